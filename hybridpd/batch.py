@@ -1,0 +1,434 @@
+"""Batch engine: many impact-pair trajectories at once, closed-form flows, compiled with numba.
+
+This is the fast path for the PD impact pair (both feedback cases). It never steps an ODE:
+between impacts it evaluates the closed-form flight and locates the next wall contact with a
+*guaranteed safe-step* root finder. At flight time ``tau`` it evaluates the gaps
+``g+ = L - z3`` and ``g- = z3 + L`` with their derivatives, and a rigorous bound ``M`` of
+``|z3''|`` over ``[tau, tau + Delta]``; since ``g(tau + s) >= g + g' s - M s^2 / 2`` there, no
+contact can happen before the positive root of that quadratic, which is the next step. The
+iteration converges quadratically to a transversal crossing (it is a damped Newton method
+from the left) and geometrically to a tangential touch (grazing), and cannot jump over a
+pair of crossings however close. Right after an impact the state sits on the wall with
+``g = 0, g' >= 0``; the same bound (or its cubic version when ``g' = 0``) gives a step that
+provably stays off the wall, so an impact never re-triggers itself, while a genuine
+re-impact is found.
+
+Closed forms (``m2 = 1`` not assumed; ``alpha = kv / (2 m2)``, ``D = alpha^2 - kp / m2``):
+
+* collocated: ``x2 = xd + f`` with the tracking error
+  ``f(t) = exp(-alpha t) (f0 Ch(D, t) + (f0' + alpha f0) Sh(D, t))``, where
+  ``Ch = cosh(sqrt(D) t)`` and ``Sh = sinh(sqrt(D) t) / sqrt(D)`` are entire in ``D``
+  (evaluated by cos/sin, cosh/sinh or a series), so nothing changes branch at critical
+  damping ``kv^2 = 4 kp m2``;
+* non-collocated: ``x2'' = (kp/m2 - w^2) pc - (kv w / m2) ps - (kv/m2) y1 - (kp/m2) x1`` with
+  ``x1`` affine in ``t``: sinusoids plus a cubic.
+
+State on the Poincare section (paper (21)): pre-impact at ``z3 = +L``, ``z4 > 0``, coordinates
+``s = (phi, z1, z2, z4)`` with ``phi = t mod T``, ``z1 = x2``, ``z2 = y2``, ``z4 = y1 - y2``.
+
+Parameters are packed as ``params = [kp, kv, m2, mu, e, L, w, xm]`` and ``case`` is 0
+(collocated) or 1 (non-collocated).
+
+Labels returned by the mapper (:data:`LABELS`): 0 converged, 1 not converged, 2 diverged
+(left a bounded region or non-finite), 3 Zeno/sticking (impacts accumulate on a wall),
+4 unresolved (an iteration bound was hit inside one flight).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = [
+    "LABELS",
+    "STATUS_IMPACT",
+    "STATUS_TIMEOUT",
+    "STATUS_STICK",
+    "STATUS_UNRESOLVED",
+    "STATUS_NONFINITE",
+    "pack_params",
+    "next_impact",
+    "impact_map",
+    "iterate_map",
+    "map_labels",
+]
+
+LABELS = ("converged", "not_converged", "diverged", "zeno_sticking", "unresolved")
+
+STATUS_IMPACT = 0       # a wall contact was located
+STATUS_TIMEOUT = 1      # no contact before the time horizon
+STATUS_STICK = 2        # zero relative velocity with the force pressing into the wall
+STATUS_UNRESOLVED = 3   # iteration bound hit (pathological tangency)
+STATUS_NONFINITE = 4
+
+_MAX_SAFE_STEPS = 20000
+
+
+def pack_params(kp, kv, m2, mu, e, L, w, xm) -> np.ndarray:
+    """Pack the eight parameters into the ``params`` array the kernels take."""
+    return np.array([kp, kv, m2, mu, e, L, w, xm], dtype=np.float64)
+
+
+@njit(cache=True)
+def _ech(alpha, D, t):
+    """Return ``exp(-alpha t) Ch(D, t)`` and ``exp(-alpha t) Sh(D, t)`` without overflow."""
+    u = D * t * t
+    ea = math.exp(-alpha * t)
+    if abs(u) < 1e-2:
+        # Series in u = D t^2: Ch = sum u^k/(2k)!, Sh = t sum u^k/(2k+1)!.
+        ch = 1.0
+        sh = 1.0
+        term_c = 1.0
+        term_s = 1.0
+        for k in range(1, 9):
+            term_c *= u / ((2 * k - 1) * (2 * k))
+            term_s *= u / ((2 * k) * (2 * k + 1))
+            ch += term_c
+            sh += term_s
+        return ea * ch, ea * sh * t
+    if u > 0.0:
+        b = math.sqrt(D)
+        # exp(-alpha t) cosh(b t) with b < alpha for kp > 0: combine exponents first.
+        e1 = math.exp((b - alpha) * t)
+        e2 = math.exp(-(b + alpha) * t)
+        return 0.5 * (e1 + e2), 0.5 * (e1 - e2) / b
+    b = math.sqrt(-D)
+    return ea * math.cos(b * t), ea * math.sin(b * t) / b
+
+
+@njit(cache=True)
+def _eval(params, case, phi0, x10, y10, x20, y20, tau, dmax):
+    """Flight state at ``tau`` plus derivatives and bounds valid on ``[tau, tau + dmax]``.
+
+    Returns ``(x1, y1, x2, y2, a2, a3, M2, M3)``: ``a2 = x2''(tau)``, ``a3 = x2'''(tau)``,
+    ``M2 >= sup |x2''|`` and ``M3 >= sup |x2'''|`` on the interval (``x1'' = 0``, so these bound
+    the gap's second and third derivatives).
+    """
+    kp, kv, m2, w, xm = params[0], params[1], params[2], params[6], params[7]
+    x1 = x10 + y10 * tau
+    y1 = y10
+    th = w * (phi0 + tau)
+    c = math.cos(th)
+    s = math.sin(th)
+    if case == 0:
+        alpha = 0.5 * kv / m2
+        D = alpha * alpha - kp / m2
+        c0 = math.cos(w * phi0)
+        s0 = math.sin(w * phi0)
+        f0 = x20 - xm * c0
+        fd0 = y20 + xm * w * s0
+        ec, es = _ech(alpha, D, tau)
+        a = f0
+        b = fd0 + alpha * f0
+        f = a * ec + b * es
+        # (a, b) -> (b - alpha a, a D - alpha b) differentiates exp(-alpha t)(a Ch + b Sh).
+        a1 = b - alpha * a
+        b1 = a * D - alpha * b
+        fd = a1 * ec + b1 * es
+        a2c = b1 - alpha * a1
+        b2c = a1 * D - alpha * b1
+        fdd = a2c * ec + b2c * es
+        fddd = -(kv * fdd + kp * fd) / m2
+        fdddd = -(kv * fddd + kp * fdd) / m2
+        x2 = xm * c + f
+        y2 = -xm * w * s + fd
+        a2 = -xm * w * w * c + fdd
+        a3 = xm * w * w * w * s + fddd
+        # sup over [0, dmax] of exp(-alpha s)|Ch| <= 1 and of exp(-alpha s)|Sh| <= s.
+        M2 = xm * w * w + abs(fdd) + abs(fddd + alpha * fdd) * dmax
+        M3 = xm * w * w * w + abs(fddd) + abs(fdddd + alpha * fddd) * dmax
+        return x1, y1, x2, y2, a2, a3, M2, M3
+    pc = xm * c
+    ps = xm * s
+    pc0 = xm * math.cos(w * phi0)
+    ps0 = xm * math.sin(w * phi0)
+    Ac = kp / m2 - w * w
+    As = -kv * w / m2
+    # particular solution of x2'' = Ac pc + As ps is -(Ac pc + As ps) / w^2
+    sp = -(Ac * pc + As * ps) / (w * w)
+    sp0 = -(Ac * pc0 + As * ps0) / (w * w)
+    dsp = -(-Ac * ps + As * pc) / w
+    dsp0 = -(-Ac * ps0 + As * pc0) / w
+    kvm = kv / m2
+    kpm = kp / m2
+    t2 = tau * tau
+    x2 = (x20 + y20 * tau + (sp - sp0 - dsp0 * tau) - 0.5 * kvm * y10 * t2
+          - kpm * (0.5 * x10 * t2 + y10 * t2 * tau / 6.0))
+    y2 = y20 + (dsp - dsp0) - kvm * y10 * tau - kpm * (x10 * tau + 0.5 * y10 * t2)
+    a2 = Ac * pc + As * ps - kvm * y10 - kpm * x1
+    a3 = w * (-Ac * ps + As * pc) - kpm * y10
+    amp = xm * math.sqrt(Ac * Ac + As * As)
+    x1end = x1 + y10 * dmax
+    M2 = amp + kvm * abs(y10) + kpm * max(abs(x1), abs(x1end))
+    M3 = amp * w + kpm * abs(y10)
+    return x1, y1, x2, y2, a2, a3, M2, M3
+
+
+@njit(cache=True)
+def _safe_step(g, gd, gdd, M2, M3, dmax):
+    """Largest step ``<= dmax`` on which ``g`` provably stays positive (0 if none is proven)."""
+    best = 0.0
+    if g > 0.0 or gd > 0.0:
+        # quadratic lower bound g + gd s - M2 s^2 / 2
+        if M2 > 0.0:
+            disc = gd * gd + 2.0 * M2 * max(g, 0.0)
+            best = (gd + math.sqrt(disc)) / M2
+            if g <= 0.0:
+                # leaving the wall: stop at the bound's maximum, where it is gd^2 / (2 M2) > 0,
+                # so the next point is provably off the wall by more than the tolerance.
+                best = gd / M2
+        elif gd < 0.0:
+            best = -g / gd
+        else:
+            best = dmax
+    if gd >= 0.0 and gdd > 0.0 and g >= 0.0 and M3 > 0.0:
+        # cubic lower bound g + gd s + gdd s^2/2 - M3 s^3/6 > 0 for s < 3 gdd / M3
+        best = max(best, 3.0 * gdd / M3)
+    return min(best, dmax)
+
+
+@njit(cache=True)
+def _contact(g, rel, gdd, tau, tol, ztol):
+    """Classify a wall whose gap ``g <= tol``: 0 no event, 1 impact, 2 grazing, 3 sticking.
+
+    ``rel`` is the approach speed (``-g'``), ``gdd = g''``. At ``tau = 0`` (start on the wall)
+    an approach faster than ``ztol`` is an immediate impact; a tangential start with the force
+    pressing into the wall is sticking; otherwise the mass is leaving and nothing fires. Later
+    on, the safe steps guarantee the wall was not reached before, so reaching the tolerance is
+    a contact: an impact, or grazing when the approach speed is below ``ztol`` (a rebound that
+    could not rise above the gap tolerance).
+    """
+    if tau == 0.0:
+        if rel > ztol:
+            return 1
+        if rel >= -ztol and gdd <= 0.0:
+            return 3
+        return 0
+    if rel > ztol:
+        return 1
+    return 2
+
+
+@njit(cache=True)
+def next_impact(params, case, phi0, x1, y1, x2, y2, t_max, tol):
+    """Locate the first wall contact of the flight starting at time ``phi0``.
+
+    Parameters
+    ----------
+    params : float64[8]
+        ``[kp, kv, m2, mu, e, L, w, xm]``.
+    case : int
+        0 collocated, 1 non-collocated.
+    phi0 : float
+        Start time (any real; the reference phase is ``w * phi0``).
+    x1, y1, x2, y2 : float
+        Post-impact (or initial) mechanical state, ``|x1 - x2| <= L``.
+    t_max : float
+        Horizon: give up (status ``STATUS_TIMEOUT``) beyond this flight time.
+    tol : float
+        Gap tolerance (length) below which a contact is declared. The matching velocity
+        tolerance is ``ztol = sqrt(2 tol M2)``, ``M2`` the local bound of ``|z3''|``.
+
+    Returns
+    -------
+    status, tau, wall, x1, y1, x2, y2, grazing
+        ``STATUS_*``, the flight time, the wall (+1/-1), the state at the contact and whether
+        the contact is tangential (relative speed below ``ztol``; no velocity jump then).
+    """
+    L = params[5]
+    w = params[6]
+    dmax = 0.5 * math.pi / w
+    tau = 0.0
+    for _ in range(_MAX_SAFE_STEPS):
+        X1, Y1, X2, Y2, a2, a3, M2, M3 = _eval(params, case, phi0, x1, y1, x2, y2, tau, dmax)
+        z3 = X1 - X2
+        z4 = Y1 - Y2
+        if not (math.isfinite(z3) and math.isfinite(z4) and math.isfinite(M2)):
+            return STATUS_NONFINITE, tau, 0, X1, Y1, X2, Y2, False
+        ztol = math.sqrt(2.0 * tol * M2)
+        gp = L - z3          # right wall: g' = -z4, g'' = x2'' = a2
+        gm = z3 + L          # left wall:  g' = z4,  g'' = -a2
+        for wall in (1, -1):
+            g = gp if wall == 1 else gm
+            if g <= tol:
+                kind = _contact(g, wall * z4, wall * a2, tau, tol, ztol)
+                if kind == 3:
+                    return STATUS_STICK, tau, wall, X1, Y1, X2, Y2, True
+                if kind > 0:
+                    return STATUS_IMPACT, tau, wall, X1, Y1, X2, Y2, kind == 2
+        step = min(_safe_step(gp, -z4, a2, M2, M3, dmax), _safe_step(gm, z4, -a2, M2, M3, dmax))
+        if not step > 0.0:
+            return STATUS_UNRESOLVED, tau, 0, X1, Y1, X2, Y2, False
+        tau += step
+        if tau > t_max:
+            return STATUS_TIMEOUT, t_max, 0, X1, Y1, X2, Y2, False
+    return STATUS_UNRESOLVED, tau, 0, X1, Y1, X2, Y2, False
+
+
+@njit(cache=True)
+def _impact_velocities(mu, e, y1, y2):
+    """Newton's law (2) on the velocities."""
+    n1 = ((mu - e) * y1 + (1.0 + e) * y2) / (1.0 + mu)
+    n2 = ((1.0 + e) * mu * y1 + (1.0 - mu * e) * y2) / (1.0 + mu)
+    return n1, n2
+
+
+@njit(cache=True)
+def _map_once(params, case, s, out, tol, max_impacts):
+    """One application of P from section point ``s`` into ``out``; returns (status, impacts).
+
+    ``s = (phi, z1, z2, z4)``; the trajectory may hit the walls in any order; P returns the
+    first pre-impact state at the right wall after the initial impact.
+    """
+    mu, e, L, w = params[3], params[4], params[5], params[6]
+    T = 2.0 * math.pi / w
+    phi = s[0]
+    x2 = s[1]
+    y2 = s[2]
+    x1 = x2 + L
+    y1 = y2 + s[3]
+    y1, y2 = _impact_velocities(mu, e, y1, y2)
+    t = phi
+    for k in range(max_impacts):
+        st, tau, wall, x1, y1, x2, y2, graze = next_impact(
+            params, case, t, x1, y1, x2, y2, 50.0 * T, tol)
+        if st != STATUS_IMPACT:
+            out[0] = t
+            out[1] = x2
+            out[2] = y2
+            out[3] = y1 - y2
+            return st + 10, k
+        t += tau
+        # snap onto the wall (the root is located to tol) so the next flight starts on it
+        x1 = x2 + wall * L
+        if wall == 1:
+            out[0] = t - T * math.floor(t / T)
+            out[1] = x2
+            out[2] = y2
+            out[3] = y1 - y2
+            return STATUS_IMPACT, k + 1
+        if not graze:
+            y1, y2 = _impact_velocities(mu, e, y1, y2)
+    return STATUS_UNRESOLVED + 10, max_impacts
+
+
+@njit(cache=True)
+def impact_map(params, case, S, tol=1e-13, max_impacts=1000):
+    """Apply the impact map P to many section points.
+
+    Parameters
+    ----------
+    params : float64[8]
+    case : int
+    S : float64[N, 4]
+        Section points ``(phi, z1, z2, z4)``, pre-impact at ``z3 = +L`` with ``z4 > 0``.
+
+    Returns
+    -------
+    out : float64[N, 4]
+        ``P(S)`` (``phi`` reduced mod T).
+    status : int64[N]
+        0 when P is defined; otherwise ``10 + STATUS_*`` of the flight that failed.
+    n_impacts : int64[N]
+        Impacts taken (2 on a simple orbit).
+    """
+    N = S.shape[0]
+    out = np.empty((N, 4))
+    status = np.empty(N, dtype=np.int64)
+    nimp = np.empty(N, dtype=np.int64)
+    for i in range(N):
+        st, k = _map_once(params, case, S[i], out[i], tol, max_impacts)
+        status[i] = st
+        nimp[i] = k
+    return out, status, nimp
+
+
+@njit(cache=True)
+def _phase_diff(a, b, T):
+    d = (a - b) % T
+    if d > 0.5 * T:
+        d -= T
+    return d
+
+
+@njit(cache=True)
+def iterate_map(params, case, s0, n_iter, tol=1e-13, max_impacts=1000):
+    """Iterate P ``n_iter`` times from ``s0``; returns ``(orbit[n_iter + 1, 4], n_done, status)``."""
+    orbit = np.full((n_iter + 1, 4), np.nan)
+    orbit[0] = s0
+    cur = s0.copy()
+    nxt = np.empty(4)
+    for i in range(n_iter):
+        st, k = _map_once(params, case, cur, nxt, tol, max_impacts)
+        if st != 0:
+            return orbit, i, st
+        orbit[i + 1] = nxt
+        cur[:] = nxt
+    return orbit, n_iter, 0
+
+
+@njit(cache=True)
+def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
+               tol=1e-13, max_impacts=1000):
+    """Label section points by where P takes them (the basin mapper's kernel).
+
+    Converged means the paper's criterion: after ``n_iter`` iterations,
+    ``(x1*-x1)^2 + (y1*-y1)^2 + (y2*-y2)^2 + (phi*-phi)^2 < crit`` (``phi`` differences taken
+    modulo T, nearest representative). Early exit: once ``d^T Q d < cert_r2`` for the
+    deviation ``d`` from the fixed point in section coordinates, the point lies in a
+    neighbourhood certified (by the caller) to be invariant, contracting and inside the
+    criterion ball, so every later iterate satisfies the criterion; pass ``cert_r2 = 0`` to
+    disable. ``escape`` bounds ``|z1|, |z2|, |z4|``: beyond it the label is "diverged".
+
+    Returns ``labels[N]`` (see :data:`LABELS`), ``iterations[N]`` and the final points.
+    """
+    N = S.shape[0]
+    T = 2.0 * math.pi / params[6]
+    labels = np.empty(N, dtype=np.int64)
+    iters = np.empty(N, dtype=np.int64)
+    final = np.empty((N, 4))
+    cur = np.empty(4)
+    nxt = np.empty(4)
+    d = np.empty(4)
+    for i in range(N):
+        cur[:] = S[i]
+        lab = -1
+        it = 0
+        for it in range(1, n_iter + 1):
+            st, k = _map_once(params, case, cur, nxt, tol, max_impacts)
+            if st != 0:
+                if st == STATUS_STICK + 10:
+                    lab = 3
+                elif st == STATUS_NONFINITE + 10 or st == STATUS_TIMEOUT + 10:
+                    lab = 2
+                else:
+                    lab = 4
+                break
+            cur[:] = nxt
+            if not (abs(cur[1]) < escape and abs(cur[2]) < escape and abs(cur[3]) < escape):
+                lab = 2
+                break
+            if cert_r2 > 0.0:
+                d[0] = _phase_diff(cur[0], fixed[0], T)
+                d[1] = cur[1] - fixed[1]
+                d[2] = cur[2] - fixed[2]
+                d[3] = cur[3] - fixed[3]
+                q = 0.0
+                for a in range(4):
+                    for b in range(4):
+                        q += d[a] * cert_Q[a, b] * d[b]
+                if q < cert_r2:
+                    lab = 0
+                    break
+        if lab < 0:
+            # the paper's criterion in (x1, y1, y2, phi): x1 = z1 + L, y1 = z2 + z4, y2 = z2
+            dphi = _phase_diff(cur[0], fixed[0], T)
+            dx1 = cur[1] - fixed[1]
+            dy1 = (cur[2] + cur[3]) - (fixed[2] + fixed[3])
+            dy2 = cur[2] - fixed[2]
+            lab = 0 if dx1 * dx1 + dy1 * dy1 + dy2 * dy2 + dphi * dphi < crit else 1
+        labels[i] = lab
+        iters[i] = it
+        final[i] = cur
+    return labels, iters, final
