@@ -1,0 +1,355 @@
+"""Basins of attraction of a fixed point of the impact map (paper Figs 6-7).
+
+Two layers, after Attractors.jl: a **mapper** that takes one initial condition on the section
+to a label, and **basins** as a thin layer that applies a mapper over a 2-D grid.
+
+Labels (:data:`LABELS`): ``converged`` (the paper's criterion holds after ``n_iter``
+iterations of ``P``), ``not_converged``, ``diverged`` (left the bounded region, non-finite,
+or no further impact), ``zeno_sticking`` (impacts accumulate on a wall), ``unresolved`` (an
+iteration bound inside one flight was hit), ``off_section`` (the grid point is not a
+pre-impact state: ``z4 = y1 - y2 <= 0``).
+
+The paper's criterion: converged if ``(x1*-x1)^2 + (y1*-y1)^2 + (y2*-y2)^2 + (phi*-phi)^2 <
+0.001`` after 1500 iterations of ``P`` (3000 impacts); phase differences are taken modulo
+``T`` (nearest representative), which the paper leaves implicit.
+
+**Early exit.** For a stable fixed point, ``Q`` solving ``DP^T Q DP - Q = -I`` defines a norm
+in which ``DP`` contracts. The mapper searches the largest radius ``r`` (up to the one whose
+``Q``-ball lies inside the criterion ball) for which ``P`` maps the ``Q``-ball into a strictly
+smaller one, checked on sampled points of nested spheres with a safety factor. A trajectory
+entering that ball stays in it, hence satisfies the criterion at iteration ``n_iter``: it is
+labelled ``converged`` at once. (``Q`` solves the Lyapunov equation of ``DP / rho_t`` with
+``rho_t = (1 + rho) / 2``, so ``DP`` contracts by about ``rho_t`` in the ``Q``-norm; the sampled
+images must fall inside ``(1 + rho_t) / 2`` of the radius, and the ball used is 0.9 of the
+largest radius that passed.) This certification is numerical (sampled), not
+interval-rigorous; the tests compare labels with and without it on grids, and
+``early_exit=False`` runs every trajectory to the end.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.linalg import solve_discrete_lyapunov
+
+from .batch import map_labels
+from .impactmap import ImpactMap
+
+__all__ = ["LABELS", "BasinResult", "ImpactMapper", "basin_of_attraction", "load_basin",
+           "section_grid"]
+
+LABELS = ("converged", "not_converged", "diverged", "zeno_sticking", "unresolved", "off_section")
+OFF_SECTION = 5
+
+
+class ImpactMapper:
+    """Map a section point to a label by iterating the impact map (Attractors.jl's mapper).
+
+    Parameters
+    ----------
+    impact_map : ImpactMap
+    fixed_point : array_like, shape (4,)
+        ``s* = (phi*, z1*, z2*, z4*)``, a fixed point of ``P``.
+    n_iter : int
+        Iterations of ``P`` (the paper: 1500, i.e. 3000 impacts).
+    criterion : float
+        Threshold on the squared distance in ``(x1, y1, y2, phi)`` (the paper: 0.001).
+    early_exit : bool
+        Use the certified contraction ball (see the module docstring).
+    escape : float
+        Bound on ``|z1|, |z2|, |z4|`` beyond which a trajectory is ``diverged``.
+
+    Examples
+    --------
+    >>> from hybridpd import ImpactPair, PDGains
+    >>> from hybridpd.orbits import symmetric_orbit
+    >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
+    >>> m = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
+    >>> m.label_name(m(orb.fixed_point + [0, 0.01, 0, 0]))
+    'converged'
+    """
+
+    def __init__(self, impact_map: ImpactMap, fixed_point, *, n_iter: int = 1500,
+                 criterion: float = 1e-3, early_exit: bool = True, escape: float = 1e3):
+        if not isinstance(impact_map, ImpactMap):
+            raise ValueError(f"impact_map must be an ImpactMap, got {type(impact_map).__name__}")
+        fp = np.asarray(fixed_point, float)
+        if fp.shape != (4,) or not np.all(np.isfinite(fp)):
+            raise ValueError(f"fixed_point must be 4 finite numbers, got {fixed_point!r}")
+        if int(n_iter) < 1:
+            raise ValueError(f"n_iter must be >= 1, got {n_iter!r}")
+        if not (criterion > 0 and math.isfinite(criterion)):
+            raise ValueError(f"criterion must be > 0, got {criterion!r}")
+        if not (escape > 0 and math.isfinite(escape)):
+            raise ValueError(f"escape must be > 0, got {escape!r}")
+        self.map = impact_map
+        self.fixed_point = fp
+        self.n_iter = int(n_iter)
+        self.criterion = float(criterion)
+        self.escape = float(escape)
+        self.cert_Q = np.eye(4)
+        self.cert_r2 = 0.0
+        if early_exit:
+            self.cert_Q, self.cert_r2 = self._certify()
+
+    @staticmethod
+    def label_name(label: int) -> str:
+        """Name of an integer label."""
+        return LABELS[int(label)]
+
+    def _criterion_matrix(self) -> np.ndarray:
+        # (dx1, dy1, dy2, dphi) = C (dphi, dz1, dz2, dz4)
+        return np.array([[0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 1, 0], [1, 0, 0, 0]], float)
+
+    def _certify(self):
+        """Largest sampled-invariant Q-ball inside the criterion ball (r^2 = 0: none)."""
+        P = self.map
+        try:
+            DP = np.asarray(P.jacobian(self.fixed_point).DP, float).reshape(4, 4)
+        except (ValueError, RuntimeError):
+            return np.eye(4), 0.0
+        rho = np.max(np.abs(np.linalg.eigvals(DP))) if np.all(np.isfinite(DP)) else np.inf
+        if not rho < 0.999:
+            return np.eye(4), 0.0
+        # Lyapunov equation of DP / rho_t: in the Q-norm DP contracts by about rho_t < 1.
+        rho_t = 0.5 * (1.0 + rho)
+        kappa = 0.5 * (1.0 + rho_t)
+        A = DP / rho_t
+        Q = solve_discrete_lyapunov(A.T, np.eye(4))
+        Q = 0.5 * (Q + Q.T)
+        # largest r with {d: d^T Q d < r^2} inside {|C d|^2 < criterion}
+        C = self._criterion_matrix()
+        Li = np.linalg.cholesky(np.linalg.inv(Q))
+        lam = np.linalg.eigvalsh(Li.T @ C.T @ C @ Li).max()
+        r_max = math.sqrt(self.criterion / lam) * 0.5
+        Lq = np.linalg.cholesky(Q)            # Q = Lq Lq^T, so |Lq^T d| is the Q-norm
+        Lq_inv_T = np.linalg.inv(Lq.T)
+        rng = np.random.default_rng(12345)
+        dirs = rng.normal(size=(400, 4))
+        dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+        T = P.period
+        r = r_max
+        for _ in range(30):
+            ok = True
+            for frac in (1.0, 0.5, 0.25, 0.1):
+                d = (r * frac) * dirs @ Lq_inv_T.T
+                pts = self.fixed_point + d
+                if np.any(pts[:, 3] <= 0):
+                    ok = False
+                    break
+                res = P.apply(pts)
+                if not np.all(res.ok):
+                    ok = False
+                    break
+                dd = res.s - self.fixed_point
+                dd[:, 0] = (dd[:, 0] + 0.5 * T) % T - 0.5 * T
+                qn = np.sqrt(np.einsum("ij,jk,ik->i", dd, Q, dd))
+                # strict contraction with a safety factor: images in the kappa r frac ball
+                if np.any(qn >= kappa * r * frac):
+                    ok = False
+                    break
+            if ok:
+                return Q, (0.9 * r) ** 2
+            r *= 0.5
+        return np.eye(4), 0.0
+
+    @property
+    def certified_radius(self) -> float:
+        """Radius (in the ``Q``-norm) of the certified ball; 0 if early exit is off."""
+        return math.sqrt(self.cert_r2)
+
+    def labels(self, S) -> tuple[np.ndarray, np.ndarray]:
+        """Labels and iterations used for section points ``S`` of shape ``(N, 4)``.
+
+        Points with ``z4 <= 0`` get ``off_section``.
+        """
+        S = np.asarray(S, float).reshape(-1, 4)
+        lab = np.full(S.shape[0], OFF_SECTION, dtype=np.int64)
+        its = np.zeros(S.shape[0], dtype=np.int64)
+        valid = np.isfinite(S).all(axis=1) & (S[:, 3] > 0)
+        if np.any(valid):
+            m = self.map
+            lv, iv, _ = map_labels(m.params, m._c, np.ascontiguousarray(S[valid]),
+                                   self.fixed_point, self.n_iter, self.criterion, self.cert_Q,
+                                   self.cert_r2, self.escape, m.tol, m.max_impacts)
+            lab[valid] = lv
+            its[valid] = iv
+        return lab, its
+
+    def __call__(self, s) -> int:
+        """Label of one section point ``s = (phi, z1, z2, z4)``."""
+        lab, _ = self.labels(np.asarray(s, float).reshape(1, 4))
+        return int(lab[0])
+
+
+def section_grid(fixed_point, L, x1, y1) -> np.ndarray:
+    """Section points of the paper's basin slice: ``(x1, y1)`` with ``y2 = y2*``, ``phi = phi*``.
+
+    On the section ``x1 = z1 + L``, ``y1 = z2 + z4``, ``y2 = z2``, so a grid point maps to
+    ``(phi*, x1 - L, z2*, y1 - z2*)``. Returns shape ``(len(y1), len(x1), 4)``.
+    """
+    fp = np.asarray(fixed_point, float)
+    X1, Y1 = np.meshgrid(np.asarray(x1, float), np.asarray(y1, float))
+    return np.stack([np.full_like(X1, fp[0]), X1 - L, np.full_like(X1, fp[2]), Y1 - fp[2]],
+                    axis=-1)
+
+
+def load_basin(path) -> "BasinResult":
+    """Read a :class:`BasinResult` written by :meth:`BasinResult.save`."""
+    from .sweep import load_npz
+
+    a, meta = load_npz(path)
+    if meta.pop("kind", None) != "basin":
+        raise ValueError(f"{path} does not hold a basin")
+    frac = float(meta.pop("converged_fraction"))
+    meta.pop("label_names", None)
+    return BasinResult(a["x1"], a["y1"], a["labels"], a["iterations"], a["fixed_point"], frac,
+                       meta)
+
+
+def _check_axis(name, spec):
+    lo, hi, num = spec
+    lo, hi = float(lo), float(hi)
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise ValueError(f"{name} range must be finite, got {spec!r}")
+    if not hi > lo:
+        raise ValueError(f"{name} range must be increasing (MIN < MAX), got {spec!r}")
+    if int(num) != num or int(num) < 1:
+        raise ValueError(f"{name} NUM must be a positive integer, got {num!r}")
+    return np.linspace(lo, hi, int(num))
+
+
+@dataclass(frozen=True)
+class BasinResult:
+    """A basin of attraction on a 2-D slice of the section.
+
+    Attributes
+    ----------
+    x1, y1 : ndarray
+        Grid axes (primary-mass position and velocity at the impact).
+    labels : ndarray of int, shape (len(y1), len(x1))
+        Indexed ``[y1][x1]``, values into :data:`LABELS`.
+    iterations : ndarray of int, same shape
+        Iterations of ``P`` actually run (smaller with early exit).
+    fixed_point : ndarray, shape (4,)
+        ``(phi*, z1*, z2*, z4*)``; in the slice's coordinates ``x1* = z1* + L``,
+        ``y1* = z2* + z4*``.
+    converged_fraction : float
+        Share of on-section grid points labelled converged.
+    metadata : dict
+        Parameters, criterion, iterations, certified radius.
+    """
+
+    x1: np.ndarray
+    y1: np.ndarray
+    labels: np.ndarray
+    iterations: np.ndarray
+    fixed_point: np.ndarray
+    converged_fraction: float
+    metadata: dict = field(default_factory=dict)
+
+    @property
+    def label_names(self) -> tuple:
+        return LABELS
+
+    def save(self, path) -> None:
+        """Write to ``.npz`` with the metadata as JSON (see :func:`load_basin`)."""
+        from .sweep import save_npz
+
+        save_npz(path, {"x1": self.x1, "y1": self.y1, "labels": self.labels,
+                        "iterations": self.iterations, "fixed_point": self.fixed_point},
+                 {"kind": "basin", "converged_fraction": self.converged_fraction,
+                  "label_names": list(LABELS), **self.metadata})
+
+    def area(self, label: str = "converged") -> float:
+        """Area (in ``x1``-``y1`` units) of the grid cells with ``label``."""
+        k = LABELS.index(label)
+        dx = (self.x1[-1] - self.x1[0]) / max(len(self.x1) - 1, 1)
+        dy = (self.y1[-1] - self.y1[0]) / max(len(self.y1) - 1, 1)
+        return float((self.labels == k).sum() * dx * dy)
+
+
+def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chunk_size=None,
+                        store=None, progress=False, max_workers=None) -> BasinResult:
+    """Label a grid of the paper's slice ``(x1, y1)``, ``y2 = y2*``, ``phi = phi*``.
+
+    Parameters
+    ----------
+    mapper : ImpactMapper
+    x1, y1 : (min, max, num)
+        Grid axes.
+    executor, chunk_size, store, progress, max_workers
+        Passed to :func:`hybridpd.sweep.run_sweep` when ``executor`` is not ``"serial"`` or a
+        ``store`` is given (write-as-you-go, resumable); the labels do not depend on them.
+
+    Returns
+    -------
+    BasinResult
+    """
+    xs = _check_axis("x1", x1)
+    ys = _check_axis("y1", y1)
+    L = mapper.map.pair.L
+    grid = section_grid(mapper.fixed_point, L, xs, ys)
+    pts = grid.reshape(-1, 4)
+    if executor == "serial" and store is None:
+        lab, its = mapper.labels(pts)
+    else:
+        from .sweep import run_sweep
+
+        res = run_sweep(_label_chunk, {"phi": pts[:, 0], "z1": pts[:, 1], "z2": pts[:, 2],
+                                       "z4": pts[:, 3]},
+                        chunk_size=chunk_size, executor=executor, max_workers=max_workers,
+                        store=store, progress=progress, func_kwargs={"mapper": _MapperSpec.of(mapper)},
+                        metadata={"kind": "basin"})
+        lab, its = res.outputs["label"], res.outputs["iterations"]
+    lab = lab.reshape(len(ys), len(xs))
+    its = its.reshape(len(ys), len(xs))
+    on = lab != OFF_SECTION
+    frac = float((lab[on] == 0).mean()) if np.any(on) else 0.0
+    m = mapper.map
+    meta = {
+        "case": m.case.value, "kp": m.gains.kp, "kv": m.gains.kv, "mu": m.pair.mu,
+        "e": m.pair.e, "L": m.pair.L, "m2": m.pair.m2, "omega": m.reference.omega,
+        "xm": m.reference.xm, "n_iter": mapper.n_iter, "criterion": mapper.criterion,
+        "certified_radius": mapper.certified_radius,
+    }
+    return BasinResult(xs, ys, lab, its, mapper.fixed_point.copy(), frac, meta)
+
+
+@dataclass(frozen=True)
+class _MapperSpec:
+    """Picklable description of a mapper (rebuilt in worker processes)."""
+
+    params: tuple
+    case: str
+    fixed_point: tuple
+    n_iter: int
+    criterion: float
+    escape: float
+    cert_Q: tuple
+    cert_r2: float
+    tol: float
+    max_impacts: int
+
+    @classmethod
+    def of(cls, m: ImpactMapper) -> "_MapperSpec":
+        return cls(tuple(m.map.params.tolist()), m.map.case.value, tuple(m.fixed_point.tolist()),
+                   m.n_iter, m.criterion, m.escape, tuple(m.cert_Q.ravel().tolist()),
+                   m.cert_r2, m.map.tol, m.map.max_impacts)
+
+
+def _label_chunk(chunk, mapper: _MapperSpec):
+    S = np.stack([chunk["phi"], chunk["z1"], chunk["z2"], chunk["z4"]], axis=1)
+    lab = np.full(S.shape[0], OFF_SECTION, dtype=np.int64)
+    its = np.zeros(S.shape[0], dtype=np.int64)
+    valid = S[:, 3] > 0
+    if np.any(valid):
+        c = 0 if mapper.case == "collocated" else 1
+        lv, iv, _ = map_labels(np.array(mapper.params), c, np.ascontiguousarray(S[valid]),
+                               np.array(mapper.fixed_point), mapper.n_iter, mapper.criterion,
+                               np.array(mapper.cert_Q).reshape(4, 4), mapper.cert_r2,
+                               mapper.escape, mapper.tol, mapper.max_impacts)
+        lab[valid] = lv
+        its[valid] = iv
+    return {"label": lab, "iterations": its}
