@@ -5,7 +5,8 @@ to a label, and **basins** as a thin layer that applies a mapper over a 2-D grid
 
 Labels (:data:`LABELS`): ``converged`` (the paper's criterion holds after ``n_iter``
 iterations of ``P``), ``not_converged``, ``diverged`` (left the bounded region, non-finite,
-or no further impact), ``zeno_sticking`` (impacts accumulate on a wall), ``unresolved`` (an
+or no further impact), ``zeno_sticking`` (impacts accumulated and the masses stay stuck
+on a wall for 50 periods), ``unresolved`` (an
 iteration bound inside one flight was hit), ``off_section`` (the grid point is not a
 pre-impact state: ``z4 = y1 - y2 <= 0``).
 

@@ -29,9 +29,14 @@ State on the Poincare section (paper (21)): pre-impact at ``z3 = +L``, ``z4 > 0`
 Parameters are packed as ``params = [kp, kv, m2, mu, e, L, w, xm]`` and ``case`` is 0
 (collocated) or 1 (non-collocated).
 
+Zeno and sticking: when the rebound speed of a wall contact falls below the velocity
+tolerance (impacts accumulating geometrically, or a plastic contact) while the force presses
+the masses together, the masses move together in closed form, ``(m1 + m2) x'' = U``, until
+the contact force changes sign (located like a contact), then fly apart again.
+
 Labels returned by the mapper (:data:`LABELS`): 0 converged, 1 not converged, 2 diverged
-(left a bounded region or non-finite), 3 Zeno/sticking (impacts accumulate on a wall),
-4 unresolved (an iteration bound was hit inside one flight).
+(left a bounded region or non-finite), 3 Zeno/sticking (still stuck on a wall after 50
+periods), 4 unresolved (an iteration bound was hit inside one flight).
 """
 from __future__ import annotations
 
@@ -166,8 +171,13 @@ def _eval(params, case, phi0, x10, y10, x20, y20, tau, dmax):
 
 
 @njit(cache=True)
-def _safe_step(g, gd, gdd, M2, M3, dmax):
-    """Largest step ``<= dmax`` on which ``g`` provably stays positive (0 if none is proven)."""
+def _safe_step(g, gd, gdd, M2, M3, dmax, ztol):
+    """Largest step ``<= dmax`` on which ``g`` provably stays positive (0 if none is proven).
+
+    ``g, gd, gdd`` are the gap and its first two derivatives, ``M2`` and ``M3`` bounds of the
+    gap's second and third derivatives ahead, ``ztol`` the velocity tolerance below which a
+    start on the wall counts as tangential.
+    """
     best = 0.0
     if g > 0.0 or gd > 0.0:
         # quadratic lower bound g + gd s - M2 s^2 / 2
@@ -182,9 +192,10 @@ def _safe_step(g, gd, gdd, M2, M3, dmax):
             best = -g / gd
         else:
             best = dmax
-    if gd >= 0.0 and gdd > 0.0 and g >= 0.0 and M3 > 0.0:
-        # cubic lower bound g + gd s + gdd s^2/2 - M3 s^3/6 > 0 for s < 3 gdd / M3
-        best = max(best, 3.0 * gdd / M3)
+    if gdd > 0.0 and gd >= -ztol and M3 > 0.0:
+        # tangential departure: g + gd s + gdd s^2/2 - M3 s^3/6 >= gdd s^2/4 > 0 for
+        # s <= 3 gdd / (2 M3) (|g| and |gd| are at rounding level there)
+        best = max(best, 1.5 * gdd / M3)
     return min(best, dmax)
 
 
@@ -257,13 +268,107 @@ def next_impact(params, case, phi0, x1, y1, x2, y2, t_max, tol):
                     return STATUS_STICK, tau, wall, X1, Y1, X2, Y2, True
                 if kind > 0:
                     return STATUS_IMPACT, tau, wall, X1, Y1, X2, Y2, kind == 2
-        step = min(_safe_step(gp, -z4, a2, M2, M3, dmax), _safe_step(gm, z4, -a2, M2, M3, dmax))
+        step = min(_safe_step(gp, -z4, a2, M2, M3, dmax, ztol),
+                   _safe_step(gm, z4, -a2, M2, M3, dmax, ztol))
         if not step > 0.0:
             return STATUS_UNRESOLVED, tau, 0, X1, Y1, X2, Y2, False
         tau += step
         if tau > t_max:
             return STATUS_TIMEOUT, t_max, 0, X1, Y1, X2, Y2, False
     return STATUS_UNRESOLVED, tau, 0, X1, Y1, X2, Y2, False
+
+
+@njit(cache=True)
+def _stick_eval(params, case, phi0, x20, y0, wall, tau, dmax):
+    """Stuck motion at ``wall`` from ``(x2, y)`` at time ``phi0``: state and release function.
+
+    While stuck, ``(m1 + m2) x2'' = U`` with ``x1 = x2 + wall L`` and ``y1 = y2``. Writing
+    ``x2 = xd + a pc + b ps + c + h`` (a particular solution of the sinusoidal forcing
+    ``-m1 xd''``, the constant ``c = -wall L`` in the non-collocated loop, and a homogeneous
+    ``h`` with mass ``M = m1 + m2``) gives a closed form. Returns ``(x2, y, acc, jerk, bound)``
+    with the acceleration and jerk of ``x2`` and a bound on its fourth derivative over
+    ``[tau, tau + dmax]``.
+    """
+    kp, kv, m2, mu, L, w, xm = (params[0], params[1], params[2], params[3], params[5],
+                                params[6], params[7])
+    M = m2 * (1.0 + mu)
+    m1 = mu * m2
+    K = kp - M * w * w
+    det = K * K + (kv * w) ** 2
+    a = K * m1 * w * w / det
+    b = kv * w * m1 * w * w / det
+    coff = -wall * L if case == 1 else 0.0
+    alpha = 0.5 * kv / M
+    D = alpha * alpha - kp / M
+    c0 = xm * math.cos(w * phi0)
+    s0 = xm * math.sin(w * phi0)
+    h0 = x20 - ((1.0 + a) * c0 + b * s0 + coff)
+    hd0 = y0 - ((1.0 + a) * (-w * s0) + b * w * c0)
+    ec, es = _ech(alpha, D, tau)
+    A0 = h0
+    B0 = hd0 + alpha * h0
+    A1 = B0 - alpha * A0
+    B1 = A0 * D - alpha * B0
+    h = A0 * ec + B0 * es
+    hd = A1 * ec + B1 * es
+    h2 = -(kv * hd + kp * h) / M
+    h3 = -(kv * h2 + kp * hd) / M
+    h4 = -(kv * h3 + kp * h2) / M
+    h5 = -(kv * h4 + kp * h3) / M
+    th = w * (phi0 + tau)
+    pc = xm * math.cos(th)
+    ps = xm * math.sin(th)
+    x2 = (1.0 + a) * pc + b * ps + coff + h
+    y = -(1.0 + a) * w * ps + b * w * pc + hd
+    acc = -w * w * ((1.0 + a) * pc + b * ps) + h2
+    jerk = -w * w * (-(1.0 + a) * w * ps + b * w * pc) + h3
+    amp = xm * math.sqrt((1.0 + a) ** 2 + b * b)
+    bound = amp * w ** 4 + abs(h4) + abs(h5 + alpha * h4) * dmax
+    return x2, y, acc, jerk, bound
+
+
+@njit(cache=True)
+def stick_release(params, case, phi0, x2, y, wall, t_max, tol):
+    """Time the masses stay stuck on ``wall`` from time ``phi0``, and the state at release.
+
+    Stuck on the right wall the slot can only push ``m1`` to the left, which holds while
+    ``U <= 0``; on the left wall while ``U >= 0``. The release (``wall * x2''`` turning
+    positive) is located with the same guaranteed safe steps as contacts, then the motion is
+    advanced by ``1e-9 T`` (doubling if needed) past it, so that the free flight starts with
+    the masses separating.
+
+    Returns ``status, tau, x2, y`` (``STATUS_IMPACT`` on release, ``STATUS_TIMEOUT`` if still
+    stuck at ``t_max``).
+    """
+    w = params[6]
+    T = 2.0 * math.pi / w
+    dmax = 0.25 * T
+    scale = 1.0 + params[7] * w * w + params[0] * params[5] / params[2]
+    gtol = tol * scale
+    tau = 0.0
+    for _ in range(_MAX_SAFE_STEPS):
+        X2, Y, acc, jerk, bound = _stick_eval(params, case, phi0, x2, y, wall, tau, dmax)
+        if not (math.isfinite(X2) and math.isfinite(Y) and math.isfinite(bound)):
+            return STATUS_NONFINITE, tau, X2, Y
+        g = -wall * acc          # >= 0 while the contact force keeps its sign
+        gd = -wall * jerk
+        if g <= gtol and (tau > 0.0 or gd <= 0.0):
+            nudge = 1e-9 * T
+            for _k in range(60):
+                X2, Y, acc, jerk, bound = _stick_eval(params, case, phi0, x2, y, wall,
+                                                      tau + nudge, dmax)
+                if -wall * acc < 0.0:
+                    break
+                nudge *= 2.0
+            return STATUS_IMPACT, tau + nudge, X2, Y
+        step = _safe_step(g, gd, 0.0, bound, 0.0, dmax, 0.0)
+        if not step > 0.0:
+            return STATUS_UNRESOLVED, tau, X2, Y
+        tau += step
+        if tau > t_max:
+            X2, Y, acc, jerk, bound = _stick_eval(params, case, phi0, x2, y, wall, t_max, dmax)
+            return STATUS_TIMEOUT, t_max, X2, Y
+    return STATUS_UNRESOLVED, tau, x2, y
 
 
 @njit(cache=True)
@@ -275,11 +380,13 @@ def _impact_velocities(mu, e, y1, y2):
 
 
 @njit(cache=True)
-def _map_once(params, case, s, out, tol, max_impacts):
+def _map_once(params, case, s, out, tol, max_impacts, stick):
     """One application of P from section point ``s`` into ``out``; returns (status, impacts).
 
     ``s = (phi, z1, z2, z4)``; the trajectory may hit the walls in any order; P returns the
-    first pre-impact state at the right wall after the initial impact.
+    first pre-impact state at the right wall after the initial impact. With ``stick`` the
+    trajectory continues through sticking phases (Zeno accumulation); otherwise an
+    accumulation ends the map with status ``10 + STATUS_STICK``.
     """
     mu, e, L, w = params[3], params[4], params[5], params[6]
     T = 2.0 * math.pi / w
@@ -293,6 +400,24 @@ def _map_once(params, case, s, out, tol, max_impacts):
     for k in range(max_impacts):
         st, tau, wall, x1, y1, x2, y2, graze = next_impact(
             params, case, t, x1, y1, x2, y2, 50.0 * T, tol)
+        if st == STATUS_STICK and stick:
+            # impacts accumulated (or a plastic contact under a pressing force): the masses
+            # move together from the momentum-conserving contact state until the contact
+            # force changes sign
+            t += tau
+            yc = (mu * y1 + y2) / (1.0 + mu)
+            st2, ts, x2, yc = stick_release(params, case, t, x2, yc, wall, 50.0 * T, tol)
+            if st2 != STATUS_IMPACT:
+                out[0] = t
+                out[1] = x2
+                out[2] = yc
+                out[3] = 0.0
+                return (STATUS_STICK if st2 == STATUS_TIMEOUT else st2) + 10, k
+            t += ts
+            x1 = x2 + wall * L
+            y1 = yc
+            y2 = yc
+            continue
         if st != STATUS_IMPACT:
             out[0] = t
             out[1] = x2
@@ -306,7 +431,8 @@ def _map_once(params, case, s, out, tol, max_impacts):
             out[0] = t - T * math.floor(t / T)
             out[1] = x2
             out[2] = y2
-            out[3] = y1 - y2
+            # a tangential touch (grazing) lies on the closure z4 = 0 of the section
+            out[3] = max(y1 - y2, 0.0)
             return STATUS_IMPACT, k + 1
         if not graze:
             y1, y2 = _impact_velocities(mu, e, y1, y2)
@@ -314,7 +440,7 @@ def _map_once(params, case, s, out, tol, max_impacts):
 
 
 @njit(cache=True)
-def impact_map(params, case, S, tol=1e-13, max_impacts=1000):
+def impact_map(params, case, S, tol=1e-13, max_impacts=1000, stick=True):
     """Apply the impact map P to many section points.
 
     Parameters
@@ -338,7 +464,7 @@ def impact_map(params, case, S, tol=1e-13, max_impacts=1000):
     status = np.empty(N, dtype=np.int64)
     nimp = np.empty(N, dtype=np.int64)
     for i in range(N):
-        st, k = _map_once(params, case, S[i], out[i], tol, max_impacts)
+        st, k = _map_once(params, case, S[i], out[i], tol, max_impacts, stick)
         status[i] = st
         nimp[i] = k
     return out, status, nimp
@@ -353,14 +479,14 @@ def _phase_diff(a, b, T):
 
 
 @njit(cache=True)
-def iterate_map(params, case, s0, n_iter, tol=1e-13, max_impacts=1000):
+def iterate_map(params, case, s0, n_iter, tol=1e-13, max_impacts=1000, stick=True):
     """Iterate P ``n_iter`` times from ``s0``; returns ``(orbit[n_iter + 1, 4], n_done, status)``."""
     orbit = np.full((n_iter + 1, 4), np.nan)
     orbit[0] = s0
     cur = s0.copy()
     nxt = np.empty(4)
     for i in range(n_iter):
-        st, k = _map_once(params, case, cur, nxt, tol, max_impacts)
+        st, k = _map_once(params, case, cur, nxt, tol, max_impacts, stick)
         if st != 0:
             return orbit, i, st
         orbit[i + 1] = nxt
@@ -370,7 +496,7 @@ def iterate_map(params, case, s0, n_iter, tol=1e-13, max_impacts=1000):
 
 @njit(cache=True)
 def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
-               tol=1e-13, max_impacts=1000):
+               tol=1e-13, max_impacts=1000, stick=True):
     """Label section points by where P takes them (the basin mapper's kernel).
 
     Converged means the paper's criterion: after ``n_iter`` iterations,
@@ -396,7 +522,7 @@ def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
         lab = -1
         it = 0
         for it in range(1, n_iter + 1):
-            st, k = _map_once(params, case, cur, nxt, tol, max_impacts)
+            st, k = _map_once(params, case, cur, nxt, tol, max_impacts, stick)
             if st != 0:
                 if st == STATUS_STICK + 10:
                     lab = 3

@@ -193,3 +193,46 @@ def test_map_never_hangs_or_crashes(kp, kv, e, mu, case, s):
     assert status[0] in (0, 10 + STATUS_STICK, 10 + STATUS_TIMEOUT, 13, 14)
     if status[0] == 0:
         assert np.all(np.isfinite(out)) and out[0, 3] >= 0 and 0 <= out[0, 0] < 2 * np.pi / 5
+
+
+@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("wall", [1, -1])
+def test_stick_release_against_dense_sampling(case, wall):
+    """While stuck, the masses move together until the contact force changes sign; the
+    release time agrees with a dense scan of U under expm of python-control's sticking flow."""
+    from hybridpd.batch import stick_release
+
+    cl, p, c = make(case=case, e=0.1, xm=0.7)
+    As = cl.sticking_A()
+    L = cl.pair.L
+    # find a start phase where the force presses (wall * U < 0)
+    for phi0 in np.linspace(0, 1.25, 200):
+        z0 = cl.initial_state([0.1 + wall * L, 0.0, 0.1, 0.0], phi0)
+        if wall * (cl.force @ z0) < -0.5:
+            break
+    st_, tau, x2, y = stick_release(p, c, phi0, 0.1, 0.0, wall, 20.0, 1e-13)
+    assert st_ == STATUS_IMPACT
+    ts = np.linspace(0, 3.0, 30001)
+    Phi = expm(As * (ts[1] - ts[0]))
+    z = z0.copy()
+    U = np.empty(ts.size)
+    for k in range(ts.size):
+        U[k] = cl.force @ z
+        z = Phi @ z
+    k = int(np.argmax(wall * U > 0))
+    assert k > 0
+    Uf = lambda t: wall * (cl.force @ (expm(As * t) @ z0))  # noqa: E731
+    t_ref = brentq(Uf, ts[k - 1], ts[k], xtol=1e-15)
+    assert abs(tau - t_ref) < 1e-7
+    zr = expm(As * tau) @ z0
+    assert abs(x2 - zr[2]) < 1e-8 and abs(y - zr[3]) < 1e-7
+
+
+def test_chattering_run_goes_through_sticking_without_hanging():
+    """e = 0.1 from a state that chatters: the map keeps returning (through sticking phases)."""
+    from hybridpd.batch import iterate_map
+
+    cl, p, c = make(e=0.1)
+    orbit, done, status = iterate_map(p, c, np.array([0.3, -2.1, -2.3, 0.5]), 300)
+    assert status == 0 and done == 300
+    assert np.all(np.isfinite(orbit))
