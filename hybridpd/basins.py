@@ -23,8 +23,11 @@ labelled ``converged`` at once. (``Q`` solves the Lyapunov equation of ``DP / rh
 ``rho_t = (1 + rho) / 2``, so ``DP`` contracts by about ``rho_t`` in the ``Q``-norm; the sampled
 images must fall inside ``(1 + rho_t) / 2`` of the radius, and the ball used is 0.9 of the
 largest radius that passed.) This certification is numerical (sampled), not
-interval-rigorous; the tests compare labels with and without it on grids, and
-``early_exit=False`` runs every trajectory to the end.
+interval-rigorous. A second early exit reads the label off a cycle: once an iterate repeats one
+of the previous 32 to within ``1e-12`` (relative), the trajectory sits on a periodic cycle of
+``P`` and iterate ``n_iter`` is known; it is used only when that iterate's criterion value is
+not within ``1e-6`` (relative) of the threshold. The tests compare labels with and without the
+early exits on grids, and ``early_exit=False`` runs every trajectory to the end.
 """
 from __future__ import annotations
 
@@ -91,6 +94,7 @@ class ImpactMapper:
         self.escape = float(escape)
         self.cert_Q = np.eye(4)
         self.cert_r2 = 0.0
+        self.cycle_tol = 1e-12 if early_exit else 0.0
         if early_exit:
             self.cert_Q, self.cert_r2 = self._certify()
 
@@ -173,7 +177,8 @@ class ImpactMapper:
             m = self.map
             lv, iv, _ = map_labels(m.params, m._c, np.ascontiguousarray(S[valid]),
                                    self.fixed_point, self.n_iter, self.criterion, self.cert_Q,
-                                   self.cert_r2, self.escape, m.tol, m.max_impacts)
+                                   self.cert_r2, self.escape, m.tol, m.max_impacts, True,
+                                   self.cycle_tol)
             lab[valid] = lv
             its[valid] = iv
         return lab, its
@@ -330,6 +335,7 @@ class _MapperSpec:
     escape: float
     cert_Q: tuple
     cert_r2: float
+    cycle_tol: float
     tol: float
     max_impacts: int
 
@@ -337,7 +343,7 @@ class _MapperSpec:
     def of(cls, m: ImpactMapper) -> "_MapperSpec":
         return cls(tuple(m.map.params.tolist()), m.map.case.value, tuple(m.fixed_point.tolist()),
                    m.n_iter, m.criterion, m.escape, tuple(m.cert_Q.ravel().tolist()),
-                   m.cert_r2, m.map.tol, m.map.max_impacts)
+                   m.cert_r2, m.cycle_tol, m.map.tol, m.map.max_impacts)
 
 
 def _label_chunk(chunk, mapper: _MapperSpec):
@@ -350,7 +356,8 @@ def _label_chunk(chunk, mapper: _MapperSpec):
         lv, iv, _ = map_labels(np.array(mapper.params), c, np.ascontiguousarray(S[valid]),
                                np.array(mapper.fixed_point), mapper.n_iter, mapper.criterion,
                                np.array(mapper.cert_Q).reshape(4, 4), mapper.cert_r2,
-                               mapper.escape, mapper.tol, mapper.max_impacts)
+                               mapper.escape, mapper.tol, mapper.max_impacts, True,
+                               mapper.cycle_tol)
         lab[valid] = lv
         its[valid] = iv
     return {"label": lab, "iterations": its}

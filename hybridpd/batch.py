@@ -495,17 +495,37 @@ def iterate_map(params, case, s0, n_iter, tol=1e-13, max_impacts=1000, stick=Tru
 
 
 @njit(cache=True)
+def _criterion(cur, fixed, T):
+    """The paper's squared distance in (x1, y1, y2, phi): x1 = z1 + L, y1 = z2 + z4, y2 = z2."""
+    dphi = _phase_diff(cur[0], fixed[0], T)
+    dx1 = cur[1] - fixed[1]
+    dy1 = (cur[2] + cur[3]) - (fixed[2] + fixed[3])
+    dy2 = cur[2] - fixed[2]
+    return dx1 * dx1 + dy1 * dy1 + dy2 * dy2 + dphi * dphi
+
+
+_CYCLE_MAX = 32
+
+
+@njit(cache=True)
 def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
-               tol=1e-13, max_impacts=1000, stick=True):
+               tol=1e-13, max_impacts=1000, stick=True, cycle_tol=1e-12):
     """Label section points by where P takes them (the basin mapper's kernel).
 
     Converged means the paper's criterion: after ``n_iter`` iterations,
     ``(x1*-x1)^2 + (y1*-y1)^2 + (y2*-y2)^2 + (phi*-phi)^2 < crit`` (``phi`` differences taken
-    modulo T, nearest representative). Early exit: once ``d^T Q d < cert_r2`` for the
-    deviation ``d`` from the fixed point in section coordinates, the point lies in a
-    neighbourhood certified (by the caller) to be invariant, contracting and inside the
-    criterion ball, so every later iterate satisfies the criterion; pass ``cert_r2 = 0`` to
-    disable. ``escape`` bounds ``|z1|, |z2|, |z4|``: beyond it the label is "diverged".
+    modulo T, nearest representative). Two early exits keep the label of the full run:
+
+    * ``d^T cert_Q d < cert_r2`` for the deviation ``d`` from the fixed point: the point lies
+      in a neighbourhood certified (by the caller) to be invariant, contracting and inside the
+      criterion ball, so every later iterate satisfies the criterion (``cert_r2 = 0``
+      disables it);
+    * the iterate repeats one of the previous ``32`` to within ``cycle_tol`` (relative): the
+      trajectory sits on a cycle of period ``k`` and iterate ``n_iter`` is read off the
+      cycle; used only when that iterate's criterion value is farther than ``1e-6 crit``
+      from the threshold (``cycle_tol = 0`` disables it).
+
+    ``escape`` bounds ``|z1|, |z2|, |z4|``: beyond it the label is "diverged".
 
     Returns ``labels[N]`` (see :data:`LABELS`), ``iterations[N]`` and the final points.
     """
@@ -517,6 +537,7 @@ def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
     cur = np.empty(4)
     nxt = np.empty(4)
     d = np.empty(4)
+    ring = np.empty((_CYCLE_MAX, 4))
     for i in range(N):
         cur[:] = S[i]
         lab = -1
@@ -547,13 +568,28 @@ def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
                 if q < cert_r2:
                     lab = 0
                     break
+            if cycle_tol > 0.0:
+                period = 0
+                for kk in range(1, min(it - 1, _CYCLE_MAX) + 1):
+                    r = ring[(it - kk) % _CYCLE_MAX]
+                    same = abs(_phase_diff(cur[0], r[0], T)) <= cycle_tol * T
+                    for a in range(1, 4):
+                        same = same and abs(cur[a] - r[a]) <= cycle_tol * (1.0 + abs(cur[a]))
+                    if same:
+                        period = kk
+                        break
+                if period > 0:
+                    # iterate n_iter equals iterate it - ((it - n_iter) mod period)
+                    j = it - ((it - n_iter) % period)
+                    pt = ring[j % _CYCLE_MAX] if j < it else cur
+                    c = _criterion(pt, fixed, T)
+                    if abs(c - crit) > 1e-6 * crit:
+                        lab = 0 if c < crit else 1
+                        cur[:] = pt
+                        break
+                ring[it % _CYCLE_MAX] = cur
         if lab < 0:
-            # the paper's criterion in (x1, y1, y2, phi): x1 = z1 + L, y1 = z2 + z4, y2 = z2
-            dphi = _phase_diff(cur[0], fixed[0], T)
-            dx1 = cur[1] - fixed[1]
-            dy1 = (cur[2] + cur[3]) - (fixed[2] + fixed[3])
-            dy2 = cur[2] - fixed[2]
-            lab = 0 if dx1 * dx1 + dy1 * dy1 + dy2 * dy2 + dphi * dphi < crit else 1
+            lab = 0 if _criterion(cur, fixed, T) < crit else 1
         labels[i] = lab
         iters[i] = it
         final[i] = cur
