@@ -19,8 +19,12 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from hybridpd.events import advance, prepare_lti_mode
-from hybridpd.samples import (ball_initial_state, bouncing_ball, impact_oscillator,
-                              oscillator_initial_state)
+from hybridpd.samples import (
+    ball_initial_state,
+    bouncing_ball,
+    impact_oscillator,
+    oscillator_initial_state,
+)
 
 
 def _time(fn, repeat=3):

@@ -1,0 +1,32 @@
+"""Figs 4-5 of the paper with the API: existence and stability regions in the (kp, kv) plane.
+
+mu = 0.1, gamma = 0.75, n = 1, omega = 5, e = 0.1, 0.5, 0.9, collocated and non-collocated.
+A grid point is shaded when the symmetric orbit exists (conditions (13)-(14) with xm > 0 and
+viability (18)) and is stable (all multipliers of DP inside the unit circle).
+
+Run: ``python examples/paper_regions.py [outdir]`` (about 5 s).
+"""
+from matplotlib.figure import Figure
+
+from _out import out_dir
+from hybridpd.plotting import plot_regions
+from hybridpd.regions import region_map
+
+common = dict(e=(0.1, 0.5, 0.9), mu=0.1, omega=5.0, gamma=0.75, x10=1.0, n=1)
+col = region_map("collocated", x=("kp", 0.1, 50, 150), y=("kv", 0.1, 50, 150), **common)
+non = region_map("noncollocated", x=("kp", 0.1, 50, 150), y=("kv", 0.1, 50, 150), **common)
+zoom = region_map("noncollocated", x=("kp", 0.1, 20, 150), y=("kv", 0.1, 6, 150), **common)
+
+for name, rm in (("collocated", col), ("non-collocated", non), ("non-collocated zoom", zoom)):
+    print(name, "exists & stable:",
+          ", ".join(f"e={e:g}: {a:.4g} ({100 * f:.2f}%)"
+                    for e, a, f in zip(rm.e, rm.area("stable"), rm.fraction("stable"))))
+
+fig = Figure(figsize=(17, 5))
+for i, (rm, title) in enumerate(((col, "Fig. 4: collocated"), (non, "Fig. 5: non-collocated"),
+                                 (zoom, "Fig. 5, zoom"))):
+    plot_regions(rm, ax=fig.add_subplot(1, 3, i + 1), title=title)
+fig.tight_layout()
+out = out_dir()
+fig.savefig(out / "paper_regions.png", dpi=110)
+print(f"figure written to {out / 'paper_regions.png'}")
