@@ -200,34 +200,31 @@ class ControlledImpactPair:
         return self._wrap(traj)
 
     def _wrap(self, traj) -> ImpactPairTrajectory:
-        times, walls, pre, post, graz = [], [], [], [], []
+        jt = traj.jumps
+        guard = np.asarray(jt.guard, dtype=object)
+        kind = np.asarray(jt.kind, dtype=object)
+        wall_jump = ((guard == "wall+") | (guard == "wall-")) & (kind != "zeno")
+        walls = np.where(guard[wall_jump] == "wall+", 1, -1).astype(int)
+        # sticking intervals: a 'zeno' jump opens one, the next release closes it
         sticking, sticking_walls = [], []
-        open_stick = None
-        for jump in traj.jumps:
-            name = jump.guard
-            if jump.kind == "zeno":
-                w = +1 if name == "wall+" else -1
-                open_stick = (jump.t, w)
-                continue
-            if name in ("wall+", "wall-"):
-                times.append(jump.t)
-                walls.append(+1 if name == "wall+" else -1)
-                pre.append(jump.pre[:4])
-                post.append(jump.post[:4])
-                graz.append(jump.kind == "grazing")
-            elif name.startswith("release") and open_stick is not None:
-                sticking.append((open_stick[0], jump.t))
-                sticking_walls.append(open_stick[1])
-                open_stick = None
-        if open_stick is not None:
-            sticking.append((open_stick[0], traj.t_final))
-            sticking_walls.append(open_stick[1])
+        opened = None
+        for i in np.flatnonzero((kind == "zeno") | np.char.startswith(
+                guard.astype(str), "release")):
+            if kind[i] == "zeno":
+                opened = (float(jt.t[i]), 1 if guard[i] == "wall+" else -1)
+            elif opened is not None:
+                sticking.append((opened[0], float(jt.t[i])))
+                sticking_walls.append(opened[1])
+                opened = None
+        if opened is not None:
+            sticking.append((opened[0], traj.t_final))
+            sticking_walls.append(opened[1])
         return ImpactPairTrajectory(
-            impact_times=np.asarray(times, float),
-            walls=np.asarray(walls, int),
-            pre=np.asarray(pre, float).reshape(-1, 4),
-            post=np.asarray(post, float).reshape(-1, 4),
-            grazing=np.asarray(graz, bool),
+            impact_times=np.asarray(jt.t, float)[wall_jump],
+            walls=walls,
+            pre=np.asarray(jt.pre, float)[wall_jump, :4].reshape(-1, 4),
+            post=np.asarray(jt.post, float)[wall_jump, :4].reshape(-1, 4),
+            grazing=(kind[wall_jump] == "grazing").astype(bool),
             sticking=sticking, sticking_walls=sticking_walls,
             termination=traj.termination, t_final=traj.t_final, hybrid=traj,
         )
