@@ -9,7 +9,6 @@ import sys
 import time
 
 import numpy as np
-
 from _common import naive_per_impact
 
 

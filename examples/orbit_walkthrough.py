@@ -11,9 +11,9 @@
 Run: ``python examples/orbit_walkthrough.py [outdir]``.
 """
 import numpy as np
+from _out import out_dir
 from matplotlib.figure import Figure
 
-from _out import out_dir
 from hybridpd import ImpactPair, PDGains
 from hybridpd.impactmap import ImpactMap
 from hybridpd.orbits import symmetric_orbit

@@ -6,9 +6,9 @@ and applies the paper's criterion; basins are a thin layer that maps a grid of t
 
 Run: ``python examples/paper_basins.py [outdir]`` (about a minute on 2 cores).
 """
+from _out import out_dir
 from matplotlib.figure import Figure
 
-from _out import out_dir
 from hybridpd import ImpactPair, PDGains
 from hybridpd.basins import ImpactMapper, basin_of_attraction
 from hybridpd.impactmap import ImpactMap

@@ -6,9 +6,9 @@ viability (18)) and is stable (all multipliers of DP inside the unit circle).
 
 Run: ``python examples/paper_regions.py [outdir]`` (about 5 s).
 """
+from _out import out_dir
 from matplotlib.figure import Figure
 
-from _out import out_dir
 from hybridpd.plotting import plot_regions
 from hybridpd.regions import region_map
 

@@ -8,9 +8,9 @@ impact with a guaranteed first-crossing search.
 Run: ``python examples/simulate_collocated.py [outdir]``.
 """
 import numpy as np
+from _out import out_dir
 from matplotlib.figure import Figure
 
-from _out import out_dir
 from hybridpd import ImpactPair, PDGains, Reference
 from hybridpd.impactpair import ControlledImpactPair
 from hybridpd.plotting import plot_trajectory

@@ -11,10 +11,10 @@ from ._version import __version__
 from .model import Case, ImpactPair, PDGains, Reference, virtual_restitution
 
 __all__ = [
-    "__version__",
     "Case",
     "ImpactPair",
     "PDGains",
     "Reference",
+    "__version__",
     "virtual_restitution",
 ]

@@ -201,7 +201,7 @@ def section_grid(fixed_point, L, x1, y1) -> np.ndarray:
                     axis=-1)
 
 
-def load_basin(path) -> "BasinResult":
+def load_basin(path) -> BasinResult:
     """Read a :class:`BasinResult` written by :meth:`BasinResult.save`."""
     from .sweep import load_npz
 
@@ -340,7 +340,7 @@ class _MapperSpec:
     max_impacts: int
 
     @classmethod
-    def of(cls, m: ImpactMapper) -> "_MapperSpec":
+    def of(cls, m: ImpactMapper) -> _MapperSpec:
         return cls(tuple(m.map.params.tolist()), m.map.case.value, tuple(m.fixed_point.tolist()),
                    m.n_iter, m.criterion, m.escape, tuple(m.cert_Q.ravel().tolist()),
                    m.cert_r2, m.cycle_tol, m.map.tol, m.map.max_impacts)

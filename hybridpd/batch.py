@@ -48,15 +48,15 @@ from numba import njit
 __all__ = [
     "LABELS",
     "STATUS_IMPACT",
-    "STATUS_TIMEOUT",
-    "STATUS_STICK",
-    "STATUS_UNRESOLVED",
     "STATUS_NONFINITE",
-    "pack_params",
-    "next_impact",
+    "STATUS_STICK",
+    "STATUS_TIMEOUT",
+    "STATUS_UNRESOLVED",
     "impact_map",
     "iterate_map",
     "map_labels",
+    "next_impact",
+    "pack_params",
 ]
 
 LABELS = ("converged", "not_converged", "diverged", "zeno_sticking", "unresolved")
@@ -252,7 +252,7 @@ def next_impact(params, case, phi0, x1, y1, x2, y2, t_max, tol):
     dmax = 0.5 * math.pi / w
     tau = 0.0
     for _ in range(_MAX_SAFE_STEPS):
-        X1, Y1, X2, Y2, a2, a3, M2, M3 = _eval(params, case, phi0, x1, y1, x2, y2, tau, dmax)
+        X1, Y1, X2, Y2, a2, _a3, M2, M3 = _eval(params, case, phi0, x1, y1, x2, y2, tau, dmax)
         z3 = X1 - X2
         z4 = Y1 - Y2
         if not (math.isfinite(z3) and math.isfinite(z4) and math.isfinite(M2)):
@@ -486,7 +486,7 @@ def iterate_map(params, case, s0, n_iter, tol=1e-13, max_impacts=1000, stick=Tru
     cur = s0.copy()
     nxt = np.empty(4)
     for i in range(n_iter):
-        st, k = _map_once(params, case, cur, nxt, tol, max_impacts, stick)
+        st, _k = _map_once(params, case, cur, nxt, tol, max_impacts, stick)
         if st != 0:
             return orbit, i, st
         orbit[i + 1] = nxt
@@ -543,7 +543,7 @@ def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
         lab = -1
         it = 0
         for it in range(1, n_iter + 1):
-            st, k = _map_once(params, case, cur, nxt, tol, max_impacts, stick)
+            st, _k = _map_once(params, case, cur, nxt, tol, max_impacts, stick)
             if st != 0:
                 if st == STATUS_STICK + 10:
                     lab = 3

@@ -18,7 +18,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import symbolic
-from .batch import STATUS_IMPACT, _impact_velocities, impact_map, iterate_map, next_impact, pack_params
+from .batch import (
+    STATUS_IMPACT,
+    _impact_velocities,
+    impact_map,
+    iterate_map,
+    next_impact,
+    pack_params,
+)
 from .model import Case, ImpactPair, PDGains, Reference
 
 __all__ = ["ImpactMap", "MapResult", "Stability", "stability"]
@@ -152,7 +159,7 @@ class ImpactMap:
 
     def iterate(self, s0, n: int) -> np.ndarray:
         """Orbit ``s0, P(s0), ..., P^n(s0)`` of shape ``(n + 1, 4)`` (NaN rows after a failure)."""
-        orbit, done, st = iterate_map(self.params, self._c, self._points(s0)[0], int(n),
+        orbit, _done, _st = iterate_map(self.params, self._c, self._points(s0)[0], int(n),
                                       self.tol, self.max_impacts)
         return orbit
 
@@ -183,7 +190,7 @@ class ImpactMap:
                 y1, y2 = _impact_velocities(mu, e, y1, y2)
         raise RuntimeError("no return to the section within max_impacts")
 
-    def jacobian(self, s) -> "symbolic.JacobianResult":
+    def jacobian(self, s) -> symbolic.JacobianResult:
         """``DP`` at ``s`` from the symbolic blocks (the return must be +L, -L, +L)."""
         seq = self.flight_times(s)
         if [w for w, _ in seq] != [-1, 1]:

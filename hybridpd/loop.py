@@ -57,7 +57,7 @@ def _as_controller(controller):
     if isinstance(controller, (ct.StateSpace, ct.TransferFunction)):
         try:
             sys = ct.ss(controller)
-        except Exception as exc:  # improper transfer functions cannot be realised
+        except ValueError as exc:  # improper transfer functions cannot be realised
             raise ValueError(
                 "controller must be a proper LTI system from the tracking error to the force "
                 f"(an improper PD 'kp + kv s' must be given as PDGains or pd_controller): {exc}"

@@ -25,8 +25,8 @@ __all__ = [
     "Reference",
     "check_finite",
     "check_in_range",
-    "check_positive",
     "check_odd_order",
+    "check_positive",
     "virtual_restitution",
 ]
 
@@ -82,7 +82,7 @@ class Case(str, Enum):
     NONCOLLOCATED = "noncollocated"
 
     @classmethod
-    def parse(cls, value) -> "Case":
+    def parse(cls, value) -> Case:
         """Accept a ``Case`` or one of the strings ``"collocated"``, ``"noncollocated"``."""
         if isinstance(value, Case):
             return value

@@ -58,7 +58,7 @@ def _viability_kernel(P, case, phi0, x10, v, x20, y2p, tau, tol, margin, nsamp):
     for i in range(N):
         p = P[i]
         L = p[5]
-        st, t, wall, X1, Y1, X2, Y2, graze = next_impact(
+        st, t, wall, X1, _Y1, _X2, _Y2, _graze = next_impact(
             p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i], tau[i] * (1 + 10 * _END_RTOL), tol)
         if st == STATUS_STICK:
             code[i] = 4
@@ -219,7 +219,7 @@ def symmetric_orbits(kp, kv, *, mu, e, L, omega, m2=1.0, x10=1.0, n=1, case="col
     reason[(~singular) & (xm <= 0)] = 2
     ok = reason == 0
 
-    flat = lambda a: np.ascontiguousarray(np.broadcast_to(a, shape), dtype=float).ravel()  # noqa: E731
+    flat = lambda a: np.ascontiguousarray(np.broadcast_to(a, shape), dtype=float).ravel()
     P = np.stack([flat(kp), flat(kv), flat(m2), flat(mu), flat(e), flat(L), flat(omega),
                   np.where(ok, xm, 0.0).ravel()], axis=1)
     idx = np.flatnonzero(ok.ravel())
@@ -229,7 +229,7 @@ def symmetric_orbits(kp, kv, *, mu, e, L, omega, m2=1.0, x10=1.0, n=1, case="col
     x_c = np.full(P.shape[0], np.nan)
     marg = np.full(P.shape[0], np.nan)
     if idx.size:
-        sub = lambda a: flat(a)[idx]  # noqa: E731
+        sub = lambda a: flat(a)[idx]
         r = _viability_kernel(np.ascontiguousarray(P[idx]), 0 if case is Case.COLLOCATED else 1,
                               sub(cand.phi0), sub(cand.x10), sub(cand.v), sub(cand.x20),
                               sub(cand.y2_post), sub(cand.tau), tol, bool(margin),
@@ -420,7 +420,7 @@ def symmetric_orbit(pair: ImpactPair, gains: PDGains, omega: float, *, x10: floa
     cand = r.candidate
     code = int(r.reason)
     exists = bool(r.exists)
-    sc = lambda a: float(np.asarray(a).reshape(-1)[0])  # noqa: E731
+    sc = lambda a: float(np.asarray(a).reshape(-1)[0])
     v, y2m, y2p = sc(cand.v), sc(cand.y2_pre), sc(cand.y2_post)
     x20 = x10 - pair.L
     pre_plus = np.array([x10, v, x20, y2m])

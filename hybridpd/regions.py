@@ -210,7 +210,7 @@ def region_map(case="collocated", *, x=("kp", 0.1, 50.0, 200), y=("kv", 0.1, 50.
                         max_workers=max_workers, store=store, progress=progress,
                         func_kwargs=kwargs, metadata={"kind": "region_sweep", "version": 1})
         out = res.outputs
-    get = lambda k: np.asarray(out[k]).reshape(shape)  # noqa: E731
+    get = lambda k: np.asarray(out[k]).reshape(shape)
     return RegionMap(case, xname, yname, xs, ys, es, {**fixed, "n": n},
                      get("exists").astype(bool), get("stable").astype(bool),
                      get("spectral_radius").astype(float), get("xm").astype(float),

@@ -55,11 +55,11 @@ class Settings:
     iterations: int = 1500
 
     @classmethod
-    def quick(cls) -> "Settings":
+    def quick(cls) -> Settings:
         return cls(gains=(50.0, 50.0, 61), zoom=(20.0, 6.0, 61), basin=(41, 41))
 
     @classmethod
-    def full(cls) -> "Settings":
+    def full(cls) -> Settings:
         return cls(gains=(50.0, 50.0, 201), zoom=(20.0, 6.0, 201), basin=(201, 201))
 
 

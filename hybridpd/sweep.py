@@ -63,7 +63,7 @@ arrays; its metadata is ``{"hybridpd_sweep": {...identity, layout...},
 # The project's contract is ValueError for every bad input, type errors included
 # (TRY004); the broad excepts are deliberate: each re-raises with context, or
 # degrades to recomputing a chunk, or cleans up before re-raising (BLE001).
-# ruff: noqa: TRY004, BLE001
+# ruff: noqa: BLE001
 
 from __future__ import annotations
 

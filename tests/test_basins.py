@@ -19,7 +19,7 @@ def mapper_for(case, e, kp, kv, **kw):
 
 @pytest.mark.parametrize("case,e,kp,kv", CASES)
 def test_early_exits_give_identical_labels(case, e, kp, kv):
-    o, fast = mapper_for(case, e, kp, kv)
+    _o, fast = mapper_for(case, e, kp, kv)
     _, slow = mapper_for(case, e, kp, kv, early_exit=False)
     b1 = basin_of_attraction(fast, (-3, 5, 13), (-2, 10, 13))
     b2 = basin_of_attraction(slow, (-3, 5, 13), (-2, 10, 13))
@@ -71,7 +71,7 @@ def test_certified_ball_is_invariant_under_iteration():
 
 
 def test_basin_save_load_and_executors_agree(tmp_path):
-    o, m = mapper_for("collocated", 0.5, 10.0, 20.0)
+    _o, m = mapper_for("collocated", 0.5, 10.0, 20.0)
     b1 = basin_of_attraction(m, (-3, 5, 9), (-2, 10, 8))
     b2 = basin_of_attraction(m, (-3, 5, 9), (-2, 10, 8), executor="processes", max_workers=2,
                              chunk_size=10)

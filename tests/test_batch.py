@@ -10,7 +10,13 @@ from scipy.linalg import expm
 from scipy.optimize import brentq
 
 from hybridpd.batch import (
-    STATUS_IMPACT, STATUS_STICK, STATUS_TIMEOUT, _eval, impact_map, next_impact, pack_params,
+    STATUS_IMPACT,
+    STATUS_STICK,
+    STATUS_TIMEOUT,
+    _eval,
+    impact_map,
+    next_impact,
+    pack_params,
 )
 from hybridpd.loop import closed_loop
 from hybridpd.model import ImpactPair, PDGains, Reference
@@ -82,7 +88,7 @@ def test_200_impacts_flight_by_flight_against_solve_ivp(case):
     worst = 0.0
     for k in range(200):
         z0 = cl.initial_state([x1, y1, x2, y2], t)
-        st_, tau, wall, x1, y1, x2, y2, graze = next_impact(p, c, t, x1, y1, x2, y2, 50.0, 1e-13)
+        st_, tau, wall, x1, y1, x2, y2, _graze = next_impact(p, c, t, x1, y1, x2, y2, 50.0, 1e-13)
         assert st_ == STATUS_IMPACT
         if k % 10 == 0:
             tref, wref = flight_reference(cl, z0)
@@ -105,7 +111,8 @@ def test_200_impacts_against_naive_loop_non_chaotic():
     x1, y1, x2, y2, t = 0.3, 0.5, 0.0, 0.0, 0.0
     times = []
     for _ in range(200):
-        st_, tau, wall, x1, y1, x2, y2, graze = next_impact(p, c, t, x1, y1, x2, y2, 50.0, 1e-13)
+        st_, tau, wall, x1, y1, x2, y2, _graze = next_impact(p, c, t, x1, y1, x2, y2, 50.0, 1e-13)
+        assert st_ == STATUS_IMPACT
         t += tau
         times.append(t)
         x1 = x2 + wall * cl.pair.L
@@ -119,7 +126,7 @@ def _gap_max(cl, z0, lo, hi):
     ts = np.linspace(lo, hi, 2001)
     zs = np.array([expm(cl.A * t) @ z0 for t in ts])
     k = int(np.argmax(zs[:, 0] - zs[:, 2]))
-    z4 = lambda t: (expm(cl.A * t) @ z0)[1] - (expm(cl.A * t) @ z0)[3]  # noqa: E731
+    z4 = lambda t: (expm(cl.A * t) @ z0)[1] - (expm(cl.A * t) @ z0)[3]
     tstar = brentq(z4, ts[max(k - 1, 0)], ts[min(k + 1, len(ts) - 1)], xtol=1e-15)
     zs = expm(cl.A * tstar) @ z0
     return tstar, zs[0] - zs[2]
@@ -143,7 +150,7 @@ def test_near_grazing_double_crossing_found_and_near_miss_ignored(delta):
     st_, tau, wall, *_ = next_impact(p, c, 0.0, *x, tstar + 0.3, 1e-15)
     z0 = cl.initial_state(x, 0.0)
     if delta > 0:
-        g = lambda t: cl.pair.L - ((expm(cl.A * t) @ z0)[0] - (expm(cl.A * t) @ z0)[2])  # noqa: E731
+        g = lambda t: cl.pair.L - ((expm(cl.A * t) @ z0)[0] - (expm(cl.A * t) @ z0)[2])
         t1 = brentq(g, 0.0, tstar, xtol=1e-15)
         assert st_ == STATUS_IMPACT and wall == 1
         assert abs(tau - t1) < 1e-9
@@ -179,7 +186,7 @@ def test_no_retrigger_after_impact_but_rebound_found(case):
 
 def test_timeout_when_no_contact():
     # non-collocated loop, m1 at rest in the middle, xm = 0 and m2 at the origin: nothing moves
-    cl, p, c = make(case="noncollocated", xm=0.0)
+    _cl, p, c = make(case="noncollocated", xm=0.0)
     st_, tau, *_ = next_impact(p, c, 0.0, 0.0, 0.0, 0.0, 0.0, 3.0, 1e-13)
     assert st_ == STATUS_TIMEOUT and tau == 3.0
 
@@ -189,7 +196,7 @@ def test_timeout_when_no_contact():
        s=st.tuples(st.floats(0, 1.2), st.floats(-2, 2), st.floats(-3, 3), st.floats(1e-3, 5)))
 def test_map_never_hangs_or_crashes(kp, kv, e, mu, case, s):
     p = pack_params(kp, kv, 1.0, mu, e, 0.75, 5.0, 1.0)
-    out, status, nimp = impact_map(p, CASES.index(case), np.array([s], float))
+    out, status, _nimp = impact_map(p, CASES.index(case), np.array([s], float))
     assert status[0] in (0, 10 + STATUS_STICK, 10 + STATUS_TIMEOUT, 13, 14)
     if status[0] == 0:
         assert np.all(np.isfinite(out)) and out[0, 3] >= 0 and 0 <= out[0, 0] < 2 * np.pi / 5
@@ -221,7 +228,7 @@ def test_stick_release_against_dense_sampling(case, wall):
         z = Phi @ z
     k = int(np.argmax(wall * U > 0))
     assert k > 0
-    Uf = lambda t: wall * (cl.force @ (expm(As * t) @ z0))  # noqa: E731
+    Uf = lambda t: wall * (cl.force @ (expm(As * t) @ z0))
     t_ref = brentq(Uf, ts[k - 1], ts[k], xtol=1e-15)
     assert abs(tau - t_ref) < 1e-7
     zr = expm(As * tau) @ z0
@@ -232,7 +239,7 @@ def test_chattering_run_goes_through_sticking_without_hanging():
     """e = 0.1 from a state that chatters: the map keeps returning (through sticking phases)."""
     from hybridpd.batch import iterate_map
 
-    cl, p, c = make(e=0.1)
+    _cl, p, c = make(e=0.1)
     orbit, done, status = iterate_map(p, c, np.array([0.3, -2.1, -2.3, 0.5]), 300)
     assert status == 0 and done == 300
     assert np.all(np.isfinite(orbit))

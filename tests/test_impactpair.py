@@ -103,7 +103,7 @@ def test_simulate_validation():
 
 def run_cli(*args):
     return subprocess.run([sys.executable, "-m", "hybridpd", *args], capture_output=True,
-                          text=True, timeout=300)
+                          text=True, timeout=300, check=False)
 
 
 def test_cli_simulate_json_and_errors():

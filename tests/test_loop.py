@@ -27,7 +27,7 @@ def test_force_and_flow_match_eq3_eq8(kp, kv, m2, w, case, state):
     U = force_by_hand(s, kp, kv, m2, w, case)
     assert cl.force @ s == pytest.approx(U, rel=1e-12, abs=1e-10)
     ds = cl.A @ s
-    x1, y1, x2, y2, pc, ps = s
+    _x1, y1, _x2, y2, pc, ps = s
     assert np.allclose(ds, [y1, 0, y2, U / m2, -w * ps, w * pc], rtol=1e-12, atol=1e-9)
 
 

@@ -6,7 +6,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from hybridpd.model import Case, ImpactPair, PDGains, Reference, check_odd_order, virtual_restitution
+from hybridpd.model import (
+    Case,
+    ImpactPair,
+    PDGains,
+    Reference,
+    check_odd_order,
+    virtual_restitution,
+)
 
 finite = dict(allow_nan=False, allow_infinity=False)
 
