@@ -68,32 +68,32 @@ import numpy as np
 from .model import Case
 
 __all__ = [
+    "Derivation",
+    "ImpactMapResult",
+    "JacobianResult",
+    "SymmetricOrbit",
     "dch",
+    "derivation",
     "dsh",
-    "system_matrix",
-    "transition_matrix",
+    "flight_block",
+    "flight_section_map",
+    "flight_time",
     "flow",
     "gap",
     "gap_derivatives",
-    "state_from_section",
-    "section_from_state",
-    "virtual_restitution",
-    "symmetric_velocities",
-    "SymmetricOrbit",
-    "symmetric_orbit",
-    "impact_section_map",
     "impact_block",
-    "flight_section_map",
-    "flight_block",
-    "flight_time",
-    "ImpactMapResult",
     "impact_map",
-    "JacobianResult",
+    "impact_section_map",
     "map_jacobian",
     "orbit_jacobian",
-    "Derivation",
-    "derivation",
+    "section_from_state",
+    "state_from_section",
+    "symmetric_orbit",
+    "symmetric_velocities",
     "sympy_functions",
+    "system_matrix",
+    "transition_matrix",
+    "virtual_restitution",
 ]
 
 
@@ -181,7 +181,7 @@ _NUMERIC_MODULES = [{"DCh": dch, "DSh": dsh}, "numpy"]
 # ----------------------------------------------------------------------------------------
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def sympy_functions():
     """Return the SymPy function classes ``(DCh, DSh)`` (built once, on first call).
 
@@ -194,8 +194,8 @@ def sympy_functions():
     "numpy"]``).
     """
     import sympy as sp
-    from sympy.core.function import ArgumentIndexError
     from sympy.core.evalf import prec_to_dps
+    from sympy.core.function import ArgumentIndexError
 
     def _numeric_value(a, D, t, which, prec):
         dps = prec_to_dps(prec)
@@ -241,9 +241,10 @@ def sympy_functions():
             return sp.exp(-a * t) * sp.cosh(sp.sqrt(D) * t)
 
         def _latex(self, printer, exp=None):
+            # %-formatting: LaTeX braces would need doubling with str.format / f-strings
             a, D, t = (printer._print(x) for x in self.args)
-            s = r"\operatorname{Ch}_{%s}\left(%s, %s\right)" % (a, D, t)
-            return s if exp is None else r"%s^{%s}" % (s, exp)
+            s = r"\operatorname{Ch}_{%s}\left(%s, %s\right)" % (a, D, t)  # noqa: UP031
+            return s if exp is None else r"%s^{%s}" % (s, exp)  # noqa: UP031
 
     class DSh(sp.Function):
         """``exp(-a t) sinh(sqrt(D) t)/sqrt(D)`` (entire in ``D``); arguments ``(a, D, t)``."""
@@ -277,13 +278,13 @@ def sympy_functions():
 
         def _latex(self, printer, exp=None):
             a, D, t = (printer._print(x) for x in self.args)
-            s = r"\operatorname{Sh}_{%s}\left(%s, %s\right)" % (a, D, t)
-            return s if exp is None else r"%s^{%s}" % (s, exp)
+            s = r"\operatorname{Sh}_{%s}\left(%s, %s\right)" % (a, D, t)  # noqa: UP031
+            return s if exp is None else r"%s^{%s}" % (s, exp)  # noqa: UP031
 
     return DCh, DSh
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _symbols():
     import sympy as sp
 
@@ -402,7 +403,7 @@ def _case(case) -> str:
     return Case.parse(case).value
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _flow_derivation(case: str):
     import sympy as sp
 
@@ -458,7 +459,7 @@ def _flow_derivation(case: str):
     return dict(flow=flow, A=A, Phi=Phi, gap=gaps, param_subs=param_subs)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _existence_derivation(case: str):
     import sympy as sp
 
@@ -483,7 +484,7 @@ def _existence_derivation(case: str):
                 C=Csol, S=Ssol, xm=xm, sn=Ssol / xm, cs=Csol / xm)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _impact_block_derivation():
     import sympy as sp
 
@@ -498,7 +499,7 @@ def _impact_block_derivation():
     return out.jacobian([phi, z1, z2, z4]).applyfunc(sp.factor)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _flight_derivation(case: str):
     import sympy as sp
 
@@ -543,7 +544,7 @@ def derivation(case="collocated") -> Derivation:
     return _derivation(case)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _derivation(case: str) -> Derivation:
     fd = _flow_derivation(case)
     ex = _existence_derivation(case)
@@ -580,7 +581,7 @@ def _stack(values, shape, axis=-1):
                     axis=axis)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _flow_numeric(case: str):
     fd = _flow_derivation(case)
     y = _symbols()
@@ -779,7 +780,7 @@ def symmetric_velocities(*, mu, e, w, x10, n=1):
             (v * (e + 2 * e * mu - 1) / (1 + e))[()])
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _existence_numeric(case: str):
     import sympy as sp
 
@@ -956,7 +957,7 @@ def symmetric_orbit(*, kp, kv, m2=1.0, mu, e, L, w, x10, n=1,
         T = 2.0 * np.pi / w
         phi0 = np.mod(np.arctan2(S, C) / w, T)
     v, y2m, y2p = symmetric_velocities(mu=mu, e=e, w=w, x10=x10, n=nf)
-    b = lambda a: np.broadcast_to(np.asarray(a, dtype=float), shape)[()]  # noqa: E731
+    b = lambda a: np.broadcast_to(np.asarray(a, dtype=float), shape)[()]
     return SymmetricOrbit(
         case=case, kp=b(kp), kv=b(kv), m2=b(m2), mu=b(mu), e=b(e), L=b(L), w=b(w), x10=b(x10),
         n=b(nf), C=b(C), S=b(S), xm=b(xm), sn=b(sn), cs=b(cs), phi0=b(phi0), T=b(T),
@@ -995,7 +996,7 @@ def impact_block(*, mu, e) -> np.ndarray:
     return B
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _flight_numeric(case: str):
     fl = _flight_derivation(case)
     fd = _flow_derivation(case)
@@ -1134,8 +1135,8 @@ def flight_time(s, *, xm, kp, kv, m2=1.0, w, L, wall=1, case="collocated",
         return res if return_wall else res[0]
     if tmax is None:
         tmax = 50 * T
-    wn = math.sqrt(kp / m2)
-    h = min(T / 64, 1 / (8 * wn), 1 / (8 * max(kv / (2 * m2), 1e-300)))
+    rate = max(math.sqrt(abs(kp / m2)), abs(kv / (2 * m2)), 1e-300)
+    h = min(T / 64, 1 / (8 * rate))
     nchunk = 256
     t0 = 0.0
     while t0 < tmax:
@@ -1164,6 +1165,9 @@ def _first_root(g, gd, tt, gv, gdv, departing=False):
     from scipy.optimize import brentq
 
     def root(a, b):
+        ga, gb = g(a), g(b)
+        if ga * gb > 0:  # grid and scalar evaluations differ in the last bit at an endpoint
+            return a if abs(ga) < abs(gb) else b
         return brentq(g, a, b, xtol=1e-15, rtol=1e-15, maxiter=200)
 
     for k in range(len(tt) - 1):
@@ -1174,7 +1178,9 @@ def _first_root(g, gd, tt, gv, gdv, departing=False):
         if ga == 0.0 and not first:
             return a
         if da * db < 0:  # an extremum inside: split there
-            tm = brentq(gd, a, b, xtol=1e-15, rtol=1e-15, maxiter=200)
+            dA, dB = gd(a), gd(b)
+            tm = (brentq(gd, a, b, xtol=1e-15, rtol=1e-15, maxiter=200) if dA * dB < 0
+                  else (a if abs(dA) < abs(dB) else b))
             gm = g(tm)
             if not first and ga * gm < 0:
                 return root(a, tm)

@@ -27,11 +27,11 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-import numpy as np  # noqa: E402
-import sympy as sp  # noqa: E402
-from scipy.integrate import solve_ivp  # noqa: E402
+import numpy as np
+import sympy as sp
+from scipy.integrate import solve_ivp
 
-from hybridpd import symbolic as hs  # noqa: E402
+from hybridpd import symbolic as hs
 
 SAMPLE = dict(kp=10.0, kv=20.0, m2=1.0, mu=0.1, e=0.5, L=0.75, w=5.0, x10=1.0)
 

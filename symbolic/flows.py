@@ -29,11 +29,11 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-import numpy as np  # noqa: E402
-import sympy as sp  # noqa: E402
-from scipy.linalg import expm  # noqa: E402
+import numpy as np
+import sympy as sp
+from scipy.linalg import expm
 
-from hybridpd import symbolic as hs  # noqa: E402
+from hybridpd import symbolic as hs
 
 
 def show(label, expr, latex=False):
