@@ -39,6 +39,7 @@ from scipy.linalg import solve_discrete_lyapunov
 
 from .batch import map_labels
 from .impactmap import ImpactMap
+from .model import check_axis
 
 __all__ = ["LABELS", "BasinResult", "ImpactMapper", "basin_of_attraction", "load_basin",
            "section_grid"]
@@ -214,18 +215,6 @@ def load_basin(path) -> BasinResult:
                        meta)
 
 
-def _check_axis(name, spec):
-    lo, hi, num = spec
-    lo, hi = float(lo), float(hi)
-    if not (math.isfinite(lo) and math.isfinite(hi)):
-        raise ValueError(f"{name} range must be finite, got {spec!r}")
-    if not hi > lo:
-        raise ValueError(f"{name} range must be increasing (MIN < MAX), got {spec!r}")
-    if int(num) != num or int(num) < 1:
-        raise ValueError(f"{name} NUM must be a positive integer, got {num!r}")
-    return np.linspace(lo, hi, int(num))
-
-
 @dataclass(frozen=True)
 class BasinResult:
     """A basin of attraction on a 2-D slice of the section.
@@ -293,8 +282,8 @@ def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chun
     -------
     BasinResult
     """
-    xs = _check_axis("x1", x1)
-    ys = _check_axis("y1", y1)
+    xs = check_axis("x1", x1)
+    ys = check_axis("y1", y1)
     L = mapper.map.pair.L
     grid = section_grid(mapper.fixed_point, L, xs, ys)
     pts = grid.reshape(-1, 4)

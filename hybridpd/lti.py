@@ -89,6 +89,7 @@ from .events import (
 from .impactmap import Stability, stability
 from .loop import ClosedLoop, closed_loop
 from .model import Case, ImpactPair, Reference, check_odd_order, check_positive
+from .orbits import _END_RTOL, _HYPERBOLIC_TOL, REASONS
 
 __all__ = [
     "LTI_REASONS",
@@ -102,18 +103,9 @@ __all__ = [
     "lti_symmetric_orbit",
 ]
 
-#: Reason codes of :attr:`LTIOrbitResult.code` (same numbering as :data:`hybridpd.orbits.REASONS`).
-LTI_REASONS = {
-    0: "exists",
-    1: "no solution: the symmetry conditions are singular",
-    2: "no solution: xm = 0",
-    3: "viability violated: extra contact between the impacts",
-    4: "viability violated: the masses stick after the impact (zero rebound, force pressing)",
-    5: "viability undecided: contact location did not resolve",
-}
+#: Reason codes of :attr:`LTIOrbitResult.code`: the same as for the PD fast path.
+LTI_REASONS = REASONS
 
-_HYPERBOLIC_TOL = 1e-9
-_END_RTOL = 1e-7        # a contact this close to n T / 2 (relative) is the orbit's own impact
 _WALL_PLUS, _WALL_MINUS = 0, 1   # guard indices in the free-flight mode
 
 

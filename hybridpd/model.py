@@ -23,6 +23,7 @@ __all__ = [
     "ImpactPair",
     "PDGains",
     "Reference",
+    "check_axis",
     "check_finite",
     "check_in_range",
     "check_odd_order",
@@ -69,6 +70,28 @@ def check_odd_order(n) -> int:
             f"n must be a positive odd integer (symmetric orbits need odd n), got {n!r}"
         )
     return ni
+
+
+def check_axis(name: str, spec, *, min_num: int = 1, positive: bool = False) -> np.ndarray:
+    """Validate a grid axis ``(MIN, MAX, NUM)`` and return ``linspace(MIN, MAX, NUM)``.
+
+    Requires finite ``MIN < MAX``, an integer ``NUM >= min_num`` and, with ``positive``,
+    ``MIN > 0``.
+    """
+    try:
+        lo, hi, num = spec
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be (MIN, MAX, NUM), got {spec!r}") from None
+    lo, hi = float(lo), float(hi)
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise ValueError(f"{name} range must be finite, got {spec!r}")
+    if not hi > lo:
+        raise ValueError(f"{name} range must be increasing (MIN < MAX), got {spec!r}")
+    if not (float(num) == int(num) and int(num) >= min_num):
+        raise ValueError(f"{name} NUM must be an integer >= {min_num}, got {num!r}")
+    if positive and lo <= 0:
+        raise ValueError(f"{name} values must be > 0 (allowed range (0, inf)), got MIN = {lo:g}")
+    return np.linspace(lo, hi, int(num))
 
 
 class Case(str, Enum):

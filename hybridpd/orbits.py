@@ -35,7 +35,7 @@ __all__ = ["REASONS", "OrbitArrays", "SymmetricOrbitResult", "symmetric_orbit", 
 #: Codes of :attr:`OrbitArrays.reason`.
 REASONS = {
     0: "exists",
-    1: "no solution: the conditions (13)-(14) are singular",
+    1: "no solution: the symmetry conditions (13)-(14) are singular",
     2: "no solution: xm = 0",
     3: "viability violated: extra contact between the impacts",
     4: "viability violated: the masses stick after the impact (zero rebound, force pressing)",

@@ -7,35 +7,17 @@ rigorous viability, multipliers of ``DP``). Arrays are indexed ``[e][y][x]``.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from .model import Case, check_odd_order, check_positive
+from .model import Case, check_axis, check_odd_order, check_positive
 from .orbits import REASONS, symmetric_orbits
 
 __all__ = ["AXES", "RegionMap", "load_region_map", "region_map"]
 
 #: Parameters a region map can sweep (any two of them), besides the list of ``e``.
 AXES = ("kp", "kv", "mu", "L", "omega", "m2", "x10")
-
-
-def _axis(name, spec):
-    try:
-        lo, hi, num = spec
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be (MIN, MAX, NUM), got {spec!r}") from None
-    lo, hi = float(lo), float(hi)
-    if not (math.isfinite(lo) and math.isfinite(hi)):
-        raise ValueError(f"{name} range must be finite, got {spec!r}")
-    if not hi > lo:
-        raise ValueError(f"{name} range must be increasing (MIN < MAX), got {spec!r}")
-    if not (float(num) == int(num) and int(num) >= 2):
-        raise ValueError(f"{name} NUM must be an integer >= 2, got {num!r}")
-    if lo <= 0:
-        raise ValueError(f"{name} values must be > 0 (allowed range (0, inf)), got MIN = {lo:g}")
-    return np.linspace(lo, hi, int(num))
 
 
 @dataclass(frozen=True)
@@ -137,7 +119,8 @@ def _region_chunk(chunk, case, n, fixed):
 
 
 def region_map(case="collocated", *, x=("kp", 0.1, 50.0, 200), y=("kv", 0.1, 50.0, 200),
-               e=(0.1, 0.5, 0.9), mu, omega, L=None, gamma=None, x10=1.0, m2=1.0, n=1,
+               e=(0.1, 0.5, 0.9), mu=None, omega=None, L=None, gamma=None, x10=1.0,
+               m2=1.0, n=1,
                kp=None, kv=None, executor="serial", max_workers=None, chunk_size=None,
                store=None, progress=False) -> RegionMap:
     """Existence and stability of the symmetric orbit over a grid of two parameters.
@@ -176,26 +159,33 @@ def region_map(case="collocated", *, x=("kp", 0.1, 50.0, 200), y=("kv", 0.1, 50.
             raise ValueError(f"axis name must be one of {AXES}, got {nm!r}")
     if xname == yname:
         raise ValueError(f"the two axes must differ, got {xname!r} twice")
-    xs, ys = _axis(xname, x[1:]), _axis(yname, y[1:])
+    xs = check_axis(xname, x[1:], min_num=2, positive=True)
+    ys = check_axis(yname, y[1:], min_num=2, positive=True)
     es = np.atleast_1d(np.asarray(e, dtype=float))
     if es.size == 0 or es.ndim != 1:
         raise ValueError("e must be a non-empty list of restitution coefficients")
     if not np.all(np.isfinite(es)) or np.any((es < 0) | (es > 1)):
         raise ValueError(f"e must lie in [0, 1], got {es.tolist()}")
-    x10 = check_positive("x10", x10)
-    if (L is None) == (gamma is None):
+    swept = (xname, yname)
+    if "x10" not in swept:
+        x10 = check_positive("x10", x10)
+    if "L" in swept:
+        if gamma is not None or L is not None:
+            raise ValueError("L is a swept axis: do not give L or gamma as well")
+    elif (L is None) == (gamma is None):
         raise ValueError("give exactly one of L or gamma (L = gamma * x10)")
-    L = check_positive("L", L) if L is not None else check_positive("gamma", gamma) * x10
-    fixed = {"mu": check_positive("mu", mu), "omega": check_positive("omega", omega), "L": L,
-             "x10": x10, "m2": check_positive("m2", m2)}
-    for nm, val in (("kp", kp), ("kv", kv)):
-        if nm in (xname, yname):
+    elif L is None and "x10" in swept:
+        raise ValueError("with x10 swept give L, not gamma (L would change along the axis)")
+    else:
+        L = check_positive("L", L) if L is not None else check_positive("gamma", gamma) * x10
+    given = {"mu": mu, "omega": omega, "L": L, "x10": x10, "m2": m2, "kp": kp, "kv": kv}
+    fixed = {}
+    for nm, val in given.items():
+        if nm in swept:
             continue
         if val is None:
             raise ValueError(f"{nm} must be given when it is not a swept axis")
         fixed[nm] = check_positive(nm, val)
-    for nm in (xname, yname):
-        fixed.pop(nm, None)
 
     E, Y, X = np.meshgrid(es, ys, xs, indexing="ij")
     points = {"e": E.ravel(), yname: Y.ravel(), xname: X.ravel()}
