@@ -58,7 +58,7 @@ def test_same_results_serial_processes_dask():
 
 
 def test_interrupted_sweep_resumes_to_the_same_file(tmp_path, monkeypatch):
-    import hybridpd.regions as regions
+    from hybridpd import regions
 
     kw = dict(x=("kp", 0.5, 30, 9), y=("kv", 0.2, 20, 8), e=(0.5,), chunk_size=10, **PAPER)
     full = region_map("collocated", store=tmp_path / "full.npz", executor="serial", **kw)
