@@ -1259,6 +1259,28 @@ def _ns_angle(pt):
 # ----------------------------------------------------------------------------------------
 
 
+def _path_steps(name, p0, stop, step, max_step, min_step, max_steps, defaults):
+    """Validate a continuation path ``p0 -> stop`` and its step sizes.
+
+    ``defaults = (n_steps, n_max, min_fraction)``: unset sizes become ``span / n_steps``,
+    ``span / n_max`` and ``span * min_fraction``. Returns
+    ``(span, step, max_step, min_step, max_steps)``.
+    """
+    if not _in_domain(name, stop):
+        lo, hi, _ = _domain(name)
+        raise ValueError(f"stop = {stop!r} is outside the domain of {name} ({lo:g}, {hi:g})")
+    if stop == p0:
+        raise ValueError(f"stop must differ from the starting value {name} = {p0!r}")
+    n_steps, n_max, min_fraction = defaults
+    span = abs(stop - p0)
+    step = span / n_steps if step is None else _positive_float("step", step)
+    max_step = span / n_max if max_step is None else _positive_float("max_step", max_step)
+    min_step = span * min_fraction if min_step is None else _positive_float("min_step", min_step)
+    if min_step > step:
+        raise ValueError(f"min_step = {min_step!r} must not exceed step = {step!r}")
+    return span, step, max(max_step, step), min_step, _positive_int("max_steps", max_steps)
+
+
 def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
                    period: int = 1, method: str = "arclength", step: float | None = None,
                    min_step: float | None = None, max_step: float | None = None,
@@ -1347,19 +1369,8 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
         raise ValueError(f"method must be 'arclength' or 'natural', got {method!r}")
     k = _positive_int("period", period)
     p0 = _map_value(P0, name)
-    if not _in_domain(name, stop):
-        lo, hi, _ = _domain(name)
-        raise ValueError(f"stop = {stop!r} is outside the domain of {name} ({lo:g}, {hi:g})")
-    if stop == p0:
-        raise ValueError(f"stop must differ from the starting value {name} = {p0!r}")
-    span = abs(stop - p0)
-    step = span / 50 if step is None else _positive_float("step", step)
-    max_step = span / 10 if max_step is None else _positive_float("max_step", max_step)
-    min_step = span * 1e-7 if min_step is None else _positive_float("min_step", min_step)
-    if min_step > step:
-        raise ValueError(f"min_step = {min_step!r} must not exceed step = {step!r}")
-    max_step = max(max_step, step)
-    max_steps = _positive_int("max_steps", max_steps)
+    span, step, max_step, min_step, max_steps = _path_steps(
+        name, p0, stop, step, max_step, min_step, max_steps, (50, 10, 1e-7))
     tol = _positive_float("tol", tol)
     max_newton = _positive_int("max_newton", max_newton)
     if jacobian not in ("auto", "symbolic", "fd"):
@@ -1766,19 +1777,8 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
     base = {"kp": gains.kp, "kv": gains.kv, "e": pair.e, "mu": pair.mu, "L": pair.L,
             "omega": omega, "x10": x10, "m2": pair.m2}
     p0 = base[name]
-    if not _in_domain(name, stop):
-        lo, hi, _ = _domain(name)
-        raise ValueError(f"stop = {stop!r} is outside the domain of {name} ({lo:g}, {hi:g})")
-    if stop == p0:
-        raise ValueError(f"stop must differ from the starting value {name} = {p0!r}")
-    span = abs(stop - p0)
-    step = span / 100 if step is None else _positive_float("step", step)
-    max_step = span / 20 if max_step is None else _positive_float("max_step", max_step)
-    min_step = span * 1e-6 if min_step is None else _positive_float("min_step", min_step)
-    if min_step > step:
-        raise ValueError(f"min_step = {min_step!r} must not exceed step = {step!r}")
-    max_step = max(max_step, step)
-    max_steps = _positive_int("max_steps", max_steps)
+    _, step, max_step, min_step, max_steps = _path_steps(
+        name, p0, stop, step, max_step, min_step, max_steps, (100, 20, 1e-6))
     max_change = _positive_float("max_change", max_change)
     event_tol = _positive_float("event_tol", event_tol)
     margin_samples = _positive_int("margin_samples", margin_samples)
