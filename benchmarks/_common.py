@@ -22,7 +22,7 @@ def naive_per_impact(case="collocated", e=0.5, kp=10.0, kv=20.0, xm=1.0, n_impac
     terminal events, restart after each impact) and its impact times."""
     from hybridpd.loop import closed_loop
     from hybridpd.model import ImpactPair, PDGains, Reference
-    from hybridpd.naive import naive_simulate
+    from hybridpd.pair.naive import naive_simulate
 
     cl = closed_loop(ImpactPair(0.1, e, 0.75), PDGains(kp, kv), Reference(xm, 5.0), case)
     t0 = time.perf_counter()

@@ -3,9 +3,9 @@
 Run ``python benchmarks/bench_automaton.py`` (after one warm-up run has filled numba's cache).
 Prints microseconds of compute per impact for
 
-* the forced oscillator against a stop (:func:`hybridpd.samples.impact_oscillator`),
+* the forced oscillator against a stop (:func:`hybridpd.hybrid.samples.impact_oscillator`),
 * the ball on a vibrating table (sticking and releases included),
-* one raw kernel call (:func:`hybridpd.events.advance`) from Python,
+* one raw kernel call (:func:`hybridpd.hybrid.events.advance`) from Python,
 * a ``scipy.integrate.solve_ivp`` loop (DOP853, rtol = atol = 1e-12, terminal events) on the
   oscillator, and the largest difference of the impact times.
 """
@@ -18,8 +18,8 @@ import timeit
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from hybridpd.events import advance, prepare_lti_mode
-from hybridpd.samples import (
+from hybridpd.hybrid.events import advance, prepare_lti_mode
+from hybridpd.hybrid.samples import (
     ball_initial_state,
     bouncing_ball,
     impact_oscillator,

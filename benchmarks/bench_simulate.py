@@ -10,7 +10,7 @@ and two accuracy figures:
   the global figure only measures where they part;
 * the largest per-flight error: each flight restarted from hybridpd's post-impact state (local
   accuracy, which is what "equal or better accuracy" means here) for both hybridpd and the
-  naive solver, against the closed-form flight of :mod:`hybridpd.batch` located to a gap
+  naive solver, against the closed-form flight of :mod:`hybridpd.pair.batch` located to a gap
   tolerance of 1e-15 (an independent method, exact up to rounding).
 
 Run: ``python benchmarks/bench_simulate.py``.
@@ -21,8 +21,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from hybridpd import ImpactPair, PDGains, Reference
-from hybridpd.impactpair import ControlledImpactPair
-from hybridpd.naive import naive_simulate
+from hybridpd.pair.impactpair import ControlledImpactPair
+from hybridpd.pair.naive import naive_simulate
 
 N = 3000
 
@@ -67,7 +67,7 @@ def main():
     print(f"largest impact-time difference over the run: {diff.max():.3g} (the runs agree to "
           f"1e-6 up to impact {part}: chaotic transient)")
     # local accuracy, flight by flight from hybridpd's post-impact states
-    from hybridpd.batch import next_impact, pack_params
+    from hybridpd.pair.batch import next_impact, pack_params
 
     cl = sysm.loop
     p = pack_params(10, 20, 1, 0.1, 0.5, 0.75, 5.0, 1.0)

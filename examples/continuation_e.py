@@ -23,14 +23,14 @@ from _out import out_dir
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains, Reference
-from hybridpd.continuation import (
+from hybridpd.analysis.continuation import (
     continue_orbit,
     continue_symmetric,
     find_periodic_orbit,
     plot_branch,
 )
-from hybridpd.impactmap import ImpactMap
-from hybridpd.orbits import symmetric_orbit
+from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.analysis.orbits import symmetric_orbit
 
 MU, L, OMEGA, KP = 0.1, 0.75, 5.0, 10.0
 RUNS = [("collocated", 0.1), ("noncollocated", 0.5)]

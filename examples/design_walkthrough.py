@@ -27,8 +27,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, Reference
-from hybridpd.design import robustness_comparison, shifted_orbit
-from hybridpd.impactmap import ImpactMap
+from hybridpd.analysis.design import robustness_comparison, shifted_orbit
+from hybridpd.analysis.impactmap import ImpactMap
 
 SPEC = {"mu": 0.1, "e": 0.5, "gamma": 0.75, "x10": 1.0, "omega": 5.0, "n": 1}
 BOX = {"e_range": (0.3, 0.7), "mu_range": (0.08, 0.12)}

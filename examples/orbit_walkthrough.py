@@ -15,8 +15,8 @@ from _out import out_dir
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.impactmap import ImpactMap
-from hybridpd.orbits import symmetric_orbit
+from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.analysis.orbits import symmetric_orbit
 
 orb = symmetric_orbit(ImpactPair(mu=0.1, e=0.5, L=0.75), PDGains(kp=10, kv=20), omega=5.0,
                       x10=1.0, n=1, case="collocated")

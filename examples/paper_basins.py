@@ -10,10 +10,10 @@ from _out import out_dir
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.basins import ImpactMapper, basin_of_attraction
-from hybridpd.impactmap import ImpactMap
-from hybridpd.orbits import symmetric_orbit
+from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.analysis.orbits import symmetric_orbit
 from hybridpd.plotting import plot_basin
+from hybridpd.sweeps.basins import ImpactMapper, basin_of_attraction
 
 fig = Figure(figsize=(16, 9))
 for row, case in enumerate(("collocated", "noncollocated")):

@@ -10,7 +10,7 @@ from _out import out_dir
 from matplotlib.figure import Figure
 
 from hybridpd.plotting import plot_regions
-from hybridpd.regions import region_map
+from hybridpd.sweeps.regions import region_map
 
 common = dict(e=(0.1, 0.5, 0.9), mu=0.1, omega=5.0, gamma=0.75, x10=1.0, n=1)
 col = region_map("collocated", x=("kp", 0.1, 50, 150), y=("kv", 0.1, 50, 150), **common)

@@ -12,7 +12,7 @@ from _out import out_dir
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains, Reference
-from hybridpd.impactpair import ControlledImpactPair
+from hybridpd.pair.impactpair import ControlledImpactPair
 from hybridpd.plotting import plot_trajectory
 
 pair = ImpactPair(mu=0.1, e=0.5, L=0.75)

@@ -7,8 +7,8 @@ state order ``[x1, y1, x2, y2, pc, ps]``, reference ``xd = xm cos(w t)``, Poinca
 
 Importing the package is cheap: SymPy derivations and numba kernels are built on first use.
 """
-from ._version import __version__
-from .model import Case, ImpactPair, PDGains, Reference, virtual_restitution
+from hybridpd._version import __version__
+from hybridpd.model import Case, ImpactPair, PDGains, Reference, virtual_restitution
 
 __all__ = [
     "Case",

@@ -1,6 +1,6 @@
 """``python -m hybridpd`` runs the command-line interface."""
 import sys
 
-from .cli import main
+from hybridpd.cli import main
 
 sys.exit(main())

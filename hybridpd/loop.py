@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .model import Case, ImpactPair, PDGains, Reference
+from hybridpd.model import Case, ImpactPair, PDGains, Reference
 
 __all__ = ["ClosedLoop", "closed_loop", "pd_controller"]
 

@@ -64,7 +64,7 @@ def plot_basin(basin, ax=None, title=None):
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
-    from .basins import LABELS
+    from hybridpd.sweeps.basins import LABELS
 
     fig, ax = _figure(ax, figsize=(6, 5))
     colors = ["#3b75af", "#f2f2f2", "#d95f02", "#7570b3", "#e7298a", "#ffffff"]

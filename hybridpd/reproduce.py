@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .model import ImpactPair, PDGains
+from hybridpd.model import ImpactPair, PDGains
 
 __all__ = ["PAPER", "Settings", "reproduce"]
 
@@ -95,11 +95,11 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
     settings : Settings, optional
         Explicit grid sizes (overrides ``mode``; e.g. small grids for a smoke test).
     """
-    from .basins import ImpactMapper, basin_of_attraction
-    from .impactmap import ImpactMap
-    from .orbits import symmetric_orbit
-    from .plotting import plot_basin, plot_regions
-    from .regions import region_map
+    from hybridpd.analysis.impactmap import ImpactMap
+    from hybridpd.analysis.orbits import symmetric_orbit
+    from hybridpd.plotting import plot_basin, plot_regions
+    from hybridpd.sweeps.basins import ImpactMapper, basin_of_attraction
+    from hybridpd.sweeps.regions import region_map
 
     if mode not in ("quick", "full"):
         raise ValueError(f"mode must be 'quick' or 'full', got {mode!r}")
@@ -226,7 +226,7 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
         fig.tight_layout()
         fig.savefig(out / figname, dpi=110)
 
-    from .design import robustness_comparison
+    from hybridpd.analysis.design import robustness_comparison
 
     t0 = time.perf_counter()
     comparison = robustness_comparison(mu=P["mu"], gamma=P["gamma"], x10=P["x10"], n=P["n"],
@@ -295,7 +295,7 @@ def _summary(maps, zoom, orbits, basins, subst, settings, mode, timings, total, 
     w("| case | e | gains | converged (% of on-section grid) | converged area (x1*y1 units) "
       "| label counts |")
     w("|---|---|---|---|---|---|")
-    from .basins import LABELS
+    from hybridpd.sweeps.basins import LABELS
 
     for (case, e, tag), b in basins.items():
         if b is None:
@@ -412,8 +412,8 @@ def _summary(maps, zoom, orbits, basins, subst, settings, mode, timings, total, 
     w("## Files\n")
     w("`fig4_regions_collocated.png`, `fig5_regions_noncollocated.png`, "
       "`fig6_basins_collocated.png`, `fig7_basins_noncollocated.png`; data: "
-      "`regions_*.npz` (load with `hybridpd.regions.load_region_map`), `basin_*.npz` (load with "
-      "`hybridpd.basins.load_basin`), `robustness.json` (conclusion 5).\n")
+      "`regions_*.npz` (load with `hybridpd.sweeps.regions.load_region_map`), `basin_*.npz` (load with "
+      "`hybridpd.sweeps.basins.load_basin`), `robustness.json` (conclusion 5).\n")
     w("## Timings (s)\n")
     for k, v in timings.items():
         w(f"- {k}: {v:.2f}")
@@ -423,7 +423,7 @@ def _summary(maps, zoom, orbits, basins, subst, settings, mode, timings, total, 
 
 def summary_json(path) -> dict:
     """Small machine-readable digest of a reproduction directory (for scripts)."""
-    from .regions import load_region_map
+    from hybridpd.sweeps.regions import load_region_map
 
     d = Path(path)
     res = {}

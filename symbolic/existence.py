@@ -31,7 +31,7 @@ import numpy as np
 import sympy as sp
 from scipy.integrate import solve_ivp
 
-from hybridpd import symbolic as hs
+from hybridpd.pair import symbolic as hs
 
 SAMPLE = dict(kp=10.0, kv=20.0, m2=1.0, mu=0.1, e=0.5, L=0.75, w=5.0, x10=1.0)
 

@@ -33,7 +33,7 @@ import numpy as np
 import sympy as sp
 from scipy.linalg import expm
 
-from hybridpd import symbolic as hs
+from hybridpd.pair import symbolic as hs
 
 
 def show(label, expr, latex=False):

@@ -1,4 +1,4 @@
-"""Generic guard/reset hybrid automaton (hybridpd.automaton)."""
+"""Generic guard/reset hybrid automaton (hybridpd.hybrid.automaton)."""
 import math
 
 import numpy as np
@@ -7,7 +7,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
-from hybridpd.automaton import (
+from hybridpd.hybrid.automaton import (
     Guard,
     HybridAutomaton,
     HybridTrajectory,

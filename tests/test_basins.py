@@ -3,9 +3,15 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.basins import LABELS, ImpactMapper, basin_of_attraction, load_basin, section_grid
-from hybridpd.impactmap import ImpactMap
-from hybridpd.orbits import symmetric_orbit
+from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.analysis.orbits import symmetric_orbit
+from hybridpd.sweeps.basins import (
+    LABELS,
+    ImpactMapper,
+    basin_of_attraction,
+    load_basin,
+    section_grid,
+)
 
 CASES = [("collocated", 0.5, 10.0, 20.0), ("collocated", 0.1, 10.0, 20.0),
          ("noncollocated", 0.1, 5.4, 2.5), ("noncollocated", 0.5, 10.0, 20.0)]

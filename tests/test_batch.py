@@ -9,7 +9,9 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 from scipy.optimize import brentq
 
-from hybridpd.batch import (
+from hybridpd.loop import closed_loop
+from hybridpd.model import ImpactPair, PDGains, Reference
+from hybridpd.pair.batch import (
     STATUS_IMPACT,
     STATUS_STICK,
     STATUS_TIMEOUT,
@@ -18,8 +20,6 @@ from hybridpd.batch import (
     next_impact,
     pack_params,
 )
-from hybridpd.loop import closed_loop
-from hybridpd.model import ImpactPair, PDGains, Reference
 
 CASES = ("collocated", "noncollocated")
 
@@ -103,7 +103,7 @@ def test_200_impacts_flight_by_flight_against_solve_ivp(case):
 
 def test_200_impacts_against_naive_loop_non_chaotic():
     """On a non-chaotic run (converging to a periodic motion) whole runs agree to 1e-8."""
-    from hybridpd.naive import naive_simulate
+    from hybridpd.pair.naive import naive_simulate
 
     cl, p, c = make(case="noncollocated")
     ref = naive_simulate(cl, cl.initial_state([0.3, 0.5, 0.0, 0.0]), (0, 1e4), max_impacts=200,
@@ -207,7 +207,7 @@ def test_map_never_hangs_or_crashes(kp, kv, e, mu, case, s):
 def test_stick_release_against_dense_sampling(case, wall):
     """While stuck, the masses move together until the contact force changes sign; the
     release time agrees with a dense scan of U under expm of python-control's sticking flow."""
-    from hybridpd.batch import stick_release
+    from hybridpd.pair.batch import stick_release
 
     cl, p, c = make(case=case, e=0.1, xm=0.7)
     As = cl.sticking_A()
@@ -237,7 +237,7 @@ def test_stick_release_against_dense_sampling(case, wall):
 
 def test_chattering_run_goes_through_sticking_without_hanging():
     """e = 0.1 from a state that chatters: the map keeps returning (through sticking phases)."""
-    from hybridpd.batch import iterate_map
+    from hybridpd.pair.batch import iterate_map
 
     _cl, p, c = make(e=0.1)
     orbit, done, status = iterate_map(p, c, np.array([0.3, -2.1, -2.3, 0.5]), 300)

@@ -1,4 +1,4 @@
-"""Guaranteed first-crossing event location (hybridpd.events)."""
+"""Guaranteed first-crossing event location (hybridpd.hybrid.events)."""
 import math
 
 import numpy as np
@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
-from hybridpd.events import (
+from hybridpd.hybrid.events import (
     EV_CROSSING,
     EV_NONE,
     EV_START,

@@ -9,10 +9,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from hybridpd import ImpactPair, PDGains, Reference
-from hybridpd.automaton import TerminationCause
-from hybridpd.batch import STATUS_IMPACT, next_impact, pack_params
-from hybridpd.impactpair import ControlledImpactPair
-from hybridpd.naive import naive_simulate
+from hybridpd.hybrid.automaton import TerminationCause
+from hybridpd.pair.batch import STATUS_IMPACT, next_impact, pack_params
+from hybridpd.pair.impactpair import ControlledImpactPair
+from hybridpd.pair.naive import naive_simulate
 
 CASES = ("collocated", "noncollocated")
 

@@ -1,9 +1,9 @@
 """The main job end to end on small grids: files, figures and a summary with every check."""
 import numpy as np
 
-from hybridpd.basins import load_basin
-from hybridpd.regions import load_region_map
 from hybridpd.reproduce import Settings, reproduce
+from hybridpd.sweeps.basins import load_basin
+from hybridpd.sweeps.regions import load_region_map
 
 
 def test_reproduce_small(tmp_path):

@@ -1,4 +1,4 @@
-"""Sample impacting systems (hybridpd.samples) against closed forms and solve_ivp."""
+"""Sample impacting systems (hybridpd.hybrid.samples) against closed forms and solve_ivp."""
 import math
 
 import numpy as np
@@ -7,8 +7,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
-from hybridpd.automaton import TerminationCause
-from hybridpd.samples import (
+from hybridpd.hybrid.automaton import TerminationCause
+from hybridpd.hybrid.samples import (
     ball_initial_state,
     bouncing_ball,
     impact_oscillator,

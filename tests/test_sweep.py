@@ -1,4 +1,4 @@
-"""Tests of the generic sweep engine (hybridpd.sweep).
+"""Tests of the generic sweep engine (hybridpd.sweeps.sweep).
 
 The functions swept here are module-level so that process-pool and Dask
 workers can import them by name. Calls are counted through a side channel:
@@ -28,8 +28,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import hybridpd.sweep as sweep_mod
-from hybridpd.sweep import (
+import hybridpd.sweeps.sweep as sweep_mod
+from hybridpd.sweeps.sweep import (
     ChunkError,
     SweepResult,
     default_chunk_size,
@@ -779,7 +779,7 @@ def test_progress_goes_to_stderr_only(capfd):
 
 def test_import_is_light():
     code = (
-        "import sys; import hybridpd; before = set(sys.modules); import hybridpd.sweep; "
+        "import sys; import hybridpd; before = set(sys.modules); import hybridpd.sweeps.sweep; "
         "new = set(sys.modules) - before; "
         "print(sorted(m for m in new if m.split('.')[0] in ('dask', 'distributed', 'tqdm')))"
     )

@@ -1,4 +1,4 @@
-"""Tests of hybridpd.symbolic: closed-form flows, symmetric orbits, impact-map Jacobians.
+"""Tests of hybridpd.pair.symbolic: closed-form flows, symmetric orbits, impact-map Jacobians.
 
 Independent references: scipy.integrate.solve_ivp and scipy.linalg.expm for the flows, the
 impact law (2) applied directly, and a flow-based impact map built here from expm + root
@@ -19,7 +19,7 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 from scipy.optimize import brentq
 
-from hybridpd import symbolic as hs
+from hybridpd.pair import symbolic as hs
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CASES = ("collocated", "noncollocated")
@@ -34,7 +34,7 @@ HSET = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow,
 
 
 def test_import_does_not_import_sympy():
-    code = ("import sys, time; t = time.perf_counter(); import hybridpd.symbolic; "
+    code = ("import sys, time; t = time.perf_counter(); import hybridpd.pair.symbolic; "
             "dt = time.perf_counter() - t; "
             "assert 'sympy' not in sys.modules, 'sympy imported'; print(dt)")
     env = dict(os.environ)

@@ -4,7 +4,7 @@ The user states the desired motion of the primary mass — a triangle wave of am
 (length) and frequency ``omega`` (rad/time) with one impact on each wall per ``n`` reference
 periods (``n`` odd) — the plant (``m2``, ``mu``, ``e``, ``L``) and the feedback case. For
 every gain pair ``(kp, kv)`` the conditions (13)-(14) then fix the reference amplitude ``xm``
-and the impact phase ``phi0`` (:func:`hybridpd.orbits.symmetric_orbits`); the design chooses
+and the impact phase ``phi0`` (:func:`hybridpd.analysis.orbits.symmetric_orbits`); the design chooses
 the gains.
 
 Objective (maximised)
@@ -35,7 +35,7 @@ Global, then local: the objective is evaluated (vectorised) on a ``grid`` over t
 regions span decades), the best ``n_starts`` separated local maxima of the grid are refined
 with bounded Nelder-Mead (:func:`scipy.optimize.minimize`, in normalised log or linear
 coordinates), and the best refined point is re-evaluated with
-:func:`hybridpd.orbits.symmetric_orbit`. The map and the optimiser reports are returned as
+:func:`hybridpd.analysis.orbits.symmetric_orbit`. The map and the optimiser reports are returned as
 evidence. If no grid point is feasible (and no refinement finds one)
 :class:`InfeasibleDesignError` is raised.
 
@@ -58,7 +58,7 @@ and the design is re-checked on a finer validation grid.
 
 Examples
 --------
->>> from hybridpd.design import design
+>>> from hybridpd.analysis.design import design
 >>> d = design("collocated", mu=0.1, e=0.5, gamma=0.75, omega=5.0, grid=(24, 24))
 >>> d.orbit.exists and d.orbit.stable
 True
@@ -74,8 +74,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage, optimize
 
-from . import symbolic
-from .model import (
+from hybridpd.analysis.orbits import (
+    REASONS,
+    SymmetricOrbitResult,
+    symmetric_orbit,
+    symmetric_orbits,
+)
+from hybridpd.model import (
     Case,
     ImpactPair,
     PDGains,
@@ -84,7 +89,7 @@ from .model import (
     check_odd_order,
     check_positive,
 )
-from .orbits import REASONS, SymmetricOrbitResult, symmetric_orbit, symmetric_orbits
+from hybridpd.pair import symbolic
 
 __all__ = [
     "PLANT_STATUS",
@@ -245,7 +250,7 @@ def shifted_amplitude(kp, kv, xm, *, mu, e, L, omega, m2=1.0, n=1, case="colloca
 
     Examples
     --------
-    >>> from hybridpd.orbits import symmetric_orbits
+    >>> from hybridpd.analysis.orbits import symmetric_orbits
     >>> xm = float(symmetric_orbits(10, 20, mu=0.1, e=0.5, L=0.75, omega=5.0).xm)
     >>> x, alt = shifted_amplitude(10, 20, xm, mu=0.1, e=0.5, L=0.75, omega=5.0)
     >>> round(float(x), 9)
@@ -360,7 +365,7 @@ class DesignMap:
     exists, stable : ndarray of bool
         Nominal existence (with viability) and stability.
     reason : ndarray of int
-        Codes of :data:`hybridpd.orbits.REASONS`.
+        Codes of :data:`hybridpd.analysis.orbits.REASONS`.
     spectral_radius, viability_margin, xm, phi0 : ndarray
         Nominal orbit data (NaN where undefined); ``xm`` length, ``phi0`` time.
     robust_feasible : ndarray of bool or None
@@ -555,7 +560,7 @@ class DesignResult:
     stability_margin : float
         ``1 - rho``.
     viability_margin : float
-        Distance to grazing (see :mod:`hybridpd.orbits`).
+        Distance to grazing (see :mod:`hybridpd.analysis.orbits`).
     objective : float
         The maximised value: nominal ``J`` or, for a robust design, the worst case over the
         uncertainty grid.
@@ -563,7 +568,7 @@ class DesignResult:
         ``"min"`` or ``"sum"``.
     viability_weight : float
     orbit : SymmetricOrbitResult
-        The nominal orbit, recomputed by :func:`hybridpd.orbits.symmetric_orbit`.
+        The nominal orbit, recomputed by :func:`hybridpd.analysis.orbits.symmetric_orbit`.
     spec : dict
         The specification: ``mu, e, L, gamma, x10, m2, omega, n`` and the gain box.
     design_map : DesignMap

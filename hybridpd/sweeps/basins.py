@@ -37,9 +37,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg import solve_discrete_lyapunov
 
-from .batch import map_labels
-from .impactmap import ImpactMap
-from .model import check_axis
+from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.model import check_axis
+from hybridpd.pair.batch import map_labels
 
 __all__ = ["LABELS", "BasinResult", "ImpactMapper", "basin_of_attraction", "load_basin",
            "section_grid"]
@@ -68,7 +68,7 @@ class ImpactMapper:
     Examples
     --------
     >>> from hybridpd import ImpactPair, PDGains
-    >>> from hybridpd.orbits import symmetric_orbit
+    >>> from hybridpd.analysis.orbits import symmetric_orbit
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> m = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
     >>> m.label_name(m(orb.fixed_point + [0, 0.01, 0, 0]))
@@ -204,7 +204,7 @@ def section_grid(fixed_point, L, x1, y1) -> np.ndarray:
 
 def load_basin(path) -> BasinResult:
     """Read a :class:`BasinResult` written by :meth:`BasinResult.save`."""
-    from .sweep import load_npz
+    from hybridpd.sweeps.sweep import load_npz
 
     a, meta = load_npz(path)
     if meta.pop("kind", None) != "basin":
@@ -250,7 +250,7 @@ class BasinResult:
 
     def save(self, path) -> None:
         """Write to ``.npz`` with the metadata as JSON (see :func:`load_basin`)."""
-        from .sweep import save_npz
+        from hybridpd.sweeps.sweep import save_npz
 
         save_npz(path, {"x1": self.x1, "y1": self.y1, "labels": self.labels,
                         "iterations": self.iterations, "fixed_point": self.fixed_point},
@@ -275,7 +275,7 @@ def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chun
     x1, y1 : (min, max, num)
         Grid axes.
     executor, chunk_size, store, progress, max_workers
-        Passed to :func:`hybridpd.sweep.run_sweep` when ``executor`` is not ``"serial"`` or a
+        Passed to :func:`hybridpd.sweeps.sweep.run_sweep` when ``executor`` is not ``"serial"`` or a
         ``store`` is given (write-as-you-go, resumable); the labels do not depend on them.
 
     Returns
@@ -290,7 +290,7 @@ def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chun
     if executor == "serial" and store is None:
         lab, its = mapper.labels(pts)
     else:
-        from .sweep import run_sweep
+        from hybridpd.sweeps.sweep import run_sweep
 
         res = run_sweep(_label_chunk, {"phi": pts[:, 0], "z1": pts[:, 1], "z2": pts[:, 2],
                                        "z4": pts[:, 3]},

@@ -106,7 +106,7 @@ __all__ = [
 ]
 
 #: Identifier of the on-disk format, stored in every manifest and final file.
-FORMAT = "hybridpd.sweep/1"
+FORMAT = "hybridpd.sweeps.sweep/1"
 
 #: Executor names accepted by :func:`run_sweep` (besides executor instances).
 EXECUTORS = ("serial", "processes", "dask")

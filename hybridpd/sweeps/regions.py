@@ -1,8 +1,8 @@
 """Existence and stability regions of the symmetric orbit in a parameter plane (Figs 4-5).
 
-A region map evaluates :func:`hybridpd.orbits.symmetric_orbits` over a grid of two parameters
+A region map evaluates :func:`hybridpd.analysis.orbits.symmetric_orbits` over a grid of two parameters
 (by default the gains ``kp``, ``kv``) for a list of restitution coefficients. Every grid point
-gets exactly the answer :func:`hybridpd.orbits.symmetric_orbit` gives for it (existence with
+gets exactly the answer :func:`hybridpd.analysis.orbits.symmetric_orbit` gives for it (existence with
 rigorous viability, multipliers of ``DP``). Arrays are indexed ``[e][y][x]``.
 """
 from __future__ import annotations
@@ -11,8 +11,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .model import Case, check_axis, check_odd_order, check_positive
-from .orbits import REASONS, symmetric_orbits
+from hybridpd.analysis.orbits import REASONS, symmetric_orbits
+from hybridpd.model import Case, check_axis, check_odd_order, check_positive
 
 __all__ = ["AXES", "RegionMap", "load_region_map", "region_map"]
 
@@ -38,7 +38,7 @@ class RegionMap:
     exists, stable : ndarray of bool, shape (len(e), len(y), len(x))
     spectral_radius, xm : ndarray of float, same shape (NaN where no orbit exists / singular)
     reason : ndarray of int, same shape
-        Codes of :data:`hybridpd.orbits.REASONS`.
+        Codes of :data:`hybridpd.analysis.orbits.REASONS`.
     """
 
     case: str
@@ -84,7 +84,7 @@ class RegionMap:
 
     def save(self, path) -> None:
         """Write to ``.npz`` with the metadata as JSON."""
-        from .sweep import save_npz
+        from hybridpd.sweeps.sweep import save_npz
 
         meta = {"kind": "region_map", "case": self.case, "x_name": self.x_name,
                 "y_name": self.y_name, "fixed": self.fixed, **self.metadata}
@@ -95,7 +95,7 @@ class RegionMap:
 
 def load_region_map(path) -> RegionMap:
     """Read a :class:`RegionMap` written by :meth:`RegionMap.save`."""
-    from .sweep import load_npz
+    from hybridpd.sweeps.sweep import load_npz
 
     arrays, meta = load_npz(path)
     if meta.get("kind") != "region_map":
@@ -136,7 +136,7 @@ def region_map(case="collocated", *, x=("kp", 0.1, 50.0, 200), y=("kv", 0.1, 50.
         The fixed parameters (``L = gamma * x10`` when ``gamma`` is given). ``kp``/``kv`` are
         needed only when they are not swept.
     executor, max_workers, chunk_size, store, progress
-        See :func:`hybridpd.sweep.run_sweep`. ``"serial"`` is the default because the
+        See :func:`hybridpd.sweeps.sweep.run_sweep`. ``"serial"`` is the default because the
         evaluation is vectorised (a 200 x 200 x 3 map takes about a second), which beats
         starting worker processes; a ``store`` makes the sweep write as it goes and resume.
 
@@ -194,7 +194,7 @@ def region_map(case="collocated", *, x=("kp", 0.1, 50.0, 200), y=("kv", 0.1, 50.
     if executor == "serial" and store is None:
         out = _region_chunk(points, **kwargs)
     else:
-        from .sweep import run_sweep
+        from hybridpd.sweeps.sweep import run_sweep
 
         res = run_sweep(_region_chunk, points, chunk_size=chunk_size, executor=executor,
                         max_workers=max_workers, store=store, progress=progress,

@@ -4,10 +4,10 @@ Section ``Sigma = {z3 = +L, z4 > 0}`` (pre-impact states at the right wall), coo
 ``s = (phi, z1, z2, z4)`` with ``phi = t mod T``, ``z1 = x2``, ``z2 = y2``, ``z4 = y1 - y2``.
 ``P(s)`` applies the impact at ``+L`` and simulates until the next pre-impact state at the
 right wall, whatever happens in between (on a simple orbit: one impact on the left wall). It
-is computed by the simulator (the compiled closed-form engine of :mod:`hybridpd.batch`), so
+is computed by the simulator (the compiled closed-form engine of :mod:`hybridpd.pair.batch`), so
 it is usable from any state, not only near an orbit.
 
-``DP`` comes from the symbolic blocks ``DP43 DP32 DP21 DP10`` (:mod:`hybridpd.symbolic`)
+``DP`` comes from the symbolic blocks ``DP43 DP32 DP21 DP10`` (:mod:`hybridpd.pair.symbolic`)
 whenever the return has the simple pattern (+L, -L, +L); :meth:`ImpactMap.jacobian_fd` gives
 central finite differences of the simulated map as an independent check.
 """
@@ -17,8 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import symbolic
-from .batch import (
+from hybridpd.model import Case, ImpactPair, PDGains, Reference
+from hybridpd.pair import symbolic
+from hybridpd.pair.batch import (
     STATUS_IMPACT,
     _impact_velocities,
     impact_map,
@@ -26,7 +27,6 @@ from .batch import (
     next_impact,
     pack_params,
 )
-from .model import Case, ImpactPair, PDGains, Reference
 
 __all__ = ["ImpactMap", "MapResult", "Stability", "stability"]
 
@@ -104,7 +104,7 @@ class ImpactMap:
     Examples
     --------
     >>> from hybridpd import ImpactPair, PDGains, Reference
-    >>> from hybridpd.orbits import symmetric_orbit
+    >>> from hybridpd.analysis.orbits import symmetric_orbit
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> P = ImpactMap(orb.pair, orb.gains, orb.reference())
     >>> bool(np.allclose(P(orb.fixed_point), orb.fixed_point, atol=1e-12))

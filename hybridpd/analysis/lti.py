@@ -7,7 +7,7 @@ derivative filter, a PID with a filter, a lead-lag, ... in both feedback cases. 
 between impacts is still linear (:func:`hybridpd.loop.closed_loop`), now with the ``k``
 controller states appended: ``z = [x1, y1, x2, y2, pc, ps, c1..ck]`` (``n = 6 + k`` states).
 Orbits, the impact map and its Jacobian are computed **numerically** from the exact flow
-``expm(A t)``; the symbolic path (:mod:`hybridpd.orbits`) remains the fast path for a pure PD.
+``expm(A t)``; the symbolic path (:mod:`hybridpd.analysis.orbits`) remains the fast path for a pure PD.
 
 Signal conventions (those of :mod:`hybridpd.loop`)
 --------------------------------------------------
@@ -36,7 +36,7 @@ an SVD (singular when ``sigma_min <= rcond sigma_max``), then ``xm = hypot(C, S)
 
 **Existence** needs ``xm > 0`` and viability (18): no contact on the open interval
 ``(t0, t0 + tau)``. It is decided by the guaranteed first-crossing location of
-:mod:`hybridpd.events` on the two wall guards (an extra contact is never missed, however close
+:mod:`hybridpd.hybrid.events` on the two wall guards (an extra contact is never missed, however close
 to grazing); a violation is reported with its time, wall and ``x1``.
 
 Impact map on the extended section
@@ -57,7 +57,7 @@ Jacobian by implicit differentiation. Work with ``(t, z)``. An impact is ``z -> 
 Each block is mapped back to the reduced coordinates of its wall (``phi_out = phi_in + tau``),
 giving ``DP = DP43 DP32 DP21 DP10`` (24) for the simple pattern, or the product over any
 pattern of transversal impacts. :meth:`LTIImpactMap.jacobian_fd` gives central differences of
-the simulated map as the independent check. Stability: :func:`hybridpd.impactmap.stability`.
+the simulated map as the independent check. Stability: :func:`hybridpd.analysis.impactmap.stability`.
 
 Examples
 --------
@@ -75,7 +75,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.linalg import expm
 
-from .events import (
+from hybridpd.analysis.impactmap import Stability, stability
+from hybridpd.analysis.orbits import _END_RTOL, _HYPERBOLIC_TOL, REASONS
+from hybridpd.hybrid.events import (
     EV_CROSSING,
     EV_GRAZING,
     EV_NONE,
@@ -86,10 +88,8 @@ from .events import (
     lti_flow,
     prepare_lti_mode,
 )
-from .impactmap import Stability, stability
-from .loop import ClosedLoop, closed_loop
-from .model import Case, ImpactPair, Reference, check_odd_order, check_positive
-from .orbits import _END_RTOL, _HYPERBOLIC_TOL, REASONS
+from hybridpd.loop import ClosedLoop, closed_loop
+from hybridpd.model import Case, ImpactPair, Reference, check_odd_order, check_positive
 
 __all__ = [
     "LTI_REASONS",
@@ -238,7 +238,7 @@ def lead_lag(k: float, t_lead_zero: float, t_lead_pole: float, t_lag_zero: float
 # Exact free flight with guaranteed contact location
 # ----------------------------------------------------------------------------------------
 class _FreeFlight:
-    """The closed loop's free flight with the two wall guards of :mod:`hybridpd.impactpair`.
+    """The closed loop's free flight with the two wall guards of :mod:`hybridpd.pair.impactpair`.
 
     Guard 0 (``wall+``): ``g = L - z3``, fires when the gap closes on ``+L``; guard 1
     (``wall-``): ``g = z3 + L``. Both fire when ``g`` reaches ``<= 0``.
@@ -800,12 +800,12 @@ class LTIOrbitResult:
         return LTIImpactMap(self.pair, self.controller, self.reference(), self.case, **kwargs)
 
     def system(self):
-        """The :class:`~hybridpd.impactpair.ControlledImpactPair` with this orbit's reference.
+        """The :class:`~hybridpd.pair.impactpair.ControlledImpactPair` with this orbit's reference.
 
         Start it on the orbit with ``simulate(orb.pre_plus, (orb.t0, t1),
         controller_state=orb.controller_state)``.
         """
-        from .impactpair import ControlledImpactPair
+        from hybridpd.pair.impactpair import ControlledImpactPair
 
         return ControlledImpactPair(self.pair, self.controller, self.reference(), self.case)
 
@@ -909,7 +909,7 @@ def lti_symmetric_orbit(pair: ImpactPair, controller, omega: float, *, x10: floa
 
     >>> from hybridpd import ImpactPair, PDGains
     >>> from hybridpd.loop import pd_controller
-    >>> from hybridpd.orbits import symmetric_orbit
+    >>> from hybridpd.analysis.orbits import symmetric_orbit
     >>> pair = ImpactPair(mu=0.1, e=0.5, L=0.75)
     >>> a = lti_symmetric_orbit(pair, pd_controller(10, 20), 5.0)
     >>> b = symmetric_orbit(pair, PDGains(10, 20), 5.0)

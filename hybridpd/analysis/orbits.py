@@ -4,11 +4,11 @@ An orbit of odd order ``n`` has one impact on each wall per period ``n T`` (``T 
 ``n T / 2`` apart, and is symmetric about the origin. The desired primary-mass motion is a
 triangle wave between ``+x10`` and ``-x10``; the required reference amplitude ``xm`` and the
 impact phase ``phi0`` follow from the linear conditions (13)-(14) (derived in
-:mod:`hybridpd.symbolic`).
+:mod:`hybridpd.pair.symbolic`).
 
 **Existence** (paper (17)-(18)) means: the conditions have a solution (``xm > 0``) *and* the
 flight between the two impacts is viable — no other contact on the open interval. Viability is
-decided by the guaranteed first-contact location of :mod:`hybridpd.batch` (a contact located
+decided by the guaranteed first-contact location of :mod:`hybridpd.pair.batch` (a contact located
 before ``n T / 2`` is a violation, reported with its time, wall and position), not by
 sampling. The **viability margin** is ``min (L - |z3|) / L`` over the interior turning points
 of ``z3 = x1 - x2`` (1 when ``z3`` is monotone; it tends to 0 at the grazing boundary (19)
@@ -26,9 +26,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from . import symbolic
-from .batch import STATUS_IMPACT, STATUS_STICK, _eval, next_impact
-from .model import Case, ImpactPair, PDGains, Reference, check_odd_order, check_positive
+from hybridpd.model import Case, ImpactPair, PDGains, Reference, check_odd_order, check_positive
+from hybridpd.pair import symbolic
+from hybridpd.pair.batch import STATUS_IMPACT, STATUS_STICK, _eval, next_impact
 
 __all__ = ["REASONS", "OrbitArrays", "SymmetricOrbitResult", "symmetric_orbit", "symmetric_orbits"]
 
@@ -338,14 +338,14 @@ class SymmetricOrbitResult:
         return Reference(self.xm, self.omega)
 
     def system(self):
-        """The :class:`~hybridpd.impactpair.ControlledImpactPair` with this orbit's reference."""
-        from .impactpair import ControlledImpactPair
+        """The :class:`~hybridpd.pair.impactpair.ControlledImpactPair` with this orbit's reference."""
+        from hybridpd.pair.impactpair import ControlledImpactPair
 
         return ControlledImpactPair(self.pair, self.gains, self.reference(), self.case)
 
     def flight(self, t) -> np.ndarray:
         """``[x1, y1, x2, y2]`` at times ``t`` in ``[t0, t0 + tau]`` (the half-period flight)."""
-        from .batch import pack_params
+        from hybridpd.pair.batch import pack_params
 
         p = pack_params(self.gains.kp, self.gains.kv, self.pair.m2, self.pair.mu, self.pair.e,
                         self.pair.L, self.omega, self.xm)

@@ -3,16 +3,16 @@
 Two complementary tools (SPEC section 5):
 
 * :func:`find_periodic_orbit` solves ``P^k(s) = s`` for a fixed point of the ``k``-th iterate
-  of the impact map ``P`` (:class:`~hybridpd.impactmap.ImpactMap`), from any start: symmetric
+  of the impact map ``P`` (:class:`~hybridpd.analysis.impactmap.ImpactMap`), from any start: symmetric
   or not, simple impact pattern or not (double impacts, grazing contacts, sticking phases).
   The phase residual is unwrapped modulo ``T``. The Jacobian of ``P^k`` is the product of the
-  symbolic ``DP`` blocks of :mod:`hybridpd.symbolic` when every iterate has the simple pattern
+  symbolic ``DP`` blocks of :mod:`hybridpd.pair.symbolic` when every iterate has the simple pattern
   ``(+L, -L, +L)``, otherwise central finite differences of the simulated map. Damped Newton
   with a backtracking line search.
 * :func:`continue_orbit` follows a fixed point of ``P^k`` in one parameter among
   :data:`PARAMETERS` (natural-parameter continuation with a secant predictor, or
   pseudo-arclength continuation which passes folds); :func:`continue_symmetric` follows the
-  closed-form symmetric orbit family of :mod:`hybridpd.orbits` (``x10`` fixed, ``xm``
+  closed-form symmetric orbit family of :mod:`hybridpd.analysis.orbits` (``x10`` fixed, ``xm``
   follows) in one of :data:`SYMMETRIC_PARAMETERS`.
 
 Both record, at every accepted step, the parameter, the fixed point, the Floquet multipliers
@@ -52,8 +52,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from . import symbolic
-from .batch import (
+from hybridpd.analysis.impactmap import ImpactMap, stability
+from hybridpd.analysis.orbits import REASONS, symmetric_orbits
+from hybridpd.model import Case, ImpactPair, PDGains, Reference, check_finite
+from hybridpd.pair import symbolic
+from hybridpd.pair.batch import (
     STATUS_IMPACT,
     STATUS_STICK,
     _eval,
@@ -62,9 +65,6 @@ from .batch import (
     next_impact,
     stick_release,
 )
-from .impactmap import ImpactMap, stability
-from .model import Case, ImpactPair, PDGains, Reference, check_finite
-from .orbits import REASONS, symmetric_orbits
 
 __all__ = [
     "EVENT_KINDS",
@@ -141,7 +141,7 @@ class MapTrace:
     ok : bool
         The trajectory returned to the section.
     status : int
-        0 when ``ok``, else ``10 + batch.STATUS_*`` (as :class:`~hybridpd.impactmap.MapResult`).
+        0 when ``ok``, else ``10 + batch.STATUS_*`` (as :class:`~hybridpd.analysis.impactmap.MapResult`).
     steps : tuple of ImpactStep
         Contacts after the initial ``+L`` impact; the last one is the return to ``+L``.
     margin : float
@@ -245,7 +245,7 @@ def trace_map(impact_map_: ImpactMap, s, *, margin: bool = True,
     Examples
     --------
     >>> from hybridpd import ImpactPair, PDGains
-    >>> from hybridpd.orbits import symmetric_orbit
+    >>> from hybridpd.analysis.orbits import symmetric_orbit
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> P = ImpactMap(orb.pair, orb.gains, orb.reference())
     >>> tr = trace_map(P, orb.fixed_point)
@@ -818,7 +818,7 @@ def find_periodic_orbit(impact_map_: ImpactMap, s0, period: int = 1, *, tol: flo
     The period-2 attractor of the collocated loop at ``e = 0.1`` (paper parameters):
 
     >>> from hybridpd import ImpactPair, PDGains, Reference
-    >>> from hybridpd.orbits import symmetric_orbit
+    >>> from hybridpd.analysis.orbits import symmetric_orbit
     >>> pair = ImpactPair(mu=0.1, e=0.1, L=0.75)
     >>> xm = symmetric_orbit(pair, PDGains(10, 20), 5.0).xm
     >>> P = ImpactMap(pair, PDGains(10, 20), Reference(xm, 5.0))
@@ -1349,7 +1349,7 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
     ``kv`` through its grazing:
 
     >>> from hybridpd import ImpactPair, PDGains, Reference
-    >>> from hybridpd.orbits import symmetric_orbit
+    >>> from hybridpd.analysis.orbits import symmetric_orbit
     >>> pair = ImpactPair(mu=0.1, e=0.1, L=0.75)
     >>> orb = symmetric_orbit(pair, PDGains(10, 20), 5.0)
     >>> P = ImpactMap(pair, PDGains(10, 20), Reference(orb.xm, 5.0))
@@ -1704,7 +1704,7 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
 
     Along the family the desired primary-mass amplitude ``x10`` stays fixed (unless it is the
     parameter) and the reference amplitude ``xm`` follows from (20), as in
-    :func:`hybridpd.orbits.symmetric_orbit`. Every point is closed form (conditions
+    :func:`hybridpd.analysis.orbits.symmetric_orbit`. Every point is closed form (conditions
     (13)-(14), viability by guaranteed contact location, symbolic ``DP``), so the family is a
     graph over the parameter and no corrector is needed; the step adapts to the change of
     the fixed point, the spectral radius and the viability margin.

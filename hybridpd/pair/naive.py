@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .loop import ClosedLoop
+from hybridpd.loop import ClosedLoop
 
 __all__ = ["NaiveResult", "naive_simulate"]
 

@@ -4,7 +4,7 @@ Model
 -----
 A :class:`HybridAutomaton` has modes (:class:`Mode`) on a common state space ``z in R^n``. In a
 mode the state flows by ``z' = A z + b`` (exactly: matrix exponential, see
-:mod:`hybridpd.events`). Each mode has affine guards (:class:`Guard`) ``g(z) = c . z + d``;
+:mod:`hybridpd.hybrid.events`). Each mode has affine guards (:class:`Guard`) ``g(z) = c . z + d``;
 ``direction = -1`` means the admissible side is ``g > 0`` and the guard *fires* when the flow
 reaches ``g <= 0`` (``+1``: admissible ``g < 0``, fires at ``g >= 0``). Firing applies the affine
 reset ``z+ = R z + r`` and switches to the guard's ``target`` mode. Time is hybrid time
@@ -16,7 +16,7 @@ Conventions
   forbidden side (``kind='crossing'``), or the local extremum of a tangential touch that stays
   within the rounding bound (``kind='grazing'``; the reset is applied, which for an impact law
   is continuous at zero relative velocity). A near miss above the bound never fires. Crossings
-  are never missed, however close together (see :mod:`hybridpd.events`).
+  are never missed, however close together (see :mod:`hybridpd.hybrid.events`).
 * **Simultaneous guards**: events within the time resolution are ties; the larger
   ``priority`` wins, then the earlier declared guard. The others are re-examined after the
   jump (on-guard rule below).
@@ -77,7 +77,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .events import (
+from hybridpd.hybrid.events import (
     EV_GRAZING,
     EV_NONE,
     EV_NONFINITE,

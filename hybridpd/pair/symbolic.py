@@ -65,7 +65,7 @@ from typing import Any
 
 import numpy as np
 
-from .model import Case
+from hybridpd.model import Case
 
 __all__ = [
     "Derivation",

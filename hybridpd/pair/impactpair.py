@@ -15,7 +15,7 @@ Modes
     holds while ``U <= 0``; on the left wall while ``U >= 0``.
 
 All timing conventions (hybrid time ``(t, j)``, grazing, post-reset semantics, the Zeno
-estimate) are those of :mod:`hybridpd.automaton`.
+estimate) are those of :mod:`hybridpd.hybrid.automaton`.
 """
 from __future__ import annotations
 
@@ -23,9 +23,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .automaton import Guard, HybridAutomaton, Mode, TerminationCause
-from .loop import ClosedLoop, closed_loop
-from .model import Case, ImpactPair, Reference, check_finite, check_positive
+from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode, TerminationCause
+from hybridpd.loop import ClosedLoop, closed_loop
+from hybridpd.model import Case, ImpactPair, Reference, check_finite, check_positive
 
 __all__ = ["ControlledImpactPair", "ImpactPairTrajectory"]
 

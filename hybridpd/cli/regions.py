@@ -1,0 +1,41 @@
+"""``hybridpd regions``."""
+from __future__ import annotations
+
+import json
+
+from hybridpd.cli._common import add_plant, add_sweep, clearance, progress_wanted
+
+
+def register(sub):
+    p = sub.add_parser("regions", help="existence/stability regions over (kp, kv)")
+    add_plant(p, xm=False, gamma=True)
+    p.add_argument("--e", type=float, nargs="+", required=True)
+    p.add_argument("--n", type=int, default=1)
+    p.add_argument("--kp", type=float, nargs=3, required=True, metavar=("MIN", "MAX", "NUM"))
+    p.add_argument("--kv", type=float, nargs=3, required=True, metavar=("MIN", "MAX", "NUM"))
+    add_sweep(p)
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from hybridpd.sweeps.regions import region_map
+
+    L, x10 = clearance(args)
+    for nm in ("kp", "kv"):
+        num = getattr(args, nm)[2]
+        if num != int(num):
+            raise ValueError(f"--{nm} NUM must be an integer, got {num:g}")
+    rm = region_map(args.case, x=("kp", *args.kp), y=("kv", *args.kv), e=args.e, mu=args.mu,
+                    omega=args.omega, L=L, x10=x10, m2=args.m2, n=args.n,
+                    executor=args.executor, max_workers=args.workers,
+                    progress=progress_wanted(args))
+    if args.out:
+        rm.save(args.out)
+    if args.json:
+        print(json.dumps(rm.to_dict()))
+        return 0
+    print(f"{args.case} regions on kp x kv = {len(rm.x)} x {len(rm.y)}:")
+    for k, e in enumerate(rm.e):
+        print(f"  e = {e:g}: exists {100 * rm.fraction('exists')[k]:.2f}%, exists & stable "
+              f"{100 * rm.fraction('stable')[k]:.2f}% (area {rm.area('stable')[k]:.4g})")
+    return 0

@@ -1,0 +1,7 @@
+"""The paper's impact pair: its automaton instance and its named fast paths.
+
+``impactpair`` is the pair written on the generic automaton (the general path);
+``symbolic`` holds the SymPy closed forms (flows, existence, Jacobian blocks) and ``batch``
+the compiled closed-form engine. Both fast paths are checked against the general path in the
+tests. ``naive`` is the plain ``solve_ivp`` loop kept as an independent reference.
+"""

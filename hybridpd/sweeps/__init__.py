@@ -1,0 +1,1 @@
+"""Sweeps over the analyses: executors and resumable stores, region maps, basins."""
