@@ -1,0 +1,12 @@
+"""Figures in the paper's style (matplotlib, Agg-safe; every function returns the Figure).
+
+* :func:`plot_regions` — Figs 4-5: existence and stability regions for several ``e``
+  superposed; the intersection (exists and stable) shaded.
+* :func:`plot_basin` — Figs 6-7: the basin slice ``(x1, y1)`` with the fixed point marked.
+* :func:`plot_trajectory` — positions, gap and impacts against time, and the phase portrait.
+"""
+from hybridpd.plotting.basins import plot_basin
+from hybridpd.plotting.regions import plot_regions
+from hybridpd.plotting.trajectory import plot_trajectory
+
+__all__ = ["plot_basin", "plot_regions", "plot_trajectory"]
