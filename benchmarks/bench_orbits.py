@@ -1,4 +1,4 @@
-"""Issue 3 benchmark: orbit + stability per gain point, first call, import time.
+"""Benchmark: orbit + stability per gain point, first call, import time.
 
 Targets: orbit + stability for one gain point <= 50 us after warm-up over a grid; first call
 including the SymPy derivation <= 5 s; ``import hybridpd`` <= 0.5 s. Run:

@@ -1,4 +1,4 @@
-"""Issue 4 benchmark: region maps and basins, with the naive per-impact baseline.
+"""Benchmark: region maps and basins, with the naive per-impact baseline.
 
 Targets on this 2-core machine: a 200 x 200 (kp, kv) map for 3 values of e in <= 6 s per
 feedback case; a 200 x 200 basin with 1500 iterations in <= 30 s (aim 10 s). The naive

@@ -1,4 +1,4 @@
-"""Issue 2 benchmark: 3000 impacts of the collocated impact pair, hybridpd vs the naive loop.
+"""Benchmark: 3000 impacts of the collocated impact pair, hybridpd vs the naive loop.
 
 Case: mu 0.1, e 0.5, L 0.75, omega 5, kp 10, kv 20, xm 1, x0 = (0.3, 0.5, 0, 0). The naive
 loop is solve_ivp (DOP853, rtol 1e-10, atol 1e-12) with terminal events, restarted after each

@@ -30,9 +30,9 @@ from hybridpd import ImpactPair, Reference
 from hybridpd.analysis.design import robustness_comparison, shifted_orbit
 from hybridpd.analysis.impactmap import ImpactMap
 
-SPEC = {"mu": 0.1, "e": 0.5, "gamma": 0.75, "x10": 1.0, "omega": 5.0, "n": 1}
+PROBLEM = {"mu": 0.1, "e": 0.5, "gamma": 0.75, "x10": 1.0, "omega": 5.0, "n": 1}
 BOX = {"e_range": (0.3, 0.7), "mu_range": (0.08, 0.12)}
-L = SPEC["gamma"] * SPEC["x10"]
+L = PROBLEM["gamma"] * PROBLEM["x10"]
 
 
 def phase_wrapped(d, T):
@@ -44,7 +44,7 @@ def phase_wrapped(d, T):
 def convergence_figure(d, path):
     """Iterate the simulated impact map from a perturbed fixed point (the designed orbit)."""
     o = d.orbit
-    P = ImpactMap(o.pair, o.gains, Reference(d.xm, SPEC["omega"]), d.case)
+    P = ImpactMap(o.pair, o.gains, Reference(d.xm, PROBLEM["omega"]), d.case)
     s0 = o.fixed_point + np.array([0.02, -0.05, 0.1, 0.05])
     traj = P.iterate(s0, 40)
     dist = np.linalg.norm(phase_wrapped(traj - o.fixed_point, P.period), axis=1)
@@ -59,7 +59,7 @@ def convergence_figure(d, path):
     ax1.set_ylim(1e-17, 10)
     ax1.legend(fontsize=8)
     ax2.plot(k, traj[:, 1] + L, "o-", ms=3, label="x1 at the +L impact")
-    ax2.axhline(SPEC["x10"], color="k", lw=0.8, ls="--", label="desired x10")
+    ax2.axhline(PROBLEM["x10"], color="k", lw=0.8, ls="--", label="desired x10")
     ax2.set_xlabel("iteration k")
     ax2.set_ylabel("primary-mass impact position")
     ax2.legend(fontsize=8)
@@ -112,7 +112,7 @@ def robust_box_figure(designs, path):
             wc = r.worst_spectral_radius_case if col == 0 else r.worst_case
             ax.plot(wc["mu"], wc["e"], "x", color="k" if col else "c", ms=12, mew=2,
                     clip_on=False)
-            ax.plot(SPEC["mu"], SPEC["e"], "o", mfc="none", mec="k", ms=8)
+            ax.plot(PROBLEM["mu"], PROBLEM["e"], "o", mfc="none", mec="k", ms=8)
             ax.set_xlabel("mu")
             ax.set_ylabel("e")
             ax.set_title(f"{d.case.value}: kp = {d.kp:.3g}, kv = {d.kv:.3g}, xm = {d.xm:.3g}"
@@ -158,7 +158,7 @@ def main(outdir="examples/out"):
     t0 = time.perf_counter()
 
     # 1-5 share the designs: the comparison runs the nominal and robust design of each case
-    cmp = robustness_comparison(**{k: SPEC[k] for k in ("mu", "gamma", "x10", "n", "omega",
+    cmp = robustness_comparison(**{k: PROBLEM[k] for k in ("mu", "gamma", "x10", "n", "omega",
                                                         "e")}, **BOX)
     rows = {r.case: r for r in cmp.rows}
     d = rows["collocated"].nominal
@@ -193,8 +193,8 @@ def main(outdir="examples/out"):
         # the plant at the worst case, simulated from the nominal orbit's fixed point
         wc = rr.worst_spectral_radius_case
         pair = ImpactPair(wc["mu"], wc["e"], L)
-        so = shifted_orbit(pair, r.gains, r.xm, SPEC["omega"], case=r.case)
-        P = ImpactMap(pair, r.gains, Reference(r.xm, SPEC["omega"]), r.case)
+        so = shifted_orbit(pair, r.gains, r.xm, PROBLEM["omega"], case=r.case)
+        P = ImpactMap(pair, r.gains, Reference(r.xm, PROBLEM["omega"]), r.case)
         end = P.iterate(r.orbit.fixed_point, 300)[-1]
         err = np.abs(phase_wrapped(end - so.fixed_point, P.period)).max()
         print(f"     worst-case plant simulated from the nominal orbit settles on the predicted "
