@@ -17,11 +17,26 @@ from hybridpd.cli._common import EXIT_BAD_INPUT, Parser, UsageError
 COMMANDS = ("simulate", "orbit", "regions", "basin", "design", "reproduce")
 
 
+DESCRIPTION = """\
+Analysis and design of PD control of mechanical systems with dynamic backlash: the impact
+pair of Mata-Jimenez, Brogliato and Goswami (two masses, a clearance 2L, restitution e, a PD
+loop with feed-forward tracking xd = xm cos(omega t)) and general linear mechanical systems
+with clearances and stops.
+
+Feedback cases: "collocated" measures the secondary mass x2, the one the force acts on;
+"noncollocated" (alias "non-collocated") measures the primary mass x1 through the backlash.
+Conventions: CONVENTIONS.md in the source distribution."""
+
+EPILOG = """\
+Run "hybridpd COMMAND --help" for a command's options and an example. Bad input prints one
+line and exits with status 2."""
+
+
 def build_parser() -> Parser:
-    parser = Parser(prog="hybridpd", description="Analysis and design of PD control of "
-                    "mechanical systems with dynamic backlash.")
+    parser = Parser(prog="hybridpd", description=DESCRIPTION, epilog=EPILOG)
     parser.add_argument("--version", action="version", version=f"hybridpd {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser,
+                                title="commands", metavar="COMMAND")
     for name in COMMANDS:
         importlib.import_module(f"hybridpd.cli.{name}").register(sub)
     return parser

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import difflib
 import sys
 
 EXIT_BAD_INPUT = 2
@@ -12,22 +13,86 @@ class UsageError(Exception):
     """Bad command-line input (exit status 2)."""
 
 
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """Keeps descriptions and epilogs as written and shows every non-trivial default."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        default = action.default
+        if (text and "%(default)" not in text and not action.required
+                and default not in (None, False, argparse.SUPPRESS)
+                and action.option_strings):
+            text += " (default: %(default)s)"
+        return text
+
+
+CASES = {"collocated": "collocated", "noncollocated": "noncollocated",
+         "non-collocated": "noncollocated"}
+
+
+def case_type(text: str) -> str:
+    """``--case`` values: the paper's spelling ``non-collocated`` is accepted as an alias."""
+    key = text.strip().lower()
+    if key not in CASES:
+        raise argparse.ArgumentTypeError(
+            f"invalid case {text!r}: use collocated or noncollocated (alias non-collocated)")
+    return CASES[key]
+
+
 class Parser(argparse.ArgumentParser):
-    # argparse prints the whole usage and exits; the project wants one line and status 2.
+    """An argument parser whose errors are one line (status 2) and name unknown flags."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        # Abbreviations would let a typo silently match another option.
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
+
     def error(self, message):
+        # argparse prints the whole usage and exits; the project wants one line and status 2.
         raise UsageError(message)
+
+    def parse_known_args(self, args=None, namespace=None):
+        # Unknown flags are reported before argparse's "X is required" (which would
+        # otherwise hide a misspelt required option such as --Kp).
+        args = list(sys.argv[1:] if args is None else args)
+        for tok in args:
+            if tok == "--":
+                break
+            if self._subparsers is not None and not tok.startswith("-"):
+                break  # the sub-command's own flags are checked by its parser
+            if tok.startswith("--"):
+                flag = tok.split("=", 1)[0]
+                if flag not in self._option_string_actions:
+                    raise UsageError(unknown_flag_message(flag, self._option_string_actions))
+        return super().parse_known_args(args, namespace)
+
+
+def unknown_flag_message(flag: str, known) -> str:
+    """``unknown option --Kp (did you mean --kp?)``."""
+    options = sorted(o for o in known if o.startswith("--"))
+    lowered = {o.lower(): o for o in options}
+    guess = lowered.get(flag.lower())
+    if guess is None:
+        close = difflib.get_close_matches(flag, options, n=1, cutoff=0.6)
+        guess = close[0] if close else None
+    hint = f" (did you mean {guess}?)" if guess else ""
+    return f"unknown option {flag}{hint}"
 
 
 def add_plant(p, *, xm=True, gamma=False):
-    p.add_argument("--case", required=True, choices=["collocated", "noncollocated"])
+    p.add_argument("--case", required=True, type=case_type, metavar="CASE",
+                   help="collocated (the PD loop measures the secondary mass x2, the one it "
+                        "pushes) or noncollocated (it measures the primary mass x1 through "
+                        "the backlash; alias non-collocated)")
     p.add_argument("--mu", type=float, required=True, help="mass ratio m1/m2 (> 0)")
-    p.add_argument("--m2", type=float, default=1.0, help="secondary mass (> 0), default 1")
+    p.add_argument("--m2", type=float, default=1.0, help="secondary mass m2 (> 0)")
     p.add_argument("--omega", type=float, required=True, help="reference frequency (> 0)")
     if gamma:
         g = p.add_mutually_exclusive_group(required=True)
         g.add_argument("--L", type=float, help="half clearance (> 0)")
         g.add_argument("--gamma", type=float, help="L / x10 (> 0)")
-        p.add_argument("--x10", type=float, default=1.0, help="primary-mass amplitude, default 1")
+        p.add_argument("--x10", type=float, default=1.0, help="amplitude of the primary mass's desired motion (> 0)")
     else:
         p.add_argument("--L", type=float, required=True, help="half clearance (> 0)")
     if xm:
