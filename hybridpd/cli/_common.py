@@ -108,11 +108,25 @@ def clearance(args):
     return check_positive("gamma", args.gamma) * x10, x10
 
 
+def command(sub, name: str, *, help: str, description: str, example: str):
+    """A sub-command parser with a one-line ``help``, a paragraph and an example epilog."""
+    import textwrap
+
+    return sub.add_parser(name, help=help, description=textwrap.fill(description, 88),
+                          epilog="example:\n  " + example)
+
+
+JSON_HELP = "print one JSON object on stdout instead of the summary"
+
+
 def add_sweep(p):
-    p.add_argument("--executor", default="serial", choices=["serial", "processes", "dask"])
-    p.add_argument("--workers", type=int, default=None, help="worker count (default: all cores)")
-    p.add_argument("--out", default=None, help="write the result (.npz)")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--executor", default="serial", choices=["serial", "processes", "dask"],
+                   help="where the grid points run: in this process, a process pool, or a "
+                        "Dask cluster (dask.distributed)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="worker count (default: all cores)")
+    p.add_argument("--out", default=None, help="write the result to this file")
+    p.add_argument("--json", action="store_true", help=JSON_HELP)
 
 
 def progress_wanted(args) -> bool:

@@ -5,19 +5,34 @@ import json
 
 import numpy as np
 
-from hybridpd.cli._common import add_plant, add_sweep, clearance, progress_wanted
+from hybridpd.cli._common import add_plant, add_sweep, clearance, command, progress_wanted
+
+DESCRIPTION = ("Iterates the impact map from every point of a section slice in the "
+               "(x1, y1) plane (the other section coordinates at their fixed-point "
+               "values) and labels each point by where it goes: the paper's Figs 6-7.")
 
 
 def register(sub):
-    p = sub.add_parser("basin", help="basin of attraction of the symmetric orbit")
+    p = command(sub, "basin", help="basin of attraction of the symmetric orbit",
+                description=DESCRIPTION,
+                example=("hybridpd basin --case collocated --mu 0.1 --e 0.5 --gamma "
+                         "0.75 --omega 5 --kp 10 --kv 20 --x1 -3 5 100 --y1 -2 10 100"
+                         " --executor processes"))
     add_plant(p, xm=False, gamma=True)
-    p.add_argument("--e", type=float, required=True)
-    p.add_argument("--n", type=int, default=1)
-    p.add_argument("--kp", type=float, required=True)
-    p.add_argument("--kv", type=float, required=True)
-    p.add_argument("--x1", type=float, nargs=3, required=True, metavar=("MIN", "MAX", "NUM"))
-    p.add_argument("--y1", type=float, nargs=3, required=True, metavar=("MIN", "MAX", "NUM"))
-    p.add_argument("--iterations", type=int, default=1500)
+    p.add_argument("--e", type=float, required=True,
+                   help="restitution coefficient in [0, 1]")
+    p.add_argument("--n", type=int, default=1,
+                   help="odd order of the symmetric orbit (period n T)")
+    p.add_argument("--kp", type=float, required=True,
+                   help="proportional gain kp (> 0)")
+    p.add_argument("--kv", type=float, required=True,
+                   help="derivative gain kv (> 0)")
+    p.add_argument("--x1", type=float, nargs=3, required=True, metavar=("MIN", "MAX", "NUM"),
+                   help="grid axis: NUM points from MIN to MAX")
+    p.add_argument("--y1", type=float, nargs=3, required=True, metavar=("MIN", "MAX", "NUM"),
+                   help="grid axis: NUM points from MIN to MAX")
+    p.add_argument("--iterations", type=int, default=1500,
+                   help="iterations of the impact map (two impacts each)")
     p.add_argument("--no-early-exit", action="store_true",
                    help="run every trajectory for all iterations")
     add_sweep(p)

@@ -4,22 +4,36 @@ from __future__ import annotations
 import json
 import sys
 
-from hybridpd.cli._common import EXIT_INFEASIBLE, add_plant, clearance
+from hybridpd.cli._common import EXIT_INFEASIBLE, JSON_HELP, add_plant, clearance, command
+
+DESCRIPTION = ("Chooses PD gains (kp, kv) and the reference amplitude xm so that the "
+               "primary mass moves between +x10 and -x10 on an existing, stable "
+               "symmetric orbit with the largest stability and viability margins; "
+               "with --e-range/--mu-range the orbit must stay stable, with the "
+               "amplitude within --x10-tol, over the whole uncertainty box. Exit "
+               "status 3 if infeasible.")
 
 
 def register(sub):
-    p = sub.add_parser("design", help="PD gains and reference for a desired primary-mass "
-                                      "motion (optionally robust to e and mu)")
+    p = command(sub, "design", help="PD gains for a desired primary-mass motion (optionally robust to e and mu)",
+                description=DESCRIPTION,
+                example=("hybridpd design --case collocated --mu 0.1 --e 0.5 --gamma "
+                         "0.75 --omega 5 --json"))
     add_plant(p, xm=False, gamma=True)
     p.add_argument("--e", type=float, required=True, help="nominal restitution coefficient")
-    p.add_argument("--n", type=int, default=1)
-    p.add_argument("--kp-range", type=float, nargs=2, default=(0.1, 100.0), metavar=("LO", "HI"))
-    p.add_argument("--kv-range", type=float, nargs=2, default=(0.1, 100.0), metavar=("LO", "HI"))
-    p.add_argument("--e-range", type=float, nargs=2, default=None, metavar=("LO", "HI"))
-    p.add_argument("--mu-range", type=float, nargs=2, default=None, metavar=("LO", "HI"))
+    p.add_argument("--n", type=int, default=1,
+                   help="odd order of the symmetric orbit (period n T)")
+    p.add_argument("--kp-range", type=float, nargs=2, default=(0.1, 100.0), metavar=("LO", "HI"),
+                   help="search or uncertainty interval")
+    p.add_argument("--kv-range", type=float, nargs=2, default=(0.1, 100.0), metavar=("LO", "HI"),
+                   help="search or uncertainty interval")
+    p.add_argument("--e-range", type=float, nargs=2, default=None, metavar=("LO", "HI"),
+                   help="search or uncertainty interval")
+    p.add_argument("--mu-range", type=float, nargs=2, default=None, metavar=("LO", "HI"),
+                   help="search or uncertainty interval")
     p.add_argument("--x10-tol", type=float, default=0.1,
                    help="robust design: allowed relative error of the primary amplitude")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--json", action="store_true", help=JSON_HELP)
     p.set_defaults(func=run)
 
 

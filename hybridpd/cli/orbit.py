@@ -3,17 +3,28 @@ from __future__ import annotations
 
 import json
 
-from hybridpd.cli._common import add_plant, clearance
+from hybridpd.cli._common import JSON_HELP, add_plant, clearance, command
+
+DESCRIPTION = ("Solves the paper's conditions (13)-(17) for the simple symmetric "
+               "orbit of order n (one impact on each wall per period n T), checks its"
+               " viability (18) rigorously and its stability (27) from the Jacobian "
+               "DP of the impact map: xm, phi0, the viability margin, the Floquet "
+               "multipliers and the spectral radius.")
 
 
 def register(sub):
-    p = sub.add_parser("orbit", help="symmetric periodic orbit: existence and stability")
+    p = command(sub, "orbit", help="symmetric periodic orbit: existence and stability",
+                description=DESCRIPTION,
+                example=("hybridpd orbit --case noncollocated --mu 0.1 --e 0.5 "
+                         "--gamma 0.75 --omega 5 --kp 10 --kv 20"))
     add_plant(p, xm=False, gamma=True)
     p.add_argument("--e", type=float, required=True, help="restitution coefficient in [0, 1]")
     p.add_argument("--n", type=int, default=1, help="odd orbit order (period n T)")
-    p.add_argument("--kp", type=float, required=True)
-    p.add_argument("--kv", type=float, required=True)
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--kp", type=float, required=True,
+                   help="proportional gain kp (> 0)")
+    p.add_argument("--kv", type=float, required=True,
+                   help="derivative gain kv (> 0)")
+    p.add_argument("--json", action="store_true", help=JSON_HELP)
     p.set_defaults(func=run)
 
 

@@ -3,16 +3,28 @@ from __future__ import annotations
 
 import json
 
-from hybridpd.cli._common import add_plant, add_sweep, clearance, progress_wanted
+from hybridpd.cli._common import add_plant, add_sweep, clearance, command, progress_wanted
+
+DESCRIPTION = ("Maps, on a grid of PD gains (kp, kv) and for each restitution "
+               "coefficient e, where the symmetric orbit exists (with viability) and "
+               "where it is also stable: the paper's Figs 4-5.")
 
 
 def register(sub):
-    p = sub.add_parser("regions", help="existence/stability regions over (kp, kv)")
+    p = command(sub, "regions", help="existence/stability regions over (kp, kv)",
+                description=DESCRIPTION,
+                example=("hybridpd regions --case collocated --mu 0.1 --e 0.1 0.5 0.9"
+                         " --gamma 0.75 --omega 5 --kp 0.1 50 200 --kv 0.1 50 200 "
+                         "--out regions.nc"))
     add_plant(p, xm=False, gamma=True)
-    p.add_argument("--e", type=float, nargs="+", required=True)
-    p.add_argument("--n", type=int, default=1)
-    p.add_argument("--kp", type=float, nargs=3, required=True, metavar=("MIN", "MAX", "NUM"))
-    p.add_argument("--kv", type=float, nargs=3, required=True, metavar=("MIN", "MAX", "NUM"))
+    p.add_argument("--e", type=float, nargs="+", required=True,
+                   help="one or more restitution coefficients in [0, 1]")
+    p.add_argument("--n", type=int, default=1,
+                   help="odd order of the symmetric orbit (period n T)")
+    p.add_argument("--kp", type=float, nargs=3, required=True, metavar=("MIN", "MAX", "NUM"),
+                   help="grid axis: NUM points from MIN to MAX")
+    p.add_argument("--kv", type=float, nargs=3, required=True, metavar=("MIN", "MAX", "NUM"),
+                   help="grid axis: NUM points from MIN to MAX")
     add_sweep(p)
     p.set_defaults(func=run)
 

@@ -3,19 +3,33 @@ from __future__ import annotations
 
 import json
 
-from hybridpd.cli._common import add_plant
+from hybridpd.cli._common import JSON_HELP, add_plant, command
+
+DESCRIPTION = ("Simulates the impact pair under PD control from an initial state: "
+               "exact flows between impacts, guaranteed location of every impact, "
+               "Zeno accumulation followed by sticking and release. Prints the "
+               "impacts (time, wall, pre-impact state) and why the run stopped.")
 
 
 def register(sub):
-    p = sub.add_parser("simulate", help="simulate the controlled impact pair")
+    p = command(sub, "simulate", help="simulate the controlled impact pair",
+                description=DESCRIPTION,
+                example=("hybridpd simulate --case collocated --mu 0.1 --e 0.5 --L "
+                         "0.75 --omega 5 --kp 10 --kv 20 --xm 1 --x0 0.3 0.5 0 0 "
+                         "--t-end 10"))
     add_plant(p)
     p.add_argument("--e", type=float, required=True, help="restitution coefficient in [0, 1]")
-    p.add_argument("--kp", type=float, required=True)
-    p.add_argument("--kv", type=float, required=True)
-    p.add_argument("--x0", type=float, nargs=4, required=True, metavar=("X1", "Y1", "X2", "Y2"))
-    p.add_argument("--t-end", type=float, required=True)
-    p.add_argument("--max-impacts", type=int, default=100_000)
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--kp", type=float, required=True,
+                   help="proportional gain kp (> 0)")
+    p.add_argument("--kv", type=float, required=True,
+                   help="derivative gain kv (> 0)")
+    p.add_argument("--x0", type=float, nargs=4, required=True, metavar=("X1", "Y1", "X2", "Y2"),
+                   help="initial positions and velocities of both masses")
+    p.add_argument("--t-end", type=float, required=True,
+                   help="end time of the simulation (> 0)")
+    p.add_argument("--max-impacts", type=int, default=100_000,
+                   help="stop after this many impacts (the run says why it stopped)")
+    p.add_argument("--json", action="store_true", help=JSON_HELP)
     p.set_defaults(func=run)
 
 
