@@ -1,5 +1,6 @@
 """Continuation of the symmetric orbit in the velocity gain, with bifurcation events.
 
+
 Paper parameters (mu = 0.1, gamma = L / x10 = 0.75, n = 1, omega = 5, kp = 10): the
 symmetric period-1 orbit that puts the primary mass on a triangle wave of amplitude
 x10 = 1 is followed in kv (x10 fixed, the reference amplitude xm follows), for
@@ -14,12 +15,12 @@ multipliers crosses the unit circle), folds/branch points, period doublings, sta
 changes. Then the map continuation (Newton on P at fixed xm) follows the period-2 attractor
 that coexists with the collocated orbit at kv = 20 down to its fold.
 
-Run: ``python examples/continuation_e.py [outdir]`` (writes ``continuation_e.png``).
+Run: ``python examples/continuation_e.py [--out DIR]`` (writes ``continuation_e.png``).
 """
 import time
 
 import numpy as np
-from _out import out_dir
+from _out import example_args
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains, Reference
@@ -31,6 +32,8 @@ from hybridpd.analysis.continuation import (
 )
 from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.analysis.orbits import symmetric_orbit
+
+ARGS = example_args(__doc__)
 
 MU, L, OMEGA, KP = 0.1, 0.75, 5.0, 10.0
 RUNS = [("collocated", 0.1), ("noncollocated", 0.5)]
@@ -74,6 +77,6 @@ br2 = continue_orbit(P, cyc, "kv", 5.0, period=2)
 report("period-2 cycle continued in kv (xm fixed)", br2)
 
 print(f"\ntotal {time.perf_counter() - t0:.1f} s")
-path = out_dir() / "continuation_e.png"
+path = ARGS.out / "continuation_e.png"
 fig.savefig(path, dpi=110)
 print(f"wrote {path}")

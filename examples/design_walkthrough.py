@@ -1,6 +1,6 @@
 """Design walk-through: PD gains for a desired motion of the primary mass, verified and made robust.
 
-Run ``python examples/design_walkthrough.py [OUTDIR]`` (default ``examples/out/``). It
+Run ``python examples/design_walkthrough.py [--out DIR]`` (default ``examples/out/``). It
 
 1. states the desired motion (the paper's: ``x10 = 1``, ``gamma = L/x10 = 0.75``, ``n = 1``,
    ``omega = 5``) and plant (``mu = 0.1``, ``e = 0.5``, ``m2 = 1``) and designs collocated
@@ -19,11 +19,11 @@ Only :class:`matplotlib.figure.Figure` objects are used (no pyplot, no GUI).
 """
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
+from _out import example_args
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, Reference
@@ -152,9 +152,7 @@ def comparison_figure(cmp, path):
     fig.savefig(path, dpi=110)
 
 
-def main(outdir="examples/out"):
-    out = Path(outdir)
-    out.mkdir(parents=True, exist_ok=True)
+def main(out: Path):
     t0 = time.perf_counter()
 
     # 1-5 share the designs: the comparison runs the nominal and robust design of each case
@@ -215,4 +213,4 @@ def main(outdir="examples/out"):
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:2])
+    main(example_args(__doc__).out)

@@ -14,17 +14,17 @@ A pure PD ``kp + kv s`` needs the velocity error; in practice the derivative is 
 
 Run::
 
-    python examples/filtered_pd.py [output.png]
+    python examples/filtered_pd.py [--out DIR]
 
-The figure (matplotlib ``Figure``, no GUI) goes to the given path or to
+The figure (matplotlib ``Figure``, no GUI) goes to ``DIR/filtered_pd.png``, by default
 ``examples/out/filtered_pd.png``.
 """
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
+from _out import example_args
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains
@@ -179,5 +179,4 @@ def full_period(o, t) -> np.ndarray:
 
 
 if __name__ == "__main__":
-    default = Path(__file__).resolve().parent / "out" / "filtered_pd.png"
-    main(Path(sys.argv[1]) if len(sys.argv) > 1 else default)
+    main(example_args(__doc__).out / "filtered_pd.png")

@@ -1,5 +1,6 @@
 """Finding a symmetric periodic orbit and checking its stability (paper sections 3-4).
 
+
 1. Solve the existence conditions (13)-(14) for the paper's parameters (mu = 0.1,
    gamma = 0.75, n = 1, omega = 5, e = 0.5, kp = 10, kv = 20, collocated): the reference
    amplitude xm and the impact phase phi0 that put m1 on a triangle wave of amplitude 1.
@@ -8,15 +9,17 @@
 3. Simulate from a perturbed start: the trajectory settles on the orbit, and the distance to
    the fixed point on the section shrinks at the predicted rate (the spectral radius).
 
-Run: ``python examples/orbit_walkthrough.py [outdir]``.
+Run: ``python examples/orbit_walkthrough.py [--out DIR]``.
 """
 import numpy as np
-from _out import out_dir
+from _out import example_args
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains
 from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.analysis.orbits import symmetric_orbit
+
+ARGS = example_args(__doc__)
 
 orb = symmetric_orbit(ImpactPair(mu=0.1, e=0.5, L=0.75), PDGains(kp=10, kv=20), omega=5.0,
                       x10=1.0, n=1, case="collocated")
@@ -58,6 +61,6 @@ ax.semilogy(k, pred, "--", label=f"rho^k, rho = {orb.spectral_radius:.4f}")
 ax.set_xlabel("iteration k of P")
 ax.legend(fontsize=8)
 fig.tight_layout()
-out = out_dir()
+out = ARGS.out
 fig.savefig(out / "orbit_walkthrough.png", dpi=110)
 print(f"figure written to {out / 'orbit_walkthrough.png'}")

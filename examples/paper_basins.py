@@ -4,9 +4,9 @@ The mapper (one section point -> a label) iterates the impact map 1500 times (30
 and applies the paper's criterion; basins are a thin layer that maps a grid of the slice
 (x1, y1) with y2 = y2*, phi = phi* through it.
 
-Run: ``python examples/paper_basins.py [outdir]`` (about a minute on 2 cores).
+Run: ``python examples/paper_basins.py [--out DIR] [--quick]`` (about a minute on 2 cores).
 """
-from _out import out_dir
+from _out import example_args
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains
@@ -15,6 +15,8 @@ from hybridpd.analysis.orbits import symmetric_orbit
 from hybridpd.plotting import plot_basin
 from hybridpd.sweeps.basins import ImpactMapper, basin_of_attraction
 
+ARGS = example_args(__doc__)
+NUM, N_ITER = (12, 100) if ARGS.quick else (60, 1500)
 fig = Figure(figsize=(16, 9))
 for row, case in enumerate(("collocated", "noncollocated")):
     for col, e in enumerate((0.1, 0.5, 0.9)):
@@ -27,12 +29,13 @@ for row, case in enumerate(("collocated", "noncollocated")):
                     transform=ax.transAxes)
             continue
         mapper = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference(), case),
-                              orb.fixed_point)
-        b = basin_of_attraction(mapper, (-3, 5, 60), (-2, 10, 60), executor="processes")
+                              orb.fixed_point, n_iter=N_ITER)
+        b = basin_of_attraction(mapper, (-3, 5, NUM), (-2, 10, NUM),
+                                executor="serial" if ARGS.quick else "processes")
         print(f"{case} e={e}: spectral radius {orb.spectral_radius:.4g}, converged "
               f"{100 * b.converged_fraction:.1f}%")
         plot_basin(b, ax=ax)
 fig.tight_layout()
-out = out_dir()
+out = ARGS.out
 fig.savefig(out / "paper_basins.png", dpi=100)
 print(f"figure written to {out / 'paper_basins.png'}")

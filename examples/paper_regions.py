@@ -4,18 +4,20 @@ mu = 0.1, gamma = 0.75, n = 1, omega = 5, e = 0.1, 0.5, 0.9, collocated and non-
 A grid point is shaded when the symmetric orbit exists (conditions (13)-(14) with xm > 0 and
 viability (18)) and is stable (all multipliers of DP inside the unit circle).
 
-Run: ``python examples/paper_regions.py [outdir]`` (about 5 s).
+Run: ``python examples/paper_regions.py [--out DIR] [--quick]`` (about 5 s).
 """
-from _out import out_dir
+from _out import example_args
 from matplotlib.figure import Figure
 
 from hybridpd.plotting import plot_regions
 from hybridpd.sweeps.regions import region_map
 
+ARGS = example_args(__doc__)
+NUM = 30 if ARGS.quick else 150
 common = dict(e=(0.1, 0.5, 0.9), mu=0.1, omega=5.0, gamma=0.75, x10=1.0, n=1)
-col = region_map("collocated", x=("kp", 0.1, 50, 150), y=("kv", 0.1, 50, 150), **common)
-non = region_map("noncollocated", x=("kp", 0.1, 50, 150), y=("kv", 0.1, 50, 150), **common)
-zoom = region_map("noncollocated", x=("kp", 0.1, 20, 150), y=("kv", 0.1, 6, 150), **common)
+col = region_map("collocated", x=("kp", 0.1, 50, 150), y=("kv", 0.1, 50, NUM), **common)
+non = region_map("noncollocated", x=("kp", 0.1, 50, NUM), y=("kv", 0.1, 50, NUM), **common)
+zoom = region_map("noncollocated", x=("kp", 0.1, 20, NUM), y=("kv", 0.1, 6, NUM), **common)
 
 for name, rm in (("collocated", col), ("non-collocated", non), ("non-collocated zoom", zoom)):
     print(name, "exists & stable:",
@@ -27,6 +29,6 @@ for i, (rm, title) in enumerate(((col, "Fig. 4: collocated"), (non, "Fig. 5: non
                                  (zoom, "Fig. 5, zoom"))):
     plot_regions(rm, ax=fig.add_subplot(1, 3, i + 1), title=title)
 fig.tight_layout()
-out = out_dir()
+out = ARGS.out
 fig.savefig(out / "paper_regions.png", dpi=110)
 print(f"figure written to {out / 'paper_regions.png'}")

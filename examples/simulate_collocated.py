@@ -1,19 +1,22 @@
 """Simulating the PD-controlled impact pair (collocated feedback).
 
+
 The secondary mass m2 is driven by the PD law (3) tracking ``xd = cos(5 t)``; the primary mass
 m1 moves freely in the slot of half-width L = 0.75 and is driven only through impacts (e = 0.5,
 mu = 0.1). The simulation is exact between impacts (closed-form LTI flow) and locates every
 impact with a guaranteed first-crossing search.
 
-Run: ``python examples/simulate_collocated.py [outdir]``.
+Run: ``python examples/simulate_collocated.py [--out DIR]``.
 """
 import numpy as np
-from _out import out_dir
+from _out import example_args
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains, Reference
 from hybridpd.pair.impactpair import ControlledImpactPair
 from hybridpd.plotting import plot_trajectory
+
+ARGS = example_args(__doc__)
 
 pair = ImpactPair(mu=0.1, e=0.5, L=0.75)
 system = ControlledImpactPair(pair, PDGains(kp=10, kv=20), Reference(xm=1.0, omega=5.0),
@@ -31,7 +34,7 @@ z4_pre = traj.pre[:, 1] - traj.pre[:, 3]
 z4_post = traj.post[:, 1] - traj.post[:, 3]
 print("max |z4+ + e z4-| =", float(np.max(np.abs(z4_post + pair.e * z4_pre))))
 
-out = out_dir()
+out = ARGS.out
 fig = plot_trajectory(traj, pair.L, fig=Figure(figsize=(10, 7)))
 fig.savefig(out / "simulate_collocated.png", dpi=110)
 print(f"figure written to {out / 'simulate_collocated.png'}")
