@@ -186,9 +186,11 @@ def done_chunks(store: Path) -> list[int]:
 
 
 def chunk_file(store: Path, name: str, i: int) -> Path:
-    """The Zarr chunk file of sweep chunk `i` of output `name` (zarr 3 or zarr 2 key layout)."""
-    v3 = store / name / "c" / str(i)
-    return v3 if (store / "zarr.json").exists() else store / name / str(i)
+    """The Zarr chunk file of sweep chunk `i` of output `name` (Zarr format 2 key)."""
+    import zarr
+
+    ndim = zarr.open_group(str(store), mode="r")[name].ndim
+    return store / name / ".".join([str(i)] + ["0"] * (ndim - 1))
 
 
 def wait_until(cond, timeout=20.0, what="condition"):

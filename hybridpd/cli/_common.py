@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 
 EXIT_BAD_INPUT = 2
 EXIT_INFEASIBLE = 3
@@ -51,4 +50,5 @@ def add_sweep(p):
 
 
 def progress_wanted(args) -> bool:
-    return sys.stderr.isatty()
+    # The reporter picks a bar (terminal) or plain lines (logs); only --quiet silences it.
+    return not getattr(args, "quiet", False)

@@ -54,11 +54,17 @@ UNITS: dict[str, tuple[str, str]] = {
 
 
 def axis_attrs(name: str) -> dict[str, str]:
-    """``{"units", "long_name"}`` of a known parameter or variable (empty if unknown)."""
+    """``{"units", "long_name"}`` of a known parameter or variable (empty if unknown).
+
+    Examples
+    --------
+    >>> axis_attrs("kv")
+    {'units': 'mass/time', 'long_name': 'derivative gain kv'}
+    """
     if name not in UNITS:
         return {}
     units, long_name = UNITS[name]
-    return {"units": units, "long_name": long_name}
+    return {"units": units, "long_name": f"{long_name} {name}"}
 
 
 def check_suffix(path: str | os.PathLike, name: str = "path",
@@ -131,7 +137,9 @@ def write_dataset(ds, path: str | os.PathLike) -> Path:
             ds.to_netcdf(tmp, engine="netcdf4", **({"auto_complex": True} if cplx else {}))
             os.replace(tmp, p)
         else:
-            ds.to_zarr(tmp, mode="w", consolidated=False)
+            # Zarr format 2 with consolidated metadata: read by zarr-python 2 and 3 and by
+            # xarray.open_zarr without warnings
+            ds.to_zarr(tmp, mode="w", consolidated=True, **_zarr2())
             if p.exists():
                 if not ((p / "zarr.json").is_file() or (p / ".zgroup").is_file()):
                     raise ValueError(f"path {str(p)!r} exists and is not a Zarr store; "
@@ -161,5 +169,12 @@ def read_dataset(path: str | os.PathLike):
             ds = xr.open_dataset(p, engine="netcdf4")
         with ds:
             return ds.load()
-    with xr.open_dataset(p, engine="zarr", consolidated=False) as ds:
+    consolidated = (p / ".zmetadata").is_file()
+    with xr.open_dataset(p, engine="zarr", consolidated=consolidated) as ds:
         return ds.load()
+
+
+def _zarr2() -> dict:
+    import zarr
+
+    return {"zarr_format": 2} if int(zarr.__version__.split(".")[0]) >= 3 else {}

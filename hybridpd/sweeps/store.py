@@ -1,7 +1,8 @@
 """The on-disk store of a sweep: one Zarr group, written as it goes, resumed, never mixed.
 
-Layout of ``store="run.zarr"`` (a directory; Zarr's own format, readable by
-``zarr.open_group`` and by ``xarray.open_zarr``, which shows the points as coordinates)::
+Layout of ``store="run.zarr"`` (a directory in Zarr format 2, readable by zarr-python 2 and
+3, by ``zarr.open_group`` and by ``xarray.open_zarr``, which shows the points as
+coordinates)::
 
     run.zarr/            group attributes: {"hybridpd_sweep": {format, identity,
                          identity_hash, n_points, chunk_size, n_chunks, point_names,
@@ -201,18 +202,28 @@ def raise_mismatch(where: Path, stored: Any, current: dict) -> None:
 
 
 def _create_array(group, name, shape, chunks, dtype, dims, attrs=None):
-    attrs = dict(attrs or {})
-    if hasattr(group, "create_array"):  # zarr >= 3
+    # Zarr format 2 (written by zarr-python 2 and 3, read by every Zarr implementation);
+    # "_ARRAY_DIMENSIONS" names the dimensions for xarray.
+    attrs = {"_ARRAY_DIMENSIONS": list(dims), **(attrs or {})}
+    if hasattr(group, "create_array"):  # zarr-python >= 3
         return group.create_array(name, shape=shape, chunks=chunks, dtype=dtype, fill_value=0,
-                                  dimension_names=dims, attributes=attrs, overwrite=True)
+                                  attributes=attrs, overwrite=True)
     arr = group.create_dataset(name, shape=shape, chunks=chunks, dtype=dtype, fill_value=0,
-                               overwrite=True)  # zarr 2: xarray's dimension attribute
-    arr.attrs.update({"_ARRAY_DIMENSIONS": list(dims), **attrs})
+                               overwrite=True)
+    arr.attrs.update(attrs)
     return arr
 
 
+def _open_new_group(path: Path):
+    import zarr
+
+    if int(zarr.__version__.split(".")[0]) >= 3:
+        return zarr.open_group(str(path), mode="w", zarr_format=2)
+    return zarr.open_group(str(path), mode="w")
+
+
 def _is_zarr_group(path: Path) -> bool:
-    return (path / "zarr.json").is_file() or (path / ".zgroup").is_file()
+    return (path / ".zgroup").is_file() or (path / "zarr.json").is_file()
 
 
 def check_store_path(store: Any) -> Path:
@@ -284,7 +295,7 @@ class ZarrStore:
             return "complete" if info.get("status") == "complete" else "partial"
         if self.path.exists():
             shutil.rmtree(self.path)  # a sweep store or an empty directory (check_store_path)
-        self.group = zarr.open_group(str(self.path), mode="w")
+        self.group = _open_new_group(self.path)
         self.info = {"format": FORMAT, "identity": self.identity,
                      "identity_hash": self.identity_hash, "n_points": self.n_points,
                      "chunk_size": self.chunk_size, "n_chunks": self.n_chunks,
@@ -360,8 +371,12 @@ class ZarrStore:
 
     def finish(self) -> None:
         """Mark the store complete (after every chunk is on disk)."""
+        import zarr
+
         self.info["status"] = "complete"
         self._write_attrs()
+        # Consolidated metadata: xarray.open_zarr reads the finished store in one go.
+        zarr.consolidate_metadata(str(self.path))
 
 
 def read_store(path: Path) -> tuple[dict, dict, dict, dict]:
