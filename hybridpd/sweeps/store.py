@@ -14,7 +14,9 @@ coordinates)::
 
 Every output array is chunked like the sweep (``chunk_size`` points per Zarr chunk), so one
 finished sweep chunk is one Zarr chunk file per output, written by Zarr atomically (temporary
-file, then rename). Its ``done`` flag is written after them: a chunk is either complete on
+file, then rename) from a background thread while the next chunk computes (a chunk is on
+disk at most two chunks later, and before the sweep returns or raises). Its ``done`` flag is
+written after them: a chunk is either complete on
 disk or recomputed on resume, whatever moment the process was killed. A chunk file that
 cannot be decoded on resume (disk trouble) is recomputed with a warning. Nothing in the store
 depends on timing, host or executor, so equal sweeps give equal files.
@@ -29,6 +31,7 @@ with a different identity raises ``ValueError``.
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import contextlib
 import dataclasses
 import functools
@@ -294,6 +297,8 @@ class ZarrStore:
         self.arrays: dict[str, Any] = {}
         self.done_flags: Any = None
         self.info: dict = {}
+        self._writer: cf.ThreadPoolExecutor | None = None
+        self._pending: list[cf.Future] = []
 
     def bounds(self, i: int) -> tuple[int, int]:
         start = i * self.chunk_size
@@ -391,13 +396,31 @@ class ZarrStore:
             self.info["output_names"] = list(outputs)
             self._write_attrs()
         start, stop = self.bounds(i)
-        _write_in_order([(self.arrays[k], slice(start, stop), a) for k, a in outputs.items()],
-                        [(self.done_flags, slice(i, i + 1), np.ones(1, bool))])  # flag last
+        stages = ([(self.arrays[k], slice(start, stop), a) for k, a in outputs.items()],
+                  [(self.done_flags, slice(i, i + 1), np.ones(1, bool))])  # the flag last
+        # Written by one background thread while the next chunk computes; at most two chunks
+        # wait, and a failed write is re-raised here or by flush().
+        if self._writer is None:
+            self._writer = cf.ThreadPoolExecutor(1, thread_name_prefix="hybridpd-store")
+        self._pending.append(self._writer.submit(_write_in_order, *stages))
+        while len(self._pending) > 2:
+            self._pending.pop(0).result()
+
+    def flush(self) -> None:
+        """Wait until every chunk handed to :meth:`write_chunk` is on disk (errors re-raised)."""
+        try:
+            while self._pending:
+                self._pending.pop(0).result()
+        finally:
+            if self._writer is not None:
+                self._writer.shutdown(wait=True)
+                self._writer = None
 
     def finish(self) -> None:
         """Mark the store complete (after every chunk is on disk)."""
         import zarr
 
+        self.flush()
         self.info["status"] = "complete"
         self._write_attrs()
         # Consolidated metadata: xarray.open_zarr reads the finished store in one go.

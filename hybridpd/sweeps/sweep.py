@@ -688,7 +688,11 @@ def run_sweep(
             start, stop = asm.bounds(i)
             bar.update(stop - start)
 
-        compute(spec, func, cols, func_kwargs, pending, asm.bounds, on_result, timeout)
+        try:
+            compute(spec, func, cols, func_kwargs, pending, asm.bounds, on_result, timeout)
+        finally:
+            if st is not None:  # chunks finished before an error or Ctrl-C reach the disk
+                st.flush()
     if st is not None:
         st.finish()
     return SweepResult(
