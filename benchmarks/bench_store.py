@@ -16,22 +16,22 @@ from pathlib import Path
 from _common import best_of
 
 
-def _timed(label, fn, base=None):
-    el, out = best_of(fn, repeat=3)
+def _timed(label, fn, base=None, repeat=3):
+    el, out = best_of(fn, repeat=repeat)
     extra = "" if base is None else f"  overhead {el - base:+.3f} s ({100 * (el - base) / base:+.1f}%)"
     print(f"  {label:<26s} {el:7.3f} s{extra}")
     return el, out
 
 
-def _store_runs(run, tmp: Path):
-    base, _ = _timed("no store", lambda: run(None))
+def _store_runs(run, tmp: Path, repeat=3):
+    base, _ = _timed("no store", lambda: run(None), repeat=repeat)
 
     def fresh():
         shutil.rmtree(tmp / "run.zarr", ignore_errors=True)
         return run(tmp / "run.zarr")
 
-    _timed("fresh store", fresh, base)
-    _timed("resume finished store", lambda: run(tmp / "run.zarr"), base)
+    _timed("fresh store", fresh, base, repeat)
+    _timed("resume finished store", lambda: run(tmp / "run.zarr"), base, repeat)
 
 
 def main(quick=False):
@@ -59,6 +59,14 @@ def main(quick=False):
             _store_runs(lambda st, ex=executor: basin_of_attraction(
                 mapper, (-3, 5, nb), (-2, 10, nb), executor=ex, store=st, progress=False),
                 Path(d))
+    # the slower basin (most points run all 1500 iterations): the store's share is smaller
+    orb = symmetric_orbit(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0)
+    mapper = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
+    with tempfile.TemporaryDirectory() as d:
+        print(f"basin collocated e=0.1 {nb} x {nb}, processes (one run each):")
+        _store_runs(lambda st: basin_of_attraction(
+            mapper, (-3, 5, nb), (-2, 10, nb), executor="processes", store=st, progress=False),
+            Path(d), repeat=1)
 
 
 if __name__ == "__main__":
