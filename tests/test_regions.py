@@ -61,7 +61,7 @@ def test_interrupted_sweep_resumes_to_the_same_file(tmp_path, monkeypatch):
     from hybridpd.sweeps import regions
 
     kw = dict(x=("kp", 0.5, 30, 9), y=("kv", 0.2, 20, 8), e=(0.5,), chunk_size=10, **PAPER)
-    full = region_map("collocated", store=tmp_path / "full.npz", executor="serial", **kw)
+    full = region_map("collocated", store=tmp_path / "full.zarr", executor="serial", **kw)
     calls = {"n": 0}
     original = regions.symmetric_orbits
 
@@ -74,13 +74,18 @@ def test_interrupted_sweep_resumes_to_the_same_file(tmp_path, monkeypatch):
     # interrupt inside the evaluation: the sweep's identity (its chunk function) is unchanged
     monkeypatch.setattr(regions, "symmetric_orbits", flaky)
     with pytest.raises(KeyboardInterrupt):
-        region_map("collocated", store=tmp_path / "part.npz", executor="serial", **kw)
-    monkeypatch.setattr(regions, "symmetric_orbits", original)
+        region_map("collocated", store=tmp_path / "part.zarr", executor="serial", **kw)
     done_before = calls["n"] - 1
-    resumed = region_map("collocated", store=tmp_path / "part.npz", executor="serial", **kw)
+    calls["n"] = -100  # counts again, never fails
+    resumed = region_map("collocated", store=tmp_path / "part.zarr", executor="serial", **kw)
     _compare(full, resumed)
     assert done_before == 3
-    assert (tmp_path / "part.npz").read_bytes() == (tmp_path / "full.npz").read_bytes()
+    assert calls["n"] + 100 == 8 - 3  # 72 points, chunks of 10: only the 5 unfinished ran
+    files = {p: sorted(q.relative_to(p) for q in p.rglob("*") if q.is_file())
+             for p in (tmp_path / "part.zarr", tmp_path / "full.zarr")}
+    for q in files[tmp_path / "full.zarr"]:  # the same store, file by file
+        assert (tmp_path / "part.zarr" / q).read_bytes() == (tmp_path / "full.zarr" / q).read_bytes()
+    assert files[tmp_path / "part.zarr"] == files[tmp_path / "full.zarr"]
 
 
 @pytest.mark.parametrize("kwargs, match", [

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import doctest
+import functools
 import json
 import os
 import signal
@@ -28,7 +29,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import hybridpd.sweeps.store as store_mod
 import hybridpd.sweeps.sweep as sweep_mod
+from hybridpd.sweeps.progress import Progress
 from hybridpd.sweeps.sweep import (
     ChunkError,
     SweepResult,
@@ -160,6 +163,36 @@ def pid_alive(pid: int) -> bool:
         return True
 
 
+def tree_bytes(root: Path) -> dict[str, bytes]:
+    """Every file of a store, by relative path (the store's full on-disk content)."""
+    return {str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+def store_status(store: Path) -> str:
+    import zarr
+
+    return zarr.open_group(str(store), mode="r").attrs["hybridpd_sweep"]["status"]
+
+
+def done_chunks(store: Path) -> list[int]:
+    """Chunks flagged done in a store (read by Zarr, possibly while another process writes)."""
+    import zarr
+
+    try:
+        flags = zarr.open_group(str(store), mode="r")["_sweep/done"][:]
+    except Exception:  # noqa: BLE001 - not created yet
+        return []
+    return np.flatnonzero(flags).tolist()
+
+
+def chunk_file(store: Path, name: str, i: int) -> Path:
+    """The Zarr chunk file of sweep chunk `i` of output `name` (Zarr format 2 key)."""
+    import zarr
+
+    ndim = zarr.open_group(str(store), mode="r")[name].ndim
+    return store / name / ".".join([str(i)] + ["0"] * (ndim - 1))
+
+
 def wait_until(cond, timeout=20.0, what="condition"):
     t_end = time.monotonic() + timeout
     while time.monotonic() < t_end:
@@ -260,7 +293,7 @@ def test_executors_agree_bit_for_bit(tmp_path):
                 model_func,
                 pts,
                 chunk_size=50,
-                store=tmp_path / f"{label}.npz",
+                store=tmp_path / f"{label}.zarr",
                 metadata={"case": "test"},
                 **kw,
             )
@@ -268,12 +301,11 @@ def test_executors_agree_bit_for_bit(tmp_path):
     assert ref.n_chunks == 9 and ref.n_points == n and ref.n_resumed == 0
     assert ref.executor == "serial" and runs["proc2"].executor == "processes[2]"
     assert list(ref.outputs) == sorted(ref.outputs)
-    files = {label: (tmp_path / f"{label}.npz").read_bytes() for label in runs}
+    files = {label: tree_bytes(tmp_path / f"{label}.zarr") for label in runs}
     for label, res in runs.items():
         assert_same_outputs(ref, res)
         assert res.identity_hash == ref.identity_hash
-        assert files[label] == files["serial"], label  # the final file, byte for byte
-        assert not (tmp_path / f"{label}.npz.parts").exists()  # working files removed
+        assert files[label] == files["serial"], label  # the whole store, byte for byte
     # The outputs are the function's values, in the original point order.
     direct = model_func({k: v.copy() for k, v in pts.items()})
     for k, v in direct.items():
@@ -291,7 +323,7 @@ def test_trailing_shapes_and_mixed_dtypes_survive_the_store(tmp_path):
         pts,
         chunk_size=8,
         executor="serial",
-        store=tmp_path / "s",
+        store=tmp_path / "s.zarr",
         metadata={"mu": 0.1, "gamma": 0.75},
     )
     expect = {
@@ -303,20 +335,23 @@ def test_trailing_shapes_and_mixed_dtypes_survive_the_store(tmp_path):
         "u8": (np.uint8, ()),
     }
     assert {k: (v.dtype.type, v.shape[1:]) for k, v in res.outputs.items()} == expect
-    back = load_sweep(tmp_path / "s")
+    back = load_sweep(tmp_path / "s.zarr")
     assert_same_outputs(res, back)
     assert back.metadata == {"mu": 0.1, "gamma": 0.75}
     assert back.identity_hash == res.identity_hash
     assert list(back.points) == ["e", "kp", "kv", "i"]
     for k in pts:
         np.testing.assert_array_equal(back.points[k], pts[k])
-    # The directory store keeps its manifest, marked complete.
-    manifest = json.loads((tmp_path / "s" / "manifest.json").read_text())
-    assert manifest["status"] == "complete" and manifest["identity_hash"] == res.identity_hash
-    assert not (tmp_path / "s" / "chunks").exists()
-    # SweepResult.save writes the same final format.
-    res.save(tmp_path / "copy.npz")
-    assert (tmp_path / "copy.npz").read_bytes() == (tmp_path / "s" / "result.npz").read_bytes()
+    # The store is marked complete and carries the identity.
+    assert store_status(tmp_path / "s.zarr") == "complete"
+    # SweepResult.save to .zarr writes the very same store; .nc and .npz read back equal.
+    res.save(tmp_path / "copy.zarr")
+    assert tree_bytes(tmp_path / "copy.zarr") == tree_bytes(tmp_path / "s.zarr")
+    for name in ("copy.nc", "copy.npz"):
+        res.save(tmp_path / name)
+        again = load_sweep(tmp_path / name)
+        assert_same_outputs(res, again)
+        assert again.metadata == res.metadata and again.identity_hash == res.identity_hash
 
 
 def test_2d_points_and_private_copies():
@@ -362,21 +397,21 @@ def dask_client():
 def test_dask_localcluster_matches_serial(tmp_path, dask_client):
     """A real LocalCluster (2 worker processes) -- given as a Client, and created by "dask"."""
     pts, _ = points_grid(9, 7)  # 189 points
-    ref = run_sweep(model_func, pts, chunk_size=20, executor="serial", store=tmp_path / "ref.npz")
+    ref = run_sweep(model_func, pts, chunk_size=20, executor="serial", store=tmp_path / "ref.zarr")
     via_client = run_sweep(
-        model_func, pts, chunk_size=20, executor=dask_client, store=tmp_path / "c.npz"
+        model_func, pts, chunk_size=20, executor=dask_client, store=tmp_path / "c.zarr"
     )
     assert via_client.executor == "Client"
     assert_same_outputs(ref, via_client)
-    assert (tmp_path / "c.npz").read_bytes() == (tmp_path / "ref.npz").read_bytes()
+    assert tree_bytes(tmp_path / "c.zarr") == tree_bytes(tmp_path / "ref.zarr")
     assert dask_client.status == "running"  # a supplied client is left open
     t0 = time.perf_counter()
     own = run_sweep(
-        model_func, pts, chunk_size=20, executor="dask", max_workers=2, store=tmp_path / "d.npz"
+        model_func, pts, chunk_size=20, executor="dask", max_workers=2, store=tmp_path / "d.zarr"
     )
     assert time.perf_counter() - t0 < 30
     assert own.executor == "dask[2]"
-    assert (tmp_path / "d.npz").read_bytes() == (tmp_path / "ref.npz").read_bytes()
+    assert tree_bytes(tmp_path / "d.zarr") == tree_bytes(tmp_path / "ref.zarr")
 
 
 def test_dask_worker_error_names_chunk(tmp_path, dask_client):
@@ -390,7 +425,7 @@ def test_dask_worker_error_names_chunk(tmp_path, dask_client):
             pts,
             chunk_size=20,
             executor=dask_client,
-            store=tmp_path / "s",
+            store=tmp_path / "s.zarr",
             func_kwargs={"log_dir": str(log)},
         )
     assert info.value.chunk_index == 2
@@ -400,7 +435,7 @@ def test_dask_worker_error_names_chunk(tmp_path, dask_client):
         pts,
         chunk_size=20,
         executor=dask_client,
-        store=tmp_path / "s",
+        store=tmp_path / "s.zarr",
         func_kwargs={"log_dir": str(log)},
     )
     assert res.n_resumed + res.n_computed == res.n_chunks == 10
@@ -417,18 +452,16 @@ def test_resume_after_worker_error(tmp_path, executor, workers):
     log = tmp_path / "log"
     log.mkdir()
     kw = {"chunk_size": 40, "func_kwargs": {"log_dir": str(log)}, "metadata": {"run": 1}}
-    ref = run_sweep(model_func, pts, executor="serial", store=tmp_path / "ref.npz", **kw)
+    ref = run_sweep(model_func, pts, executor="serial", store=tmp_path / "ref.zarr", **kw)
     clear_calls(log)
 
-    store = tmp_path / "run.npz"
+    store = tmp_path / "run.zarr"
     (log / "fail_at").write_text("200")  # chunk 5 of 11
     with pytest.raises(ChunkError, match=r"chunk 5 \(points 200:240\)") as info:
         run_sweep(model_func, pts, executor=executor, max_workers=workers, store=store, **kw)
     assert info.value.chunk_index == 5 and (info.value.start, info.value.stop) == (200, 240)
     assert "boom at point 200" in repr(info.value.__cause__) or "boom" in str(info.value)
-    saved = sorted(
-        int(p.name[6:12]) for p in (tmp_path / "run.npz.parts" / "chunks").glob("chunk-*.npz")
-    )
+    saved = done_chunks(store)
     assert 5 not in saved
     if executor == "serial":
         assert saved == [0, 1, 2, 3, 4]  # everything before the failure is on disk
@@ -436,7 +469,7 @@ def test_resume_after_worker_error(tmp_path, executor, workers):
         # Chunks submitted before the failing one were done or running (not
         # cancellable) when it failed: all collected and saved.
         assert set(range(5)) <= set(saved)
-    assert not store.exists()
+    assert store_status(store) == "running"
     (log / "fail_at").unlink()
     clear_calls(log)
 
@@ -447,8 +480,7 @@ def test_resume_after_worker_error(tmp_path, executor, workers):
         40 * i for i in range(11) if i not in saved
     )  # resumed chunks not recomputed
     assert_same_outputs(ref, res)
-    assert store.read_bytes() == (tmp_path / "ref.npz").read_bytes()
-    assert not (tmp_path / "run.npz.parts").exists()
+    assert tree_bytes(store) == tree_bytes(tmp_path / "ref.zarr")
 
     # A finished store is returned as is: nothing is recomputed.
     clear_calls(log)
@@ -495,16 +527,15 @@ def test_resume_after_kill(tmp_path, executor, workers, sig):
     log = tmp_path / "log"
     log.mkdir()
     kw = {"chunk_size": 40, "func_kwargs": {"log_dir": str(log)}, "metadata": {"run": 1}}
-    ref = run_sweep(slow_model_func, pts, executor="serial", store=tmp_path / "ref.npz", **kw)
+    ref = run_sweep(slow_model_func, pts, executor="serial", store=tmp_path / "ref.zarr", **kw)
     clear_calls(log)
 
-    store = tmp_path / "run"
-    chunks = store / "chunks"
+    store = tmp_path / "run.zarr"
     proc = _spawn(tmp_path, store, log, executor, workers, sleep=0.15)
     try:
         wait_until(
-            lambda: len(list(chunks.glob("chunk-*.npz"))) >= 3 or proc.poll() is not None,
-            what="three chunk files",
+            lambda: len(done_chunks(store)) >= 3 or proc.poll() is not None,
+            what="three chunks done",
         )
         assert proc.poll() is None, proc.communicate()
         proc.send_signal(sig)
@@ -522,17 +553,15 @@ def test_resume_after_kill(tmp_path, executor, workers, sig):
         wait_until(
             lambda: not any(pid_alive(p) for p in worker_pids), timeout=10, what="workers to exit"
         )
-    saved = sorted(int(p.name[6:12]) for p in chunks.glob("chunk-*.npz"))
-    assert 3 <= len(saved) < 11 and not (store / "result.npz").exists()
-    manifest = json.loads((store / "manifest.json").read_text())
-    assert manifest["status"] == "running"
+    saved = done_chunks(store)
+    assert 3 <= len(saved) < 11 and store_status(store) == "running"
     clear_calls(log)
 
     res = run_sweep(slow_model_func, pts, executor="serial", store=store, **kw)
     assert res.n_resumed == len(saved)
     assert calls_by_start(log) == sorted(40 * i for i in range(11) if i not in saved)
     assert_same_outputs(ref, res)
-    assert (store / "result.npz").read_bytes() == (tmp_path / "ref.npz").read_bytes()
+    assert tree_bytes(store) == tree_bytes(tmp_path / "ref.zarr")
 
 
 def test_resume_recovers_from_corrupt_chunk_and_stale_temp(tmp_path):
@@ -540,36 +569,37 @@ def test_resume_recovers_from_corrupt_chunk_and_stale_temp(tmp_path):
     log = tmp_path / "log"
     log.mkdir()
     kw = {"chunk_size": 10, "executor": "serial", "func_kwargs": {"log_dir": str(log)}}
-    ref = run_sweep(model_func, pts, store=tmp_path / "ref", **kw)
-    store = tmp_path / "s"
+    ref = run_sweep(model_func, pts, store=tmp_path / "ref.zarr", **kw)
+    store = tmp_path / "s.zarr"
     (log / "fail_at").write_text("30")
     with pytest.raises(ChunkError):
         run_sweep(model_func, pts, store=store, **kw)
     (log / "fail_at").unlink()
-    chunk_dir = store / "chunks"
-    (chunk_dir / "chunk-000001.npz").write_bytes(b"not a zip")  # e.g. disk trouble
-    (chunk_dir / ".chunk-000003.npz.abcdef.tmp").write_bytes(b"half")  # killed mid-write
+    chunk_file(store, "disc", 1).write_bytes(b"not a zarr chunk")  # e.g. disk trouble
+    stale = chunk_file(store, "eig", 3).with_suffix(".abcdef.partial")
+    stale.write_bytes(b"half")  # a write cut by a kill
     clear_calls(log)
-    with pytest.warns(RuntimeWarning, match="unreadable chunk file"):
+    with pytest.warns(RuntimeWarning, match="unreadable chunk 1"):
         res = run_sweep(model_func, pts, store=store, **kw)
     assert res.n_resumed == 2  # chunks 0 and 2
     assert calls_by_start(log) == [10, 30, 40, 50]
     assert_same_outputs(ref, res)
-    assert (store / "result.npz").read_bytes() == (tmp_path / "ref" / "result.npz").read_bytes()
-    assert not chunk_dir.exists()  # chunk files (and stale temporaries) cleaned up
+    assert tree_bytes(store) == tree_bytes(tmp_path / "ref.zarr")  # stale temporary gone too
 
 
-def test_keep_chunks_and_resume_false(tmp_path):
+def test_resume_false_recomputes(tmp_path):
     pts, _ = points_grid(5, 4)
     log = tmp_path / "log"
     log.mkdir()
     kw = {"chunk_size": 16, "executor": "serial", "func_kwargs": {"log_dir": str(log)}}
-    run_sweep(model_func, pts, store=tmp_path / "s", keep_chunks=True, **kw)
-    assert len(list((tmp_path / "s" / "chunks").glob("chunk-*.npz"))) == 4
+    first = run_sweep(model_func, pts, store=tmp_path / "s.zarr", **kw)
+    assert done_chunks(tmp_path / "s.zarr") == [0, 1, 2, 3]
+    before = tree_bytes(tmp_path / "s.zarr")
     clear_calls(log)
-    res = run_sweep(model_func, pts, store=tmp_path / "s", resume=False, **kw)
+    res = run_sweep(model_func, pts, store=tmp_path / "s.zarr", resume=False, **kw)
     assert res.n_resumed == 0 and len(calls_by_start(log)) == 4
-    assert not (tmp_path / "s" / "chunks").exists()
+    assert_same_outputs(first, res)
+    assert tree_bytes(tmp_path / "s.zarr") == before
 
 
 # --------------------------------------------------------------------------
@@ -590,9 +620,9 @@ def test_identity_mismatch_raises_and_never_mixes(tmp_path):
     # An interrupted store (manifest + some chunks) and a finished one.
     (log / "fail_at").write_text("30")
     with pytest.raises(ChunkError):
-        run_sweep(model_func, pts, store=tmp_path / "partial", **base)
+        run_sweep(model_func, pts, store=tmp_path / "partial.zarr", **base)
     (log / "fail_at").unlink()
-    run_sweep(model_func, pts, store=tmp_path / "done.npz", **base)
+    run_sweep(model_func, pts, store=tmp_path / "done.zarr", **base)
 
     changed_pts = {k: v.copy() for k, v in pts.items()}
     changed_pts["kp"][7] += 1e-12
@@ -603,7 +633,7 @@ def test_identity_mismatch_raises_and_never_mixes(tmp_path):
         "metadata": dict(base, metadata={"e": 0.9}),
         "chunk_size": dict(base, chunk_size=11),
     }
-    for store in ("partial", "done.npz"):
+    for store in ("partial.zarr", "done.zarr"):
         for what, kw in variants.items():
             kw = dict(kw)
             func = kw.pop("func", model_func)
@@ -611,17 +641,17 @@ def test_identity_mismatch_raises_and_never_mixes(tmp_path):
             with pytest.raises(ValueError, match=rf"different sweep.*{what}.*resume=False"):
                 run_sweep(func, p, store=tmp_path / store, **kw)
     # Files untouched by the refused attempts: resuming the original still works.
-    res = run_sweep(model_func, pts, store=tmp_path / "partial", **base)
+    res = run_sweep(model_func, pts, store=tmp_path / "partial.zarr", **base)
     assert res.n_resumed == 3
     # resume=False overwrites deliberately.
     res = run_sweep(
         model_func,
         pts,
-        store=tmp_path / "done.npz",
+        store=tmp_path / "done.zarr",
         resume=False,
         **dict(base, metadata={"e": 0.9}),
     )
-    assert load_sweep(tmp_path / "done.npz").metadata == {"e": 0.9}
+    assert load_sweep(tmp_path / "done.zarr").metadata == {"e": 0.9}
 
 
 def test_identity_ignores_executor_and_workers_but_sees_array_kwargs():
@@ -629,8 +659,8 @@ def test_identity_ignores_executor_and_workers_but_sees_array_kwargs():
     a = run_sweep(sum_func, pts, executor="serial")
     b = run_sweep(sum_func, pts, executor="processes", max_workers=2)
     assert a.identity_hash == b.identity_hash
-    ida = sweep_mod._jsonable({"w": np.arange(3.0)}, "func_kwargs", arrays="digest")
-    idb = sweep_mod._jsonable({"w": np.arange(3.0) + 1e-15 + 1}, "func_kwargs", arrays="digest")
+    ida = store_mod.jsonable({"w": np.arange(3.0)}, "func_kwargs", arrays="digest")
+    idb = store_mod.jsonable({"w": np.arange(3.0) + 1e-15 + 1}, "func_kwargs", arrays="digest")
     assert ida != idb
 
 
@@ -668,6 +698,7 @@ _PTS = {"x": np.arange(5.0)}
         ({"timeout": float("nan")}, r"timeout must be None or a positive number"),
         ({"resume": "yes"}, r"resume must be True or False"),
         ({"progress": 1}, r"progress must be True or False"),
+        ({"label": 3}, r"label must be None or a string"),
         ({"func_kwargs": [1]}, r"func_kwargs must be None or a dict"),
         ({"func_kwargs": {"f": object()}}, r"func_kwargs\['f'\] holds an object of type object"),
         ({"metadata": {"m": {1: 2}}}, r"metadata\['m'\] has a non-string key"),
@@ -719,14 +750,19 @@ def test_bad_store_paths(tmp_path):
             executor="serial",
             store=tmp_path / "file",
         )
-    (tmp_path / "d.npz").mkdir()
-    with pytest.raises(ValueError, match="store .* is a directory"):
-        run_sweep(
-            sum_func,
-            {"x0": np.ones(2), "x1": np.ones(2)},
-            executor="serial",
-            store=tmp_path / "d.npz",
-        )
+    pts = {"x0": np.ones(2), "x1": np.ones(2)}
+    for name in ("d.npz", "d.nc"):
+        with pytest.raises(ValueError, match=r"store .* names a \.(npz|nc) file.*\.zarr"):
+            run_sweep(sum_func, pts, executor="serial", store=tmp_path / name)
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("x")  # never deleted by a sweep
+    for resume in (True, False):
+        with pytest.raises(ValueError, match="not a Zarr sweep store"):
+            run_sweep(sum_func, pts, executor="serial", store=tmp_path / "mine", resume=resume)
+    assert (tmp_path / "mine" / "notes.txt").exists()
+    with pytest.raises(ValueError, match="clash with point names"):
+        run_sweep(inplace_func, {"x": np.ones(2), "y": np.ones(2)}, executor="serial",
+                  store=tmp_path / "c.zarr")
 
 
 def test_resolve_executor():
@@ -764,24 +800,27 @@ def test_timeout_stops_a_hung_pool(tmp_path):
     wait_until(lambda: not any(pid_alive(p) for p in pids), timeout=10, what="workers terminated")
 
 
-def test_progress_goes_to_stderr_only(capfd):
-    run_sweep(
-        sum_func,
-        {"x0": np.arange(100.0), "x1": np.ones(100)},
-        chunk_size=10,
-        executor="serial",
-        progress=True,
-    )
+def test_progress_counts_points_on_stderr_only(capfd, monkeypatch):
+    # Report at every chunk (no interval, no delay) to see the lines of a short sweep.
+    monkeypatch.setattr(sweep_mod, "Progress", functools.partial(Progress, interval=0, delay=0))
+    pts = {"x0": np.arange(100.0), "x1": np.ones(100)}
+    run_sweep(sum_func, pts, chunk_size=30, executor="serial", label="demo sweep")
     out, err = capfd.readouterr()
     assert out == ""
-    assert "10/10" in err and "chunk" in err
+    lines = err.splitlines()
+    assert [ln.split(":")[1].split()[0] for ln in lines] == ["30/100", "60/100", "90/100",
+                                                             "100/100", "100/100"]
+    assert lines[0].startswith("demo sweep: 30/100 points (30%)") and "done" in lines[-1]
+    run_sweep(sum_func, pts, chunk_size=30, executor="serial", progress=False)
+    assert capfd.readouterr() == ("", "")
 
 
 def test_import_is_light():
     code = (
         "import sys; import hybridpd; before = set(sys.modules); import hybridpd.sweeps.sweep; "
         "new = set(sys.modules) - before; "
-        "print(sorted(m for m in new if m.split('.')[0] in ('dask', 'distributed', 'tqdm')))"
+        "print(sorted(m for m in new if m.split('.')[0] in "
+        "('dask', 'distributed', 'tqdm', 'zarr', 'xarray', 'netCDF4')))"
     )
     out = subprocess.run(
         [sys.executable, "-c", code], cwd=str(REPO), capture_output=True, text=True, check=True

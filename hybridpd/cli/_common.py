@@ -130,4 +130,5 @@ def add_sweep(p):
 
 
 def progress_wanted(args) -> bool:
-    return sys.stderr.isatty()
+    # The reporter picks a bar (terminal) or plain lines (logs); only --quiet silences it.
+    return not getattr(args, "quiet", False)

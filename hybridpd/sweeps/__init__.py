@@ -1,1 +1,2 @@
-"""Sweeps over the analyses: executors and resumable stores, region maps, basins."""
+"""Sweeps over the analyses: executors, resumable Zarr stores, progress, labelled results
+(xarray, netCDF, Zarr), region maps, basins."""

@@ -203,9 +203,13 @@ def section_grid(fixed_point, L, x1, y1) -> np.ndarray:
 
 
 def load_basin(path) -> BasinResult:
-    """Read a :class:`BasinResult` written by :meth:`BasinResult.save`."""
-    from hybridpd.sweeps.sweep import load_npz
+    """Read a :class:`BasinResult` written by :meth:`BasinResult.save` (``.nc``, ``.zarr``,
+    ``.npz``)."""
+    from hybridpd.sweeps.labelled import check_suffix, read_dataset
+    from hybridpd.sweeps.npz import load_npz
 
+    if check_suffix(path) != ".npz":
+        return BasinResult.from_dataset(read_dataset(path))
     a, meta = load_npz(path)
     if meta.pop("kind", None) != "basin":
         raise ValueError(f"{path} does not hold a basin")
@@ -248,14 +252,59 @@ class BasinResult:
     def label_names(self) -> tuple:
         return LABELS
 
-    def save(self, path) -> None:
-        """Write to ``.npz`` with the metadata as JSON (see :func:`load_basin`)."""
-        from hybridpd.sweeps.sweep import save_npz
+    def to_dataset(self):
+        """The basin as an :class:`xarray.Dataset` with dimensions ``(y1, x1)``.
 
-        save_npz(path, {"x1": self.x1, "y1": self.y1, "labels": self.labels,
-                        "iterations": self.iterations, "fixed_point": self.fixed_point},
-                 {"kind": "basin", "converged_fraction": self.converged_fraction,
-                  "label_names": list(LABELS), **self.metadata})
+        ``labels`` carries CF ``flag_values``/``flag_meanings`` (the label names); the
+        parameters, the fixed point and the converged fraction are attributes. E.g.
+        ``(b.to_dataset().labels == 0).plot()`` draws the basin.
+        """
+        import xarray as xr
+
+        from hybridpd.sweeps.labelled import axis_attrs, encode_attrs
+
+        dims = ("y1", "x1")
+        names = list(self.label_names)
+        data = {
+            "labels": (dims, self.labels, {"long_name": "label of the initial condition",
+                                           "flag_values": list(range(len(names))),
+                                           "flag_meanings": " ".join(names)}),
+            "iterations": (dims, self.iterations,
+                           {"long_name": "iterations of the impact map actually run"}),
+        }
+        coords = {n: (n, np.asarray(getattr(self, n)), axis_attrs(n)) for n in dims}
+        attrs = {"kind": "basin", "converged_fraction": self.converged_fraction,
+                 "fixed_point": [float(v) for v in self.fixed_point],
+                 "fixed_point_coordinates": "phi z1 z2 z4", **encode_attrs(self.metadata)}
+        return xr.Dataset(data, coords=coords, attrs=attrs)
+
+    @classmethod
+    def from_dataset(cls, ds) -> BasinResult:
+        """Inverse of :meth:`to_dataset`."""
+        from hybridpd.sweeps.labelled import decode_attrs
+
+        a = decode_attrs(ds.attrs)
+        if a.pop("kind", None) != "basin":
+            raise ValueError("the dataset does not hold a basin (attribute kind)")
+        ds = ds.transpose("y1", "x1")
+        frac = float(a.pop("converged_fraction"))
+        fp = np.asarray(a.pop("fixed_point"), float)
+        a.pop("fixed_point_coordinates", None)
+        return cls(ds["x1"].values, ds["y1"].values, ds["labels"].values.astype(np.int64),
+                   ds["iterations"].values.astype(np.int64), fp, frac, a)
+
+    def save(self, path):
+        """Write to ``.nc`` (netCDF) or ``.zarr`` (:meth:`to_dataset`), or ``.npz``, by suffix
+        (see :func:`load_basin`)."""
+        from hybridpd.sweeps.labelled import check_suffix, write_dataset
+        from hybridpd.sweeps.npz import save_npz
+
+        if check_suffix(path) != ".npz":
+            return write_dataset(self.to_dataset(), path)
+        return save_npz(path, {"x1": self.x1, "y1": self.y1, "labels": self.labels,
+                               "iterations": self.iterations, "fixed_point": self.fixed_point},
+                        {"kind": "basin", "converged_fraction": self.converged_fraction,
+                         "label_names": list(LABELS), **self.metadata})
 
     def area(self, label: str = "converged") -> float:
         """Area (in ``x1``-``y1`` units) of the grid cells with ``label``."""
@@ -266,7 +315,7 @@ class BasinResult:
 
 
 def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chunk_size=None,
-                        store=None, progress=False, max_workers=None) -> BasinResult:
+                        store=None, progress=True, max_workers=None) -> BasinResult:
     """Label a grid of the paper's slice ``(x1, y1)``, ``y2 = y2*``, ``phi = phi*``.
 
     Parameters
@@ -275,8 +324,9 @@ def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chun
     x1, y1 : (min, max, num)
         Grid axes.
     executor, chunk_size, store, progress, max_workers
-        Passed to :func:`hybridpd.sweeps.sweep.run_sweep` when ``executor`` is not ``"serial"`` or a
-        ``store`` is given (write-as-you-go, resumable); the labels do not depend on them.
+        Passed to :func:`hybridpd.sweeps.sweep.run_sweep` (a ``store``, a ``.zarr`` directory,
+        makes the sweep write as it goes and resume); the labels do not depend on them.
+        Progress is labelled e.g. ``basin noncollocated e=0.1``.
 
     Returns
     -------
@@ -287,17 +337,15 @@ def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chun
     L = mapper.map.pair.L
     grid = section_grid(mapper.fixed_point, L, xs, ys)
     pts = grid.reshape(-1, 4)
-    if executor == "serial" and store is None:
-        lab, its = mapper.labels(pts)
-    else:
-        from hybridpd.sweeps.sweep import run_sweep
+    from hybridpd.sweeps.sweep import run_sweep
 
-        res = run_sweep(_label_chunk, {"phi": pts[:, 0], "z1": pts[:, 1], "z2": pts[:, 2],
-                                       "z4": pts[:, 3]},
-                        chunk_size=chunk_size, executor=executor, max_workers=max_workers,
-                        store=store, progress=progress, func_kwargs={"mapper": _MapperSpec.of(mapper)},
-                        metadata={"kind": "basin"})
-        lab, its = res.outputs["label"], res.outputs["iterations"]
+    res = run_sweep(_label_chunk, {"phi": pts[:, 0], "z1": pts[:, 1], "z2": pts[:, 2],
+                                   "z4": pts[:, 3]},
+                    chunk_size=chunk_size, executor=executor, max_workers=max_workers,
+                    store=store, progress=progress, func_kwargs={"mapper": _MapperSpec.of(mapper)},
+                    metadata={"kind": "basin"},
+                    label=f"basin {mapper.map.case.value} e={mapper.map.pair.e:g}")
+    lab, its = res.outputs["label"], res.outputs["iterations"]
     lab = lab.reshape(len(ys), len(xs))
     its = its.reshape(len(ys), len(xs))
     on = lab != OFF_SECTION
