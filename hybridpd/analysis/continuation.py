@@ -50,8 +50,8 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
+from hybridpd._jit import njit
 from hybridpd.analysis.impactmap import ImpactMap, stability
 from hybridpd.analysis.orbits import REASONS, symmetric_orbits
 from hybridpd.model import Case, ImpactPair, PDGains, Reference, check_finite

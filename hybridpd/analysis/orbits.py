@@ -24,8 +24,8 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
+from hybridpd._jit import njit
 from hybridpd.model import Case, ImpactPair, PDGains, Reference, check_odd_order, check_positive
 from hybridpd.pair import symbolic
 from hybridpd.pair.batch import STATUS_IMPACT, STATUS_STICK, _eval, next_impact
@@ -230,7 +230,8 @@ def symmetric_orbits(kp, kv, *, mu, e, L, omega, m2=1.0, x10=1.0, n=1, case="col
     marg = np.full(P.shape[0], np.nan)
     if idx.size:
         sub = lambda a: flat(a)[idx]
-        r = _viability_kernel(np.ascontiguousarray(P[idx]), 0 if case is Case.COLLOCATED else 1,
+        # a handful of orbits: interpreting beats loading numba (see hybridpd._jit)
+        r = _viability_kernel.call(idx.size <= 16, np.ascontiguousarray(P[idx]), 0 if case is Case.COLLOCATED else 1,
                               sub(cand.phi0), sub(cand.x10), sub(cand.v), sub(cand.x20),
                               sub(cand.y2_post), sub(cand.tau), tol, bool(margin),
                               int(margin_samples))

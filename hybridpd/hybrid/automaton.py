@@ -75,8 +75,8 @@ from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
+from hybridpd._jit import njit
 from hybridpd.hybrid.events import (
     EV_GRAZING,
     EV_NONE,
@@ -119,6 +119,12 @@ class TerminationCause(enum.Enum):
 
 
 _RC_BUFFER_FULL = 5
+_RC_STEP_LIMIT = 4
+# A run that looks small (a span of at most this many flow steps, or at most this many jumps)
+# starts interpreted while numba is not loaded (see hybridpd._jit; about 0.25 ms per step,
+# 1 ms per jump), in chunks bounded by both; the run carries its state between chunks.
+_INTERP_MAX_STEPS = 2000
+_INTERP_JUMPS = 64
 _KIND_NAMES = {1: "crossing", 2: "grazing", 3: "zeno"}
 
 
@@ -901,7 +907,12 @@ class HybridAutomaton:
         ic[3] = -1
         chunks = []
         cap = min(max_jumps + 4, 2048)
+        small = (t1 - t0) <= _INTERP_MAX_STEPS * float(np.min(pk.h)) or max_jumps <= _INTERP_JUMPS
         while True:
+            interp = small and run_hybrid.prefer_interpreter()
+            steps = min(max_steps, int(ic[8]) + _INTERP_MAX_STEPS) if interp else max_steps
+            if interp:
+                cap = min(cap, _INTERP_JUMPS + 4)
             bufs = {
                 "jt": np.empty(cap), "jj": np.empty(cap, np.int64), "jg": np.empty(cap, np.int64),
                 "jsrc": np.empty(cap, np.int64), "jdst": np.empty(cap, np.int64),
@@ -910,13 +921,14 @@ class HybridAutomaton:
                 "smode": np.empty(cap + 2, np.int64), "sj": np.empty(cap + 2, np.int64),
                 "sw": np.empty((cap + 2, N1)), "zt_out": np.empty(cap)}
             ic[9:12] = 0
-            rc = run_hybrid(pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs, pk.gsum,
-                            pk.cnorm, pk.prio, pk.ng, pk.Rh, pk.target, pk.zt, pk.Rz, dt_min,
-                            t1, max_jumps, max_steps, zf, zi, w, fc, ic, **bufs)
+            run = run_hybrid.interpret if interp else run_hybrid
+            rc = run(pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs, pk.gsum, pk.cnorm,
+                     pk.prio, pk.ng, pk.Rh, pk.target, pk.zt, pk.Rz, dt_min, t1, max_jumps,
+                     steps, zf, zi, w, fc, ic, **bufs)
             nj, ns, nz = int(ic[9]), int(ic[10]), int(ic[11])
             chunks.append({k: (v[:nj] if k.startswith("j") else v[:ns] if k.startswith("s")
                                else v[:nz]) for k, v in bufs.items()})
-            if rc != _RC_BUFFER_FULL:
+            if rc != _RC_BUFFER_FULL and not (rc == _RC_STEP_LIMIT and steps < max_steps):
                 break
             cap = min(max(max_jumps - int(ic[1]), 0) + 4, 65536)
         cat = {k: np.concatenate([c[k] for c in chunks]) for k in chunks[0]}

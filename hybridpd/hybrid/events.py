@@ -93,7 +93,8 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+
+from hybridpd._jit import njit
 
 __all__ = [
     "EV_CROSSING",
