@@ -53,7 +53,8 @@ def short_repr(value) -> str:
     if isinstance(value, (list, tuple)):
         if len(value) <= _MAX_SEQ:
             inner = ", ".join(short_repr(v) for v in value)
-            s = f"[{inner}]" if isinstance(value, list) else f"({inner}{',' if len(value) == 1 else ''})"
+            comma = "," if len(value) == 1 else ""
+            s = f"[{inner}]" if isinstance(value, list) else f"({inner}{comma})"
             if len(s) <= _MAX_ITEM:
                 return s
         return f"{type(value).__name__}(len={len(value)})"

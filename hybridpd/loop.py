@@ -50,7 +50,7 @@ def pd_controller(kp: float, kv: float, name: str = "pd"):
 
 
 def _as_controller(controller):
-    """Return ``(python-control StateSpace with inputs err[/err_dot], output u_fb, pd_gains|None)``."""
+    """``(python-control StateSpace from err[/err_dot] to u_fb, PDGains or None)``."""
     gains = as_gains(controller, strict=False)
     if gains is not None:
         return pd_controller(gains.kp, gains.kv), gains

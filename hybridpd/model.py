@@ -83,7 +83,7 @@ def check_in_range(name: str, value, lo: float, hi: float) -> float:
 
 
 def check_int(name: str, value, lo: int | None = None, hi: int | None = None) -> int:
-    """Return ``value`` as an int, requiring an integer (integral floats allowed) in ``[lo, hi]``."""
+    """Return ``value`` as an int: an integer (or integral float) in ``[lo, hi]``."""
     rng = f"[{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}]"
     if isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind in "iuf":
         value = value.item()
@@ -368,12 +368,19 @@ def as_gains(value, name: str = "gains", *, strict: bool = True) -> PDGains | No
         if keys != {"kp", "kv"}:
             raise ValueError(f"{name} as a mapping must have exactly the keys kp, kv, got "
                              f"{sorted(map(str, keys))}")
-        return PDGains(value["kp"], value["kv"])
+        return _gains(name, value["kp"], value["kv"])
     if isinstance(value, (tuple, list)) or (isinstance(value, np.ndarray) and value.ndim == 1):
         if len(value) != 2:
             raise ValueError(f"{name} must be a pair (kp, kv), got {_show(value)}")
-        return PDGains(value[0], value[1])
+        return _gains(name, value[0], value[1])
     if strict:
         raise ValueError(f"{name} must be PDGains, a pair (kp, kv) or a mapping with keys kp, kv; "
                          f"got {type(value).__name__}")
     return None
+
+
+def _gains(name, kp, kv) -> PDGains:
+    try:
+        return PDGains(kp, kv)
+    except ValueError as exc:
+        raise ValueError(f"{name}: {exc}") from None

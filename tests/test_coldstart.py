@@ -1,4 +1,4 @@
-"""Cold start: the generated-code cache, lazily compiled kernels, the PD loop without python-control.
+"""Cold start: generated-code cache, lazily compiled kernels, PD loop without python-control.
 
 * The cached closed-form code equals a fresh SymPy derivation (same source, same numbers on
   random inputs); a stale key, a corrupt entry or an unwritable directory regenerate it.

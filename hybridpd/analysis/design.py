@@ -74,6 +74,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage, optimize
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.orbits import (
     REASONS,
     SymmetricOrbitResult,
@@ -378,6 +379,8 @@ class DesignMap:
         design only): robustness of stability alone, without the ``x10_tol`` requirement.
     """
 
+    __repr__ = compact_repr
+
     kp: np.ndarray
     kv: np.ndarray
     spacing: str
@@ -428,6 +431,8 @@ class OptimizerRun:
     message : str
         :class:`scipy.optimize.OptimizeResult` status text.
     """
+
+    __repr__ = compact_repr
 
     start_kp: float
     start_kv: float
@@ -492,6 +497,8 @@ class RobustReport:
     worst_x10_error : float
         Largest relative amplitude error (NaN if some plant has no orbit).
     """
+
+    __repr__ = compact_repr
 
     e_values: np.ndarray
     mu_values: np.ndarray
@@ -582,6 +589,8 @@ class DesignResult:
     elapsed : float
         Wall time of the design (s).
     """
+
+    __repr__ = compact_repr
 
     case: Case
     gains: PDGains
@@ -1254,6 +1263,8 @@ class ComparisonRow:
         Why the robust design failed.
     """
 
+    __repr__ = compact_repr
+
     case: str
     nominal_fraction: float
     robust_fraction: float
@@ -1297,6 +1308,8 @@ class RobustnessComparison:
     settings : dict
         Nominal plant, boxes, tolerance and gain box.
     """
+
+    __repr__ = compact_repr
 
     rows: list
     settings: dict

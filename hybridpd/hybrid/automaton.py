@@ -77,6 +77,7 @@ from typing import NamedTuple
 import numpy as np
 
 from hybridpd._jit import njit
+from hybridpd._repr import compact_repr
 from hybridpd.hybrid.events import (
     EV_GRAZING,
     EV_NONE,
@@ -154,6 +155,8 @@ class Guard:
         Reset applied at the accumulation time (default identity); only with ``zeno_target``.
     """
 
+    __repr__ = compact_repr
+
     name: str
     c: np.ndarray
     d: float = 0.0
@@ -201,6 +204,8 @@ class Mode:
         Constant input (default zero).
     guards : sequence of Guard
     """
+
+    __repr__ = compact_repr
 
     name: str
     A: np.ndarray
@@ -278,6 +283,8 @@ class ZenoOptions:
 class Jump:
     """One jump: at hybrid time ``(t, j)`` (``j`` counts this jump), ``pre -> post``."""
 
+    __repr__ = compact_repr
+
     t: float
     j: int
     guard: str
@@ -308,6 +315,8 @@ class JumpTable:
         ``'crossing'``, ``'grazing'`` or ``'zeno'``.
     """
 
+    __repr__ = compact_repr
+
     t: np.ndarray
     j: np.ndarray
     guard: tuple
@@ -333,6 +342,8 @@ class JumpTable:
 class Segment:
     """One flow segment on ``[t_start, t_end]`` in ``mode`` at jump count ``j``."""
 
+    __repr__ = compact_repr
+
     t_start: float
     t_end: float
     mode: str
@@ -352,6 +363,8 @@ class SegmentTable:
     x_start : ndarray, shape (m, n)
         State at ``t_start`` (after the jumps at that time).
     """
+
+    __repr__ = compact_repr
 
     t_start: np.ndarray
     t_end: np.ndarray
@@ -417,6 +430,8 @@ class HybridTrajectory:
     Calling the trajectory, ``traj(t)`` (= :meth:`state_at`), gives the exact state at any
     time(s) in ``[t0, t_final]``, right-continuous at jumps.
     """
+
+    __repr__ = compact_repr
 
     t0: float
     t_final: float

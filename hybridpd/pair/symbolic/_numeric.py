@@ -17,7 +17,7 @@ import numpy as np
 
 from hybridpd import _codecache
 from hybridpd._version import __version__
-from hybridpd.model import Case
+from hybridpd.model import Case, check_array
 
 _DERIVE_SOURCE = Path(__file__).with_name("derive.py")
 
@@ -26,8 +26,9 @@ def _case(case) -> str:
     return Case.parse(case).value
 
 
-def _as_float_arrays(*xs):
-    return [np.asarray(x, dtype=float) for x in xs]
+def _as_float_arrays(**named):
+    """The values as float arrays (any shape, NaN allowed), rejecting non-numeric input."""
+    return [check_array(name, x, finite=False) for name, x in named.items()]
 
 
 def _stack(values, shape, axis=-1):

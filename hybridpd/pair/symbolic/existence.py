@@ -10,7 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._repr import compact_repr, short_repr
+from hybridpd.model import check_array
 from hybridpd.pair.symbolic._numeric import _as_float_arrays, _case, kernel
 
 __all__ = ["SymmetricOrbit", "symmetric_orbit", "symmetric_velocities", "virtual_restitution"]
@@ -18,7 +19,7 @@ __all__ = ["SymmetricOrbit", "symmetric_orbit", "symmetric_velocities", "virtual
 
 def virtual_restitution(mu, e):
     """Virtual restitution coefficient (12): ``R = (e + 2 e mu - 1)/(e - 2 mu - 1)``."""
-    mu, e = _as_float_arrays(mu, e)
+    mu, e = _as_float_arrays(mu=mu, e=e)
     return ((e + 2 * e * mu - 1) / (e - 2 * mu - 1))[()]
 
 
@@ -32,17 +33,20 @@ def symmetric_velocities(*, mu, e, w, x10, n=1):
         post ``y1+ = -v`` at the ``+L`` wall), ``y2_pre = v (e - 2 mu - 1)/(1 + e)`` (10),
         ``y2_post = v (e + 2 e mu - 1)/(1 + e) = R y2_pre`` (11).
     """
-    mu, e, w, x10, n = _as_float_arrays(mu, e, w, x10, n)
+    mu, e, w, x10, n = _as_float_arrays(mu=mu, e=e, w=w, x10=x10, n=n)
     v = 2.0 * x10 * w / (n * np.pi)
     return (v[()], (v * (e - 2 * mu - 1) / (1 + e))[()],
             (v * (e + 2 * e * mu - 1) / (1 + e))[()])
 
 
 def _check_odd(n):
-    n = np.asarray(n)
-    nf = np.asarray(n, dtype=float)
-    if not np.all((nf == np.round(nf)) & (nf >= 1) & (np.mod(nf, 2) == 1)):
-        raise ValueError(f"n must be a positive odd integer (or array of them), got {n!r}")
+    try:
+        nf = check_array("n", n)
+    except ValueError:
+        nf = None
+    if nf is None or not np.all((nf == np.round(nf)) & (nf >= 1) & (np.mod(nf, 2) == 1)):
+        raise ValueError(f"n must be a positive odd integer 1, 3, 5, ... (or an array of them), "
+                         f"got {short_repr(n)}")
     return nf
 
 
@@ -172,13 +176,9 @@ def symmetric_orbit(*, kp, kv, m2=1.0, mu, e, L, w, x10, n=1,
     """
     case = _case(case)
     nf = _check_odd(n)
-    kp, kv, m2, mu, e, L, w, x10 = _as_float_arrays(kp, kv, m2, mu, e, L, w, x10)
-    for name, val in (("kp", kp), ("kv", kv), ("m2", m2), ("mu", mu), ("L", L), ("w", w),
-                      ("x10", x10)):
-        if not np.all(np.isfinite(val) & (val > 0)):
-            raise ValueError(f"{name} must be finite and > 0 everywhere")
-    if not np.all((e >= 0) & (e <= 1)):
-        raise ValueError("e must lie in [0, 1] everywhere")
+    kp, kv, m2, mu, L, w, x10 = (check_array(name, v, lo=0.0) for name, v in (
+        ("kp", kp), ("kv", kv), ("m2", m2), ("mu", mu), ("L", L), ("w", w), ("x10", x10)))
+    e = check_array("e", e, lo=0.0, lo_open=False, hi=1.0)
     shape = np.broadcast_shapes(kp.shape, kv.shape, m2.shape, mu.shape, e.shape, L.shape,
                                 w.shape, x10.shape, nf.shape)
     f = kernel("existence", case)

@@ -15,7 +15,7 @@ __all__ = ["flow", "gap", "gap_derivatives", "section_from_state", "state_from_s
 
 
 def _flow_args(t, X0, kp, kv, m2, w):
-    t, X0, kp, kv, m2, w = _as_float_arrays(t, X0, kp, kv, m2, w)
+    t, X0, kp, kv, m2, w = _as_float_arrays(t=t, X0=X0, kp=kp, kv=kv, m2=m2, w=w)
     if X0.shape[-1:] != (6,):
         raise ValueError(f"X0 must have shape (..., 6) [x1, y1, x2, y2, pc, ps], got {X0.shape}")
     shape = np.broadcast_shapes(t.shape, X0.shape[:-1], kp.shape, kv.shape, m2.shape, w.shape)
@@ -38,7 +38,7 @@ def system_matrix(*, kp, kv, m2=1.0, w, case="collocated") -> np.ndarray:
         non-collocated ``[-kp/m2, -kv/m2, 0, 0, kp/m2 - w^2, -kv w/m2]``.
     """
     case = _case(case)
-    kp, kv, m2, w = _as_float_arrays(kp, kv, m2, w)
+    kp, kv, m2, w = _as_float_arrays(kp=kp, kv=kv, m2=m2, w=w)
     shape = np.broadcast_shapes(kp.shape, kv.shape, m2.shape, w.shape)
     A = np.zeros(shape + (6, 6))
     A[..., 0, 1] = 1.0
@@ -70,7 +70,7 @@ def transition_matrix(t, *, kp, kv, m2=1.0, w, case="collocated") -> np.ndarray:
         ``X(t) = Phi(t) @ X(0)``. Continuous across critical damping ``kv^2 = 4 kp m2``.
     """
     case = _case(case)
-    t, kp, kv, m2, w = _as_float_arrays(t, kp, kv, m2, w)
+    t, kp, kv, m2, w = _as_float_arrays(t=t, kp=kp, kv=kv, m2=m2, w=w)
     shape = np.broadcast_shapes(t.shape, kp.shape, kv.shape, m2.shape, w.shape)
     vals = kernel("transition", case)(t, kp, kv, m2, w)
     return _stack(vals, shape).reshape(shape + (6, 6))
@@ -154,7 +154,7 @@ def state_from_section(s, *, xm, L, w, wall=1) -> np.ndarray:
     ndarray, shape (..., 6)
         ``(z1 + wall L, z2 + z4, z1, z2, xm cos(w phi), xm sin(w phi))``.
     """
-    s, xm, L, w, wall = _as_float_arrays(s, xm, L, w, wall)
+    s, xm, L, w, wall = _as_float_arrays(s=s, xm=xm, L=L, w=w, wall=wall)
     phi, z1, z2, z4 = np.moveaxis(s, -1, 0)
     shape = np.broadcast_shapes(phi.shape, xm.shape, L.shape, w.shape, wall.shape)
     return _stack([z1 + wall * L, z2 + z4, z1, z2, xm * np.cos(w * phi), xm * np.sin(w * phi)],
@@ -166,7 +166,7 @@ def section_from_state(X, *, w) -> np.ndarray:
 
     ``phi = atan2(ps, pc)/w mod T``; the wall (``z3``) is not checked.
     """
-    X, w = _as_float_arrays(X, w)
+    X, w = _as_float_arrays(X=X, w=w)
     T = 2.0 * np.pi / w
     phi = np.mod(np.arctan2(X[..., 5], X[..., 4]) / w, T)
     shape = np.broadcast_shapes(phi.shape, X.shape[:-1])

@@ -27,7 +27,7 @@ def impact_section_map(s, *, mu, e) -> np.ndarray:
 
     ``s`` has shape (..., 4) (pre-impact); the law is the same on both walls.
     """
-    s, mu, e = _as_float_arrays(s, mu, e)
+    s, mu, e = _as_float_arrays(s=s, mu=mu, e=e)
     phi, z1, z2, z4 = np.moveaxis(s, -1, 0)
     shape = np.broadcast_shapes(phi.shape, mu.shape, e.shape)
     return _stack([phi, z1, z2 + (1 + e) * mu / (1 + mu) * z4, -e * z4], shape)
@@ -38,7 +38,7 @@ def impact_block(*, mu, e) -> np.ndarray:
 
     ``[[1,0,0,0],[0,1,0,0],[0,0,1,(1+e) mu/(1+mu)],[0,0,0,-e]]`` (independent of the state).
     """
-    mu, e = _as_float_arrays(mu, e)
+    mu, e = _as_float_arrays(mu=mu, e=e)
     shape = np.broadcast_shapes(mu.shape, e.shape)
     B = np.zeros(shape + (4, 4))
     B[..., 0, 0] = B[..., 1, 1] = B[..., 2, 2] = 1.0
@@ -48,7 +48,8 @@ def impact_block(*, mu, e) -> np.ndarray:
 
 
 def _flight_args(s, tau, xm, kp, kv, m2, w, L, wall):
-    s, tau, xm, kp, kv, m2, w, L, wall = _as_float_arrays(s, tau, xm, kp, kv, m2, w, L, wall)
+    s, tau, xm, kp, kv, m2, w, L, wall = _as_float_arrays(
+        s=s, tau=tau, xm=xm, kp=kp, kv=kv, m2=m2, w=w, L=L, wall=wall)
     if s.shape[-1:] != (4,):
         raise ValueError(f"s must have shape (..., 4) (phi, z1, z2, z4), got {s.shape}")
     if not np.all(np.abs(wall) == 1):
