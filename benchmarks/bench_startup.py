@@ -34,16 +34,22 @@ def _time(cmd, env) -> float:
     return time.perf_counter() - t0
 
 
-def _heavy_modules(cmd, env) -> list:
-    """Heavy modules loaded by the command (run in-process under ``runpy`` in a child)."""
-    args = cmd[3:]
-    code = ("import runpy, sys; sys.argv = ['hybridpd'] + %r\n"
-            "try:\n    runpy.run_module('hybridpd', run_name='__main__')\n"
-            "except SystemExit:\n    pass\n"
-            "print(sorted({m for m in sys.modules for h in %r if m == h or "
-            "m.startswith(h + '.')} & set(%r)), file=sys.stderr)") % (args, HEAVY, HEAVY)
-    r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
-                       check=True)
+_PROBE = """
+import runpy, sys
+heavy = sys.argv[1].split(",")
+sys.argv = ["hybridpd"] + sys.argv[2:]
+try:
+    runpy.run_module("hybridpd", run_name="__main__")
+except SystemExit:
+    pass
+print(sorted(h for h in heavy if h in sys.modules), file=sys.stderr)
+"""
+
+
+def _heavy_modules(cmd, env) -> str:
+    """Heavy modules loaded by the command (run under ``runpy`` in a child process)."""
+    r = subprocess.run([sys.executable, "-c", _PROBE, ",".join(HEAVY), *cmd[3:]], env=env,
+                       capture_output=True, text=True, check=True)
     return r.stderr.strip().splitlines()[-1]
 
 

@@ -32,6 +32,7 @@ __all__ = [
     "check_finite",
     "check_in_range",
     "check_int",
+    "check_named_axis",
     "check_odd_order",
     "check_pair",
     "check_positive",
@@ -182,6 +183,22 @@ def check_axis(name: str, spec, *, min_num: int = 1, positive: bool = False) -> 
     if positive and lo <= 0:
         raise ValueError(f"{name} values must be > 0 (allowed range (0, inf)), got MIN = {lo:g}")
     return np.linspace(lo, hi, num)
+
+
+def check_named_axis(param: str, spec, names, *, min_num: int = 1, positive: bool = False):
+    """Validate ``param = (NAME, MIN, MAX, NUM)`` with ``NAME`` in ``names``.
+
+    Returns ``(NAME, linspace(MIN, MAX, NUM))``; errors name ``param`` (see :func:`check_axis`).
+    """
+    if isinstance(spec, (str, bytes, dict)) or not hasattr(spec, "__len__") or len(spec) != 4:
+        raise ValueError(f"{param} must be (NAME, MIN, MAX, NUM), got {_show(spec)}")
+    name = spec[0]
+    if not isinstance(name, str) or name not in names:
+        raise ValueError(f"{param} axis name must be one of {tuple(names)}, got {_show(name)}")
+    try:
+        return name, check_axis(name, tuple(spec[1:]), min_num=min_num, positive=positive)
+    except ValueError as exc:
+        raise ValueError(f"{param}: {exc}") from None
 
 
 class Case(str, Enum):

@@ -51,6 +51,16 @@ BAD = {
     "gains": [None, 10, "kp", {"kp": 10, "kv": 20, "extra": 1}, {"kp": 10}, {"k": 1, "v": 2},
               (10,), (10, 20, 30), ("10", 20), (10, None), (0, 20), (10, -1), [True, 1],
               {"kp": "10", "kv": 20}],
+    "axis": [None, 3, "0,1,2", {"a": 1}, (0, 1), (0, 1, 2, 3), ("0", 1, 2), (0, None, 2),
+             (1, 0, 2), (0, math.inf, 2), (0, 1, 0), (0, 1, 2.5), (0, 1, True), (0, 1, "2")],
+    "named_axis": [None, "kp", ("kp", 1, 2), ("zz", 1, 2, 3), ("kp", "1", 2, 3),
+                   ("kp", 2, 1, 3), ("kp", 1, 2, 1), ("kp", 1, 2, 2.5), ("kp", 1, 2, True),
+                   ("kp", -1, 2, 3), ("kp", math.nan, 2, 3), {"kp": 1}, ("kp", 1, 2, 3, 4)],
+    "range": [None, 5, "1,2", {"lo": 1}, (1,), (1, 2, 3), ("1", 2), (2, 1), (0, 1), (-1, 2),
+              (1, math.inf), (None, 2), (True, 2)],
+    "grid": [None, 4, "4x4", {"a": 4}, (4,), (4, 4, 4), (1, 4), (4, 2.5), ("4", 4),
+             (True, 4), (4, None), (4, -4)],
+    "map_obj": [None, 1, "P", {"a": 1}, PAIR, (1, 2)],
     "case": [None, 1, "colocated", "", {"case": 1}, True, 2.5],
     "pair_obj": [None, 1, "pair", {"mu": 0.1}, (0.1, 0.5, 0.75), GAINS],
     "ref_obj": [None, 1, "ref", {"xm": 1}, (1, 5), PAIR],
@@ -86,8 +96,63 @@ def _entry_points():
     def loop(pair, controller, reference, case):
         return closed_loop(pair, controller, reference, case)
 
+    def regions(case, x, y, e, mu, omega, L, m2, n):
+        from hybridpd.sweeps.regions import region_map
+
+        return region_map(case, x=x, y=y, e=e, mu=mu, omega=omega, L=L, m2=m2, n=n)
+
+    def mapper(impact_map, fixed_point, n_iter, criterion, escape):
+        from hybridpd.sweeps.basins import ImpactMapper
+
+        return ImpactMapper(impact_map, fixed_point, n_iter=n_iter, criterion=criterion,
+                            escape=escape, early_exit=False)
+
+    def basin(mapper, x1, y1):
+        from hybridpd.sweeps.basins import basin_of_attraction
+
+        return basin_of_attraction(mapper, x1, y1)
+
+    def design_(case, mu, e, omega, L, kp_range, kv_range, grid, n_starts, maxiter):
+        from hybridpd.analysis.design import design
+
+        return design(case, mu=mu, e=e, omega=omega, L=L, kp_range=kp_range,
+                      kv_range=kv_range, grid=grid, n_starts=n_starts, maxiter=maxiter,
+                      validation_grid=(2, 2), uncertainty_grid=(2, 2))
+
+    def periodic(impact_map_, s0, period, tol, max_iter):
+        from hybridpd.analysis.continuation import find_periodic_orbit
+
+        return find_periodic_orbit(impact_map_, s0, period, tol=tol, max_iter=max_iter)
+
+    from hybridpd.sweeps.basins import ImpactMapper
+
+    orb = symmetric_orbit(PAIR, GAINS, 5.0)
+    P = ImpactMap(PAIR, GAINS, orb.reference())
+    fp = orb.fixed_point
     pos, arr = "positive", "positive[]"
     return {
+        "region_map": (regions, dict(case="collocated", x=("kp", 1.0, 20.0, 2),
+                                     y=("kv", 1.0, 20.0, 2), e=(0.5,), mu=0.1, omega=5.0,
+                                     L=0.75, m2=1.0, n=1),
+                       dict(case="case", x="named_axis", y="named_axis", e="unit[]", mu=pos,
+                            omega=pos, L=pos, m2=pos, n="odd")),
+        "ImpactMapper": (mapper, dict(impact_map=P, fixed_point=fp, n_iter=5, criterion=1e-3,
+                                      escape=1e3),
+                         dict(impact_map="map_obj", fixed_point="vec4", n_iter="count",
+                              criterion=pos, escape=pos)),
+        "basin_of_attraction": (basin, dict(mapper=ImpactMapper(P, fp, n_iter=3,
+                                                                early_exit=False),
+                                            x1=(-0.5, 0.5, 2), y1=(-0.5, 0.5, 2)),
+                                dict(mapper="map_obj", x1="axis", y1="axis")),
+        "design": (design_, dict(case="collocated", mu=0.1, e=0.5, omega=5.0, L=0.75,
+                                 kp_range=(1.0, 50.0), kv_range=(1.0, 50.0), grid=(4, 4),
+                                 n_starts=1, maxiter=2),
+                   dict(case="case", mu=pos, e="unit", omega=pos, L=pos, kp_range="range",
+                        kv_range="range", grid="grid", n_starts="count", maxiter="count")),
+        "find_periodic_orbit": (periodic, dict(impact_map_=P, s0=fp, period=1, tol=1e-12,
+                                               max_iter=20),
+                                dict(impact_map_="map_obj", s0="vec4", period="count",
+                                     tol=pos, max_iter="count")),
         "ImpactPair": (ImpactPair, dict(mu=0.1, e=0.5, L=0.75, m2=1.0),
                        dict(mu=pos, e="unit", L=pos, m2=pos)),
         "PDGains": (PDGains, dict(kp=10, kv=20), dict(kp=pos, kv=pos)),
