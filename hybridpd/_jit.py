@@ -96,9 +96,16 @@ class Kernel:
         return self._dispatcher
 
     def __call__(self, *args, **kwargs):
-        if self._dispatcher is None and _INTERPRETING.get():
+        d = self._dispatcher
+        if d is not None:
+            return d(*args, **kwargs)
+        if _INTERPRETING.get():
             return self.py_func(*args, **kwargs)
         return self.dispatcher(*args, **kwargs)
+
+    def __reduce__(self):
+        # pickled by reference (the module attribute), like a plain function
+        return _import_kernel, (self.__module__, self.__qualname__)
 
     def prefer_interpreter(self) -> bool:
         """True when interpreting a small call beats compiling (see the module docstring)."""
@@ -119,6 +126,15 @@ class Kernel:
         if small and self.prefer_interpreter():
             return self.interpret(*args, **kwargs)
         return self(*args, **kwargs)
+
+
+def _import_kernel(module: str, qualname: str) -> Kernel:
+    import importlib
+
+    obj = importlib.import_module(module)
+    for part in qualname.split("."):
+        obj = getattr(obj, part)
+    return obj
 
 
 def njit(*args, **options):

@@ -4,7 +4,7 @@
   random inputs); a stale key, a corrupt entry or an unwritable directory regenerate it.
 * The PD closed loop written out directly equals python-control's interconnection.
 * Interpreted kernels (small calls before numba is loaded) give the compiled results.
-* PD paths (orbit, simulate, regions) import neither python-control, scipy.signal nor
+* PD paths (orbit, simulate, regions, basins, design) import neither python-control, scipy.signal nor
   matplotlib; the orbit and simulate paths load neither numba nor SymPy once the code is cached.
 """
 import json
@@ -230,6 +230,14 @@ out["simulate"] = loaded()
 region_map("collocated", x=("kp", 1, 20, 3), y=("kv", 1, 20, 3), e=(0.5,), mu=0.1,
            omega=5, L=0.75)
 out["regions"] = loaded()
+from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.sweeps.basins import ImpactMapper, basin_of_attraction
+P = ImpactMap(orb.pair, orb.gains, orb.reference(), orb.case)
+basin_of_attraction(ImpactMapper(P, orb.fixed_point, n_iter=5), (-0.5, 0.5, 2), (-0.5, 0.5, 2))
+out["basins"] = loaded()
+from hybridpd.analysis.design import design
+design("collocated", mu=0.1, e=0.5, omega=5.0, L=0.75, grid=(4, 4), n_starts=1, maxiter=2)
+out["design"] = loaded()
 out["check"] = [bool(orb.exists), int(tr.n_impacts)]
 print(json.dumps(out))
 """
@@ -246,7 +254,7 @@ def test_pd_paths_do_not_import_control(cache):
     first, second = (json.loads(r.stdout.strip().splitlines()[-1]) for r in runs)
     for out in (first, second):
         assert out["check"] == [True, 30]
-        for path in ("orbit", "simulate", "regions"):
+        for path in ("orbit", "simulate", "regions", "basins", "design"):
             assert not {"control", "scipy.signal", "matplotlib"} & set(out[path]), (path, out)
     # with the generated code cached, a PD orbit and a short simulation need no SymPy or numba
     assert second["orbit"] == [] and second["simulate"] == [], second
@@ -265,3 +273,11 @@ def test_cli_orbit_does_not_import_control(cache):
                        text=True, timeout=300, check=False)
     assert json.loads(r.stdout)["exists"] is True
     assert r.stderr.strip().splitlines()[-1] == "False False False"
+
+
+def test_kernels_pickle_by_reference():
+    import pickle
+
+    from hybridpd.pair import batch
+
+    assert pickle.loads(pickle.dumps(batch.next_impact)) is batch.next_impact
