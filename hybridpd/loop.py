@@ -3,7 +3,9 @@
 The plant (two masses, input force ``U`` on ``m2``), the controller acting on the tracking
 error of ``x2`` (collocated) or ``x1`` (non-collocated), the feed-forward ``m2 xd''`` and the
 reference exosystem are joined with :func:`control.interconnect` (named signals) into one
-autonomous :class:`control.StateSpace`. Between impacts the closed loop is linear and
+autonomous :class:`control.StateSpace`. For a pure PD the same matrices are also written out
+directly (``method="auto"``, the default), so that the PD paths never import python-control;
+the tests check both constructions against each other. Between impacts the closed loop is linear and
 time-invariant; the hybrid layer only reads its matrices (:class:`ClosedLoop`).
 
 Sign conventions
@@ -20,11 +22,13 @@ Sign conventions
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd.model import Case, ImpactPair, PDGains, Reference
+from hybridpd._repr import compact_repr
+from hybridpd.model import Case, ImpactPair, PDGains, Reference, as_gains
 
 __all__ = ["ClosedLoop", "closed_loop", "pd_controller"]
 
@@ -46,14 +50,14 @@ def pd_controller(kp: float, kv: float, name: str = "pd"):
 
 
 def _as_controller(controller):
-    """Return ``(python-control StateSpace with inputs err[/err_dot], output u_fb, pd_gains|None)``."""
+    """``(python-control StateSpace from err[/err_dot] to u_fb, PDGains or None)``."""
+    gains = as_gains(controller, strict=False)
+    if gains is not None:
+        return pd_controller(gains.kp, gains.kv), gains
+    if not type(controller).__module__.startswith("control."):
+        _bad_controller(controller)
     import control as ct
 
-    if isinstance(controller, PDGains):
-        return pd_controller(controller.kp, controller.kv), controller
-    if isinstance(controller, tuple) and len(controller) == 2:
-        g = PDGains(*controller)
-        return pd_controller(g.kp, g.kv), g
     if isinstance(controller, (ct.StateSpace, ct.TransferFunction)):
         try:
             sys = ct.ss(controller)
@@ -76,10 +80,32 @@ def _as_controller(controller):
         states = [f"c{i + 1}" for i in range(sys.nstates)]
         sys = ct.ss(*mats, inputs=inputs, outputs=["u_fb"], states=states, name="ctrl")
         return sys, None
+    _bad_controller(controller)
+
+
+def _bad_controller(controller):
     raise ValueError(
-        "controller must be PDGains, a (kp, kv) tuple, or a python-control StateSpace/"
-        f"TransferFunction; got {type(controller).__name__}"
+        "controller must be PDGains, a (kp, kv) pair, a mapping with keys exactly kp, kv, or a "
+        f"python-control StateSpace/TransferFunction; got {type(controller).__name__}"
     )
+
+
+def _pd_matrices(pair: ImpactPair, gains: PDGains, reference: Reference, case: Case):
+    """``(A, force)`` of the PD closed loop written out from (3)-(8) (no python-control).
+
+    ``U = m2 xd'' - kv (y - xd') - kp (x - xd)`` with ``xd = pc``, ``xd' = -w ps``,
+    ``xd'' = -w^2 pc``. The test suite checks these against :func:`control.interconnect`.
+    """
+    kp, kv, m2, w = gains.kp, gains.kv, pair.m2, reference.omega
+    force = np.zeros(6)
+    ix, iy = (2, 3) if case is Case.COLLOCATED else (0, 1)
+    force[ix], force[iy] = -kp, -kv
+    force[4], force[5] = kp - m2 * w * w, -kv * w
+    A = np.zeros((6, 6))
+    A[0, 1] = A[2, 3] = 1.0
+    A[3] = force / m2
+    A[4, 5], A[5, 4] = -w, w
+    return A, force
 
 
 @dataclass(frozen=True)
@@ -96,24 +122,39 @@ class ClosedLoop:
         Collocated (feedback of ``x2``) or non-collocated (``x1``).
     gains : PDGains or None
         The PD gains when the controller is a pure PD (enables the symbolic fast path).
-    sys : control.StateSpace
-        The interconnected autonomous system (no inputs); outputs ``x1, y1, x2, y2, U``.
     A : ndarray, shape (n, n)
         Free-flight matrix in the state order ``[x1, y1, x2, y2, pc, ps, c_1..c_k]``.
     force : ndarray, shape (n,)
         Row with ``U = force @ state`` (the control force on ``m2``).
     state_names : tuple of str
         Names of the ``n`` states in order.
+    controller : object
+        The controller as given (PDGains for a PD).
+    sys : control.StateSpace
+        The interconnected autonomous system (no inputs; outputs ``x1, y1, x2, y2, U``),
+        built with :func:`control.interconnect` on first access when the loop was assembled
+        by the PD fast path.
     """
 
     pair: ImpactPair
     reference: Reference
     case: Case
     gains: PDGains | None
-    sys: object = field(repr=False)
     A: np.ndarray = field(repr=False)
     force: np.ndarray = field(repr=False)
     state_names: tuple
+    controller: object = field(default=None, repr=False)
+    _sys: object = field(default=None, repr=False, compare=False)
+
+    __repr__ = compact_repr
+
+    @functools.cached_property
+    def sys(self):
+        """The python-control interconnection (see the class docstring)."""
+        if self._sys is not None:
+            return self._sys
+        return closed_loop(self.pair, self.controller, self.reference, self.case,
+                           method="interconnect")._sys
 
     @property
     def n_states(self) -> int:
@@ -146,16 +187,21 @@ class ClosedLoop:
         return np.concatenate([x0, self.reference.exo_state(t0), c])
 
 
-def closed_loop(pair: ImpactPair, controller, reference: Reference, case="collocated") -> ClosedLoop:
+def closed_loop(pair: ImpactPair, controller, reference: Reference, case="collocated", *,
+                method: str = "auto") -> ClosedLoop:
     """Interconnect plant, controller, feed-forward and exosystem with python-control.
 
     Parameters
     ----------
     pair : ImpactPair
-    controller : PDGains, (kp, kv), or python-control LTI system
+    controller : PDGains, (kp, kv), {"kp": .., "kv": ..}, or python-control LTI system
         See the module docstring for the signal conventions.
     reference : Reference
     case : {"collocated", "noncollocated"}
+    method : {"auto", "interconnect"}
+        ``"auto"`` writes a PD loop's matrices out directly (no python-control import; the
+        tests check them against the interconnection) and interconnects any other
+        controller; ``"interconnect"`` always uses :func:`control.interconnect`.
 
     Returns
     -------
@@ -170,13 +216,20 @@ def closed_loop(pair: ImpactPair, controller, reference: Reference, case="colloc
     >>> cl.force      # U = -10 x2 - 20 y2 - 15 pc - 100 ps
     array([   0.,    0.,  -10.,  -20.,  -15., -100.])
     """
-    import control as ct
-
     if not isinstance(pair, ImpactPair):
         raise ValueError(f"pair must be an ImpactPair, got {type(pair).__name__}")
     if not isinstance(reference, Reference):
         raise ValueError(f"reference must be a Reference, got {type(reference).__name__}")
     case = Case.parse(case)
+    if method not in ("auto", "interconnect"):
+        raise ValueError(f"method must be 'auto' or 'interconnect', got {method!r}")
+    gains = as_gains(controller, "controller", strict=False)
+    if gains is not None and method == "auto":
+        A, force = _pd_matrices(pair, gains, reference, case)
+        return ClosedLoop(pair=pair, reference=reference, case=case, gains=gains, A=A,
+                          force=force, state_names=MECH_STATES + EXO_STATES, controller=gains)
+    import control as ct
+
     ctrl, gains = _as_controller(controller)
     m2, w = pair.m2, reference.omega
 
@@ -219,5 +272,6 @@ def closed_loop(pair: ImpactPair, controller, reference: Reference, case="colloc
                 states=list(MECH_STATES + EXO_STATES) + [s.split("_", 1)[1] for s in ctrl_labels],
                 outputs=list(MECH_STATES) + ["U"], name="closed_loop")
     names = tuple(sys.state_labels)
-    return ClosedLoop(pair=pair, reference=reference, case=case, gains=gains, sys=sys,
-                      A=A, force=C[4].copy(), state_names=names)
+    return ClosedLoop(pair=pair, reference=reference, case=case, gains=gains, A=A,
+                      force=C[4].copy(), state_names=names,
+                      controller=controller if gains is None else gains, _sys=sys)

@@ -1,6 +1,7 @@
 """Impact-pair parameters, validation and Newton's impact law (paper eq. (2)).
 
-Conventions (fixed by the project's SPEC, stated here once and reused everywhere):
+Conventions (those of the README's "Conventions" section, stated here once and reused
+everywhere):
 
 * State order ``[x1, y1, x2, y2]`` (positions in length units, velocities in length/time)
   for the mechanical part; the closed loop appends the reference exosystem
@@ -13,6 +14,8 @@ Conventions (fixed by the project's SPEC, stated here once and reused everywhere
 from __future__ import annotations
 
 import math
+import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import Enum
 
@@ -23,52 +26,144 @@ __all__ = [
     "ImpactPair",
     "PDGains",
     "Reference",
+    "as_gains",
+    "check_array",
     "check_axis",
     "check_finite",
     "check_in_range",
+    "check_int",
+    "check_named_axis",
     "check_odd_order",
+    "check_pair",
     "check_positive",
     "virtual_restitution",
 ]
 
 
-def check_finite(name: str, value) -> float:
-    """Return ``value`` as a float, raising ``ValueError`` naming ``name`` if it is not finite."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a finite real number, got {value!r}") from None
+def _show(value) -> str:
+    s = repr(value)
+    return s if len(s) <= 60 else s[:57] + "..."
+
+
+def _real(name: str, value, rng: str) -> float:
+    """``value`` as a float if it is a real number (not bool, str, None, container), else raise."""
+    if isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind in "iuf":
+        value = value.item()
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ValueError(f"{name} must be a real number in {rng}, got {_show(value)}")
+    v = float(value)
     if not math.isfinite(v):
-        raise ValueError(f"{name} must be a finite real number, got {value!r}")
+        raise ValueError(f"{name} must be a finite real number in {rng}, got {_show(value)}")
     return v
 
 
+def check_finite(name: str, value) -> float:
+    """Return ``value`` as a float; ``ValueError`` naming ``name`` unless a finite real number.
+
+    Strings, bools, ``None``, containers and arrays of more than one element are rejected
+    (a 0-d array is accepted).
+    """
+    return _real(name, value, "(-inf, inf)")
+
+
 def check_positive(name: str, value) -> float:
-    """Return ``value`` as a float, requiring ``0 < value < inf``."""
-    v = check_finite(name, value)
+    """Return ``value`` as a float, requiring a real number with ``0 < value < inf``."""
+    v = _real(name, value, "(0, inf)")
     if v <= 0.0:
-        raise ValueError(f"{name} must be > 0 (allowed range (0, inf)), got {value!r}")
+        raise ValueError(f"{name} must be > 0 (allowed range (0, inf)), got {_show(value)}")
     return v
 
 
 def check_in_range(name: str, value, lo: float, hi: float) -> float:
-    """Return ``value`` as a float, requiring ``lo <= value <= hi``."""
-    v = check_finite(name, value)
+    """Return ``value`` as a float, requiring a real number with ``lo <= value <= hi``."""
+    rng = f"[{lo:g}, {hi:g}]"
+    v = _real(name, value, rng)
     if not (lo <= v <= hi):
-        raise ValueError(f"{name} must lie in [{lo:g}, {hi:g}], got {value!r}")
+        raise ValueError(f"{name} must lie in {rng}, got {_show(value)}")
     return v
+
+
+def check_int(name: str, value, lo: int | None = None, hi: int | None = None) -> int:
+    """Return ``value`` as an int: an integer (or integral float) in ``[lo, hi]``."""
+    rng = f"[{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}]"
+    if isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind in "iuf":
+        value = value.item()
+    ok = (isinstance(value, numbers.Integral)
+          or (isinstance(value, numbers.Real) and math.isfinite(value) and value == int(value)))
+    if isinstance(value, (bool, np.bool_)) or not ok:
+        raise ValueError(f"{name} must be an integer in {rng}, got {_show(value)}")
+    v = int(value)
+    if (lo is not None and v < lo) or (hi is not None and v > hi):
+        raise ValueError(f"{name} must be an integer in {rng}, got {_show(value)}")
+    return v
+
+
+def check_array(name: str, value, *, shape: tuple | None = None, trailing: tuple | None = None,
+                lo: float | None = None, hi: float | None = None, lo_open: bool = True,
+                finite: bool = True) -> np.ndarray:
+    """Return ``value`` as a float ndarray after checking its type, shape and range.
+
+    Parameters
+    ----------
+    name : str
+        Parameter name for the error message.
+    value : array_like
+        Real numbers (bools, strings, ``None``, mappings and ragged or object arrays are
+        rejected).
+    shape : tuple, optional
+        Exact shape required.
+    trailing : tuple, optional
+        Required trailing dimensions (shape ``(..., *trailing)``).
+    lo, hi : float, optional
+        Range: ``lo < x`` (``lo <= x`` unless ``lo_open``) and ``x <= hi``.
+    finite : bool
+        Require every entry finite.
+    """
+    if value is None or isinstance(value, (str, bytes, dict)) or hasattr(value, "keys"):
+        raise ValueError(f"{name} must be an array of real numbers, got {_show(value)}")
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be an array of real numbers, got {_show(value)}") from None
+    if a.dtype.kind not in "iuf":
+        raise ValueError(f"{name} must be an array of real numbers, got {_show(value)}")
+    a = a.astype(float)
+    if shape is not None and a.shape != tuple(shape):
+        raise ValueError(f"{name} must have shape {tuple(shape)}, got shape {a.shape}")
+    if trailing is not None:
+        t = tuple(trailing)
+        if a.ndim < len(t) or a.shape[a.ndim - len(t):] != t:
+            dims = ", ".join(str(d) for d in t)
+            raise ValueError(f"{name} must have shape (..., {dims}), got shape {a.shape}")
+    if finite and not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be finite")
+    rng = (f"{'(' if lo_open else '['}{'-inf' if lo is None else format(lo, 'g')}, "
+           f"{'inf' if hi is None else format(hi, 'g')}{']' if hi is not None else ')'}")
+    if lo is not None:
+        bad = a <= lo if lo_open else a < lo
+        if np.any(bad):
+            raise ValueError(f"{name} must lie in {rng}, got {a[bad].ravel()[0]!r}")
+    if hi is not None and np.any(a > hi):
+        raise ValueError(f"{name} must lie in {rng}, got {a[a > hi].ravel()[0]!r}")
+    return a
+
+
+def check_pair(name: str, value) -> tuple[float, float]:
+    """Return ``(a, b)`` from a sequence of exactly two finite real numbers."""
+    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__") or len(value) != 2:
+        raise ValueError(f"{name} must be a pair (start, end) of real numbers, got {_show(value)}")
+    return check_finite(f"{name}[0]", value[0]), check_finite(f"{name}[1]", value[1])
 
 
 def check_odd_order(n) -> int:
     """Return the orbit order ``n`` as an int, requiring a positive odd integer."""
+    msg = f"n must be a positive odd integer 1, 3, 5, ... (symmetric orbits), got {_show(n)}"
     try:
-        ni = int(n)
-    except (TypeError, ValueError):
-        raise ValueError(f"n must be a positive odd integer, got {n!r}") from None
-    if ni != n or ni < 1 or ni % 2 == 0:
-        raise ValueError(
-            f"n must be a positive odd integer (symmetric orbits need odd n), got {n!r}"
-        )
+        ni = check_int("n", n, 1)
+    except ValueError:
+        raise ValueError(msg) from None
+    if ni % 2 == 0:
+        raise ValueError(msg)
     return ni
 
 
@@ -78,20 +173,32 @@ def check_axis(name: str, spec, *, min_num: int = 1, positive: bool = False) -> 
     Requires finite ``MIN < MAX``, an integer ``NUM >= min_num`` and, with ``positive``,
     ``MIN > 0``.
     """
-    try:
-        lo, hi, num = spec
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be (MIN, MAX, NUM), got {spec!r}") from None
-    lo, hi = float(lo), float(hi)
-    if not (math.isfinite(lo) and math.isfinite(hi)):
-        raise ValueError(f"{name} range must be finite, got {spec!r}")
+    if isinstance(spec, (str, bytes, dict)) or not hasattr(spec, "__len__") or len(spec) != 3:
+        raise ValueError(f"{name} must be (MIN, MAX, NUM), got {_show(spec)}")
+    lo = check_finite(f"{name} MIN", spec[0])
+    hi = check_finite(f"{name} MAX", spec[1])
     if not hi > lo:
-        raise ValueError(f"{name} range must be increasing (MIN < MAX), got {spec!r}")
-    if not (float(num) == int(num) and int(num) >= min_num):
-        raise ValueError(f"{name} NUM must be an integer >= {min_num}, got {num!r}")
+        raise ValueError(f"{name} range must be increasing (MIN < MAX), got {_show(spec)}")
+    num = check_int(f"{name} NUM", spec[2], min_num)
     if positive and lo <= 0:
         raise ValueError(f"{name} values must be > 0 (allowed range (0, inf)), got MIN = {lo:g}")
-    return np.linspace(lo, hi, int(num))
+    return np.linspace(lo, hi, num)
+
+
+def check_named_axis(param: str, spec, names, *, min_num: int = 1, positive: bool = False):
+    """Validate ``param = (NAME, MIN, MAX, NUM)`` with ``NAME`` in ``names``.
+
+    Returns ``(NAME, linspace(MIN, MAX, NUM))``; errors name ``param`` (see :func:`check_axis`).
+    """
+    if isinstance(spec, (str, bytes, dict)) or not hasattr(spec, "__len__") or len(spec) != 4:
+        raise ValueError(f"{param} must be (NAME, MIN, MAX, NUM), got {_show(spec)}")
+    name = spec[0]
+    if not isinstance(name, str) or name not in names:
+        raise ValueError(f"{param} axis name must be one of {tuple(names)}, got {_show(name)}")
+    try:
+        return name, check_axis(name, tuple(spec[1:]), min_num=min_num, positive=positive)
+    except ValueError as exc:
+        raise ValueError(f"{param}: {exc}") from None
 
 
 class Case(str, Enum):
@@ -148,7 +255,7 @@ class ImpactPair:
     --------
     >>> pair = ImpactPair(mu=0.1, e=0.5, L=0.75)
     >>> post = pair.impact([0.75, 1.0, 0.0, -1.0], wall=+1)
-    >>> float(post[1] - post[3])          # relative velocity reversed and scaled by e
+    >>> round(float(post[1] - post[3]), 12)   # relative velocity reversed and scaled by e
     -1.0
     """
 
@@ -195,7 +302,7 @@ class ImpactPair:
         dimensions broadcast (shape ``(..., n)`` with ``n >= 4``). ``wall`` is accepted for
         symmetry with the trajectory records: the law (2) is the same on both walls.
         """
-        if wall not in (-1, 1):
+        if isinstance(wall, bool) or wall not in (-1, 1):
             raise ValueError(f"wall must be +1 or -1, got {wall!r}")
         x = np.array(state, dtype=float, copy=True)
         if x.shape[-1] < 4:
@@ -263,3 +370,34 @@ class Reference:
         t = np.asarray(t, dtype=float)
         wt = self.omega * t
         return np.stack([self.xm * np.cos(wt), self.xm * np.sin(wt)], axis=-1)
+
+
+def as_gains(value, name: str = "gains", *, strict: bool = True) -> PDGains | None:
+    """PD gains from ``PDGains``, a pair ``(kp, kv)`` or a mapping with keys exactly ``kp, kv``.
+
+    With ``strict=False`` anything else returns ``None`` (the caller may accept other
+    controllers); a malformed pair or mapping always raises ``ValueError`` naming ``name``.
+    """
+    if isinstance(value, PDGains):
+        return value
+    if isinstance(value, Mapping):
+        keys = set(value)
+        if keys != {"kp", "kv"}:
+            raise ValueError(f"{name} as a mapping must have exactly the keys kp, kv, got "
+                             f"{sorted(map(str, keys))}")
+        return _gains(name, value["kp"], value["kv"])
+    if isinstance(value, (tuple, list)) or (isinstance(value, np.ndarray) and value.ndim == 1):
+        if len(value) != 2:
+            raise ValueError(f"{name} must be a pair (kp, kv), got {_show(value)}")
+        return _gains(name, value[0], value[1])
+    if strict:
+        raise ValueError(f"{name} must be PDGains, a pair (kp, kv) or a mapping with keys kp, kv; "
+                         f"got {type(value).__name__}")
+    return None
+
+
+def _gains(name, kp, kv) -> PDGains:
+    try:
+        return PDGains(kp, kv)
+    except ValueError as exc:
+        raise ValueError(f"{name}: {exc}") from None

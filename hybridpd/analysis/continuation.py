@@ -50,11 +50,19 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
+from hybridpd._jit import njit
 from hybridpd.analysis.impactmap import ImpactMap, stability
 from hybridpd.analysis.orbits import REASONS, symmetric_orbits
-from hybridpd.model import Case, ImpactPair, PDGains, Reference, check_finite
+from hybridpd.model import (
+    Case,
+    ImpactPair,
+    PDGains,
+    Reference,
+    check_array,
+    check_finite,
+    check_int,
+)
 from hybridpd.pair import symbolic
 from hybridpd.pair.batch import (
     STATUS_IMPACT,
@@ -313,24 +321,14 @@ def _min(values):
 
 
 def _section_point(s, name, closure=False) -> np.ndarray:
-    a = np.asarray(s, dtype=float)
-    if a.shape != (4,):
-        raise ValueError(f"{name} must have shape (4,) = (phi, z1, z2, z4), got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} must be finite, got {a.tolist()}")
+    a = check_array(name, s, shape=(4,))  # (phi, z1, z2, z4)
     if a[3] < 0 or (a[3] == 0 and not closure):
         raise ValueError(f"{name}[3] = z4 must be > 0 (approaching the +L wall), got {a[3]!r}")
     return a
 
 
 def _positive_int(name, value) -> int:
-    try:
-        v = int(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a positive integer, got {value!r}") from None
-    if v != value or v < 1:
-        raise ValueError(f"{name} must be a positive integer, got {value!r}")
-    return v
+    return check_int(name, value, 1)
 
 
 def _positive_float(name, value) -> float:

@@ -74,6 +74,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage, optimize
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.orbits import (
     REASONS,
     SymmetricOrbitResult,
@@ -86,6 +87,7 @@ from hybridpd.model import (
     PDGains,
     check_finite,
     check_in_range,
+    check_int,
     check_odd_order,
     check_positive,
 )
@@ -378,6 +380,8 @@ class DesignMap:
         design only): robustness of stability alone, without the ``x10_tol`` requirement.
     """
 
+    __repr__ = compact_repr
+
     kp: np.ndarray
     kv: np.ndarray
     spacing: str
@@ -428,6 +432,8 @@ class OptimizerRun:
     message : str
         :class:`scipy.optimize.OptimizeResult` status text.
     """
+
+    __repr__ = compact_repr
 
     start_kp: float
     start_kv: float
@@ -492,6 +498,8 @@ class RobustReport:
     worst_x10_error : float
         Largest relative amplitude error (NaN if some plant has no orbit).
     """
+
+    __repr__ = compact_repr
 
     e_values: np.ndarray
     mu_values: np.ndarray
@@ -582,6 +590,8 @@ class DesignResult:
     elapsed : float
         Wall time of the design (s).
     """
+
+    __repr__ = compact_repr
 
     case: Case
     gains: PDGains
@@ -694,17 +704,9 @@ def _grid_shape(name, value, minimum=2):
         a, b = value
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a pair of integers, got {value!r}") from None
-    out = []
-    for v in (a, b):
-        try:
-            iv = int(v)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name} must be a pair of integers >= {minimum}, "
-                             f"got {value!r}") from None
-        if iv != v or iv < minimum:
-            raise ValueError(f"{name} must be a pair of integers >= {minimum}, got {value!r}")
-        out.append(iv)
-    return tuple(out)
+    if isinstance(value, (str, bytes, dict)):
+        raise ValueError(f"{name} must be a pair of integers >= {minimum}, got {value!r}")
+    return check_int(f"{name}[0]", a, minimum), check_int(f"{name}[1]", b, minimum)
 
 
 def _axis_values(lo, hi, num, spacing):
@@ -1043,18 +1045,8 @@ def design(case="collocated", *, mu, e, omega, L=None, gamma=None, x10=1.0, m2=1
     pb = _problem(case, mu, e, omega, L, gamma, x10, m2, n, kp_range, kv_range, spacing,
                   viability_weight, objective, e_range, mu_range, uncertainty_grid, x10_tol)
     nkp, nkv = _grid_shape("grid", grid)
-    try:
-        n_starts_i = int(n_starts)
-    except (TypeError, ValueError):
-        raise ValueError(f"n_starts must be an integer >= 1, got {n_starts!r}") from None
-    if n_starts_i != n_starts or n_starts_i < 1:
-        raise ValueError(f"n_starts must be an integer >= 1, got {n_starts!r}")
-    try:
-        maxiter_i = int(maxiter)
-    except (TypeError, ValueError):
-        raise ValueError(f"maxiter must be an integer >= 1, got {maxiter!r}") from None
-    if maxiter_i != maxiter or maxiter_i < 1:
-        raise ValueError(f"maxiter must be an integer >= 1, got {maxiter!r}")
+    n_starts_i = check_int("n_starts", n_starts, 1)
+    maxiter_i = check_int("maxiter", maxiter, 1)
     if validation_grid is not None and pb.robust:
         validation_grid = _grid_shape("validation_grid", validation_grid)
 
@@ -1254,6 +1246,8 @@ class ComparisonRow:
         Why the robust design failed.
     """
 
+    __repr__ = compact_repr
+
     case: str
     nominal_fraction: float
     robust_fraction: float
@@ -1297,6 +1291,8 @@ class RobustnessComparison:
     settings : dict
         Nominal plant, boxes, tolerance and gain box.
     """
+
+    __repr__ = compact_repr
 
     rows: list
     settings: dict

@@ -17,7 +17,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridpd.model import Case, ImpactPair, PDGains, Reference
+from hybridpd._repr import compact_repr
+from hybridpd.model import (
+    Case,
+    ImpactPair,
+    Reference,
+    as_gains,
+    check_array,
+    check_int,
+    check_positive,
+)
 from hybridpd.pair import symbolic
 from hybridpd.pair.batch import (
     STATUS_IMPACT,
@@ -47,6 +56,8 @@ class Stability:
     hyperbolic : bool
         No multiplier within ``tol`` of the unit circle.
     """
+
+    __repr__ = compact_repr
 
     multipliers: np.ndarray
     spectral_radius: float
@@ -81,6 +92,8 @@ class MapResult:
         Impacts taken to return (2 on a simple orbit).
     """
 
+    __repr__ = compact_repr
+
     s: np.ndarray
     ok: np.ndarray
     status: np.ndarray
@@ -113,16 +126,15 @@ class ImpactMap:
 
     def __init__(self, pair: ImpactPair, gains, reference: Reference, case="collocated", *,
                  tol: float = 1e-13, max_impacts: int = 1000):
-        if not isinstance(gains, PDGains):
-            gains = PDGains(*gains)
+        gains = as_gains(gains)
         if not isinstance(pair, ImpactPair):
             raise ValueError(f"pair must be an ImpactPair, got {type(pair).__name__}")
         if not isinstance(reference, Reference):
             raise ValueError(f"reference must be a Reference, got {type(reference).__name__}")
         self.pair, self.gains, self.reference = pair, gains, reference
         self.case = Case.parse(case)
-        self.tol = float(tol)
-        self.max_impacts = int(max_impacts)
+        self.tol = check_positive("tol", tol)
+        self.max_impacts = check_int("max_impacts", max_impacts, 1)
         self.params = pack_params(gains.kp, gains.kv, pair.m2, pair.mu, pair.e, pair.L,
                                   reference.omega, reference.xm)
         self._c = 0 if self.case is Case.COLLOCATED else 1
@@ -133,11 +145,7 @@ class ImpactMap:
         return self.reference.period
 
     def _points(self, s) -> np.ndarray:
-        s = np.asarray(s, dtype=float)
-        if s.shape[-1] != 4:
-            raise ValueError(f"s must have shape (..., 4) = (phi, z1, z2, z4), got {s.shape}")
-        if not np.all(np.isfinite(s)):
-            raise ValueError("s must be finite")
+        s = check_array("s", s, trailing=(4,))
         if np.any(s[..., 3] <= 0):
             raise ValueError("s[..., 3] = z4 must be > 0 (approaching the +L wall)")
         return np.ascontiguousarray(s.reshape(-1, 4))
@@ -150,7 +158,7 @@ class ImpactMap:
 
     def __call__(self, s) -> np.ndarray:
         """``P(s)``; raises ``RuntimeError`` if a trajectory does not return to the section."""
-        s_arr = np.asarray(s, dtype=float)
+        s_arr = check_array("s", s, trailing=(4,))
         r = self.apply(s_arr)
         if not np.all(r.ok):
             raise RuntimeError(f"P undefined at {int((~r.ok).sum())} point(s): status "

@@ -75,6 +75,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.linalg import expm
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.impactmap import Stability, stability
 from hybridpd.analysis.orbits import _END_RTOL, _HYPERBOLIC_TOL, REASONS
 from hybridpd.hybrid.events import (
@@ -381,6 +382,8 @@ class LTIMapResult:
         ``phi_in + sum(taus)`` (time): the output phase before reduction mod ``T``.
     """
 
+    __repr__ = compact_repr
+
     s: np.ndarray
     ok: bool
     status: str
@@ -410,6 +413,8 @@ class LTIJacobian:
     taus : ndarray
         Flight times used.
     """
+
+    __repr__ = compact_repr
 
     DP: np.ndarray
     blocks: tuple
@@ -720,6 +725,8 @@ class LTIOrbitResult:
     DP_fd_error : float or None
         :meth:`fd_error` (only when requested with ``fd_check=True``).
     """
+
+    __repr__ = compact_repr
 
     exists: bool
     code: int

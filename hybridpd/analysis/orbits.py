@@ -24,9 +24,20 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
-from hybridpd.model import Case, ImpactPair, PDGains, Reference, check_odd_order, check_positive
+from hybridpd._jit import njit
+from hybridpd._repr import compact_repr
+from hybridpd.model import (
+    Case,
+    ImpactPair,
+    PDGains,
+    Reference,
+    as_gains,
+    check_array,
+    check_int,
+    check_odd_order,
+    check_positive,
+)
 from hybridpd.pair import symbolic
 from hybridpd.pair.batch import STATUS_IMPACT, STATUS_STICK, _eval, next_impact
 
@@ -104,17 +115,7 @@ def _viability_kernel(P, case, phi0, x10, v, x20, y2p, tau, tol, margin, nsamp):
 
 
 def _check_array(name, value, lo=None, lo_open=True, hi=None):
-    a = np.asarray(value, dtype=float)
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} must be finite")
-    if lo is not None:
-        bad = a <= lo if lo_open else a < lo
-        if np.any(bad):
-            rng = f"({lo:g}, inf)" if hi is None else f"[{lo:g}, {hi:g}]"
-            raise ValueError(f"{name} must lie in {rng}, got {a[bad].ravel()[0]!r}")
-    if hi is not None and np.any(a > hi):
-        raise ValueError(f"{name} must lie in [{lo:g}, {hi:g}], got {a[a > hi].ravel()[0]!r}")
-    return a
+    return check_array(name, value, lo=lo, lo_open=lo_open, hi=hi)
 
 
 @dataclass(frozen=True)
@@ -150,6 +151,8 @@ class OrbitArrays:
     candidate : symbolic.SymmetricOrbit
         The raw solution of (13)-(14) (velocities, ``C``, ``S``, ``R``, ...).
     """
+
+    __repr__ = compact_repr
 
     case: Case
     exists: np.ndarray
@@ -208,6 +211,8 @@ def symmetric_orbits(kp, kv, *, mu, e, L, omega, m2=1.0, x10=1.0, n=1, case="col
     omega = _check_array("omega", omega, 0.0)
     m2 = _check_array("m2", m2, 0.0)
     x10 = _check_array("x10", x10, 0.0)
+    tol = check_positive("tol", tol)
+    margin_samples = check_int("margin_samples", margin_samples, 2)
     kp, kv, mu, e, L, omega, m2, x10 = np.broadcast_arrays(kp, kv, mu, e, L, omega, m2, x10)
     shape = kp.shape
     cand = symbolic.symmetric_orbit(kp=kp, kv=kv, m2=m2, mu=mu, e=e, L=L, w=omega, x10=x10, n=n,
@@ -230,7 +235,8 @@ def symmetric_orbits(kp, kv, *, mu, e, L, omega, m2=1.0, x10=1.0, n=1, case="col
     marg = np.full(P.shape[0], np.nan)
     if idx.size:
         sub = lambda a: flat(a)[idx]
-        r = _viability_kernel(np.ascontiguousarray(P[idx]), 0 if case is Case.COLLOCATED else 1,
+        # a handful of orbits: interpreting beats loading numba (see hybridpd._jit)
+        r = _viability_kernel.call(idx.size <= 16, np.ascontiguousarray(P[idx]), 0 if case is Case.COLLOCATED else 1,
                               sub(cand.phi0), sub(cand.x10), sub(cand.v), sub(cand.x20),
                               sub(cand.y2_post), sub(cand.tau), tol, bool(margin),
                               int(margin_samples))
@@ -303,6 +309,8 @@ class SymmetricOrbitResult:
     violation : dict or None
         ``{"t": time after t0, "wall": +-1, "x1": position}`` of an extra contact.
     """
+
+    __repr__ = compact_repr
 
     exists: bool
     reason: str
@@ -409,8 +417,7 @@ def symmetric_orbit(pair: ImpactPair, gains: PDGains, omega: float, *, x10: floa
     """
     if not isinstance(pair, ImpactPair):
         raise ValueError(f"pair must be an ImpactPair, got {type(pair).__name__}")
-    if not isinstance(gains, PDGains):
-        gains = PDGains(*gains)
+    gains = as_gains(gains)
     omega = check_positive("omega", omega)
     x10 = check_positive("x10", x10)
     n = check_odd_order(n)

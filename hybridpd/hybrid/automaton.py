@@ -75,8 +75,9 @@ from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
+from hybridpd._jit import njit
+from hybridpd._repr import compact_repr
 from hybridpd.hybrid.events import (
     EV_GRAZING,
     EV_NONE,
@@ -119,6 +120,12 @@ class TerminationCause(enum.Enum):
 
 
 _RC_BUFFER_FULL = 5
+_RC_STEP_LIMIT = 4
+# A run that looks small (a span of at most this many flow steps, or at most this many jumps)
+# starts interpreted while numba is not loaded (see hybridpd._jit; about 0.25 ms per step,
+# 1 ms per jump), in chunks bounded by both; the run carries its state between chunks.
+_INTERP_MAX_STEPS = 2000
+_INTERP_JUMPS = 64
 _KIND_NAMES = {1: "crossing", 2: "grazing", 3: "zeno"}
 
 
@@ -147,6 +154,8 @@ class Guard:
     zeno_reset : (R, r), optional
         Reset applied at the accumulation time (default identity); only with ``zeno_target``.
     """
+
+    __repr__ = compact_repr
 
     name: str
     c: np.ndarray
@@ -195,6 +204,8 @@ class Mode:
         Constant input (default zero).
     guards : sequence of Guard
     """
+
+    __repr__ = compact_repr
 
     name: str
     A: np.ndarray
@@ -272,6 +283,8 @@ class ZenoOptions:
 class Jump:
     """One jump: at hybrid time ``(t, j)`` (``j`` counts this jump), ``pre -> post``."""
 
+    __repr__ = compact_repr
+
     t: float
     j: int
     guard: str
@@ -302,6 +315,8 @@ class JumpTable:
         ``'crossing'``, ``'grazing'`` or ``'zeno'``.
     """
 
+    __repr__ = compact_repr
+
     t: np.ndarray
     j: np.ndarray
     guard: tuple
@@ -327,6 +342,8 @@ class JumpTable:
 class Segment:
     """One flow segment on ``[t_start, t_end]`` in ``mode`` at jump count ``j``."""
 
+    __repr__ = compact_repr
+
     t_start: float
     t_end: float
     mode: str
@@ -346,6 +363,8 @@ class SegmentTable:
     x_start : ndarray, shape (m, n)
         State at ``t_start`` (after the jumps at that time).
     """
+
+    __repr__ = compact_repr
 
     t_start: np.ndarray
     t_end: np.ndarray
@@ -411,6 +430,8 @@ class HybridTrajectory:
     Calling the trajectory, ``traj(t)`` (= :meth:`state_at`), gives the exact state at any
     time(s) in ``[t0, t_final]``, right-continuous at jumps.
     """
+
+    __repr__ = compact_repr
 
     t0: float
     t_final: float
@@ -901,7 +922,12 @@ class HybridAutomaton:
         ic[3] = -1
         chunks = []
         cap = min(max_jumps + 4, 2048)
+        small = (t1 - t0) <= _INTERP_MAX_STEPS * float(np.min(pk.h)) or max_jumps <= _INTERP_JUMPS
         while True:
+            interp = small and run_hybrid.prefer_interpreter()
+            steps = min(max_steps, int(ic[8]) + _INTERP_MAX_STEPS) if interp else max_steps
+            if interp:
+                cap = min(cap, _INTERP_JUMPS + 4)
             bufs = {
                 "jt": np.empty(cap), "jj": np.empty(cap, np.int64), "jg": np.empty(cap, np.int64),
                 "jsrc": np.empty(cap, np.int64), "jdst": np.empty(cap, np.int64),
@@ -910,13 +936,14 @@ class HybridAutomaton:
                 "smode": np.empty(cap + 2, np.int64), "sj": np.empty(cap + 2, np.int64),
                 "sw": np.empty((cap + 2, N1)), "zt_out": np.empty(cap)}
             ic[9:12] = 0
-            rc = run_hybrid(pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs, pk.gsum,
-                            pk.cnorm, pk.prio, pk.ng, pk.Rh, pk.target, pk.zt, pk.Rz, dt_min,
-                            t1, max_jumps, max_steps, zf, zi, w, fc, ic, **bufs)
+            run = run_hybrid.interpret if interp else run_hybrid
+            rc = run(pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs, pk.gsum, pk.cnorm,
+                     pk.prio, pk.ng, pk.Rh, pk.target, pk.zt, pk.Rz, dt_min, t1, max_jumps,
+                     steps, zf, zi, w, fc, ic, **bufs)
             nj, ns, nz = int(ic[9]), int(ic[10]), int(ic[11])
             chunks.append({k: (v[:nj] if k.startswith("j") else v[:ns] if k.startswith("s")
                                else v[:nz]) for k, v in bufs.items()})
-            if rc != _RC_BUFFER_FULL:
+            if rc != _RC_BUFFER_FULL and not (rc == _RC_STEP_LIMIT and steps < max_steps):
                 break
             cap = min(max(max_jumps - int(ic[1]), 0) + 4, 65536)
         cat = {k: np.concatenate([c[k] for c in chunks]) for k in chunks[0]}

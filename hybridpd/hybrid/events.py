@@ -93,7 +93,8 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+
+from hybridpd._jit import njit
 
 # re-exported: the kernels below and their users share these
 from hybridpd.hybrid._poly import (

@@ -43,7 +43,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from hybridpd._jit import njit
 
 __all__ = [
     "LABELS",

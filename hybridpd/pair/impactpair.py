@@ -23,9 +23,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode, TerminationCause
 from hybridpd.loop import ClosedLoop, closed_loop
-from hybridpd.model import Case, ImpactPair, Reference, check_finite, check_positive
+from hybridpd.model import Case, ImpactPair, Reference, check_array, check_int, check_pair
 
 __all__ = ["ControlledImpactPair", "ImpactPairTrajectory"]
 
@@ -56,6 +57,8 @@ class ImpactPairTrajectory:
     hybrid : HybridTrajectory
         The underlying automaton trajectory (segments, all jumps, dense output).
     """
+
+    __repr__ = compact_repr
 
     impact_times: np.ndarray
     walls: np.ndarray
@@ -114,6 +117,8 @@ class ControlledImpactPair:
     """
 
     def __init__(self, plant: ImpactPair, controller, reference: Reference, case="collocated"):
+        if not isinstance(plant, ImpactPair):
+            raise ValueError(f"plant must be an ImpactPair, got {type(plant).__name__}")
         self.loop: ClosedLoop = closed_loop(plant, controller, reference, Case.parse(case))
         self.plant = plant
         self.reference = reference
@@ -186,10 +191,11 @@ class ControlledImpactPair:
         -------
         ImpactPairTrajectory
         """
-        t0, t1 = (check_finite("t_span[0]", t_span[0]), check_finite("t_span[1]", t_span[1]))
+        t0, t1 = check_pair("t_span", t_span)
         if not t1 > t0:
-            raise ValueError(f"t_span must be increasing (t0 < t1), got {tuple(t_span)!r}")
-        max_impacts = int(check_positive("max_impacts", max_impacts))
+            raise ValueError(f"t_span must be increasing (t0 < t1), got {(t0, t1)!r}")
+        max_impacts = check_int("max_impacts", max_impacts, 1)
+        x0 = check_array("x0", x0, shape=(4,))
         z0 = self.initial_state(x0, t0, controller_state)
         gap = z0[0] - z0[2]
         L = self.plant.L

@@ -38,7 +38,7 @@ import numpy as np
 from scipy.linalg import solve_discrete_lyapunov
 
 from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.model import check_axis
+from hybridpd.model import check_array, check_axis, check_int, check_positive
 from hybridpd.pair.batch import map_labels
 
 __all__ = ["LABELS", "BasinResult", "ImpactMapper", "basin_of_attraction", "load_basin",
@@ -79,15 +79,10 @@ class ImpactMapper:
                  criterion: float = 1e-3, early_exit: bool = True, escape: float = 1e3):
         if not isinstance(impact_map, ImpactMap):
             raise ValueError(f"impact_map must be an ImpactMap, got {type(impact_map).__name__}")
-        fp = np.asarray(fixed_point, float)
-        if fp.shape != (4,) or not np.all(np.isfinite(fp)):
-            raise ValueError(f"fixed_point must be 4 finite numbers, got {fixed_point!r}")
-        if int(n_iter) < 1:
-            raise ValueError(f"n_iter must be >= 1, got {n_iter!r}")
-        if not (criterion > 0 and math.isfinite(criterion)):
-            raise ValueError(f"criterion must be > 0, got {criterion!r}")
-        if not (escape > 0 and math.isfinite(escape)):
-            raise ValueError(f"escape must be > 0, got {escape!r}")
+        fp = check_array("fixed_point", fixed_point, shape=(4,))
+        n_iter = check_int("n_iter", n_iter, 1)
+        criterion = check_positive("criterion", criterion)
+        escape = check_positive("escape", escape)
         self.map = impact_map
         self.fixed_point = fp
         self.n_iter = int(n_iter)
@@ -332,6 +327,8 @@ def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chun
     -------
     BasinResult
     """
+    if not isinstance(mapper, ImpactMapper):
+        raise ValueError(f"mapper must be an ImpactMapper, got {type(mapper).__name__}")
     xs = check_axis("x1", x1)
     ys = check_axis("y1", y1)
     L = mapper.map.pair.L

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from hybridpd.analysis.orbits import REASONS, symmetric_orbits
-from hybridpd.model import Case, check_axis, check_odd_order, check_positive
+from hybridpd.model import Case, check_array, check_named_axis, check_odd_order, check_positive
 
 __all__ = ["AXES", "RegionMap", "load_region_map", "region_map"]
 
@@ -214,15 +214,11 @@ def region_map(case="collocated", *, x=("kp", 0.1, 50.0, 200), y=("kv", 0.1, 50.
     """
     case = Case.parse(case).value
     n = check_odd_order(n)
-    xname, yname = str(x[0]), str(y[0])
-    for nm in (xname, yname):
-        if nm not in AXES:
-            raise ValueError(f"axis name must be one of {AXES}, got {nm!r}")
+    xname, xs = check_named_axis("x", x, AXES, min_num=2, positive=True)
+    yname, ys = check_named_axis("y", y, AXES, min_num=2, positive=True)
     if xname == yname:
-        raise ValueError(f"the two axes must differ, got {xname!r} twice")
-    xs = check_axis(xname, x[1:], min_num=2, positive=True)
-    ys = check_axis(yname, y[1:], min_num=2, positive=True)
-    es = np.atleast_1d(np.asarray(e, dtype=float))
+        raise ValueError(f"x and y must sweep different parameters, got {xname!r} twice")
+    es = np.atleast_1d(check_array("e", e, lo=0.0, lo_open=False, hi=1.0))
     if es.size == 0 or es.ndim != 1:
         raise ValueError("e must be a non-empty list of restitution coefficients")
     if not np.all(np.isfinite(es)) or np.any((es < 0) | (es > 1)):
