@@ -281,3 +281,28 @@ def test_kernels_pickle_by_reference():
     from hybridpd.pair import batch
 
     assert pickle.loads(pickle.dumps(batch.next_impact)) is batch.next_impact
+
+
+_RACE = """
+import sys, time
+from hybridpd import _codecache
+
+def slow():
+    time.sleep(0.2)  # widen the window in which the writers overlap
+    return "VALUE = " + repr("x" * 200000) + "\\n"
+
+ns = _codecache.load("race.entry", "feed", slow)
+print(len(ns["VALUE"]))
+"""
+
+
+def test_concurrent_writers_leave_a_valid_entry(cache):
+    env = dict(os.environ, PYTHONPATH=str(ROOT), HYBRIDPD_CACHE_DIR=str(cache))
+    procs = [subprocess.Popen([sys.executable, "-c", _RACE], cwd=ROOT, env=env,
+                              stdout=subprocess.PIPE, text=True) for _ in range(4)]
+    outs = [p.communicate(timeout=120)[0] for p in procs]
+    assert all(p.returncode == 0 for p in procs)
+    assert [o.split() for o in outs] == [["200000"]] * 4
+    ns = _codecache.load("race.entry", "feed", lambda: pytest.fail("entry should be cached"))
+    assert len(ns["VALUE"]) == 200000
+    assert sorted(p.name for p in cache.iterdir()) == ["race.entry-feed.py"]  # no temp files

@@ -124,6 +124,39 @@ def _entry_points():
 
         return find_periodic_orbit(impact_map_, s0, period, tol=tol, max_iter=max_iter)
 
+    def lti_orbit(pair, controller, omega, x10, n, case, margin_samples):
+        from hybridpd.analysis.lti import lti_symmetric_orbit
+
+        return lti_symmetric_orbit(pair, controller, omega, x10=x10, n=n, case=case,
+                                   margin_samples=margin_samples)
+
+    def continuation(pair, gains, omega, parameter, stop, x10, n, max_steps):
+        from hybridpd.analysis.continuation import continue_symmetric
+
+        return continue_symmetric(pair, gains, omega, parameter, stop, x10=x10, n=n,
+                                  max_steps=max_steps)
+
+    def trace(impact_map_, s, margin_samples):
+        from hybridpd.analysis.continuation import trace_map
+
+        return trace_map(impact_map_, s, margin_samples=margin_samples)
+
+    def power_jacobian(impact_map_, s, period):
+        from hybridpd.analysis.continuation import map_power_jacobian
+
+        return map_power_jacobian(impact_map_, s, period)
+
+    def shifted(pair, gains, xm, omega, x10_nominal, n):
+        from hybridpd.analysis.design import shifted_orbit
+
+        return shifted_orbit(pair, gains, xm, omega, x10_nominal=x10_nominal, n=n)
+
+    def robust(case, kp, kv, xm, mu, e, omega, L, uncertainty_grid):
+        from hybridpd.analysis.design import robustness
+
+        return robustness(case, kp, kv, xm, mu=mu, e=e, omega=omega, L=L,
+                          e_range=(0.4, 0.6), uncertainty_grid=uncertainty_grid)
+
     from hybridpd.sweeps.basins import ImpactMapper
 
     orb = symmetric_orbit(PAIR, GAINS, 5.0)
@@ -149,6 +182,28 @@ def _entry_points():
                                  n_starts=1, maxiter=2),
                    dict(case="case", mu=pos, e="unit", omega=pos, L=pos, kp_range="range",
                         kv_range="range", grid="grid", n_starts="count", maxiter="count")),
+        "lti_symmetric_orbit": (lti_orbit, dict(pair=PAIR, controller=GAINS, omega=5.0,
+                                                x10=1.0, n=1, case="collocated",
+                                                margin_samples=16),
+                                dict(pair="pair_obj", controller="gains", omega=pos, x10=pos,
+                                     n="odd", case="case", margin_samples="count")),
+        "continue_symmetric": (continuation, dict(pair=PAIR, gains=GAINS, omega=5.0,
+                                                  parameter="kp", stop=10.5, x10=1.0, n=1,
+                                                  max_steps=3),
+                               dict(pair="pair_obj", gains="gains", omega=pos, parameter="case",
+                                    stop="real", x10=pos, n="odd", max_steps="count")),
+        "trace_map": (trace, dict(impact_map_=P, s=fp, margin_samples=16),
+                      dict(impact_map_="map_obj", s="vec4", margin_samples="count")),
+        "map_power_jacobian": (power_jacobian, dict(impact_map_=P, s=fp, period=1),
+                               dict(impact_map_="map_obj", s="vec4", period="count")),
+        "shifted_orbit": (shifted, dict(pair=PAIR, gains=GAINS, xm=orb.xm, omega=5.0,
+                                        x10_nominal=1.0, n=1),
+                          dict(pair="pair_obj", gains="gains", xm=pos, omega=pos,
+                               x10_nominal=pos, n="odd")),
+        "robustness": (robust, dict(case="collocated", kp=10.0, kv=20.0, xm=orb.xm, mu=0.1,
+                                    e=0.5, omega=5.0, L=0.75, uncertainty_grid=(2, 2)),
+                       dict(case="case", kp=pos, kv=pos, xm=pos, mu=pos, e="unit", omega=pos,
+                            L=pos, uncertainty_grid="grid")),
         "find_periodic_orbit": (periodic, dict(impact_map_=P, s0=fp, period=1, tol=1e-12,
                                                max_iter=20),
                                 dict(impact_map_="map_obj", s0="vec4", period="count",

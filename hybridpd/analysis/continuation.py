@@ -59,9 +59,11 @@ from hybridpd.model import (
     ImpactPair,
     PDGains,
     Reference,
+    as_gains,
     check_array,
     check_finite,
     check_int,
+    check_odd_order,
 )
 from hybridpd.pair import symbolic
 from hybridpd.pair.batch import (
@@ -262,8 +264,8 @@ def trace_map(impact_map_: ImpactMap, s, *, margin: bool = True,
     """
     # z4 = 0 (the closure of the section) is accepted: P itself returns it after a
     # tangential touch of the right wall
+    P = _impact_map(impact_map_)
     s = _section_point(s, "s", closure=True)
-    P = impact_map_
     params, case, tol = P.params, P._c, P.tol
     mu, e, L, w = params[3], params[4], params[5], params[6]
     T = 2.0 * math.pi / w
@@ -280,7 +282,7 @@ def trace_map(impact_map_: ImpactMap, s, *, margin: bool = True,
                                                             50.0 * T, tol)
         if margin and st in (STATUS_IMPACT, STATUS_STICK):
             marg = min(marg, _flight_margin(params, case, t, x1, y1, x2, y2, tau,
-                                            int(margin_samples)))
+                                            check_int("margin_samples", margin_samples, 2)))
         if st == STATUS_STICK:
             t += tau
             yc = (mu * Y1 + Y2) / (1.0 + mu)
@@ -325,6 +327,12 @@ def _section_point(s, name, closure=False) -> np.ndarray:
     if a[3] < 0 or (a[3] == 0 and not closure):
         raise ValueError(f"{name}[3] = z4 must be > 0 (approaching the +L wall), got {a[3]!r}")
     return a
+
+
+def _impact_map(P) -> ImpactMap:
+    if not isinstance(P, ImpactMap):
+        raise ValueError(f"impact_map_ must be an ImpactMap, got {type(P).__name__}")
+    return P
 
 
 def _positive_int(name, value) -> int:
@@ -460,7 +468,7 @@ def map_power_jacobian(impact_map_: ImpactMap, s, period: int = 1, *, method: st
         raise ValueError(f"method must be 'auto', 'symbolic' or 'fd', got {method!r}")
     k = _positive_int("period", period)
     fd_step = _positive_float("fd_step", fd_step)
-    P = impact_map_
+    P = _impact_map(impact_map_)
     s = _section_point(s, "s")
     pts = [s]
     traces = []
@@ -1765,8 +1773,7 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
     """
     if not isinstance(pair, ImpactPair):
         raise ValueError(f"pair must be an ImpactPair, got {type(pair).__name__}")
-    if not isinstance(gains, PDGains):
-        gains = PDGains(*gains)
+    gains = as_gains(gains)
     omega = _positive_float("omega", omega)
     x10 = _positive_float("x10", x10)
     case = Case.parse(case)
@@ -1783,7 +1790,7 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
     bad = [kd for kd in events if kd not in EVENT_KINDS]
     if bad:
         raise ValueError(f"events must be a subset of {EVENT_KINDS}, got {bad}")
-    n = int(n)
+    n = check_odd_order(n)
     direction = 1.0 if stop > p0 else -1.0
 
     def point(p):

@@ -85,6 +85,7 @@ from hybridpd.model import (
     Case,
     ImpactPair,
     PDGains,
+    as_gains,
     check_finite,
     check_in_range,
     check_int,
@@ -330,8 +331,7 @@ def shifted_orbit(pair: ImpactPair, gains, xm: float, omega: float, *, x10_nomin
     """
     if not isinstance(pair, ImpactPair):
         raise ValueError(f"pair must be an ImpactPair, got {type(pair).__name__}")
-    if not isinstance(gains, PDGains):
-        gains = PDGains(*gains)
+    gains = as_gains(gains)
     xm = check_positive("xm", xm)
     omega = check_positive("omega", omega)
     x10_nominal = check_positive("x10_nominal", x10_nominal)

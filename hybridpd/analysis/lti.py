@@ -90,7 +90,14 @@ from hybridpd.hybrid.events import (
     prepare_lti_mode,
 )
 from hybridpd.loop import ClosedLoop, closed_loop
-from hybridpd.model import Case, ImpactPair, Reference, check_odd_order, check_positive
+from hybridpd.model import (
+    Case,
+    ImpactPair,
+    Reference,
+    check_int,
+    check_odd_order,
+    check_positive,
+)
 
 __all__ = [
     "LTI_REASONS",
@@ -930,6 +937,7 @@ def lti_symmetric_orbit(pair: ImpactPair, controller, omega: float, *, x10: floa
     n = check_odd_order(n)
     case = Case.parse(case)
     rcond = check_positive("rcond", rcond)
+    margin_samples = check_int("margin_samples", margin_samples, 2)
     # A does not depend on xm (it only scales the exosystem's state): build with xm = 1.
     loop = closed_loop(pair, controller, Reference(1.0, omega), case)
     A = loop.A
