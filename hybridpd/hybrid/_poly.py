@@ -7,7 +7,8 @@ locator in :mod:`hybridpd.hybrid.events` is built on these; the constants are sh
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from hybridpd._jit import njit
 
 EV_NONE = 0
 EV_CROSSING = 1
