@@ -760,6 +760,16 @@ def test_bad_store_paths(tmp_path):
         with pytest.raises(ValueError, match="not a Zarr sweep store"):
             run_sweep(sum_func, pts, executor="serial", store=tmp_path / "mine", resume=resume)
     assert (tmp_path / "mine" / "notes.txt").exists()
+    # A Zarr dataset that is not a sweep store (e.g. a saved result) is never overwritten.
+    import xarray as xr
+
+    xr.Dataset({"a": ("x", np.arange(3))}).to_zarr(tmp_path / "other.zarr", consolidated=False)
+    before = tree_bytes(tmp_path / "other.zarr")
+    for resume in (True, False):
+        with pytest.raises(ValueError, match="not a Zarr sweep store"):
+            run_sweep(sum_func, pts, executor="serial", store=tmp_path / "other.zarr",
+                      resume=resume)
+    assert tree_bytes(tmp_path / "other.zarr") == before
     with pytest.raises(ValueError, match="clash with point names"):
         run_sweep(inplace_func, {"x": np.ones(2), "y": np.ones(2)}, executor="serial",
                   store=tmp_path / "c.zarr")

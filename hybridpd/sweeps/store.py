@@ -253,7 +253,7 @@ def _is_zarr_group(path: Path) -> bool:
 
 
 def check_store_path(store: Any) -> Path:
-    """Validate a store path: a directory (new, empty, or a sweep store), not a file."""
+    """Validate a store path: a directory path, not a file (contents checked by open)."""
     if not isinstance(store, (str, os.PathLike)):
         raise ValueError(f"store must be None or a directory path, got {store!r}")
     p = Path(store)
@@ -264,11 +264,6 @@ def check_store_path(store: Any) -> Path:
         )
     if p.exists() and not p.is_dir():
         raise ValueError(f"store {str(p)!r} exists and is not a directory; pass a directory path")
-    if p.is_dir() and any(p.iterdir()) and not _is_zarr_group(p):
-        raise ValueError(
-            f"store {str(p)!r} is a non-empty directory that is not a Zarr sweep store; "
-            "pass a new path (e.g. 'run.zarr')"
-        )
     return p
 
 
@@ -313,6 +308,11 @@ class ZarrStore:
         import zarr
 
         info, _ = _stored_info(self.path)
+        if info is None and self.path.is_dir() and any(self.path.iterdir()):
+            # never delete what a sweep did not write (a saved dataset, an older store, ...)
+            raise ValueError(
+                f"store {str(self.path)!r} is a non-empty directory that is not a Zarr sweep "
+                "store; pass a new path (e.g. 'run.zarr')")
         if info is not None and resume:
             if info.get("identity_hash") != self.identity_hash:
                 raise_mismatch(self.path, info.get("identity"), self.identity)
@@ -324,7 +324,7 @@ class ZarrStore:
             self.arrays = {k: self.group[k] for k in info.get("output_names", [])}
             return "complete" if info.get("status") == "complete" else "partial"
         if self.path.exists():
-            shutil.rmtree(self.path)  # a sweep store or an empty directory (check_store_path)
+            shutil.rmtree(self.path)  # a sweep store or an empty directory
         self.group = _open_new_group(self.path)
         self.info = {"format": FORMAT, "identity": self.identity,
                      "identity_hash": self.identity_hash, "n_points": self.n_points,
