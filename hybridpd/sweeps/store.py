@@ -39,6 +39,7 @@ import hashlib
 import json
 import os
 import shutil
+import uuid
 import warnings
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -323,19 +324,26 @@ class ZarrStore:
                 p.unlink(missing_ok=True)
             self.arrays = {k: self.group[k] for k in info.get("output_names", [])}
             return "complete" if info.get("status") == "complete" else "partial"
-        if self.path.exists():
-            shutil.rmtree(self.path)  # a sweep store or an empty directory
-        self.group = _open_new_group(self.path)
-        self.info = {"format": FORMAT, "identity": self.identity,
-                     "identity_hash": self.identity_hash, "n_points": self.n_points,
-                     "chunk_size": self.chunk_size, "n_chunks": self.n_chunks,
-                     "point_names": list(cols), "output_names": [], "status": "running"}
-        for k, v in cols.items():  # written once: one Zarr chunk each
-            _create_array(self.group, k, (self.n_points,), (self.n_points,), v.dtype,
-                          ["point"])[:] = v
-        self.done_flags = _create_array(self.group, _DONE, (self.n_chunks,), (1,), bool,
-                                        ["chunk"])
-        self._write_attrs()
+        # Built beside and renamed into place: a store exists only with its identity.
+        tmp = self.path.with_name(f".{self.path.name}.{uuid.uuid4().hex[:12]}.tmp")
+        try:
+            self.group = _open_new_group(tmp)
+            self.info = {"format": FORMAT, "identity": self.identity,
+                         "identity_hash": self.identity_hash, "n_points": self.n_points,
+                         "chunk_size": self.chunk_size, "n_chunks": self.n_chunks,
+                         "point_names": list(cols), "output_names": [], "status": "running"}
+            for k, v in cols.items():  # written once: one Zarr chunk each
+                _create_array(self.group, k, (self.n_points,), (self.n_points,), v.dtype,
+                              ["point"])[:] = v
+            _create_array(self.group, _DONE, (self.n_chunks,), (1,), bool, ["chunk"])
+            self._write_attrs()
+            if self.path.exists():
+                shutil.rmtree(self.path)  # a sweep store or an empty directory
+            os.replace(tmp, self.path)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+        self.group = zarr.open_group(str(self.path), mode="r+")
+        self.done_flags = self.group[_DONE]
         return "new"
 
     def _write_attrs(self) -> None:
