@@ -137,14 +137,16 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
     kpm, kvm, num = settings.gains
     for case in cases:
         t0 = time.perf_counter()
-        rm = region_map(case, x=("kp", 0.1, kpm, num), y=("kv", 0.1, kvm, num), **common)
+        rm = region_map(case, x=("kp", 0.1, kpm, num), y=("kv", 0.1, kvm, num),
+                        progress=progress, **common)
         rm.save(out / f"regions_{case}.npz")
         maps[case] = rm
         timings[f"regions {case}"] = time.perf_counter() - t0
         tick(f"regions {case}: stable {', '.join(f'{100 * f:.1f}%' for f in rm.fraction())}")
     zk, zv, zn = settings.zoom
     t0 = time.perf_counter()
-    zoom = region_map("noncollocated", x=("kp", 0.1, zk, zn), y=("kv", 0.1, zv, zn), **common)
+    zoom = region_map("noncollocated", x=("kp", 0.1, zk, zn), y=("kv", 0.1, zv, zn),
+                      progress=progress, **common)
     zoom.save(out / "regions_noncollocated_zoom.npz")
     timings["regions noncollocated zoom"] = time.perf_counter() - t0
     tick("regions noncollocated (zoom)")
@@ -194,7 +196,8 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
                 mapper = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference(), case),
                                       orb.fixed_point, n_iter=settings.iterations)
                 b = basin_of_attraction(mapper, (*X1_RANGE, nx), (*Y1_RANGE, ny),
-                                        executor=executor, max_workers=max_workers)
+                                        executor=executor, max_workers=max_workers,
+                                        progress=progress)
                 b.save(out / f"basin_{case}_e{e:g}_{tag}.npz")
                 basins[(case, e, tag)] = b
             timings[f"basin {case} e={e:g}"] = time.perf_counter() - t0

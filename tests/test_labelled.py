@@ -189,3 +189,12 @@ def test_import_hybridpd_does_not_import_xarray():
     out = subprocess.run([sys.executable, "-c", code], cwd=str(REPO), capture_output=True,
                          text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_docstring_examples_run():
+    import doctest
+
+    import hybridpd.sweeps.labelled as mod
+
+    failures, tried = doctest.testmod(mod, optionflags=doctest.ELLIPSIS)
+    assert tried >= 3 and failures == 0

@@ -84,3 +84,12 @@ def test_bad_arguments(kw, match):
     args.update(kw)
     with pytest.raises(ValueError, match=match):
         Progress(args.pop("total"), args.pop("label"), **args)
+
+
+def test_docstring_examples_run():
+    import doctest
+
+    import hybridpd.sweeps.progress as mod
+
+    failures, tried = doctest.testmod(mod)
+    assert tried >= 3 and failures == 0

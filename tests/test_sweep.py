@@ -489,6 +489,30 @@ def test_resume_after_worker_error(tmp_path, executor, workers):
     assert_same_outputs(ref, again)
 
 
+@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                                HealthCheck.function_scoped_fixture])
+@given(n=st.integers(1, 90), cs=st.integers(1, 30), fail=st.integers(0, 10**6))
+def test_any_interrupted_store_resumes_to_the_uninterrupted_store(tmp_path, n, cs, fail):
+    run_dir = tmp_path / uuid.uuid4().hex[:8]
+    log = run_dir / "log"
+    log.mkdir(parents=True)
+    pts = {"i": np.arange(n), "kp": np.linspace(0.5, 30, n), "kv": np.linspace(0.1, 40, n)[::-1],
+           "e": np.full(n, 0.5)}
+    kw = {"chunk_size": cs, "executor": "serial", "progress": False,
+          "func_kwargs": {"log_dir": str(log)}}
+    run_sweep(model_func, pts, store=run_dir / "ref.zarr", **kw)
+    n_chunks = -(-n // cs)
+    k = fail % n_chunks
+    (log / "fail_at").write_text(str(k * cs))
+    with pytest.raises(ChunkError):
+        run_sweep(model_func, pts, store=run_dir / "run.zarr", **kw)
+    assert done_chunks(run_dir / "run.zarr") == list(range(k))
+    (log / "fail_at").unlink()
+    res = run_sweep(model_func, pts, store=run_dir / "run.zarr", **kw)
+    assert res.n_resumed == k
+    assert tree_bytes(run_dir / "run.zarr") == tree_bytes(run_dir / "ref.zarr")
+
+
 def slow_model_func(chunk, *, log_dir=None):
     """model_func slowed down by an environment variable (not part of the identity)."""
     time.sleep(float(os.environ.get("SWEEP_TEST_SLEEP", "0")))
@@ -760,6 +784,16 @@ def test_bad_store_paths(tmp_path):
         with pytest.raises(ValueError, match="not a Zarr sweep store"):
             run_sweep(sum_func, pts, executor="serial", store=tmp_path / "mine", resume=resume)
     assert (tmp_path / "mine" / "notes.txt").exists()
+    # A Zarr dataset that is not a sweep store (e.g. a saved result) is never overwritten.
+    import xarray as xr
+
+    xr.Dataset({"a": ("x", np.arange(3))}).to_zarr(tmp_path / "other.zarr", consolidated=False)
+    before = tree_bytes(tmp_path / "other.zarr")
+    for resume in (True, False):
+        with pytest.raises(ValueError, match="not a Zarr sweep store"):
+            run_sweep(sum_func, pts, executor="serial", store=tmp_path / "other.zarr",
+                      resume=resume)
+    assert tree_bytes(tmp_path / "other.zarr") == before
     with pytest.raises(ValueError, match="clash with point names"):
         run_sweep(inplace_func, {"x": np.ones(2), "y": np.ones(2)}, executor="serial",
                   store=tmp_path / "c.zarr")

@@ -115,7 +115,9 @@ class RegionMap:
         }
         attrs = {"kind": "region_map", "case": self.case, "x_name": self.x_name,
                  "y_name": self.y_name, "fixed_names": " ".join(self.fixed),
-                 **encode_attrs(self.fixed), "metadata": encode_attrs({"m": self.metadata})["m"]}
+                 **encode_attrs(self.fixed)}
+        if self.metadata:
+            attrs["metadata"] = encode_attrs({"m": self.metadata})["m"]
         return xr.Dataset(data, coords=coords, attrs=attrs)
 
     @classmethod

@@ -39,6 +39,7 @@ import hashlib
 import json
 import os
 import shutil
+import uuid
 import warnings
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -253,7 +254,7 @@ def _is_zarr_group(path: Path) -> bool:
 
 
 def check_store_path(store: Any) -> Path:
-    """Validate a store path: a directory (new, empty, or a sweep store), not a file."""
+    """Validate a store path: a directory path, not a file (contents checked by open)."""
     if not isinstance(store, (str, os.PathLike)):
         raise ValueError(f"store must be None or a directory path, got {store!r}")
     p = Path(store)
@@ -264,11 +265,6 @@ def check_store_path(store: Any) -> Path:
         )
     if p.exists() and not p.is_dir():
         raise ValueError(f"store {str(p)!r} exists and is not a directory; pass a directory path")
-    if p.is_dir() and any(p.iterdir()) and not _is_zarr_group(p):
-        raise ValueError(
-            f"store {str(p)!r} is a non-empty directory that is not a Zarr sweep store; "
-            "pass a new path (e.g. 'run.zarr')"
-        )
     return p
 
 
@@ -313,6 +309,11 @@ class ZarrStore:
         import zarr
 
         info, _ = _stored_info(self.path)
+        if info is None and self.path.is_dir() and any(self.path.iterdir()):
+            # never delete what a sweep did not write (a saved dataset, an older store, ...)
+            raise ValueError(
+                f"store {str(self.path)!r} is a non-empty directory that is not a Zarr sweep "
+                "store; pass a new path (e.g. 'run.zarr')")
         if info is not None and resume:
             if info.get("identity_hash") != self.identity_hash:
                 raise_mismatch(self.path, info.get("identity"), self.identity)
@@ -323,19 +324,26 @@ class ZarrStore:
                 p.unlink(missing_ok=True)
             self.arrays = {k: self.group[k] for k in info.get("output_names", [])}
             return "complete" if info.get("status") == "complete" else "partial"
-        if self.path.exists():
-            shutil.rmtree(self.path)  # a sweep store or an empty directory (check_store_path)
-        self.group = _open_new_group(self.path)
-        self.info = {"format": FORMAT, "identity": self.identity,
-                     "identity_hash": self.identity_hash, "n_points": self.n_points,
-                     "chunk_size": self.chunk_size, "n_chunks": self.n_chunks,
-                     "point_names": list(cols), "output_names": [], "status": "running"}
-        for k, v in cols.items():  # written once: one Zarr chunk each
-            _create_array(self.group, k, (self.n_points,), (self.n_points,), v.dtype,
-                          ["point"])[:] = v
-        self.done_flags = _create_array(self.group, _DONE, (self.n_chunks,), (1,), bool,
-                                        ["chunk"])
-        self._write_attrs()
+        # Built beside and renamed into place: a store exists only with its identity.
+        tmp = self.path.with_name(f".{self.path.name}.{uuid.uuid4().hex[:12]}.tmp")
+        try:
+            self.group = _open_new_group(tmp)
+            self.info = {"format": FORMAT, "identity": self.identity,
+                         "identity_hash": self.identity_hash, "n_points": self.n_points,
+                         "chunk_size": self.chunk_size, "n_chunks": self.n_chunks,
+                         "point_names": list(cols), "output_names": [], "status": "running"}
+            for k, v in cols.items():  # written once: one Zarr chunk each
+                _create_array(self.group, k, (self.n_points,), (self.n_points,), v.dtype,
+                              ["point"])[:] = v
+            _create_array(self.group, _DONE, (self.n_chunks,), (1,), bool, ["chunk"])
+            self._write_attrs()
+            if self.path.exists():
+                shutil.rmtree(self.path)  # a sweep store or an empty directory
+            os.replace(tmp, self.path)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+        self.group = zarr.open_group(str(self.path), mode="r+")
+        self.done_flags = self.group[_DONE]
         return "new"
 
     def _write_attrs(self) -> None:

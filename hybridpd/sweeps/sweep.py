@@ -325,7 +325,7 @@ class SweepResult:
     identity : dict
         The identity itself.
     path : pathlib.Path or None
-        The final ``.npz`` file, or None without a store.
+        The Zarr store (or the file read by :func:`load_sweep`), or None without a store.
     wall_time : float
         Seconds spent in :func:`run_sweep` (0 for :func:`load_sweep`).
     compute_time : float
@@ -558,7 +558,7 @@ def run_sweep(
     label : str, optional
         What runs, shown by the progress report (default: the function's name).
     metadata : dict, optional
-        JSON-compatible data stored in the final file and part of the
+        JSON-compatible data stored in the store's attributes and part of the
         identity (e.g. the fixed model parameters, a code version).
     func_kwargs : dict, optional
         Extra keyword arguments of `func`, part of the identity (numpy arrays
