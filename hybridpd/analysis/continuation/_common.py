@@ -11,8 +11,9 @@ from hybridpd.model import ImpactPair, PDGains, Reference, check_finite
 
 #: Parameters :func:`continue_orbit` can follow (all others fixed).
 PARAMETERS = ("kp", "kv", "e", "mu", "xm", "omega", "L")
-#: Parameters :func:`continue_symmetric` can follow (``xm`` is an output there).
-SYMMETRIC_PARAMETERS = ("kp", "kv", "e", "mu", "omega", "L", "x10")
+#: Parameters :func:`continue_symmetric` can follow (``xm`` is an output there; ``gamma`` moves
+#: ``L = gamma * x10`` with ``x10`` fixed; ``m2`` moves both masses, ``m1 = mu m2``).
+SYMMETRIC_PARAMETERS = ("kp", "kv", "e", "mu", "omega", "L", "x10", "m2", "gamma")
 #: Kinds of :class:`BifurcationEvent`.
 EVENT_KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing", "stability_change",
                "existence")

@@ -64,7 +64,9 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
     stop : float
         End value of the parameter (the start is its value in the inputs).
     x10 : float
-        Primary-mass amplitude (length); ``gamma = L / x10``.
+        Primary-mass amplitude (length); ``gamma = L / x10``. With ``parameter="gamma"`` it
+        stays fixed and the clearance follows, ``L = gamma * x10`` (the paper's convention,
+        README "Conventions"); the start is ``gamma = pair.L / x10``.
     n : int
         Odd orbit order.
     case : {"collocated", "noncollocated"}
@@ -116,6 +118,10 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
     stop = check_finite("stop", stop)
     base = {"kp": gains.kp, "kv": gains.kv, "e": pair.e, "mu": pair.mu, "L": pair.L,
             "omega": omega, "x10": x10, "m2": pair.m2}
+    if name == "gamma":
+        # gamma = L / x10 with x10 fixed: the clearance follows the parameter
+        base["gamma"] = pair.L / x10
+        del base["L"]
     p0 = base[name]
     _, step, max_step, min_step, max_steps = _path_steps(
         name, p0, stop, step, max_step, min_step, max_steps, (100, 20, 1e-6))
@@ -131,6 +137,8 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
     def point(p):
         v = dict(base)
         v[name] = float(p)
+        if name == "gamma":
+            v["L"] = v["gamma"] * v["x10"]
         r = symmetric_orbits(v["kp"], v["kv"], mu=v["mu"], e=v["e"], L=v["L"],
                              omega=v["omega"], m2=v["m2"], x10=v["x10"], n=n, case=case,
                              margin=True, jacobian=False, margin_samples=margin_samples)
