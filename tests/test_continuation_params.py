@@ -7,7 +7,11 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains, Reference
-from hybridpd.analysis.continuation import SYMMETRIC_PARAMETERS, continue_symmetric
+from hybridpd.analysis.continuation import (
+    SYMMETRIC_PARAMETERS,
+    continue_orbit,
+    continue_symmetric,
+)
 from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.analysis.orbits import symmetric_orbit
 
@@ -59,3 +63,24 @@ def test_bad_parameter_names_the_allowed_ones():
         continue_symmetric(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), W, "m1", 2.0)
     with pytest.raises(ValueError, match="gamma"):
         continue_symmetric(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), W, "gamma", -0.5)
+
+
+def test_map_continuation_on_the_design_path_meets_the_closed_form_grazing():
+    """continue_orbit with x10 (xm follows the design) is continue_symmetric's path: Newton on
+    the simulated P finds the closed-form points and ends at the same grazing value."""
+    pair = ImpactPair(0.1, 0.1, 0.75)
+    fam = continue_symmetric(pair, PDGains(10, 21.5), W, "kv", 22.5)
+    kg = fam.events_of("grazing")[0].parameter
+    o = symmetric_orbit(pair, PDGains(10, 21.5), W)
+    P = ImpactMap(pair, PDGains(10, 21.5), Reference(0.5, W))     # xm replaced by the design
+    br = continue_orbit(P, o.fixed_point, "kv", 22.5, x10=1.0, step=0.1)
+    assert abs(br.xm[0] - o.xm) < 1e-12 and br.fixed["x10"] == 1.0 and "xm" not in br.fixed
+    ev = br.events_of("grazing")
+    assert ev and "ends at grazing" in br.termination
+    assert abs(ev[-1].parameter - kg) < 1e-6
+    for i in (1, len(br) // 2):
+        ref = symmetric_orbit(pair, PDGains(10, br.parameter[i]), W)
+        assert abs(ref.xm - br.xm[i]) < 1e-12
+        assert np.max(np.abs(ref.fixed_point - br.points[i])) < 1e-9
+    with pytest.raises(ValueError, match="parameter must be one of"):
+        continue_orbit(P, o.fixed_point, "xm", 0.7, x10=1.0)

@@ -47,37 +47,46 @@ units, velocities in length/time.
 Modules: :mod:`.trace` (one application of ``P`` with its impact pattern), :mod:`.newton`
 (``P^k``, its Jacobian, damped Newton), :mod:`.periodic` (:func:`find_periodic_orbit`),
 :mod:`.events` (:class:`Branch`, :class:`BifurcationEvent`, event location), :mod:`.branch`
-(:func:`continue_orbit`), :mod:`.symmetric` (:func:`continue_symmetric`) and :mod:`.plot`
-(:func:`plot_branch`).
+(:func:`continue_orbit`), :mod:`.symmetric` (:func:`continue_symmetric`), :mod:`.switching`
+(:func:`switch_branch`: the period-doubled branch at a flip, the crossing branch at a branch
+point, the motion reached past a grazing point) and :mod:`.plot` (:func:`plot_branch`).
 """
 from __future__ import annotations
 
 from hybridpd.analysis.continuation._common import (
+    DESIGN_PARAMETERS,
     EVENT_KINDS,
     PARAMETERS,
     SYMMETRIC_PARAMETERS,
+    design_xm,
 )
 from hybridpd.analysis.continuation.branch import continue_orbit
 from hybridpd.analysis.continuation.events import BifurcationEvent, Branch
 from hybridpd.analysis.continuation.newton import map_power_jacobian
 from hybridpd.analysis.continuation.periodic import PeriodicOrbit, find_periodic_orbit
 from hybridpd.analysis.continuation.plot import plot_branch
+from hybridpd.analysis.continuation.switching import BranchSwitch, branch_map, switch_branch
 from hybridpd.analysis.continuation.symmetric import continue_symmetric
 from hybridpd.analysis.continuation.trace import ImpactStep, MapTrace, trace_map
 
 __all__ = [
+    "DESIGN_PARAMETERS",
     "EVENT_KINDS",
     "PARAMETERS",
     "SYMMETRIC_PARAMETERS",
     "BifurcationEvent",
     "Branch",
+    "BranchSwitch",
     "ImpactStep",
     "MapTrace",
     "PeriodicOrbit",
+    "branch_map",
     "continue_orbit",
     "continue_symmetric",
+    "design_xm",
     "find_periodic_orbit",
     "map_power_jacobian",
     "plot_branch",
+    "switch_branch",
     "trace_map",
 ]

@@ -3,14 +3,20 @@ parameters of an :class:`~hybridpd.analysis.impactmap.ImpactMap`)."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.analysis.orbits import symmetric_orbits
 from hybridpd.model import ImpactPair, PDGains, Reference, check_finite
 
 #: Parameters :func:`continue_orbit` can follow (all others fixed).
-PARAMETERS = ("kp", "kv", "e", "mu", "xm", "omega", "L")
+PARAMETERS = ("kp", "kv", "e", "mu", "xm", "omega", "L", "m2")
+#: Parameters :func:`continue_orbit` can follow along the design path (``x10`` given: the
+#: reference amplitude ``xm`` follows the symmetric-orbit design, as in
+#: :func:`continue_symmetric`).
+DESIGN_PARAMETERS = ("kp", "kv", "e", "mu", "omega", "L", "m2", "gamma", "x10")
 #: Parameters :func:`continue_symmetric` can follow (``xm`` is an output there; ``gamma`` moves
 #: ``L = gamma * x10`` with ``x10`` fixed; ``m2`` moves both masses, ``m1 = mu m2``).
 SYMMETRIC_PARAMETERS = ("kp", "kv", "e", "mu", "omega", "L", "x10", "m2", "gamma")
@@ -84,21 +90,62 @@ def _check_parameter(name, allowed):
     return name
 
 
-def _map_value(P: ImpactMap, name: str) -> float:
+@dataclass(frozen=True)
+class _Design:
+    """The design path: ``xm`` is the amplitude that puts the primary mass on the order-``n``
+    triangle wave of amplitude ``x10`` (paper (20)), recomputed at every parameter value."""
+
+    x10: float
+    n: int = 1
+
+
+def design_xm(pair: ImpactPair, gains: PDGains, omega: float, x10: float, n: int = 1,
+              case="collocated") -> float:
+    """Reference amplitude ``xm`` of the order-``n`` symmetric orbit realising ``x10``.
+
+    The closed-form solution of (13)-(14) and (20) (the *formal* orbit: its viability is not
+    required); NaN where the conditions are singular or give ``xm <= 0``.
+    """
+    r = symmetric_orbits(gains.kp, gains.kv, mu=pair.mu, e=pair.e, L=pair.L, omega=omega,
+                         m2=pair.m2, x10=x10, n=n, case=case, margin=False, jacobian=False)
+    xm = float(np.asarray(r.xm).reshape(-1)[0])
+    return xm if np.isfinite(xm) and xm > 0 else np.nan
+
+
+def _map_value(P: ImpactMap, name: str, design: _Design | None = None) -> float:
+    if name == "gamma":
+        return P.pair.L / design.x10
+    if name == "x10":
+        return design.x10
     return {"kp": P.gains.kp, "kv": P.gains.kv, "e": P.pair.e, "mu": P.pair.mu,
-            "L": P.pair.L, "xm": P.reference.xm, "omega": P.reference.omega}[name]
+            "L": P.pair.L, "m2": P.pair.m2, "xm": P.reference.xm,
+            "omega": P.reference.omega}[name]
 
 
-def _map_with(P: ImpactMap, name: str, value: float) -> ImpactMap:
-    """A copy of ``P`` with one parameter changed (the others and the tolerances kept)."""
+def _map_with(P: ImpactMap, name: str, value: float, design: _Design | None = None):
+    """A copy of ``P`` with one parameter changed (the others and the tolerances kept).
+
+    With a ``design``, ``xm`` follows the design at the new value (``gamma`` moves
+    ``L = gamma * x10``; ``x10`` moves the design itself); None where the design has no
+    amplitude.
+    """
     pair, g, ref = P.pair, P.gains, P.reference
     if name in ("kp", "kv"):
         g = PDGains(**{"kp": g.kp, "kv": g.kv, name: value})
-    elif name in ("e", "mu", "L"):
+    elif name in ("e", "mu", "L", "m2", "gamma"):
+        if name == "gamma":
+            name, value = "L", value * design.x10
         pair = ImpactPair(**{"mu": pair.mu, "e": pair.e, "L": pair.L, "m2": pair.m2,
                              name: value})
-    else:
+    elif name in ("xm", "omega"):
         ref = Reference(**{"xm": ref.xm, "omega": ref.omega, name: value})
+    if design is not None:
+        if name == "x10":
+            design = _Design(value, design.n)
+        xm = design_xm(pair, g, ref.omega, design.x10, design.n, P.case)
+        if not np.isfinite(xm):
+            return None
+        ref = Reference(xm, ref.omega)
     return ImpactMap(pair, g, ref, P.case, tol=P.tol, max_impacts=P.max_impacts)
 
 

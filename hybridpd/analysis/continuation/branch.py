@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -9,9 +10,11 @@ from hybridpd.analysis.continuation._common import (
     _END_GRAZE,
     _MAX_HALVINGS,
     _NEAR_BRANCH,
+    DESIGN_PARAMETERS,
     EVENT_KINDS,
     PARAMETERS,
     _check_parameter,
+    _Design,
     _in_domain,
     _map_value,
     _map_with,
@@ -56,7 +59,8 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
                    jacobian: str = "auto", fd_step: float = 1e-6, locate: bool = True,
                    event_tol: float = 1e-9, graze_tol: float = 1e-6,
                    margin_samples: int = 128,
-                   events: tuple = EVENT_KINDS) -> Branch:
+                   events: tuple = EVENT_KINDS, x10: float | None = None,
+                   n: int = 1) -> Branch:
     """Continue a fixed point of ``P^k`` in one parameter from its value in the map to ``stop``.
 
     Parameters
@@ -66,8 +70,8 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
     s0 : array_like, shape (4,), or PeriodicOrbit
         Starting guess (corrected by Newton first).
     parameter : str
-        One of :data:`PARAMETERS`; the others stay fixed (``xm`` included: to follow the
-        symmetric family with ``x10`` fixed use :func:`continue_symmetric`).
+        One of :data:`PARAMETERS`; the others stay fixed (``xm`` included), unless ``x10``
+        is given: then one of :data:`DESIGN_PARAMETERS`.
     stop : float
         Parameter value where the continuation ends.
     period : int
@@ -98,6 +102,14 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
         Grid of the turning-point search per flight.
     events : tuple of str
         Kinds to detect (subset of :data:`EVENT_KINDS`; ``existence`` does not apply here).
+    x10 : float, optional
+        Follow the *design path* instead of a fixed ``xm``: at every parameter value the
+        reference amplitude is the one that realises the primary-mass amplitude ``x10`` on
+        the order-``n`` symmetric orbit (:func:`~hybridpd.analysis.continuation._common.design_xm`,
+        paper (20)), the path of :func:`continue_symmetric`. The map's own ``xm`` is
+        replaced by the design value at the start. ``gamma`` then means ``L / x10``.
+    n : int
+        Odd order of the design orbit (with ``x10``).
 
     Returns
     -------
@@ -127,7 +139,10 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
     """
     if not isinstance(impact_map_, ImpactMap):
         raise ValueError(f"impact_map_ must be an ImpactMap, got {type(impact_map_).__name__}")
-    name = _check_parameter(parameter, PARAMETERS)
+    design = None
+    if x10 is not None:
+        design = _Design(_positive_float("x10", x10), _positive_int("n", n))
+    name = _check_parameter(parameter, PARAMETERS if design is None else DESIGN_PARAMETERS)
     P0 = impact_map_
     if isinstance(s0, PeriodicOrbit):
         s0 = s0.s
@@ -136,7 +151,12 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
     if method not in ("arclength", "natural"):
         raise ValueError(f"method must be 'arclength' or 'natural', got {method!r}")
     k = _positive_int("period", period)
-    p0 = _map_value(P0, name)
+    p0 = _map_value(P0, name, design)
+    if design is not None:
+        P0 = _map_with(P0, name, p0, design)
+        if P0 is None:
+            raise ValueError(f"the design path has no reference amplitude at {name} = {p0:g} "
+                             f"(x10 = {design.x10:g}, n = {design.n})")
     span, step, max_step, min_step, max_steps = _path_steps(
         name, p0, stop, step, max_step, min_step, max_steps, (50, 10, 1e-7))
     tol = _positive_float("tol", tol)
@@ -161,21 +181,25 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
         if key not in cache:
             if len(cache) > 64:
                 cache.clear()
-            cache[key] = _map_with(P0, name, key)
+            cache[key] = _map_with(P0, name, key, design)
         return cache[key]
 
     def F(u):
         p = u[4]
-        if not _in_domain(name, p):
+        if not _in_domain(name, p) or map_at(p) is None:
             return None
         return _residual(map_at(p), u[:4], k)
 
     def Fs(u):
+        if map_at(u[4]) is None:
+            raise RuntimeError(f"no design amplitude at {name} = {u[4]:g}")
         return map_power_jacobian(map_at(u[4]), u[:4], k, method=jacobian,
                                   fd_step=fd_step)[0] - np.eye(4)
 
     def Fp(u):
-        return _param_derivative(map_at(u[4]), name, u[:4], k, fd_step)
+        if map_at(u[4]) is None:
+            raise RuntimeError(f"no design amplitude at {name} = {u[4]:g}")
+        return _param_derivative(map_at(u[4]), name, u[:4], k, fd_step, design)
 
     def correct(u_pred, normal):
         """Newton on [F(u); normal . (u - u_pred)] = 0 (normal None: fixed p)."""
@@ -197,6 +221,8 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
 
     def make_point(u, its):
         P = map_at(u[4])
+        if P is None:
+            return None
         s = u[:4].copy()
         traces, DP, _, margin, vmin, _, _ = _orbit_diagnostics(
             P, s, k, jacobian, fd_step, margin_samples, graze_tol)
@@ -405,4 +431,9 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
             h = min(1.5 * h, max_step)
         elif its >= 7:
             h = max(0.6 * h, min_step)
-    return _branch_from_points(pts, evs, name, P0, k, method, termination, rejected)
+    br = _branch_from_points(pts, evs, name, P0, k, method, termination, rejected)
+    if design is not None:
+        fixed = {kk: v for kk, v in br.fixed.items() if kk not in ("xm", name)}
+        fixed.update({"x10": design.x10, "n": design.n})
+        br = replace(br, fixed=fixed)
+    return br

@@ -135,17 +135,15 @@ def _fd_jacobian(P: ImpactMap, s: np.ndarray, k: int, fd_step: float) -> np.ndar
     return J
 
 
-def _param_derivative(P: ImpactMap, name: str, s: np.ndarray, k: int, fd_step: float):
+def _param_derivative(P: ImpactMap, name: str, s: np.ndarray, k: int, fd_step: float,
+                      design=None):
     """``d(P^k(s) - s)/dp`` by central (or one-sided at a domain edge) differences."""
-    p = _map_value(P, name)
+    p = _map_value(P, name, design)
     h = fd_step * max(1.0, abs(p))
     vals = []
     for q in (p + h, p - h):
-        if _in_domain(name, q):
-            r = _residual(_map_with(P, name, q), s, k)
-            vals.append(r)
-        else:
-            vals.append(None)
+        Q = _map_with(P, name, q, design) if _in_domain(name, q) else None
+        vals.append(None if Q is None else _residual(Q, s, k))
     if vals[0] is not None and vals[1] is not None:
         d, hh = vals[0] - vals[1], 2 * h
     else:
