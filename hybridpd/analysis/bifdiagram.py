@@ -17,11 +17,12 @@ the bifurcation diagrams of the impact-oscillator literature. Each value is clas
     not periodic, exponent ``<= chaos_tol`` (quasi-periodic, a period above ``max_period``,
     or a transient slower than the window);
 ``diverged``
-    the trajectory left ``|z1|, |z2|, |z4| <= escape``, became non-finite, or met no further
-    impact (the engine's time-out);
+    the trajectory left ``|z1|, |z2|, |z4| <= escape`` or became non-finite;
 ``sticking``
     the masses stay stuck on a wall for 50 periods (impacts accumulated; the engine's Zeno
     status); sticking *phases* that end are part of ordinary iterates;
+``no_impact``
+    no further contact within 50 periods (the motion settled inside the clearance);
 ``unresolved``
     an iteration bound inside one flight was hit;
 ``undefined``
@@ -57,14 +58,14 @@ __all__ = ["CLASSES", "COORDINATES", "DIAGRAM_PARAMETERS", "BifurcationDiagram",
            "bifurcation_diagram", "load_diagram", "section_coordinate"]
 
 #: Classes of a parameter value (index = the integer code in ``BifurcationDiagram.code``).
-CLASSES = ("periodic", "quasiperiodic", "chaotic", "diverged", "sticking", "unresolved",
-           "undefined")
+CLASSES = ("periodic", "quasiperiodic", "chaotic", "diverged", "sticking", "no_impact",
+           "unresolved", "undefined")
 #: Parameters a diagram can sweep.
 DIAGRAM_PARAMETERS = ("kp", "kv", "e", "mu", "gamma", "omega", "m2", "xm")
 #: Section coordinates by name (``phi, z1, z2, z4`` and the physical ``x1, y1, x2, y2``).
 COORDINATES = ("phi", "z1", "z2", "z4", "x1", "y1", "x2", "y2")
 
-_STATUS_CLASS = {11: "diverged", 12: "sticking", 13: "unresolved", 14: "diverged"}
+_STATUS_CLASS = {11: "no_impact", 12: "sticking", 13: "unresolved", 14: "diverged"}
 
 
 def section_coordinate(points, name: str, L: float) -> np.ndarray:
