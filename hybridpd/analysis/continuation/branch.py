@@ -45,6 +45,7 @@ from hybridpd.analysis.continuation.newton import (
 )
 from hybridpd.analysis.continuation.periodic import (
     PeriodicOrbit,
+    _minimal_period,
     _orbit_diagnostics,
     find_periodic_orbit,
 )
@@ -353,6 +354,10 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
                 elif method == "natural" and not (
                         np.linalg.norm(u[:4] - u_pred[:4]) <= 0.5 * max(ns, h) + 10 * tol):
                     why = "the corrector moved far from the predictor"
+                elif k > 1 and _minimal_period(map_at(u[4]), u[:4], k) < k:
+                    # the corrector slid onto an orbit of lower period (e.g. the parent of a
+                    # period-doubled branch, a fixed point of P^k too): another branch
+                    why = "the corrector landed on an orbit of lower period"
                 else:
                     pt = make_point(u, res.iterations)
                     if pt is None:

@@ -316,7 +316,11 @@ def _grazing_switch(branch, event, offset, settle, max_period, tol):
     for K in range(1, max_period + 1):
         back = tr[-1 - K]
         if np.max(np.abs(_dphase(back - last, P.period))) < 1e-6 * _scale(last):
-            orb = find_periodic_orbit(P, last, K, tol=tol)
+            # start from the cycle point farthest from the parent orbit, so that the corrector
+            # of a continuation cannot slide back onto the parent
+            far = max(tr[-K:], key=lambda x: np.max(np.abs(_dphase(x - event.point,
+                                                                    P.period))))
+            orb = find_periodic_orbit(P, far, K, tol=tol)
             if orb.converged and orb.minimal_period == K:
                 return p, orb, f"settled on a period-{K} orbit after {settle} iterations"
     return p, None, (f"the motion from the grazing orbit did not settle on a cycle of period "
