@@ -48,6 +48,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.analysis.orbits import symmetric_orbits
@@ -273,17 +274,53 @@ def _jacobians(P: ImpactMap, X, Y, fd_step):
 def _lyapunov(J):
     """Exponents (decreasing) of the product of the ``J`` (N, 4, 4) by QR; the first quarter
     only aligns ``Q``."""
-    N = J.shape[0]
-    warm = N // 4
-    Q = np.eye(4)
-    acc = np.zeros(4)
+    if not np.all(np.isfinite(J)):
+        return np.full(4, np.nan)
+    return np.sort(_qr_exponents(np.ascontiguousarray(J), J.shape[0] // 4))[::-1]
+
+
+@njit(cache=True)
+def _qr_exponents(J, warm):
+    """Mean ``log |R_aa|`` of ``Q_{i+1} R_{i+1} = J_i Q_i`` over ``i >= warm`` (modified
+    Gram-Schmidt; a column that vanishes, e.g. from a zero multiplier, is replaced by a unit
+    vector orthogonal to the previous ones and contributes ``log 1e-300``)."""
+    N, n = J.shape[0], J.shape[1]
+    Q = np.eye(n)
+    acc = np.zeros(n)
+    Z = np.empty((n, n))
+    Qn = np.empty((n, n))
+    v = np.empty(n)
     for i in range(N):
-        if not np.all(np.isfinite(J[i])):
-            return np.full(4, np.nan)
-        Q, R = np.linalg.qr(J[i] @ Q)
-        if i >= warm:
-            acc += np.log(np.maximum(np.abs(np.diag(R)), 1e-300))
-    return np.sort(acc / max(N - warm, 1))[::-1]
+        for r in range(n):
+            for c in range(n):
+                s = 0.0
+                for m in range(n):
+                    s += J[i, r, m] * Q[m, c]
+                Z[r, c] = s
+        for a in range(n):
+            for attempt in range(2):
+                for r in range(n):
+                    v[r] = Z[r, a] if attempt == 0 else (1.0 if r == a else 0.0)
+                for b in range(a):
+                    d = 0.0
+                    for r in range(n):
+                        d += Qn[r, b] * v[r]
+                    for r in range(n):
+                        v[r] -= d * Qn[r, b]
+                nv = 0.0
+                for r in range(n):
+                    nv += v[r] * v[r]
+                nv = math.sqrt(nv)
+                if attempt == 0 and i >= warm:
+                    acc[a] += math.log(max(nv, 1e-300))
+                if nv > 1e-300:
+                    break
+            for r in range(n):
+                Qn[r, a] = v[r] / nv
+        for r in range(n):
+            for c in range(n):
+                Q[r, c] = Qn[r, c]
+    return acc / max(N - warm, 1)
 
 
 def _check_values(name, values):
