@@ -81,7 +81,7 @@ def branches(pair, kv_lo, kv_hi):
     report("  period-2 branch, upwards", up)
     # downwards: through the fold onto the unstable partner, then along it
     P0 = branch_map(sym, sw.start_parameters[0])
-    down = continue_orbit(P0, sw.starts[0], "kv", kv_lo, period=2, x10=X10, step=0.1)
+    down = continue_orbit(P0, sw.starts[0], "kv", kv_lo, period=2, x10=X10)
     report("  period-2 branch, downwards", down)
     out = [(sym, "symmetric period-1"), (up, "period-2 (double impact)"),
            (down, "period-2 (double impact)")]

@@ -318,6 +318,7 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
         T = 2 * math.pi / (cur.u[4] if name == "omega" else P0.reference.omega)
         accepted = None
         why = ""
+        exact = False
         for _h in range(_MAX_HALVINGS):
             if method == "natural":
                 p_new = cur.u[4] + direction * h
@@ -366,6 +367,15 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
                 accepted = pt
                 break
             rejected += 1
+            if method == "arclength" and not exact and why.startswith("the step turned") \
+                    and cur.Fp is not None:
+                # Next to a fold the secant of the last (long) step is a poor tangent and
+                # the branch turns away from it whatever the step: retry with the exact
+                # tangent, the kernel of [DP^k - I, dF/dp] at the current point.
+                v = np.linalg.svd(np.column_stack([cur.DP - np.eye(4), cur.Fp]))[2][-1]
+                tangent = v if v @ tangent >= 0 else -v
+                exact = True
+                continue
             h *= 0.5
             if h < min_step:
                 break
