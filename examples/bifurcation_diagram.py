@@ -133,7 +133,7 @@ def main():
                      "($x_{10} = 1$, $x_m$ from the design), $\\omega = 5$, $k_p = 10$\n"
                      f"last {args.keep} of {args.iterations} iterates per $k_v$, each "
                      "started from the previous state")
-    bifurcation_legend(ax, loc="center right", ncols=2)
+    bifurcation_legend(ax, loc="upper right", ncols=2)
     ax.set_xlabel("")
     ax.axvline(20.0, color="gray", lw=0.6, ls=":")
     ax2.plot(d_up.values, d_up.lyapunov, ".", ms=2, color="k", label="$k_v$ increasing")

@@ -149,3 +149,29 @@ def test_bad_input_names_the_culprit(kw, match):
     with pytest.raises(ValueError, match=match):
         bifurcation_diagram(PAIR01, PDGains(10, 20), W, args.pop("parameter"),
                             args.pop("values"), **args)
+
+
+def test_plot_overlays_branches_with_a_legend_of_the_drawn_artists(period2_branch):
+    from hybridpd.plotting.bifurcation import plot_bifurcation
+
+    b = period2_branch
+    sym = continue_symmetric(PAIR01, PDGains(10, 20), W, "kv", 23.0)
+    d = bifurcation_diagram(PAIR01, PDGains(10, 20), W, "kv", np.linspace(20, 23, 4),
+                            iterations=200, keep=16, follow=True)
+    fig = plot_bifurcation(d, coordinate="phi", branches=[(sym, "symmetric"), (b, "2-cycle")])
+    ax = fig.axes[0]
+    drawn = {ln.get_label() for ln in ax.get_lines() if not ln.get_label().startswith("_")}
+    legend = {t.get_text() for t in ax.get_legend().get_texts()}
+    assert legend == drawn
+    assert {"iterates of $P$", "symmetric, stable", "2-cycle, stable", "grazing"} <= legend
+    # the 2-cycle is drawn through both of its points: one solid curve per cycle point
+    c2 = next(ln.get_color() for ln in ax.get_lines() if ln.get_label() == "2-cycle, stable")
+    solid = [ln for ln in ax.get_lines() if ln.get_linestyle() == "-" and ln.get_color() == c2]
+    assert len(solid) >= 2
+    ys = np.concatenate([ln.get_ydata() for ln in solid])
+    T = 2 * np.pi / W
+    s0, s1 = b.points[-1], branch_map(b, b.parameter[-1])(b.points[-1])
+    assert np.nanmin(np.abs(ys - s0[0])) < 1e-12 and np.nanmin(np.abs(ys - s1[0] % T)) < 1e-12
+    assert ax.get_xlabel() == "$k_v$" and "mod" in ax.get_ylabel()
+    with pytest.raises(ValueError, match="coordinate"):
+        plot_bifurcation(d, coordinate="x3")

@@ -192,8 +192,8 @@ def _draw_branch(ax, br, coordinate, c, name, events, seen):
         if ev.kind not in _EVENT_MARKERS or not ev.viable:
             continue
         mk, col, text = _EVENT_MARKERS[ev.kind]
-        if ev.kind == "fold":
-            text = "fold" if "turns back" in ev.detail else "branch point"
+        if ev.kind == "fold" and "turns back" not in ev.detail:
+            mk, text = "o", "branch point"
         s = np.asarray(ev.point, float)
         Lv = float(L[min(ev.index, len(L) - 1)])
         yv = float(section_coordinate(s, coordinate, Lv))
