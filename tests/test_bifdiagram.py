@@ -9,6 +9,8 @@ import json
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from hybridpd import ImpactPair, PDGains
 from hybridpd.analysis.bifdiagram import (
@@ -175,3 +177,20 @@ def test_plot_overlays_branches_with_a_legend_of_the_drawn_artists(period2_branc
     assert ax.get_xlabel() == "$k_v$" and "mod" in ax.get_ylabel()
     with pytest.raises(ValueError, match="coordinate"):
         plot_bifurcation(d, coordinate="x3")
+
+
+@settings(max_examples=60, deadline=None)
+@given(k=st.integers(1, 9), n=st.integers(20, 80), seed=st.integers(0, 2**32 - 1),
+       shift=st.floats(0, 1))
+def test_period_detection_finds_the_minimal_period(k, n, seed, shift):
+    """Synthetic cycles (phases wrapped across T, noise far below the tolerance)."""
+    from hybridpd.analysis.bifdiagram import _period
+
+    T = 1.2566
+    rng = np.random.default_rng(seed)
+    cyc = rng.uniform(-3, 3, (k, 4))
+    cyc[:, 0] = (np.arange(k) * 0.37 + shift) % T          # distinct phases mod T
+    X = cyc[np.arange(n) % k] + rng.normal(0, 1e-12, (n, 4))
+    X[:, 0] %= T
+    want = k if n >= 2 * k else 0
+    assert _period(X, T, 16, 1e-8) == want
