@@ -84,3 +84,16 @@ def test_map_continuation_on_the_design_path_meets_the_closed_form_grazing():
         assert np.max(np.abs(ref.fixed_point - br.points[i])) < 1e-9
     with pytest.raises(ValueError, match="parameter must be one of"):
         continue_orbit(P, o.fixed_point, "xm", 0.7, x10=1.0)
+
+
+def test_map_continuation_in_m2_on_the_design_path_matches_the_closed_form():
+    pair = ImpactPair(0.1, 0.5, 0.75)
+    o = symmetric_orbit(pair, PDGains(10, 20), W)
+    P = ImpactMap(pair, PDGains(10, 20), o.reference())
+    br = continue_orbit(P, o.fixed_point, "m2", 1.6, x10=1.0, step=0.2)
+    assert br.termination == "reached stop" and br.parameter[-1] == 1.6
+    for i in (len(br) // 2, len(br) - 1):
+        ref = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75, br.parameter[i]), PDGains(10, 20), W)
+        assert abs(ref.xm - br.xm[i]) < 1e-12
+        assert np.max(np.abs(ref.fixed_point - br.points[i])) < 1e-9
+        assert abs(ref.spectral_radius - br.spectral_radius[i]) < 1e-7
