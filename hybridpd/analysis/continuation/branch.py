@@ -1,0 +1,454 @@
+"""Continuation of fixed points of ``P^k`` in one parameter (:func:`continue_orbit`)."""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from hybridpd.analysis.continuation._common import (
+    _END_GRAZE,
+    _MAX_HALVINGS,
+    _NEAR_BRANCH,
+    DESIGN_PARAMETERS,
+    EVENT_KINDS,
+    PARAMETERS,
+    _check_parameter,
+    _Design,
+    _in_domain,
+    _map_value,
+    _map_with,
+    _path_steps,
+    _positive_float,
+    _positive_int,
+    _scale,
+    _section_point,
+    _wrap_diff,
+)
+from hybridpd.analysis.continuation.events import (
+    BifurcationEvent,
+    Branch,
+    _bisect_predicate,
+    _branch_from_points,
+    _empty_branch,
+    _Point,
+    _rel_speed,
+    _sig_str,
+    _test_fold,
+    _Tracker,
+)
+from hybridpd.analysis.continuation.newton import (
+    _newton,
+    _param_derivative,
+    _residual,
+    map_power_jacobian,
+)
+from hybridpd.analysis.continuation.periodic import (
+    PeriodicOrbit,
+    _minimal_period,
+    _orbit_diagnostics,
+    find_periodic_orbit,
+)
+from hybridpd.analysis.impactmap import ImpactMap, stability
+from hybridpd.model import check_finite
+
+
+def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
+                   period: int = 1, method: str = "arclength", step: float | None = None,
+                   min_step: float | None = None, max_step: float | None = None,
+                   max_steps: int = 400, tol: float = 1e-10, max_newton: int = 12,
+                   jacobian: str = "auto", fd_step: float = 1e-6, locate: bool = True,
+                   event_tol: float = 1e-9, graze_tol: float = 1e-6,
+                   margin_samples: int = 128,
+                   events: tuple = EVENT_KINDS, x10: float | None = None,
+                   n: int = 1) -> Branch:
+    """Continue a fixed point of ``P^k`` in one parameter from its value in the map to ``stop``.
+
+    Parameters
+    ----------
+    impact_map_ : ImpactMap
+        Map at the starting parameter values.
+    s0 : array_like, shape (4,), or PeriodicOrbit
+        Starting guess (corrected by Newton first).
+    parameter : str
+        One of :data:`PARAMETERS`; the others stay fixed (``xm`` included), unless ``x10``
+        is given: then one of :data:`DESIGN_PARAMETERS`.
+    stop : float
+        Parameter value where the continuation ends.
+    period : int
+        ``k``.
+    method : {"arclength", "natural"}
+        Pseudo-arclength (unknowns ``(s, p)``, constraint ``t . (u - u_pred) = 0``; passes
+        folds) or natural continuation in ``p`` with a secant predictor for ``s`` (stops at a
+        fold: the corrector fails, the step shrinks below ``min_step``).
+    step, min_step, max_step : float, optional
+        Initial, smallest and largest step (parameter units for ``natural``, arclength in
+        ``(phi, z1, z2, z4, p)`` for ``arclength``). Defaults ``|stop - p0| / 50``,
+        ``|stop - p0| * 1e-7`` and ``|stop - p0| / 10``.
+    max_steps : int
+        Bound on accepted steps.
+    tol, max_newton : float, int
+        Corrector tolerance and iteration bound.
+    jacobian : {"auto", "symbolic", "fd"}
+        Jacobian of ``P^k`` (see :func:`map_power_jacobian`).
+    fd_step : float
+        Relative finite-difference step (Jacobian and parameter derivative).
+    locate : bool
+        Locate events (otherwise they are reported at the nearer bracketing point).
+    event_tol : float
+        Location tolerance (length of the bracket in ``(s, p)``).
+    graze_tol : float
+        Grazing thresholds (see :func:`find_periodic_orbit`).
+    margin_samples : int
+        Grid of the turning-point search per flight.
+    events : tuple of str
+        Kinds to detect (subset of :data:`EVENT_KINDS`; ``existence`` does not apply here).
+    x10 : float, optional
+        Follow the *design path* instead of a fixed ``xm``: at every parameter value the
+        reference amplitude is the one that realises the primary-mass amplitude ``x10`` on
+        the order-``n`` symmetric orbit (:func:`~hybridpd.analysis.continuation._common.design_xm`,
+        paper (20)), the path of :func:`continue_symmetric`. The map's own ``xm`` is
+        replaced by the design value at the start. ``gamma`` then means ``L / x10``.
+    n : int
+        Odd order of the design orbit (with ``x10``).
+
+    Returns
+    -------
+    Branch
+        ``family == "periodic"``; ``termination`` tells why it stopped ("reached stop",
+        "max_steps reached", "step below min_step ...", "parameter left ...").
+
+    Raises
+    ------
+    ValueError
+        Unknown parameter or method, non-finite ``stop``, zero or negative steps, ``stop``
+        equal to the start or outside the parameter's domain.
+
+    Examples
+    --------
+    Follow the symmetric orbit of the collocated loop (``e = 0.1``) at fixed ``xm`` in
+    ``kv`` through its grazing:
+
+    >>> from hybridpd import ImpactPair, PDGains, Reference
+    >>> from hybridpd.analysis.orbits import symmetric_orbit
+    >>> pair = ImpactPair(mu=0.1, e=0.1, L=0.75)
+    >>> orb = symmetric_orbit(pair, PDGains(10, 20), 5.0)
+    >>> P = ImpactMap(pair, PDGains(10, 20), Reference(orb.xm, 5.0))
+    >>> br = continue_orbit(P, orb.fixed_point, "kv", 23.0, step=0.5)
+    >>> [ev.kind for ev in br.events][:1]
+    ['grazing']
+    """
+    if not isinstance(impact_map_, ImpactMap):
+        raise ValueError(f"impact_map_ must be an ImpactMap, got {type(impact_map_).__name__}")
+    design = None
+    if x10 is not None:
+        design = _Design(_positive_float("x10", x10), _positive_int("n", n))
+    name = _check_parameter(parameter, PARAMETERS if design is None else DESIGN_PARAMETERS)
+    P0 = impact_map_
+    if isinstance(s0, PeriodicOrbit):
+        s0 = s0.s
+    s0 = _section_point(s0, "s0")
+    stop = check_finite("stop", stop)
+    if method not in ("arclength", "natural"):
+        raise ValueError(f"method must be 'arclength' or 'natural', got {method!r}")
+    k = _positive_int("period", period)
+    p0 = _map_value(P0, name, design)
+    if design is not None:
+        P0 = _map_with(P0, name, p0, design)
+        if P0 is None:
+            raise ValueError(f"the design path has no reference amplitude at {name} = {p0:g} "
+                             f"(x10 = {design.x10:g}, n = {design.n})")
+    span, step, max_step, min_step, max_steps = _path_steps(
+        name, p0, stop, step, max_step, min_step, max_steps, (50, 10, 1e-7))
+    tol = _positive_float("tol", tol)
+    max_newton = _positive_int("max_newton", max_newton)
+    if jacobian not in ("auto", "symbolic", "fd"):
+        raise ValueError(f"jacobian must be 'auto', 'symbolic' or 'fd', got {jacobian!r}")
+    fd_step = _positive_float("fd_step", fd_step)
+    event_tol = _positive_float("event_tol", event_tol)
+    graze_tol = _positive_float("graze_tol", graze_tol)
+    margin_samples = _positive_int("margin_samples", margin_samples)
+    bad = [kd for kd in events if kd not in EVENT_KINDS]
+    if bad:
+        raise ValueError(f"events must be a subset of {EVENT_KINDS}, got {bad}")
+    direction = 1.0 if stop > p0 else -1.0
+    lo_p, hi_p = min(p0, stop), max(p0, stop)
+
+    cache = {}
+
+    def map_at(p):
+        # the corrector evaluates the same few parameter values repeatedly
+        key = float(p)
+        if key not in cache:
+            if len(cache) > 64:
+                cache.clear()
+            cache[key] = _map_with(P0, name, key, design)
+        return cache[key]
+
+    def F(u):
+        p = u[4]
+        if not _in_domain(name, p) or map_at(p) is None:
+            return None
+        return _residual(map_at(p), u[:4], k)
+
+    def Fs(u):
+        if map_at(u[4]) is None:
+            raise RuntimeError(f"no design amplitude at {name} = {u[4]:g}")
+        return map_power_jacobian(map_at(u[4]), u[:4], k, method=jacobian,
+                                  fd_step=fd_step)[0] - np.eye(4)
+
+    def Fp(u):
+        if map_at(u[4]) is None:
+            raise RuntimeError(f"no design amplitude at {name} = {u[4]:g}")
+        return _param_derivative(map_at(u[4]), name, u[:4], k, fd_step, design)
+
+    def correct(u_pred, normal):
+        """Newton on [F(u); normal . (u - u_pred)] = 0 (normal None: fixed p)."""
+        if normal is None:
+            p = u_pred[4]
+            res = _newton(lambda x: F(np.append(x, p)), lambda x: Fs(np.append(x, p)),
+                          u_pred[:4], tol=tol, max_iter=max_newton, scale=_scale)
+            return np.append(res.x, p), res
+
+        def G(u):
+            r = F(u)
+            return None if r is None else np.append(r, normal @ (u - u_pred))
+
+        def JG(u):
+            return np.vstack([np.column_stack([Fs(u), Fp(u)]), normal])
+
+        res = _newton(G, JG, u_pred, tol=tol, max_iter=max_newton, scale=_scale)
+        return res.x, res
+
+    def make_point(u, its):
+        P = map_at(u[4])
+        if P is None:
+            return None
+        s = u[:4].copy()
+        traces, DP, _, margin, vmin, _, _ = _orbit_diagnostics(
+            P, s, k, jacobian, fd_step, margin_samples, graze_tol)
+        if DP is None or not np.all(np.isfinite(DP)):
+            return None
+        st = stability(DP)
+        sig = tuple(tr.signature for tr in traces)
+        try:
+            fp = Fp(u)
+        except RuntimeError:
+            fp = None
+        return _Point(u=u.copy(), DP=DP, mult=st.multipliers, rho=st.spectral_radius,
+                      signature=sig, margin=margin, min_speed=vmin,
+                      xm=P.reference.xm, newton_its=its, traces=traces, Fp=fp)
+
+    def turn_test(pt, chord):
+        # parameter component of the unit tangent (kernel of [DP^k - I, dF/dp]) oriented
+        # along the chord: it changes sign at a turning point of the branch
+        if pt.Fp is None:
+            return np.nan
+        v = np.linalg.svd(np.column_stack([pt.DP - np.eye(4), pt.Fp]))[2][-1]
+        return float(v[4] if v @ chord >= 0 else -v[4])
+
+    def evaluate_between(pa, pb, theta):
+        chord = pb.u - pa.u
+        nrm = np.linalg.norm(chord)
+        u, res = correct(pa.u + theta * chord, chord / nrm)
+        if not res.converged:
+            return None
+        return make_point(u, res.iterations)
+
+    def to_event(kind, pt, index, detail, fv, ok):
+        T = 2 * math.pi / (pt.u[4] if name == "omega" else P0.reference.omega)
+        s = pt.u[:4].copy()
+        s[0] %= T
+        return BifurcationEvent(kind=kind, parameter=float(pt.u[4]), point=s,
+                                multipliers=pt.mult.copy(), index=index, detail=detail,
+                                test_value=float(fv), located=bool(ok), viable=True,
+                                xm=float(pt.xm))
+
+    tracker = _Tracker(events, evaluate_between, lambda a, b: float(np.linalg.norm(b.u - a.u)),
+                       event_tol, 60, locate, to_event, turn_test=turn_test)
+
+    def grazing_events(pa, pb, index):
+        if "grazing" not in events or pa.signature == pb.signature:
+            return []
+        if locate:
+            la, lb, ok = _bisect_predicate(lambda th: evaluate_between(pa, pb, th),
+                                           lambda pt: pt.signature == pa.signature, pa, pb,
+                                           size=float(np.linalg.norm(pb.u - pa.u)),
+                                           tol=event_tol, max_iter=60)
+        else:
+            la, lb, ok = pa, pb, False
+        # report the side where the changing contact is slow / the margin is small
+        ga = min(la.margin, _rel_speed(la))
+        gb = min(lb.margin, _rel_speed(lb))
+        pt, g = (la, ga) if ga <= gb else (lb, gb)
+        detail = (f"impact pattern {_sig_str(pa.signature)} -> {_sig_str(pb.signature)} "
+                  f"(margin {la.margin:.3g} / {lb.margin:.3g}, smallest approach speed "
+                  f"{la.min_speed:.3g} / {lb.min_speed:.3g})")
+        return [to_event("grazing", pt, index, detail, g, ok)]
+
+    # ---- initial point
+    start = find_periodic_orbit(P0, s0, k, tol=tol, max_iter=max(max_newton, 30),
+                                jacobian=jacobian, fd_step=fd_step)
+    if not start.converged:
+        return _empty_branch(name, P0, k, method,
+                             f"initial Newton failed: {start.reason}")
+    u0 = np.append(start.s, p0)
+    first = make_point(u0, start.iterations)
+    if first is None:
+        return _empty_branch(name, P0, k, method, "Jacobian undefined at the initial point")
+    pts = [first]
+    evs = []
+    rejected = 0
+    termination = f"max_steps = {max_steps} reached"
+    h = min(step, max_step)
+    # initial tangent: kernel of [F_s, F_p], oriented towards stop
+    if method == "arclength":
+        try:
+            A = np.column_stack([Fs(u0), Fp(u0)])
+            tangent = np.linalg.svd(A)[2][-1]
+        except (RuntimeError, np.linalg.LinAlgError):
+            tangent = np.append(np.zeros(4), 1.0)
+        if tangent[4] * direction < 0:
+            tangent = -tangent
+        if abs(tangent[4]) < 1e-12:
+            tangent = np.append(np.zeros(4), direction)
+    prev_u = None
+    for _ in range(max_steps):
+        cur = pts[-1]
+        T = 2 * math.pi / (cur.u[4] if name == "omega" else P0.reference.omega)
+        accepted = None
+        why = ""
+        exact = False
+        for _h in range(_MAX_HALVINGS):
+            if method == "natural":
+                p_new = cur.u[4] + direction * h
+                if (p_new - stop) * direction > 0:
+                    p_new = stop
+                if prev_u is not None:
+                    # secant predictor through the last two points
+                    dp_prev = cur.u[4] - prev_u[4]
+                    u_pred = cur.u + (cur.u - prev_u) * ((p_new - cur.u[4]) / dp_prev)
+                else:
+                    u_pred = cur.u.copy()
+                u_pred[4] = p_new
+                u, res = correct(u_pred, None)
+            else:
+                u_pred = cur.u + h * tangent
+                if (u_pred[4] - stop) * direction > 0 and tangent[4] * direction > 0:
+                    # the predictor passes stop (maybe beyond the parameter's domain, e.g.
+                    # e > 1): correct at stop itself, along the tangent
+                    u_pred = cur.u + ((stop - cur.u[4]) / tangent[4]) * tangent
+                    u_pred[4] = stop
+                    u, res = correct(u_pred, None)
+                else:
+                    u, res = correct(u_pred, tangent)
+            pt = None
+            if not res.converged:
+                why = f"corrector: {res.reason}"
+            else:
+                sec = u - cur.u
+                ns = float(np.linalg.norm(sec))
+                if method == "arclength" and not (ns > 0 and (sec @ tangent) / ns > 0.8):
+                    # the corrected point lies far off the predicted direction: most likely
+                    # another branch
+                    why = "the step turned by more than 37 degrees"
+                elif method == "natural" and not (
+                        np.linalg.norm(u[:4] - u_pred[:4]) <= 0.5 * max(ns, h) + 10 * tol):
+                    why = "the corrector moved far from the predictor"
+                elif k > 1 and _minimal_period(map_at(u[4]), u[:4], k) < k:
+                    # the corrector slid onto an orbit of lower period (e.g. the parent of a
+                    # period-doubled branch, a fixed point of P^k too): another branch
+                    why = "the corrector landed on an orbit of lower period"
+                else:
+                    pt = make_point(u, res.iterations)
+                    if pt is None:
+                        why = "Jacobian undefined at the corrected point"
+            if pt is not None:
+                accepted = pt
+                break
+            rejected += 1
+            if method == "arclength" and not exact and why.startswith("the step turned") \
+                    and cur.Fp is not None:
+                # Next to a fold the secant of the last (long) step is a poor tangent and
+                # the branch turns away from it whatever the step: retry with the exact
+                # tangent, the kernel of [DP^k - I, dF/dp] at the current point.
+                v = np.linalg.svd(np.column_stack([cur.DP - np.eye(4), cur.Fp]))[2][-1]
+                tangent = v if v @ tangent >= 0 else -v
+                exact = True
+                continue
+            h *= 0.5
+            if h < min_step:
+                break
+        if accepted is None:
+            termination = (f"step below min_step = {min_step:g} at {name} = {cur.u[4]:.10g} "
+                           f"({why})")
+            g = min(cur.margin, _rel_speed(cur))
+            m1 = float(np.min(np.abs(cur.mult - 1.0)))
+            if m1 < _NEAR_BRANCH and not (np.isfinite(g) and g < _END_GRAZE):
+                # Next to a branch point another family crosses this one; the corrector
+                # lands on it (rejected as a sharp turn) whatever the step. Passing needs
+                # branch switching, which is not attempted: say so.
+                termination += (f"; stopped next to a branch point (a multiplier within "
+                                f"{m1:.2g} of +1): another family of fixed points crosses here")
+                if "fold" in events:
+                    evs.append(to_event(
+                        "fold", cur, len(pts) - 1,
+                        f"branch point not passed (closest |lambda - 1| = {m1:.2g}); restart "
+                        "from the other family to continue", float(_test_fold(cur)), False))
+            if np.isfinite(g) and g < _END_GRAZE:
+                # The fixed point runs into grazing and no fixed point continues it: at a
+                # grazing contact P has a square-root singularity (the branch ends, as in a
+                # nonsmooth fold). The last point is within the margin of the grazing point.
+                termination += "; the branch ends at grazing"
+                if "grazing" in events:
+                    evs.append(to_event(
+                        "grazing", cur, len(pts) - 1,
+                        f"the branch ends at grazing (margin {cur.margin:.3g}, relative "
+                        f"approach speed {_rel_speed(cur):.3g}): no fixed point of P^{k} "
+                        "continues beyond it", g, g < graze_tol))
+            break
+        new = accepted
+        its = res.iterations
+        # keep the phase continuous along the branch
+        new.u[0] = cur.u[0] + _wrap_diff(new.u[0] - cur.u[0], T)
+        p_new = new.u[4]
+        done = False
+        if method == "natural" and p_new == stop:
+            done = True
+        elif method == "arclength" and (p_new - stop) * direction >= 0:
+            # overshot: land exactly on stop by a fixed-parameter correction
+            w = (stop - cur.u[4]) / (p_new - cur.u[4])
+            u_pred = cur.u + w * (new.u - cur.u)
+            u_pred[4] = stop
+            u, res2 = correct(u_pred, None)
+            if res2.converged:
+                pt = make_point(u, res2.iterations)
+                if pt is not None:
+                    pt.u[0] = cur.u[0] + _wrap_diff(pt.u[0] - cur.u[0], T)
+                    new = pt
+            done = True
+        idx = len(pts) - 1
+        evs.extend(tracker.detect(cur, new, idx, grazing_events(cur, new, idx)))
+        prev_u = cur.u.copy()
+        pts.append(new)
+        if done:
+            termination = "reached stop"
+            break
+        if method == "arclength":
+            sec = new.u - cur.u
+            tangent = sec / np.linalg.norm(sec)       # secant predictor
+            if not (lo_p - 1e-12 * span <= p_new <= hi_p + 1e-12 * span):
+                termination = (f"parameter left [{lo_p:g}, {hi_p:g}] at {name} = {p_new:.10g} "
+                               "(the branch turned back)")
+                break
+        # step control: easy corrections lengthen the step, hard ones shorten it
+        if its <= 3:
+            h = min(1.5 * h, max_step)
+        elif its >= 7:
+            h = max(0.6 * h, min_step)
+    br = _branch_from_points(pts, evs, name, P0, k, method, termination, rejected)
+    if design is not None:
+        fixed = {kk: v for kk, v in br.fixed.items() if kk not in ("xm", name)}
+        fixed.update({"x10": design.x10, "n": design.n})
+        br = replace(br, fixed=fixed)
+    return br

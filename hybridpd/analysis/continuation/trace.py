@@ -1,0 +1,221 @@
+"""One application of the impact map with its impact pattern (walls, flight times, grazing
+touches, sticking) and the flight margins."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from hybridpd._jit import njit
+from hybridpd.analysis.continuation._common import _impact_map, _min, _section_point
+from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.model import check_int
+from hybridpd.pair.batch import (
+    STATUS_IMPACT,
+    STATUS_STICK,
+    _eval,
+    _impact_velocities,
+    next_impact,
+    stick_release,
+)
+
+
+@dataclass(frozen=True)
+class ImpactStep:
+    """One wall contact met by an application of ``P``.
+
+    Attributes
+    ----------
+    wall : int
+        +1 (``z3 = +L``) or -1 (``z3 = -L``).
+    tau : float
+        Flight time (time units) from the previous contact (or release) to this one.
+    speed : float
+        Approach speed ``wall * z4`` just before the contact (length/time, >= 0).
+    kind : str
+        ``"impact"`` (Newton's law applied), ``"graze"`` (tangential touch: the approach speed
+        is below the engine's velocity tolerance, no velocity jump) or ``"stick"`` (impacts
+        accumulated; the masses then moved together for ``stick_time``).
+    stick_time : float
+        Duration of the sticking phase (time units), 0 unless ``kind == "stick"``.
+    """
+
+    wall: int
+    tau: float
+    speed: float
+    kind: str
+    stick_time: float = 0.0
+
+
+@dataclass(frozen=True)
+class MapTrace:
+    """One application of ``P`` with its impact pattern and flight diagnostics.
+
+    Attributes
+    ----------
+    s : ndarray, shape (4,)
+        ``P(s0)`` (``phi`` in ``[0, T)``); NaN unless ``ok``.
+    ok : bool
+        The trajectory returned to the section.
+    status : int
+        0 when ``ok``, else ``10 + batch.STATUS_*`` (as :class:`~hybridpd.analysis.impactmap.MapResult`).
+    steps : tuple of ImpactStep
+        Contacts after the initial ``+L`` impact; the last one is the return to ``+L``.
+    margin : float
+        Smallest interior distance of a flight to the wall it turns towards, divided by ``L``
+        (dimensionless): at every interior turning point of ``z3`` a maximum is measured to
+        ``+L`` and a minimum to ``-L``; 1 if ``z3`` has no interior turning point. It tends to
+        0 at grazing (paper (19)). NaN if not computed.
+    min_speed : float
+        Smallest approach speed over the impacts and grazing touches (length/time).
+    """
+
+    s: np.ndarray
+    ok: bool
+    status: int
+    steps: tuple
+    margin: float
+    min_speed: float
+
+    @property
+    def walls(self) -> tuple:
+        """Walls of the contacts, e.g. ``(-1, 1)`` for the simple pattern."""
+        return tuple(st.wall for st in self.steps)
+
+    @property
+    def signature(self) -> tuple:
+        """``((wall, kind), ...)``: what a pattern change (grazing) is detected on."""
+        return tuple((st.wall, st.kind) for st in self.steps)
+
+    @property
+    def simple(self) -> bool:
+        """The pattern ``(+L, -L, +L)`` with two genuine impacts (symbolic ``DP`` applies)."""
+        return self.signature == ((-1, "impact"), (1, "impact"))
+
+
+@njit(cache=True)
+def _flight_margin(params, case, t0, x1, y1, x2, y2, tau, nsamp):
+    """Smallest ``distance / L`` to the wall approached at interior turning points of ``z3``.
+
+    Turning points are sign changes of ``z4`` on a uniform grid of ``nsamp`` intervals,
+    refined by bisection. A maximum of ``z3`` is measured to ``+L``, a minimum to ``-L``
+    (a small hop away from the wall just left is not a near-grazing).
+    """
+    L = params[5]
+    m = 1.0
+    if not tau > 0.0:
+        return m
+    h = tau / nsamp
+    prev = 0.0
+    for k in range(1, nsamp):
+        s = k * h
+        r = _eval(params, case, t0, x1, y1, x2, y2, s, 0.0)
+        z4 = r[1] - r[3]
+        if k > 1 and z4 * prev < 0.0:
+            a = s - h
+            b = s
+            fa = prev
+            for _ in range(60):
+                c = 0.5 * (a + b)
+                rc = _eval(params, case, t0, x1, y1, x2, y2, c, 0.0)
+                fc = rc[1] - rc[3]
+                if fc * fa > 0.0:
+                    a = c
+                    fa = fc
+                else:
+                    b = c
+            rc = _eval(params, case, t0, x1, y1, x2, y2, 0.5 * (a + b), 0.0)
+            z3 = rc[0] - rc[2]
+            if prev > 0.0:
+                d = (L - z3) / L       # z4: + -> -, a maximum of z3, towards +L
+            else:
+                d = (z3 + L) / L       # a minimum of z3, towards -L
+            m = min(m, d)
+        prev = z4
+    return m
+
+
+def trace_map(impact_map_: ImpactMap, s, *, margin: bool = True,
+              margin_samples: int = 256) -> MapTrace:
+    """Apply ``P`` once from ``s`` and record every contact (the impact pattern).
+
+    This follows the compiled engine step by step (the same kernels, the same tolerances),
+    so ``trace_map(P, s).s`` equals ``P(s)``; it additionally records walls, flight times,
+    approach speeds, grazing touches and sticking phases, and measures how close every
+    flight comes to a wall in its interior.
+
+    Parameters
+    ----------
+    impact_map_ : ImpactMap
+    s : array_like, shape (4,)
+        Section point ``(phi, z1, z2, z4)`` with ``z4 >= 0`` (``z4 = 0``: a grazing arrival,
+        as returned by ``P`` after a tangential touch).
+    margin : bool
+        Compute :attr:`MapTrace.margin` (``margin_samples`` flow evaluations per flight).
+    margin_samples : int
+        Grid size of the turning-point search in each flight.
+
+    Returns
+    -------
+    MapTrace
+
+    Examples
+    --------
+    >>> from hybridpd import ImpactPair, PDGains
+    >>> from hybridpd.analysis.orbits import symmetric_orbit
+    >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
+    >>> P = ImpactMap(orb.pair, orb.gains, orb.reference())
+    >>> tr = trace_map(P, orb.fixed_point)
+    >>> tr.walls, tr.simple
+    ((-1, 1), True)
+    """
+    # z4 = 0 (the closure of the section) is accepted: P itself returns it after a
+    # tangential touch of the right wall
+    P = _impact_map(impact_map_)
+    s = _section_point(s, "s", closure=True)
+    params, case, tol = P.params, P._c, P.tol
+    mu, e, L, w = params[3], params[4], params[5], params[6]
+    T = 2.0 * math.pi / w
+    x2, y2 = float(s[1]), float(s[2])
+    x1, y1 = x2 + L, y2 + float(s[3])
+    y1, y2 = _impact_velocities(mu, e, y1, y2)
+    t = float(s[0])
+    steps = []
+    marg = 1.0 if margin else np.nan
+    speeds = []
+    nan4 = np.full(4, np.nan)
+    for _ in range(P.max_impacts):
+        st, tau, wall, _X1, Y1, X2, Y2, graze = next_impact(params, case, t, x1, y1, x2, y2,
+                                                            50.0 * T, tol)
+        if margin and st in (STATUS_IMPACT, STATUS_STICK):
+            marg = min(marg, _flight_margin(params, case, t, x1, y1, x2, y2, tau,
+                                            check_int("margin_samples", margin_samples, 2)))
+        if st == STATUS_STICK:
+            t += tau
+            yc = (mu * Y1 + Y2) / (1.0 + mu)
+            st2, ts, X2, yc = stick_release(params, case, t, X2, yc, wall, 50.0 * T, tol)
+            steps.append(ImpactStep(int(wall), float(tau), float(abs(Y1 - Y2)), "stick",
+                                    float(ts)))
+            if st2 != STATUS_IMPACT:
+                return MapTrace(nan4, False, int(STATUS_STICK if st2 == 1 else st2) + 10,
+                                tuple(steps), marg, _min(speeds))
+            t += ts
+            x2 = X2
+            x1 = x2 + wall * L
+            y1 = y2 = yc
+            continue
+        if st != STATUS_IMPACT:
+            return MapTrace(nan4, False, int(st) + 10, tuple(steps), marg, _min(speeds))
+        t += tau
+        speed = max(wall * (Y1 - Y2), 0.0)
+        speeds.append(speed)
+        steps.append(ImpactStep(int(wall), float(tau), float(speed),
+                                "graze" if graze else "impact"))
+        x1, y1, x2, y2 = X2 + wall * L, Y1, X2, Y2
+        if wall == 1:
+            out = np.array([t - T * math.floor(t / T), x2, y2, max(y1 - y2, 0.0)])
+            return MapTrace(out, True, 0, tuple(steps), marg, _min(speeds))
+        if not graze:
+            y1, y2 = _impact_velocities(mu, e, y1, y2)
+    return MapTrace(nan4, False, 13, tuple(steps), marg, _min(speeds))

@@ -1,0 +1,150 @@
+"""``hybridpd bifurcation``: a brute-force bifurcation diagram of the impact map."""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+
+#: Parameters the command can sweep (``--param NAME``).
+SWEEPABLE = ("kp", "kv", "e", "mu", "gamma", "omega", "m2")
+_REQUIRED = ("e", "mu", "gamma", "omega", "kp", "kv")
+
+_DESCRIPTION = """\
+Brute-force bifurcation diagram of the impact map P in one parameter.
+
+For NUM values of the swept parameter between MIN and MAX, P is iterated ITERATIONS times
+from one initial condition (or, with --follow, from the previous value's final state) and
+the last KEEP section points (phi, z1, z2, z4) are kept. Each value is classified
+(periodic with its period, quasiperiodic, chaotic, diverged, sticking, no_impact,
+unresolved, undefined) and the largest Lyapunov exponent of P is estimated from the
+product of the Jacobians DP along the iterates.
+
+The reference amplitude xm follows the design at every value: the one that puts the
+primary mass on the order-N symmetric orbit of amplitude x10 (gamma = L / x10, see the
+README's conventions). Every parameter other than the swept one must be given (m2 and x10
+default to 1); the swept one must not be.
+"""
+
+_EPILOG = """\
+example (the paper's parameters, kv swept, following):
+  hybridpd bifurcation --case collocated --mu 0.1 --e 0.1 --gamma 0.75 --omega 5 --n 1 \\
+      --kp 10 --param kv 10 35 200 --iterations 1000 --keep 100 --follow \\
+      --out kv.npz --plot kv.png
+"""
+
+
+def register(sub):
+    p = sub.add_parser("bifurcation", help="brute-force bifurcation diagram of the impact map",
+                       description=_DESCRIPTION, epilog=_EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--case", required=True, choices=["collocated", "noncollocated"],
+                   help="feedback case")
+    p.add_argument("--mu", type=float, help="mass ratio m1/m2 (> 0)")
+    p.add_argument("--e", type=float, help="restitution coefficient in [0, 1]")
+    p.add_argument("--gamma", type=float, help="clearance ratio L / x10 (> 0)")
+    p.add_argument("--omega", type=float, help="reference frequency (> 0, rad/time)")
+    p.add_argument("--n", type=int, default=1, help="odd order of the design orbit (default 1)")
+    p.add_argument("--m2", type=float, help="secondary mass (> 0), default 1")
+    p.add_argument("--kp", type=float, help="proportional gain (> 0)")
+    p.add_argument("--kv", type=float, help="velocity gain (> 0)")
+    p.add_argument("--x10", type=float, default=1.0,
+                   help="primary-mass amplitude of the design (> 0), default 1")
+    p.add_argument("--param", nargs=4, required=True, metavar=("NAME", "MIN", "MAX", "NUM"),
+                   help=f"swept parameter, one of {', '.join(SWEEPABLE)}, from MIN to MAX "
+                   "(MIN < MAX) in NUM >= 2 values")
+    p.add_argument("--iterations", type=int, default=1000,
+                   help="iterations of P per value (default 1000)")
+    p.add_argument("--keep", type=int, default=100,
+                   help="last iterates kept per value (8 <= KEEP <= ITERATIONS, default 100)")
+    p.add_argument("--follow", action="store_true",
+                   help="start each value from the previous value's final state")
+    p.add_argument("--initial", type=float, nargs=4, metavar=("PHI", "Z1", "Z2", "Z4"),
+                   help="initial section point (default: the symmetric fixed point at MIN, "
+                   "displaced by 1e-3 in z1)")
+    p.add_argument("--max-period", type=int, default=32,
+                   help="largest period detected (default 32)")
+    p.add_argument("--out", required=True, help="write the diagram (.npz)")
+    p.add_argument("--plot", default=None, metavar="PNG", help="also draw the diagram (PNG)")
+    p.add_argument("--coordinate", default="z1",
+                   choices=["phi", "z1", "z2", "z4", "x1", "y1", "x2", "y2"],
+                   help="section coordinate on the plot's y axis (default z1)")
+    p.add_argument("--json", action="store_true",
+                   help="print a JSON summary (classes, periods, exponents, cycles) on stdout")
+    p.set_defaults(func=run)
+
+
+def _sweep(args):
+    name, lo, hi, num = args.param
+    if name not in SWEEPABLE:
+        raise ValueError(f"--param NAME must be one of {', '.join(SWEEPABLE)}, got {name!r}")
+    try:
+        lo, hi, num_f = float(lo), float(hi), float(num)
+    except ValueError:
+        raise ValueError(f"--param MIN MAX NUM must be numbers, got {args.param[1:]}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise ValueError(f"--param MIN and MAX must be finite, got {lo:g}, {hi:g}")
+    if lo >= hi:
+        raise ValueError(f"--param MIN must be < MAX, got {lo:g} >= {hi:g}")
+    if num_f != int(num_f) or num_f < 2:
+        raise ValueError(f"--param NUM must be an integer >= 2, got {num}")
+    if getattr(args, name) is not None:
+        raise ValueError(f"{name} is swept by --param and must not also be given as --{name}")
+    missing = [f"--{k}" for k in _REQUIRED if k != name and getattr(args, k) is None]
+    if missing:
+        raise ValueError(f"missing {', '.join(missing)} (every parameter but the swept one is "
+                         "required)")
+    return name, lo, hi, int(num_f)
+
+
+def run(args) -> int:
+    import numpy as np
+
+    from hybridpd.analysis.bifdiagram import bifurcation_diagram
+    from hybridpd.model import ImpactPair, PDGains
+
+    name, lo, hi, num = _sweep(args)
+    if args.iterations < 1:
+        raise ValueError(f"--iterations must be >= 1, got {args.iterations}")
+    if args.keep > args.iterations:
+        raise ValueError(f"--keep ({args.keep}) must not exceed --iterations "
+                         f"({args.iterations})")
+    if not str(args.out).endswith(".npz"):
+        raise ValueError(f"--out must be a .npz file, got {args.out!r}")
+    if args.plot is not None and not str(args.plot).lower().endswith(".png"):
+        raise ValueError(f"--plot must be a .png file, got {args.plot!r}")
+    values = np.linspace(lo, hi, num)
+    v0 = {k: getattr(args, k) for k in ("e", "mu", "gamma", "omega", "kp", "kv", "m2")}
+    v0["m2"] = 1.0 if v0["m2"] is None else v0["m2"]
+    v0[name] = lo
+    if not (v0["gamma"] > 0 and args.x10 > 0):
+        raise ValueError(f"gamma and x10 must be > 0, got {v0['gamma']!r}, {args.x10!r}")
+    pair = ImpactPair(v0["mu"], v0["e"], v0["gamma"] * args.x10, v0["m2"])
+    d = bifurcation_diagram(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name, values,
+                            case=args.case, x10=args.x10, n=args.n,
+                            iterations=args.iterations, keep=args.keep, follow=args.follow,
+                            initial=args.initial, max_period=args.max_period)
+    d.save(args.out)
+    if args.plot:
+        from hybridpd.plotting.bifurcation import plot_bifurcation
+
+        plot_bifurcation(d, coordinate=args.coordinate).savefig(args.plot, dpi=130)
+    if args.json:
+        lya = [None if not np.isfinite(x) else float(x) for x in d.lyapunov]
+        print(json.dumps({
+            "parameter": name, "values": values.tolist(), "classification": d.classification,
+            "period": [int(k) for k in d.period], "lyapunov": lya,
+            "cycles": [d.cycle(i).tolist() for i in range(len(d))],
+            "xm": [None if not np.isfinite(x) else float(x) for x in d.xm],
+            "counts": d.counts(), "fixed": d.fixed, "case": d.case,
+            "iterations": d.iterations, "keep": d.keep, "follow": d.follow,
+            "out": str(args.out), "plot": args.plot,
+        }))
+        return 0
+    counts = ", ".join(f"{n} {c}" for c, n in d.counts().items() if n)
+    print(f"{args.case} bifurcation diagram in {name} [{lo:g}, {hi:g}] ({num} values, last "
+          f"{d.keep} of {d.iterations} iterates{', following' if d.follow else ''}): {counts}")
+    periods = {int(k): int(np.sum(d.period == k)) for k in np.unique(d.period) if k}
+    if periods:
+        print("  periods: " + ", ".join(f"{k}: {n} values" for k, n in periods.items()))
+    print(f"  wrote {args.out}" + (f" and {args.plot}" if args.plot else ""))
+    return 0

@@ -1,0 +1,202 @@
+"""plot bifurcation diagrams: see :mod:`hybridpd.plotting`."""
+from __future__ import annotations
+
+import numpy as np
+
+from hybridpd.analysis.bifdiagram import COORDINATES, section_coordinate
+from hybridpd.plotting._common import _COLORS, figure
+
+__all__ = ["PARAMETER_LABELS", "bifurcation_legend", "plot_bifurcation"]
+
+#: Axis labels of the parameters (maths text).
+PARAMETER_LABELS = {"kp": r"$k_p$", "kv": r"$k_v$", "e": r"$e$", "mu": r"$\mu$",
+                    "gamma": r"$\gamma = L / x_{10}$", "omega": r"$\omega$", "m2": r"$m_2$",
+                    "xm": r"$x_m$", "L": r"$L$", "x10": r"$x_{10}$"}
+_COORD_LABELS = {"phi": r"impact phase $\varphi = t\ \mathrm{mod}\ T$",
+                 "z1": r"$z_1 = x_2$ at impact", "x2": r"$x_2$ at impact",
+                 "z2": r"$z_2 = y_2$ before impact", "y2": r"$y_2$ before impact",
+                 "z4": r"$z_4 = y_1 - y_2$ before impact",
+                 "x1": r"$x_1 = x_2 + L$ at impact", "y1": r"$y_1$ before impact"}
+_EVENT_MARKERS = {"period_doubling": ("D", "tab:purple", "period doubling"),
+                  "fold": ("s", "tab:red", "fold"),
+                  "grazing": ("v", "black", "grazing"),
+                  "neimark_sacker": ("*", "tab:green", "Neimark-Sacker")}
+_SYMBOLS = {"kp": "k_p", "kv": "k_v", "e": "e", "mu": r"\mu", "omega": r"\omega",
+            "m2": "m_2", "xm": "x_m", "x10": "x_{10}", "n": "n", "L": "L"}
+
+
+def _branch_cycles(branch):
+    """The ``k`` section points of every orbit of a branch, shape (N, k, 4), and ``L``."""
+    from hybridpd.analysis.continuation import branch_map
+
+    k = int(branch.period)
+    N = len(branch)
+    out = np.full((N, k, 4), np.nan)
+    L = np.full(N, np.nan)
+    for i in range(N):
+        P = branch_map(branch, branch.parameter[i])
+        if P is None:
+            continue
+        L[i] = P.pair.L
+        s = branch.points[i]
+        if not np.all(np.isfinite(s)) or s[3] <= 0:
+            continue
+        out[i, 0] = s
+        if k > 1:
+            r = P.iterate(s, k - 1)
+            out[i, 1:] = r[1:]
+    return out, L
+
+
+def _pieces(mask):
+    """Extend a mask by one point on each side so that solid and dashed pieces connect."""
+    m = mask.copy()
+    m[1:] |= mask[:-1]
+    m[:-1] |= mask[1:]
+    return m
+
+
+def _title(diagram):
+    f = diagram.fixed
+    parts = [f"{diagram.case}"]
+    for key in ("e", "mu", "kp", "kv", "omega", "m2", "xm", "x10"):
+        if key in f and key != diagram.parameter_name:
+            parts.append(f"${_SYMBOLS[key]} = {f[key]:g}$")
+    if diagram.parameter_name != "gamma" and "x10" in f and "L" in f:
+        parts.append(rf"$\gamma = {f['L'] / f['x10']:g}$")
+    elif "L" in f and diagram.parameter_name != "gamma":
+        parts.append(f"$L = {f['L']:g}$")
+    path = r"$x_m$ from the design" if diagram.design else r"fixed $x_m$"
+    run = (f"last {diagram.keep} of {diagram.iterations} iterates"
+           + (", following" if diagram.follow else ", one initial condition"))
+    return ", ".join(parts) + f"\n{path}; {run}"
+
+
+def plot_bifurcation(diagram, ax=None, coordinate: str = "z1", branches=(), *,
+                     events: bool = True, title: str | None = None, markersize: float = 1.0,
+                     color: str = "k", label: str | None = None, legend: bool = True,
+                     note: bool = True):
+    """A bifurcation diagram in the impact-oscillator style, with continued branches.
+
+    Small dots: for every parameter value, the recorded iterates of ``P`` (one coordinate of
+    the section points). Continued branches (:class:`~hybridpd.analysis.continuation.Branch`)
+    are drawn over them, every point of a period-``k`` cycle, stable parts solid and unstable
+    parts dashed (non-viable formal orbits of a symmetric family are not drawn), with their
+    events marked.
+
+    Parameters
+    ----------
+    diagram : BifurcationDiagram
+    ax : matplotlib Axes, optional
+        Drawn into when given, else a new Figure (no pyplot).
+    coordinate : str
+        One of :data:`~hybridpd.analysis.bifdiagram.COORDINATES` (``phi, z1, z2, z4`` or the
+        physical ``x1, y1, x2, y2``).
+    branches : sequence of Branch or (Branch, label)
+        Continued branches in the diagram's parameter (on the same parameter path); pieces
+        with the same label share one colour and one legend entry.
+    events : bool
+        Mark the branches' period-doubling, fold/branch, grazing and Neimark-Sacker events.
+    title : str, optional
+        Default: the fixed parameters and the run settings.
+    markersize : float
+        Size of the dots (points).
+    color : str
+        Colour of the dots.
+    label : str, optional
+        Legend label of the dots (default ``"iterates of P"``).
+    legend : bool
+        Draw the legend (:func:`bifurcation_legend`) of all labelled artists of ``ax``.
+    note : bool
+        Write the counts of the non-periodic classes in a corner.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hybridpd import ImpactPair, PDGains
+    >>> from hybridpd.analysis.bifdiagram import bifurcation_diagram
+    >>> d = bifurcation_diagram(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0, "kv",
+    ...                         np.linspace(18, 20, 3), iterations=100, keep=10)
+    >>> fig = plot_bifurcation(d, coordinate="x1")
+    >>> fig.axes[0].get_xlabel()
+    '$k_v$'
+    """
+    if coordinate not in COORDINATES:
+        raise ValueError(f"coordinate must be one of {COORDINATES}, got {coordinate!r}")
+    fig, ax = figure(ax, figsize=(7, 4.5))
+    y = diagram.coordinate(coordinate)
+    x = np.repeat(diagram.values[:, None], y.shape[1], axis=1)
+    ok = np.isfinite(y)
+    if ok.any():
+        ax.plot(x[ok], y[ok], linestyle="none", marker=".", ms=markersize, color=color,
+                rasterized=True, zorder=2, label=label or "iterates of $P$")
+    colors = {}
+    seen = set(ax.get_legend_handles_labels()[1])
+    for item in branches:
+        br, blabel = item if isinstance(item, tuple) else (item, None)
+        name = blabel or (f"period-{br.period} branch"
+                          + (" (symmetric)" if br.family == "symmetric" else ""))
+        # branches with the same label are pieces of one family: one colour, one entry
+        c = colors.setdefault(name, _COLORS[len(colors) % len(_COLORS)])
+        _draw_branch(ax, br, coordinate, c, name, events, seen)
+    ax.set_xlabel(PARAMETER_LABELS.get(diagram.parameter_name, diagram.parameter_name))
+    ax.set_ylabel(_COORD_LABELS[coordinate])
+    ax.set_xlim(float(np.min(diagram.values)), float(np.max(diagram.values)))
+    ax.set_title(title if title is not None else _title(diagram), fontsize=9)
+    if legend:
+        bifurcation_legend(ax)
+    counts = {c: n for c, n in diagram.counts().items() if n and c != "periodic"}
+    if note and counts:
+        ax.text(0.01, 0.01, ", ".join(f"{n} {c.replace('_', ' ')}" for c, n in counts.items()),
+                transform=ax.transAxes, fontsize=6, color="gray", va="bottom")
+    return fig
+
+
+def bifurcation_legend(ax, **kw):
+    """The legend of every labelled artist in ``ax``, the diagram dots enlarged to be
+    visible (call it again after drawing several diagrams into one axes)."""
+    kw.setdefault("fontsize", 7)
+    kw.setdefault("loc", "best")
+    kw.setdefault("framealpha", 0.9)
+    leg = ax.legend(**kw)
+    for h in leg.legend_handles:
+        if getattr(h, "get_linestyle", lambda: "")() in ("None", "none") \
+                and getattr(h, "get_marker", lambda: "")() == ".":
+            h.set_markersize(6)
+    return leg
+
+
+def _draw_branch(ax, br, coordinate, c, name, events, seen):
+    """Draw one branch, labelling the first artist of every kind not yet in ``seen``."""
+    cyc, L = _branch_cycles(br)
+    yc = section_coordinate(cyc, coordinate, L[:, None])
+    p = br.parameter
+    stable = br.stable & br.viable
+    unstable = br.viable & ~br.stable
+    for m, ls, lab in ((stable, "-", "stable"), (unstable, "--", "unstable")):
+        if not m.any():
+            continue
+        mm = _pieces(m) & br.viable
+        text = f"{name}, {lab}"
+        for q in range(yc.shape[1]):
+            ax.plot(p, np.where(mm, yc[:, q], np.nan), ls, color=c, lw=1.4, zorder=3,
+                    label=text if text not in seen else None)
+            seen.add(text)
+    if not events:
+        return
+    for ev in br.events:
+        if ev.kind not in _EVENT_MARKERS or not ev.viable:
+            continue
+        mk, col, text = _EVENT_MARKERS[ev.kind]
+        if ev.kind == "fold" and "turns back" not in ev.detail:
+            mk, text = "o", "branch point"
+        s = np.asarray(ev.point, float)
+        Lv = float(L[min(ev.index, len(L) - 1)])
+        yv = float(section_coordinate(s, coordinate, Lv))
+        ax.plot([ev.parameter], [yv], mk, color=col, mfc="none", ms=7, mew=1.3, zorder=4,
+                label=text if text not in seen else None)
+        seen.add(text)
