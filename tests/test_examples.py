@@ -13,7 +13,7 @@ SCRIPTS = sorted((ROOT / "symbolic").glob("*.py"))
 
 def _run(args, cwd, timeout=600):
     env = dict(os.environ, MPLBACKEND="Agg")
-    return subprocess.run([sys.executable, *map(str, args)], cwd=cwd, env=env,
+    return subprocess.run([sys.executable, *map(str, args)], check=False, cwd=cwd, env=env,
                           capture_output=True, text=True, timeout=timeout)
 
 
