@@ -31,6 +31,7 @@ Neimark-Sacker curves, are located on the curves and listed in
 """
 from __future__ import annotations
 
+import itertools
 import time
 from dataclasses import dataclass, field
 
@@ -195,7 +196,7 @@ def _crossed_edges(U, nx, ny):
     """Coarse edges crossed by the polyline ``U`` (unit coordinates)."""
     G = np.column_stack([U[:, 0] * (nx - 1), U[:, 1] * (ny - 1)])
     out = set()
-    for a, b in zip(G[:-1], G[1:]):
+    for a, b in itertools.pairwise(G):
         for ax_, o in ((1, 0), (0, 1)):   # horizontal lines y = i -> horizontal edges
             lo, hi = sorted((a[ax_], b[ax_]))
             if hi - lo == 0:
@@ -304,6 +305,46 @@ def _trace_seed(tr: Tracer, u_seed, normal, watchers):
     return pts, (two["end"], one["end"]), two["codim2"] + one["codim2"]
 
 
+def _trace_from(tr, kind, u, normal, max_dist, watchers, curves, codim):
+    """Correct ``u`` onto the curve along ``normal`` and trace it (appends to the lists)."""
+    ok, u0, _, tv0 = tr.correct_on_line(u, normal, max_dist=max_dist)
+    if not ok or not _domain_mask(tv0, kind)[0]:
+        return "unresolved" if not ok else "domain"
+    res = _trace_seed(tr, u0, normal, watchers)
+    if res is None:
+        return "unresolved"
+    pts, ends, cod = res
+    for name, uc, tvc in cod:
+        if name in _MULT and not all(_domain_mask(tvc, k)[0] for k in (kind, name)):
+            continue          # the other curve does not bound a region there
+        codim.append((_codim_name(kind, name), uc, tvc))
+    curves.append((kind, np.array(pts), tuple(
+        e if not e.startswith("codim2:") else "codim2:" + _codim_name(kind, e[7:])
+        for e in ends)))
+    return "traced"
+
+
+def _seed_from_codim2(plane, kinds, curves, codim, opts):
+    """Trace curves met at a codim-2 crossing that no coarse edge revealed (thin features)."""
+    n_evals = 0
+    done = 0
+    while done < len(codim):
+        name, uc, _ = codim[done]
+        done += 1
+        for kind in name.split("+") if "+" in name else ():
+            if kind not in kinds or kind == "existence":
+                continue
+            if any(k == kind and _dist_to_polyline(uc, U) < 1e-3 for k, U, _ in curves):
+                continue
+            tr = Tracer(plane, kind, **opts)
+            ((_, g),), _ = tr.fgrad(uc)
+            if np.all(np.isfinite(g)) and np.any(g != 0):
+                _trace_from(tr, kind, uc, np.array([-g[1], g[0]]), 1e-3,
+                            _watchers(kind, kinds), curves, codim)
+            n_evals += tr.n_evals
+    return n_evals
+
+
 def _trace_kind(tr: Tracer, kind, tvg, grid, kinds, curves, codim):
     ny, nx = grid
     S = tvg.sign_test(kind).reshape(ny, nx)
@@ -340,27 +381,13 @@ def _trace_kind(tr: Tracer, kind, tvg, grid, kinds, curves, codim):
         if any(_dist_to_polyline(root, P) < 0.3 * cell for P in traced):
             state[edge] = "near"
             continue
-        normal = UB[k] - UA[k]
-        ok, u0, _, tv0 = tr.correct_on_line(root, normal, max_dist=1.5 * cell)
-        if not ok or not _domain_mask(tv0, kind)[0]:
-            state[edge] = "unresolved" if not ok else "domain"
-            continue
-        res = _trace_seed(tr, u0, normal, watchers)
-        if res is None:
-            state[edge] = "unresolved"
-            continue
-        pts, ends, cod = res
-        U = np.array(pts)
-        traced.append(U)
-        crossed |= _crossed_edges(U, nx, ny)
-        state[edge] = "crossed" if edge in crossed else "near"
-        for name, uc, tvc in cod:
-            if name in _MULT and not all(_domain_mask(tvc, k)[0] for k in (kind, name)):
-                continue          # the other curve does not bound a region there
-            codim.append((_codim_name(kind, name), uc, tvc))
-        curves.append((kind, U, tuple(e if not e.startswith("codim2:")
-                                      else "codim2:" + _codim_name(kind, e[7:])
-                                      for e in ends)))
+        why = _trace_from(tr, kind, root, UB[k] - UA[k], 1.5 * cell, watchers, curves, codim)
+        if why == "traced":
+            U = curves[-1][1]
+            traced.append(U)
+            crossed |= _crossed_edges(U, nx, ny)
+            why = "crossed" if edge in crossed else "near"
+        state[edge] = why
     unresolved = sum(1 for v in state.values() if v == "unresolved")
     uncovered = sum(1 for s in seeds if state.get(s) not in ("crossed", "near", "domain"))
     return len(seeds), unresolved, uncovered
@@ -474,6 +501,9 @@ def boundary_curves(case="collocated", *, x=("kp", 0.1, 50.0), y=("kv", 0.1, 50.
         unresolved += b
         uncovered += c
         n_evals += tr.n_evals
+    n_evals += _seed_from_codim2(plane, kinds, raw_curves, raw_codim,
+                                 dict(tol=tol, max_step=max_step, max_steps=max_steps,
+                                      margin_samples=margin_samples))
     curves = []
     for kind, U, ends in raw_curves:
         tv = plane.evaluate(plane.x.from_unit(U[:, 0]), plane.y.from_unit(U[:, 1]),

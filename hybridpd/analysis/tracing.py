@@ -164,7 +164,7 @@ class Tracer:
     def correct_on_line(self, u_pred, normal, max_dist=0.5):
         """Correct onto ``F = 0`` keeping ``normal . (u - u_pred) = 0`` (returns ok, u, g, tv)."""
         n = np.asarray(normal, float)
-        ok, u, F, g, tv, _ = self.correct(u_pred, n / np.linalg.norm(n), max_dist)
+        ok, u, _, g, tv, _ = self.correct(u_pred, n / np.linalg.norm(n), max_dist)
         return ok, u, g, tv
 
     # -- location on the curve -------------------------------------------------------------
@@ -222,9 +222,9 @@ class Tracer:
         p[axis] = val
         normal = np.zeros(2)
         normal[axis] = 1.0
-        ok, u, g, tv = self.correct_on_line(p, normal, max_dist=2 * np.linalg.norm(d) + 1e-9)
+        ok, u, _, tv = self.correct_on_line(p, normal, max_dist=2 * np.linalg.norm(d) + 1e-9)
         if not ok or np.any(u < -1e-12) or np.any(u > 1 + 1e-12):
-            ok, u, g, tv = False, p, None, None
+            ok, u, tv = False, p, None
         return ok, np.clip(u, 0.0, 1.0), tv
 
     # -- one direction ------------------------------------------------------------------------
@@ -249,7 +249,7 @@ class Tracer:
         for _ in range(self.max_steps):
             ok = False
             while h >= self.min_step:
-                ok, u1, F1, g1, tv1, its = self.correct(u + h * t, t, max_dist=h)
+                ok, u1, _, g1, tv1, its = self.correct(u + h * t, t, max_dist=h)
                 if ok:
                     t1 = _perp(g1)
                     if t1 @ t < 0:
@@ -261,7 +261,7 @@ class Tracer:
                     ok = False
                 h *= 0.5
             if not ok:
-                return self._done(pts, codim, self._stalled_end(u, tv))
+                return self._stalled(pts, codim, u, tv)
             # box edge
             if np.any(u1 < 0.0) or np.any(u1 > 1.0):
                 eok, ue, _ = self.edge_point(u, u1)
@@ -305,8 +305,37 @@ class Tracer:
                 h = min(1.5 * h, self.max_step)
         return self._done(pts, codim, "max_steps")
 
-    def _stalled_end(self, u, tv):
-        return "stalled"
+    def _stalled(self, pts, codim, u, tv):
+        """End of a curve whose corrector failed at the smallest step: explain it if we can."""
+        if np.min(np.minimum(u, 1.0 - u)) < 1e-4:
+            # e.g. at e -> 0 the boundaries run into the box edge with unbounded slope
+            return self._done(pts, codim, "box_edge")
+        if self.kind == "grazing" and tv.margin2[0] < 1e-2:
+            # two interior turning points graze at once: a corner of the existence region
+            uc, tvc = self.newton2(u, lambda t: t.margin2)
+            if uc is not None:
+                pts.append(uc)
+                codim.append(("grazing", uc, tvc))
+                return self._done(pts, codim, "codim2:grazing")
+        return self._done(pts, codim, "stalled")
+
+    def newton2(self, u, extra, max_iter=20):
+        """Newton on ``[F; extra] = 0`` from ``u``: ``(u, tv)`` or ``(None, None)``."""
+        u = np.array(u, float)
+        for _ in range(max_iter):
+            ((F, g), (E, ge)), tv = self.fgrad(u, extra)
+            if not np.isfinite(F + E):
+                return None, None
+            if abs(F) <= self.tol and abs(E) <= self.tol:
+                return u, tv
+            try:
+                d = np.linalg.solve(np.array([g, ge]), -np.array([F, E]))
+            except np.linalg.LinAlgError:
+                return None, None
+            if not np.all(np.isfinite(d)) or np.linalg.norm(d) > 0.05:
+                return None, None
+            u = u + d
+        return None, None
 
     @staticmethod
     def _done(pts, codim, end):
