@@ -15,6 +15,7 @@ multiplier crosses; Neimark-Sacker: two).
 """
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,7 +63,7 @@ def _dense(curves, spacing):
     pts = []
     for c in curves:
         U = c.u
-        for a, b in zip(U[:-1], U[1:]):
+        for a, b in itertools.pairwise(U):
             k = max(1, int(np.ceil(np.linalg.norm(b - a) / spacing)))
             s = np.arange(k)[:, None] / k
             pts.append(a + s * (b - a))

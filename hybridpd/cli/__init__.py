@@ -14,7 +14,7 @@ from hybridpd._version import __version__
 from hybridpd.cli._common import EXIT_BAD_INPUT, Parser, UsageError
 
 #: Command modules, in the order the help lists them.
-COMMANDS = ("simulate", "orbit", "regions", "basin", "design", "reproduce")
+COMMANDS = ("simulate", "orbit", "regions", "boundaries", "basin", "design", "reproduce")
 
 
 def build_parser() -> Parser:
