@@ -262,12 +262,12 @@ class Tracer:
                 h *= 0.5
             if not ok:
                 return self._stalled(pts, codim, u, tv)
-            # box edge
-            if np.any(u1 < 0.0) or np.any(u1 > 1.0):
-                eok, ue, _ = self.edge_point(u, u1)
-                if eok:
-                    pts.append(ue)
-                return self._done(pts, codim, "box_edge")
+            # box edge: the end point is solved on the edge (then checked like any point)
+            at_edge = bool(np.any(u1 < 0.0) or np.any(u1 > 1.0))
+            if at_edge:
+                eok, u1, tv1 = self.edge_point(u, u1)
+                if not eok:
+                    return self._done(pts, codim, "box_edge")
             new = {nm: float(f(tv1)[0]) for nm, f, _ in watchers}
             ended = None
             for nm, f, mode in watchers:
@@ -291,6 +291,9 @@ class Tracer:
             if ended is not None:
                 pts.append(ended[1])
                 return self._done(pts, codim, f"codim2:{ended[0]}")
+            if at_edge:
+                pts.append(u1)
+                return self._done(pts, codim, "box_edge")
             # closed curve: the chord passes the start again
             if arc > 3 * self.max_step or arc > 0.05:
                 d = u1 - u
