@@ -12,10 +12,11 @@ kind                 test function (zero on the boundary)
                      means the masses stick after the impact and the orbit is not admissible
 ``grazing``          the viability margin ``min (L - |z3|) / L`` over the interior turning
                      points of the flight (paper (19)); ``< 0``: an extra contact
-``fold``             ``1 - lambda`` for the real multiplier of ``DP`` nearest ``+1``
-                     (sign of ``det(I - DP)``)
-``period_doubling``  ``1 + lambda`` for the real multiplier nearest ``-1``
-                     (sign of ``det(I + DP)``)
+``fold``             ``(1 - lambda_a)(1 - lambda_b) / (1 + |1 - lambda_b|)`` for the
+                     multiplier ``lambda_a`` of ``DP`` nearest ``+1`` and its partner (the
+                     conjugate, or the next real one): ``~ 1 - lambda_a`` away from a 1:1
+                     resonance and smooth through it (sign of ``det(I - DP)``)
+``period_doubling``  the same with ``1 + lambda`` (sign of ``det(I + DP)``)
 ``neimark_sacker``   ``1 - lambda_i lambda_j`` for the pair of multipliers with real product
                      nearest 1 (sign of the bialternate-product determinant
                      ``prod_{i<j} (1 - lambda_i lambda_j) = det(I - DP (.) DP)``); a
@@ -297,7 +298,9 @@ class TestValues:
                 sgn = 1.0 if kind == "fold" else -1.0
                 fac = 1.0 - sgn * lam
                 i, j = _nearest_pair(lam, sgn)
-                crit = (fac[rows, i] * fac[rows, j]).real
+                # divided by 1 + |partner factor|: O(1) when the partner is far (a
+                # multiplier of 1e3 would otherwise scale the test function by 1e3)
+                crit = (fac[rows, i] * fac[rows, j]).real / (1.0 + np.abs(fac[rows, j]))
                 mask = (np.arange(4)[None, :] == i[:, None]) | (np.arange(4)[None, :] == j[:, None])
                 rest = np.prod(np.where(mask, 1.0, fac), axis=-1).real
                 out = crit * np.sign(rest)

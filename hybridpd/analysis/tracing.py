@@ -186,6 +186,9 @@ class Tracer:
             if not (a < th < b):
                 th = 0.5 * (a + b)
             ok, u, _, tv = self.correct_on_line(ua + th * chord, t, max_dist=L)
+            if not ok and th != 0.5 * (a + b):
+                th = 0.5 * (a + b)
+                ok, u, _, tv = self.correct_on_line(ua + th * chord, t, max_dist=L)
             if not ok:
                 return None
             fm = float(mfun(tv)[0])
@@ -282,6 +285,8 @@ class Tracer:
                     continue
                 loc = self.locate(u, u1, a, b if np.isfinite(b) else -1.0, f, tv, tv1)
                 if loc is None:
+                    if mode == "end":     # never step past the end of the domain
+                        return self._done(pts, codim, "stalled")
                     continue
                 uc, tvc = loc
                 codim.append((nm, uc, tvc))
