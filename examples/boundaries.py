@@ -20,10 +20,6 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from hybridpd.analysis.boundaries import boundary_curves
-from hybridpd.plotting.boundaries import CODIM2_STYLES, KIND_STYLES, draw_boundaries
-from hybridpd.sweeps.regions import region_map
-
 PAPER = dict(mu=0.1, gamma=0.75, omega=5.0, n=1)
 ES = (0.1, 0.5, 0.9)
 COLORS = ("#0072B2", "#E69F00", "#009E73")   # Okabe-Ito: blue, orange, green
@@ -33,6 +29,10 @@ PANELS = [("collocated", (0.1, 50.0), (0.1, 50.0), "Fig. 4: collocated"),
 
 
 def panel(ax, case, xr, yr, title):
+    from hybridpd.analysis.boundaries import boundary_curves
+    from hybridpd.plotting.boundaries import draw_boundaries
+    from hybridpd.sweeps.regions import region_map
+
     rm = region_map(case, x=("kp", *xr, 120), y=("kv", *yr, 120), e=ES, mu=PAPER["mu"],
                     omega=PAPER["omega"], gamma=PAPER["gamma"], n=PAPER["n"])
     for k, e in enumerate(ES):
@@ -62,6 +62,8 @@ def main():
     ap.add_argument("--out", default="boundaries-out",
                     help="output directory (created), default ./boundaries-out")
     args = ap.parse_args()
+    from hybridpd.plotting.boundaries import CODIM2_STYLES, KIND_STYLES
+
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     fig = Figure(figsize=(17, 6.2), layout="constrained")
