@@ -418,7 +418,7 @@ def _codim2_points(plane, raw, tol=1e-6):
 def boundary_curves(case="collocated", *, x=("kp", 0.1, 50.0), y=("kv", 0.1, 50.0),
                     kp=None, kv=None, e=None, mu=None, gamma=None, omega=None, m2=1.0,
                     x10=1.0, n=1, kinds=KINDS, seed_grid=41, tol=1e-11, max_step=0.02,
-                    max_steps=4000, margin_samples=256) -> BoundaryResult:
+                    max_turn=0.1, max_steps=4000, margin_samples=256) -> BoundaryResult:
     """Trace the boundary curves of the symmetric orbit's regions in a parameter box.
 
     Parameters
@@ -443,6 +443,11 @@ def boundary_curves(case="collocated", *, x=("kp", 0.1, 50.0), y=("kv", 0.1, 50.
         Corrector tolerance on the (dimensionless) local test functions.
     max_step : float
         Largest step along a curve, as a fraction of the box (unit coordinates).
+    max_turn : float
+        Largest turn of the tangent between two points (radians); with ``max_step`` it
+        bounds the distance between the polyline's chords and the curve (about
+        ``max_step * max_turn / 8``, 2.5e-4 of the box by default). The points themselves
+        lie on the curve to ``tol`` whatever the step.
     max_steps : int
         Bound on the points of a curve per direction.
     margin_samples : int
@@ -485,6 +490,7 @@ def boundary_curves(case="collocated", *, x=("kp", 0.1, 50.0), y=("kv", 0.1, 50.
     max_step = check_positive("max_step", max_step)
     if max_step > 0.5:
         raise ValueError(f"max_step must lie in (0, 0.5] (a fraction of the box), got {max_step}")
+    max_turn = check_positive("max_turn", max_turn)
     gu = np.linspace(0.0, 1.0, seed_grid)
     UX, UY = np.meshgrid(gu, gu)
     tvg = plane.evaluate(plane.x.from_unit(UX.ravel()), plane.y.from_unit(UY.ravel()),
@@ -494,7 +500,7 @@ def boundary_curves(case="collocated", *, x=("kp", 0.1, 50.0), y=("kv", 0.1, 50.
     n_evals = 1
     for kind in kinds:
         tr = Tracer(plane, kind, tol=tol, max_step=max_step, max_steps=max_steps,
-                    margin_samples=margin_samples)
+                    max_turn=max_turn, margin_samples=margin_samples)
         a, b, c = _trace_kind(tr, kind, tvg, (seed_grid, seed_grid), kinds, raw_curves,
                               raw_codim)
         n_seeds += a
@@ -503,7 +509,7 @@ def boundary_curves(case="collocated", *, x=("kp", 0.1, 50.0), y=("kv", 0.1, 50.
         n_evals += tr.n_evals
     n_evals += _seed_from_codim2(plane, kinds, raw_curves, raw_codim,
                                  dict(tol=tol, max_step=max_step, max_steps=max_steps,
-                                      margin_samples=margin_samples))
+                                      max_turn=max_turn, margin_samples=margin_samples))
     curves = []
     for kind, U, ends in raw_curves:
         tv = plane.evaluate(plane.x.from_unit(U[:, 0]), plane.y.from_unit(U[:, 1]),

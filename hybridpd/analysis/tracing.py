@@ -89,7 +89,7 @@ class Tracer:
     """
 
     def __init__(self, plane: Plane, kind: str, *, tol=1e-11, max_step=0.02, min_step=1e-6,
-                 max_steps=4000, max_turn=0.2, margin_samples=256):
+                 max_steps=4000, max_turn=0.1, margin_samples=256):
         self.plane = plane
         self.kind = kind
         self.tol = tol
