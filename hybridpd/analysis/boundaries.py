@@ -54,6 +54,7 @@ CODIM2_KINDS = ("existence+grazing", "existence+fold", "existence+period_doublin
                 "resonance_1_2")
 
 _MULT = ("fold", "period_doubling", "neimark_sacker")
+_MAX_CODIM_SEEDS = 200     # bound on the codim-2 points tried as extra seeds
 
 
 def _pair(a, b):
@@ -328,7 +329,7 @@ def _seed_from_codim2(plane, kinds, curves, codim, opts):
     """Trace curves met at a codim-2 crossing that no coarse edge revealed (thin features)."""
     n_evals = 0
     done = 0
-    while done < len(codim):
+    while done < len(codim) and done < _MAX_CODIM_SEEDS:
         name, uc, _ = codim[done]
         done += 1
         for kind in name.split("+") if "+" in name else ():

@@ -246,7 +246,6 @@ class Tracer:
         t = direction * _perp(g0)
         u, tv = pts[0], tv0
         h = min(0.25 * self.max_step, 0.01)
-        arc = 0.0
         start = pts[0] if start is None else start
         vals = {nm: float(f(tv)[0]) for nm, f, _ in watchers}
         for _ in range(self.max_steps):
@@ -300,13 +299,12 @@ class Tracer:
                 pts.append(u1)
                 return self._done(pts, codim, "box_edge")
             # closed curve: the chord passes the start again
-            if arc > 3 * self.max_step or arc > 0.05:
+            if len(pts) > 2:        # (the first chords start at the start itself)
                 d = u1 - u
                 s = float((start - u) @ d / (d @ d))
                 if 0.0 <= s <= 1.0 and np.linalg.norm(u + s * d - start) < 0.25 * np.linalg.norm(d) + 1e-9:
                     pts.append(np.array(start, float))
                     return self._done(pts, codim, "closed")
-            arc += float(np.linalg.norm(u1 - u))
             pts.append(u1)
             u, tv, t, vals = u1, tv1, t1, new
             if its <= 3 and turn < self.max_turn / 3:
