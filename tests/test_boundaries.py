@@ -278,3 +278,36 @@ def test_cli_missing_fixed_parameter_exits_2(capsys):
                "--omega", "5", "--x", "kp", "1", "5", "--y", "kv", "1", "2", "--json"])
     assert rc == 2
     assert "e must be given" in capsys.readouterr().err
+
+
+def test_corner_of_the_existence_region_is_a_grazing_grazing_point():
+    # n = 3: two turning points of the flight graze at once where two grazing curves meet
+    res = boundary_curves("collocated", x=("kp", 0.1, 50.0), y=("kv", 0.1, 50.0), e=0.1,
+                          n=3, **PAPER)
+    assert {c.kind for c in res.curves} == {"grazing"}
+    ends = [e for c in res.curves for e in c.ends]
+    assert ends.count("codim2:grazing+grazing") == 2
+    (q,) = [q for q in res.codim2 if q.kind == "grazing+grazing"]
+    assert q.residual < 1e-3
+    _check_points(res)
+
+
+@pytest.mark.slow
+def test_existence_boundary_of_a_plastic_impact():
+    # e = 0: the masses stick after the impact on one side of the existence curve
+    res = boundary_curves("noncollocated", x=("kp", 0.1, 50.0), y=("kv", 0.1, 50.0), e=0.0,
+                          **PAPER)
+    (c,) = res.of_kind("existence")
+    from hybridpd.analysis.orbits import symmetric_orbits
+
+    U = c.u[1:-1]
+    d = c.u[2:] - c.u[:-2]
+    nrm = np.column_stack([-d[:, 1], d[:, 0]]) / np.linalg.norm(d, axis=1)[:, None]
+    codes = []
+    for sgn in (1, -1):
+        P = U + sgn * 1e-4 * nrm
+        r = symmetric_orbits(res.plane.x.from_unit(P[:, 0]), res.plane.y.from_unit(P[:, 1]),
+                             mu=0.1, e=0.0, L=0.75, omega=5.0, case="noncollocated")
+        codes.append(r.reason)
+    stuck = (codes[0] == 4) != (codes[1] == 4)
+    assert np.all(stuck)

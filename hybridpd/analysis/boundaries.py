@@ -158,8 +158,8 @@ class BoundaryResult:
                           yn: [self.plane.y.lo, self.plane.y.hi]},
                 "fixed": dict(self.plane.fixed),
                 "curves": [c.to_dict() for c in self.curves],
-                "codim2": [{"kind": p.kind, xn: float(p.x), yn: float(p.y)}
-                           for p in self.codim2],
+                "codim2": [{"kind": p.kind, xn: float(p.x), yn: float(p.y),
+                            "residual": p.residual} for p in self.codim2],
                 "seeds": self.n_seeds, "unresolved": self.unresolved,
                 "uncovered": self.uncovered}
 
@@ -399,6 +399,20 @@ def _trace_kind(tr: Tracer, kind, tvg, grid, kinds, curves, codim):
 # ---------------------------------------------------------------------------------------
 
 
+def _residual(name, tv):
+    """Largest |defining test function| of a codim-2 point."""
+    with np.errstate(invalid="ignore"):
+        if name == "grazing+grazing":
+            vals = [tv.margin[0], tv.margin2[0]]
+        elif name == "resonance_1_1":
+            vals = [tv.local_test("neimark_sacker")[0], 2.0 - tv.critical_pair()[1][0]]
+        elif name == "resonance_1_2":
+            vals = [tv.local_test("neimark_sacker")[0], tv.critical_pair()[2][0]]
+        else:
+            vals = [tv.local_test(k)[0] for k in name.split("+")]
+    return float(np.max(np.abs(vals)))
+
+
 def _codim2_points(plane, raw, tol=1e-6):
     out = []
     for name, u, tv in raw:
@@ -409,7 +423,13 @@ def _codim2_points(plane, raw, tol=1e-6):
             continue
         out.append(Codim2Point(kind=name, x=float(plane.x.from_unit(u[0])),
                                y=float(plane.y.from_unit(u[1])), u=np.array(u, float),
-                               multipliers=np.asarray(tv.lam[0]).copy()))
+                               multipliers=np.asarray(tv.lam[0]).copy(),
+                               residual=_residual(name, tv)))
+    # an unlocated corner approached from both sides is one point: keep the better one
+    approx = sorted((p for p in out if not p.residual <= 1e-8), key=lambda p: p.residual)
+    for i, p in enumerate(approx):
+        if any(q.kind == p.kind and np.linalg.norm(q.u - p.u) < 1e-3 for q in approx[:i]):
+            out = [q for q in out if q is not p]
     # a 1:1 resonance found after the fold crossing at the same point replaces it
     res = [p for p in out if p.kind == "resonance_1_1"]
     return [p for p in out if not (p.kind == "fold+neimark_sacker" and any(

@@ -52,6 +52,10 @@ class Codim2Point:
         Unit coordinates in the box.
     multipliers : ndarray, shape (4,), complex
         Multipliers of ``DP`` there (NaN where the formal orbit is singular).
+    residual : float
+        Largest absolute value of the two defining test functions at the point (about
+        1e-11 when located by Newton or on a curve; larger only for a ``grazing+grazing``
+        point where the margins are not smooth and the last curve point is reported).
     """
 
     kind: str
@@ -59,6 +63,7 @@ class Codim2Point:
     y: float
     u: np.ndarray = field(repr=False)
     multipliers: np.ndarray = field(repr=False)
+    residual: float = float("nan")
 
 
 def _perp(g):
@@ -317,12 +322,16 @@ class Tracer:
             # e.g. at e -> 0 the boundaries run into the box edge with unbounded slope
             return self._done(pts, codim, "box_edge")
         if self.kind == "grazing" and tv.margin2[0] < 1e-2:
-            # two interior turning points graze at once: a corner of the existence region
+            # two interior turning points graze at once (a corner of the existence region,
+            # or a max/min pair born at the wall, where the margins are not smooth): Newton
+            # on both margins, else the last point (its residual says how close it is)
             uc, tvc = self.newton2(u, lambda t: t.margin2)
-            if uc is not None:
+            if uc is None:
+                uc, tvc = u, tv
+            else:
                 pts.append(uc)
-                codim.append(("grazing", uc, tvc))
-                return self._done(pts, codim, "codim2:grazing")
+            codim.append(("grazing", uc, tvc))
+            return self._done(pts, codim, "codim2:grazing")
         return self._done(pts, codim, "stalled")
 
     def newton2(self, u, extra, max_iter=20):
