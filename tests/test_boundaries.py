@@ -311,3 +311,39 @@ def test_existence_boundary_of_a_plastic_impact():
         codes.append(r.reason)
     stuck = (codes[0] == 4) != (codes[1] == 4)
     assert np.all(stuck)
+
+
+_DOM = {"kp": (0.1, 50.0), "kv": (0.1, 30.0), "e": (0.02, 1.0), "mu": (0.02, 3.0),
+        "gamma": (0.05, 0.98), "omega": (0.5, 15.0), "m2": (0.2, 5.0)}
+
+
+@st.composite
+def _planes(draw):
+    names = draw(st.permutations(sorted(_DOM)))[:2]
+    axes = []
+    for nm in names:
+        lo, hi = _DOM[nm]
+        a = draw(st.floats(lo, hi - 0.1 * (hi - lo)))
+        b = draw(st.floats(a + 0.05 * (hi - lo), hi))
+        axes.append((nm, a, b))
+    fixed = {k: v for k, v in dict(kp=10.0, kv=2.0, e=0.5, mu=0.1, gamma=0.75,
+                                    omega=5.0).items() if k not in names}
+    return axes[0], axes[1], fixed
+
+
+@pytest.mark.slow
+@settings(max_examples=10, deadline=None)
+@given(case=st.sampled_from(["collocated", "noncollocated"]), plane=_planes(),
+       n=st.sampled_from([1, 3]))
+def test_random_planes_every_status_change_of_the_seed_grid_is_traced(case, plane, n):
+    x, y, fixed = plane
+    res = boundary_curves(case, x=x, y=y, n=n, seed_grid=21, **fixed)
+    for c in res.curves:
+        assert c.max_test <= 1e-9
+    xs = np.linspace(x[1], x[2], 21)
+    ys = np.linspace(y[1], y[2], 21)
+    cmp = compare_with_mask(res, region_status(res.plane, xs, ys), xs, ys)
+    if cmp.n_mask_edges:
+        assert cmp.mask_to_curves_cells <= 1.0, cmp
+    for kind, left, right in side_status(res):
+        assert np.all(left != right), kind

@@ -437,7 +437,7 @@ def _codim2_points(plane, raw, tol=1e-6):
 
 
 def boundary_curves(case="collocated", *, x=("kp", 0.1, 50.0), y=("kv", 0.1, 50.0),
-                    kp=None, kv=None, e=None, mu=None, gamma=None, omega=None, m2=1.0,
+                    kp=None, kv=None, e=None, mu=None, gamma=None, omega=None, m2=None,
                     x10=1.0, n=1, kinds=KINDS, seed_grid=41, tol=1e-11, max_step=0.02,
                     max_turn=0.1, max_steps=4000, margin_samples=256) -> BoundaryResult:
     """Trace the boundary curves of the symmetric orbit's regions in a parameter box.
@@ -453,7 +453,8 @@ def boundary_curves(case="collocated", *, x=("kp", 0.1, 50.0), y=("kv", 0.1, 50.
         ``gamma = L / x10``, ``omega`` in rad/time). Those not swept must be given; the value
         of a swept one is ignored if inside its range (ValueError otherwise).
     m2, x10 : float
-        Secondary mass and the primary mass's amplitude (default 1; ``L = gamma x10``).
+        Secondary mass (default 1 unless swept) and the primary mass's amplitude (default 1;
+        ``L = gamma x10``).
     n : int
         Odd orbit order.
     kinds : sequence of str

@@ -431,12 +431,12 @@ class Plane:
 
 
 def make_plane(case, x, y, *, kp=None, kv=None, e=None, mu=None, gamma=None, omega=None,
-               m2=1.0, x10=1.0, n=1) -> Plane:
+               m2=None, x10=1.0, n=1) -> Plane:
     """Validate a parameter plane: axes ``x``, ``y`` = ``(name, lo, hi)`` and fixed values.
 
     A fixed value given for a swept name is ignored when it lies in the axis range and
     rejected (ValueError) otherwise, so a contradictory input is never silently dropped.
-    Every parameter not swept must be given (``m2`` and ``x10`` default to 1).
+    Every parameter not swept must be given (``m2``, unless swept, and ``x10`` default to 1).
 
     Raises
     ------
@@ -451,6 +451,8 @@ def make_plane(case, x, y, *, kp=None, kv=None, e=None, mu=None, gamma=None, ome
     ay = Axis.parse(y, "y")
     if ax.name == ay.name:
         raise ValueError(f"the x and y axes must be different parameters, got {ax.name!r} twice")
+    if m2 is None and "m2" not in (ax.name, ay.name):
+        m2 = 1.0
     given = {"kp": kp, "kv": kv, "e": e, "mu": mu, "gamma": gamma, "omega": omega, "m2": m2}
     fixed = {"x10": check_positive("x10", x10)}
     for name, val in given.items():

@@ -69,10 +69,7 @@ def run(args) -> int:
     x = _parse_axis("x", args.x)
     y = _parse_axis("y", args.y)
     fixed = {k: getattr(args, k) for k in ("kp", "kv", "e", "mu", "gamma", "omega")}
-    m2 = args.m2
-    if m2 is None:
-        m2 = None if "m2" in (x[0], y[0]) else 1.0
-    res = boundary_curves(args.case, x=x, y=y, m2=m2, x10=args.x10, n=args.n,
+    res = boundary_curves(args.case, x=x, y=y, m2=args.m2, x10=args.x10, n=args.n,
                           seed_grid=args.seed_grid, max_step=args.max_step, **fixed)
     if args.json:
         print(json.dumps(res.to_dict()))
