@@ -14,22 +14,8 @@ from hybridpd._version import __version__
 from hybridpd.cli._common import EXIT_BAD_INPUT, Parser, UsageError
 
 #: Command modules, in the order the help lists them.
-COMMANDS = ("simulate", "orbit", "regions", "basin", "bifurcation", "design", "reproduce")
-
-
-DESCRIPTION = """\
-Analysis and design of PD control of mechanical systems with dynamic backlash: the impact
-pair of Mata-Jimenez, Brogliato and Goswami (two masses, a clearance 2L, restitution e, a PD
-loop with feed-forward tracking xd = xm cos(omega t)) and general linear mechanical systems
-with clearances and stops.
-
-Feedback cases: "collocated" measures the secondary mass x2, the one the force acts on;
-"noncollocated" (alias "non-collocated") measures the primary mass x1 through the backlash.
-Conventions: CONVENTIONS.md in the source distribution."""
-
-EPILOG = """\
-Run "hybridpd COMMAND --help" for a command's options and an example. Bad input prints one
-line and exits with status 2."""
+COMMANDS = ("simulate", "orbit", "regions", "basin", "boundaries", "bifurcation", "design",
+            "reproduce")
 
 
 def build_parser() -> Parser:
