@@ -18,6 +18,21 @@ COMMANDS = ("simulate", "orbit", "regions", "basin", "boundaries", "bifurcation"
             "reproduce")
 
 
+DESCRIPTION = """\
+Analysis and design of PD control of mechanical systems with dynamic backlash: the impact
+pair of Mata-Jimenez, Brogliato and Goswami (two masses, a clearance 2L, restitution e, a PD
+loop with feed-forward tracking xd = xm cos(omega t)) and general linear mechanical systems
+with clearances and stops.
+
+Feedback cases: "collocated" measures the secondary mass x2, the one the force acts on;
+"noncollocated" (alias "non-collocated") measures the primary mass x1 through the backlash.
+Conventions: CONVENTIONS.md in the source distribution."""
+
+EPILOG = """\
+Run "hybridpd COMMAND --help" for a command's options and an example. Bad input prints one
+line and exits with status 2."""
+
+
 def build_parser() -> Parser:
     parser = Parser(prog="hybridpd", description=DESCRIPTION, epilog=EPILOG)
     parser.add_argument("--version", action="version", version=f"hybridpd {__version__}")
