@@ -1,7 +1,6 @@
 """``hybridpd boundaries``: traced boundary curves of the symmetric orbit in a parameter box."""
 from __future__ import annotations
 
-import argparse
 import json
 
 from hybridpd.analysis.testfunctions import PARAMETERS
@@ -27,7 +26,7 @@ def register(sub):
         "boundaries of the simple symmetric orbit over a box of two parameters (any two of "
         f"{', '.join(PARAMETERS)}; the others fixed) by pseudo-arclength continuation of "
         "closed-form test functions, and locate the codimension-2 points where they meet.",
-        epilog=_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+        epilog=_EPILOG)
     p.add_argument("--case", required=True, choices=["collocated", "noncollocated"],
                    help="which position the PD loop feeds back")
     p.add_argument("--x", nargs=3, required=True, metavar=("NAME", "MIN", "MAX"),
