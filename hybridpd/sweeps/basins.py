@@ -580,8 +580,8 @@ class AttractorBasin:
                 rho = a.spectral_radius
                 stab = "stable" if a.stable else ("unstable" if a.stable is False else "?")
                 extra = f"; {stab}, spectral radius {rho:.4g}"
-            lines.append(f"{m.name}: {m.percent} of the on-section grid, area {m.area:.4g}"
-                         f"{extra}")
+            where = "window" if a.label == OFF_SECTION_LABEL else "on-section grid"
+            lines.append(f"{m.name}: {m.percent} of the {where}, area {m.area:.4g}{extra}")
         return lines
 
     def to_dict(self) -> dict:
