@@ -391,3 +391,47 @@ def test_basin_figures_keep_text_inside_and_legend_matches_drawing():
     _assert_no_text_clipped(fig)
     with pytest.raises(ValueError, match="basin"):
         plot_basin(np.zeros((3, 3)))
+
+
+def test_cli_basin_prints_attractors_and_measures(capsys):
+    import json
+
+    from hybridpd.cli import main
+
+    base = ["basin", "--case", "collocated", "--mu", "0.1", "--gamma", "0.75", "--omega", "5",
+            "--n", "1", "--e", "0.1", "--kp", "10", "--kv", "20", "--x1", "-3", "5", "12",
+            "--y1", "-2", "10", "12", "--max-extensions", "0"]
+    assert main(base) == 0
+    out = capsys.readouterr().out
+    assert "period-2 orbit: " in out and "symmetric orbit (period 1): " in out
+    assert "multipliers" in out and "y2 = y2* = " in out
+    assert main([*base, "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    names = [a["name"] for a in d["attractors"]]
+    assert names[:2] == ["symmetric orbit (period 1)", "period-2 orbit"]
+    lab = np.array(d["attractor_labels"])
+    assert lab.shape == (12, 12)
+    for a in d["attractors"]:
+        assert a["count"] == int((lab == a["label"]).sum())
+    assert d["attractors"][1]["period"] == 2 and len(d["attractors"][1]["points"]) == 2
+    assert main([*base, "--max-period", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "max-period" in err
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case,e,kp,kv", [("collocated", 0.1, 10.0, 20.0),
+                                          ("collocated", 0.9, 2.0, 1.0),
+                                          ("noncollocated", 0.1, 10.0, 20.0)])
+def test_attractor_labels_agree_with_direct_simulation_many_points(case, e, kp, kv):
+    o = symmetric_orbit(ImpactPair(0.1, e, 0.75), PDGains(kp, kv), 5.0, case=case)
+    mapper = ImpactMapper.from_orbit(o)
+    ab = attractor_basin(mapper, (-3, 5, 50), (-2, 10, 50))
+    grid = section_grid(o.fixed_point, 0.75, ab.x1, ab.y1).reshape(-1, 4)
+    lab = ab.labels.ravel()
+    rng = np.random.default_rng(7)
+    for i in rng.choice(len(grid), 150, replace=False):
+        if lab[i] == OFF_SECTION_LABEL:
+            assert grid[i, 3] <= 0
+            continue
+        _check_label_by_simulation(mapper.map, ab, int(lab[i]), grid[i], 1500)

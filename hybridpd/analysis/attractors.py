@@ -271,8 +271,13 @@ class CycleCatalog:
         return None
 
     def _match(self, tails: np.ndarray, att: Attractor) -> np.ndarray:
-        d2 = paper_distance2(tails[:, :, None, :], att.points[None, None, :, :], self.T)
-        return np.all(d2.min(axis=2) < self.criterion, axis=1)
+        # the first iterate rules most tails out; the whole tail only for the rest
+        d0 = paper_distance2(tails[:, 0, None, :], att.points[None, :, :], self.T)
+        ok = d0.min(axis=1) < self.criterion
+        idx = np.flatnonzero(ok)
+        d2 = paper_distance2(tails[idx, :, None, :], att.points[None, None, :, :], self.T)
+        ok[idx] = np.all(d2.min(axis=2) < self.criterion, axis=1)
+        return ok
 
     def _period(self, tails: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Smallest repeating period of each tail (0: none) and its repeat error."""
