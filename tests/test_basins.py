@@ -264,6 +264,12 @@ def test_window_extends_until_the_basin_boundary_is_inside():
                           max_extensions=2)
     assert len(ab5.windows) == 3 and ab5.reaches_edge
     assert any("reaches the window edge" in line for line in ab5.summary())
+    # finer extended grids keep the first cell size up to max_points per axis
+    abf = attractor_basin(mapper, (0.5, 1.5, 12), (2.5, 4.0, 12), max_extensions=2,
+                          max_points=30)
+    assert 12 < max(len(abf.x1), len(abf.y1)) <= 30
+    with pytest.raises(ValueError, match="max_points"):
+        attractor_basin(mapper, (0, 1, 5), (3, 4, 5), max_points=3)
     with pytest.raises(ValueError, match="max_extensions"):
         attractor_basin(mapper, (0, 1, 3), (3, 4, 3), max_extensions=-1)
 

@@ -47,18 +47,21 @@ def basin_colors(labels) -> dict:
 
 
 def basin_title(meta: dict) -> str:
-    """Two title lines with the case, gains, restitution and the conventions (mu, gamma, ...)."""
-    def g(key, fmt="{:g}"):
-        v = meta.get(key)
-        return "?" if v is None else fmt.format(v)
-
+    """Two title lines: case, restitution and gains; then the conventions (mu, gamma, omega, n,
+    m2). Values the metadata does not hold are left out."""
     gamma = meta.get("gamma")
-    if gamma is None and meta.get("x10"):
+    if gamma is None and meta.get("x10") and meta.get("L") is not None:
         gamma = meta["L"] / meta["x10"]
-    gam = "?" if gamma is None else f"{gamma:g}"
-    return (f"{str(meta.get('case', '')).capitalize()} PD: $e$ = {g('e')}, $k_p$ = {g('kp')}, "
-            f"$k_v$ = {g('kv')}\n$\\mu$ = {g('mu')}, $\\gamma$ = {gam}, $\\omega$ = "
-            f"{g('omega')}, $n$ = {g('n')}, $m_2$ = {g('m2')}")
+    vals = dict(meta, gamma=gamma)
+
+    def part(keys):
+        return ", ".join(f"{sym} = {vals[k]:g}" for k, sym in keys if vals.get(k) is not None)
+
+    first = part((("e", "$e$"), ("kp", "$k_p$"), ("kv", "$k_v$")))
+    second = part((("mu", "$\\mu$"), ("gamma" if gamma is not None else "L",
+                                        "$\\gamma$" if gamma is not None else "$L$"),
+                   ("omega", "$\\omega$"), ("n", "$n$"), ("m2", "$m_2$")))
+    return f"{str(meta.get('case', '')).capitalize()} PD: {first}\n{second}"
 
 
 def _as_attractor_basin(b):

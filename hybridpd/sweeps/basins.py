@@ -1,4 +1,4 @@
-"""Basins of attraction of a fixed point of the impact map (paper Figs 6-7).
+"""Basins of attraction of the impact map (paper Figs 6-7), labelled by attractor and measured.
 
 Two layers, after Attractors.jl: a **mapper** that takes one initial condition on the section
 to a label, and **basins** as a thin layer that applies a mapper over a 2-D grid.
@@ -28,6 +28,17 @@ of the previous 32 to within ``1e-12`` (relative), the trajectory sits on a peri
 ``P`` and iterate ``n_iter`` is known; it is used only when that iterate's criterion value is
 not within ``1e-6`` (relative) of the threshold. The tests compare labels with and without the
 early exits on grids, and ``early_exit=False`` runs every trajectory to the end.
+
+**Attractors.** :func:`attractor_basin` labels each point with the attractor it reaches:
+``0`` the symmetric orbit (the paper's criterion above), ``1, 2, ...`` other periodic orbits of
+``P`` found in the iterates ``n_iter .. n_iter + max_period + 2`` of the unconverged points and
+refined by Newton on ``P^k`` (:class:`hybridpd.analysis.attractors.CycleCatalog`), negative
+codes for sticking, divergence, no convergence within the iterations, unresolved flights and
+points off the section. The result lists the attractors (section points, period, multipliers,
+stability) and measures each basin (grid count, share of the on-section grid, area). While the
+symmetric orbit's basin touches the window's edge the window is extended (a bounded number of
+times); the result says whether it still does. :func:`format_percent` never rounds a share to
+``100 %`` or ``0 %`` when some points differ.
 """
 from __future__ import annotations
 
@@ -650,8 +661,9 @@ def _grow(window, centre, edges) -> tuple:
 
 
 def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
-                    extend: bool = True, max_extensions: int = 3, executor="serial",
-                    chunk_size=None, progress=False, max_workers=None) -> AttractorBasin:
+                    extend: bool = True, max_extensions: int = 3, max_points=None,
+                    executor="serial", chunk_size=None, progress=False,
+                    max_workers=None) -> AttractorBasin:
     """Label the slice ``(x1, y1)`` by the attractor each point reaches, and measure the basins.
 
     Each grid point first gets the paper's label (:class:`ImpactMapper`); converged points are
@@ -664,8 +676,9 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
     With ``extend``, while a point of the symmetric orbit's basin lies on the window's edge,
     the touching sides are pushed out to twice their distance from the fixed point ``(x1*,
     y1*)`` (at least half the span) and the grid is relabelled, at most ``max_extensions``
-    times, with the same number of points (so the cells grow). The result says whether the
-    basin still reaches the final window's edge (:attr:`AttractorBasin.reaches_edge`).
+    times, with the same number of points (so the cells grow) unless ``max_points`` allows
+    more. The result says whether the basin still reaches the final window's edge
+    (:attr:`AttractorBasin.reaches_edge`).
 
     Parameters
     ----------
@@ -677,6 +690,9 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
     extend : bool
     max_extensions : int
         ``>= 0``.
+    max_points : int, optional
+        Bound on the points per axis of an extended window, which then keeps the first
+        window's cell size up to that bound (default: the first window's number of points).
     executor, chunk_size, progress, max_workers
         As in :func:`basin_of_attraction`.
 
@@ -697,6 +713,13 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
     ys = check_axis("y1", y1)
     if not (int(max_extensions) == max_extensions and max_extensions >= 0):
         raise ValueError(f"max_extensions must be an integer >= 0, got {max_extensions!r}")
+    nx0, ny0 = len(xs), len(ys)
+    if max_points is None:
+        max_points = max(nx0, ny0)
+    if not (int(max_points) == max_points and max_points >= max(nx0, ny0)):
+        raise ValueError(f"max_points must be an integer >= the first window's points per "
+                         f"axis ({max(nx0, ny0)}), got {max_points!r}")
+    cell = (float(xs[-1] - xs[0]) / max(nx0 - 1, 1), float(ys[-1] - ys[0]) / max(ny0 - 1, 1))
     cat = CycleCatalog(mapper.map, mapper.fixed_point, criterion=mapper.criterion,
                        max_period=max_period)
     fp = mapper.fixed_point
@@ -711,8 +734,10 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
         if not (extend and edges) or len(windows) > max_extensions:
             break
         w = _grow(windows[-1], centre, edges)
-        xs = np.linspace(w[0], w[1], len(xs))
-        ys = np.linspace(w[2], w[3], len(ys))
+        nx = min(max(nx0, round((w[1] - w[0]) / cell[0]) + 1), int(max_points))
+        ny = min(max(ny0, round((w[3] - w[2]) / cell[1]) + 1), int(max_points))
+        xs = np.linspace(w[0], w[1], nx)
+        ys = np.linspace(w[2], w[3], ny)
     att = np.full(lab.shape, NO_CONVERGENCE, dtype=np.int64)
     att[lab == 0] = 0
     att[lab == 2] = DIVERGED
@@ -726,5 +751,5 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
     entries += [outcome(k, mapper.n_iter) for k in sorted(OUTCOMES, reverse=True) if k in present]
     basin = _basin_result(mapper, xs, ys, lab, out["iterations"])
     meta = dict(basin.metadata, max_period=int(max_period), extend=bool(extend),
-                max_extensions=int(max_extensions))
+                max_extensions=int(max_extensions), max_points=int(max_points))
     return AttractorBasin(xs, ys, att, tuple(entries), basin, tuple(windows), edges, meta)
