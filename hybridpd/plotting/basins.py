@@ -154,22 +154,17 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
                          label="off the section ($y_1 \\leq y_2^*$)")
         ax.add_patch(band)
         handles.append(band)
+    outside = []
     for a in entries:
         if a.label < 0:
             continue
         xy = a.slice_points(L)
         inside = ((xy[:, 0] >= extent[0]) & (xy[:, 0] <= extent[1]) & (xy[:, 1] >= extent[2])
                   & (xy[:, 1] <= extent[3]))
-        seen = "" if inside.all() else f", {int(inside.sum())} of {len(xy)} inside the window"
-        if a.label == 0:
-            (ln,) = ax.plot(xy[:, 0], xy[:, 1], ls="none", marker="*", ms=15, mfc="white",
-                            mec="black", mew=1.2, zorder=3,
-                            label=f"fixed point of the symmetric orbit{seen.replace(', ', ' (', 1) + ')' if seen else ''}")
-        else:
-            k = (a.label - 1) % len(_MARKERS)
-            (ln,) = ax.plot(xy[:, 0], xy[:, 1], ls="none", marker=_MARKERS[k], ms=8,
-                            mfc=colors[a.label], mec="black", mew=1.2, zorder=3,
-                            label=f"section points of the {a.name} (projected{seen})")
+        if not inside.any():
+            outside.append(a.name)
+            continue
+        ln = _mark(ax, a, xy[inside], len(xy), colors[a.label])
         handles.append(ln)
     ax.set_xlim(extent[0], extent[1])
     ax.set_ylim(extent[2], extent[3])
@@ -179,6 +174,8 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     if legend:
         note = (f"slice: $\\phi = \\phi^* = {fp[0]:.4g}$, $y_2 = y_2^* = {fp[2]:.4g}$; "
                 f"{len(x)} x {len(y)} points")
+        if outside:
+            note += "\nsection points outside the window: " + ", ".join(outside)
         if edges:
             note += ("\nthe symmetric orbit's basin reaches the window's edge ("
                      + ", ".join(e.replace("x1", "$x_1$").replace("y1", "$y_1$") for e in edges)
@@ -186,3 +183,27 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
         ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=1,
                   fontsize=8, frameon=False, title=note, title_fontsize=8)
     return fig
+
+
+def _stability_words(a) -> str:
+    if a.stable is None or not np.isfinite(a.spectral_radius):
+        return ""
+    return (", stable" if a.stable else
+            f", unstable: spectral radius {a.spectral_radius:.4g}")
+
+
+def _mark(ax, a, xy, n_total: int, color):
+    """Markers of an attractor's section points inside the window (projected on the slice)."""
+    part = "" if len(xy) == n_total else f", {len(xy)} of {n_total} inside the window"
+    if a.label == 0:
+        (ln,) = ax.plot(xy[:, 0], xy[:, 1], ls="none", marker="*", ms=15, mfc="white",
+                        mec="black", mew=1.2, zorder=3,
+                        label=f"fixed point of the symmetric orbit{_stability_words(a)}")
+        return ln
+    k = (a.label - 1) % len(_MARKERS)
+    # drawn over the (larger) star, so both show where they overlap
+    (ln,) = ax.plot(xy[:, 0], xy[:, 1], ls="none", marker=_MARKERS[k], ms=7, mfc=color,
+                    mec="black", mew=1.2, zorder=4,
+                    label=f"section points of the {a.name} (projected{part}"
+                          f"{_stability_words(a)})")
+    return ln
