@@ -2,6 +2,8 @@
 exits change no label, cycles are fixed points of P^k, windows grow, measures are formatted."""
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from hybridpd import ImpactPair, PDGains
 from hybridpd.analysis.attractors import (
@@ -441,3 +443,26 @@ def test_attractor_labels_agree_with_direct_simulation_many_points(case, e, kp, 
             assert grid[i, 3] <= 0
             continue
         _check_label_by_simulation(mapper.map, ab, int(lab[i]), grid[i], 1500)
+
+
+@given(whole=st.integers(1, 10**9), data=st.data(), digits=st.integers(0, 4))
+@settings(max_examples=200, deadline=None)
+def test_format_percent_is_within_rounding_and_never_at_the_ends(whole, data, digits):
+    part = data.draw(st.integers(0, whole))
+    s = format_percent(part, whole, digits)
+    assert s.endswith(" %")
+    if part == 0:
+        assert s == "0 %"
+    elif part == whole:
+        assert s == "100 %"
+    else:
+        assert s not in ("0 %", "100 %")
+        body = s[:-2]
+        step = 10.0 ** -digits
+        p = 100.0 * part / whole
+        if body.startswith(">"):
+            assert float(body[1:]) == pytest.approx(100 - step) and p > 100 - step
+        elif body.startswith("<"):
+            assert float(body[1:]) == pytest.approx(step) and p < step
+        else:
+            assert abs(float(body) - p) <= 0.5 * step + 1e-9 and 0 < float(body) < 100
