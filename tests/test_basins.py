@@ -270,6 +270,8 @@ def test_window_extends_until_the_basin_boundary_is_inside():
     abf = attractor_basin(mapper, (0.5, 1.5, 12), (2.5, 4.0, 12), max_extensions=2,
                           max_points=30)
     assert 12 < max(len(abf.x1), len(abf.y1)) <= 30
+    ab7 = attractor_basin(mapper, (0.5, 1.5, 7), (2.5, 4.0, 9), max_extensions=1)
+    assert ab7.labels.shape == (9, 7) and len(ab7.windows) == 2
     with pytest.raises(ValueError, match="max_points"):
         attractor_basin(mapper, (0, 1, 5), (3, 4, 5), max_points=3)
     with pytest.raises(ValueError, match="max_extensions"):

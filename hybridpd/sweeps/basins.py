@@ -692,7 +692,8 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
         ``>= 0``.
     max_points : int, optional
         Bound on the points per axis of an extended window, which then keeps the first
-        window's cell size up to that bound (default: the first window's number of points).
+        window's cell size up to that bound (default: every window has the first window's
+        number of points on each axis).
     executor, chunk_size, progress, max_workers
         As in :func:`basin_of_attraction`.
 
@@ -714,11 +715,11 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
     if not (int(max_extensions) == max_extensions and max_extensions >= 0):
         raise ValueError(f"max_extensions must be an integer >= 0, got {max_extensions!r}")
     nx0, ny0 = len(xs), len(ys)
-    if max_points is None:
-        max_points = max(nx0, ny0)
-    if not (int(max_points) == max_points and max_points >= max(nx0, ny0)):
+    if max_points is not None and not (int(max_points) == max_points
+                                       and max_points >= max(nx0, ny0)):
         raise ValueError(f"max_points must be an integer >= the first window's points per "
                          f"axis ({max(nx0, ny0)}), got {max_points!r}")
+    cap = (nx0, ny0) if max_points is None else (int(max_points), int(max_points))
     cell = (float(xs[-1] - xs[0]) / max(nx0 - 1, 1), float(ys[-1] - ys[0]) / max(ny0 - 1, 1))
     cat = CycleCatalog(mapper.map, mapper.fixed_point, criterion=mapper.criterion,
                        max_period=max_period)
@@ -734,8 +735,8 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
         if not (extend and edges) or len(windows) > max_extensions:
             break
         w = _grow(windows[-1], centre, edges)
-        nx = min(max(nx0, round((w[1] - w[0]) / cell[0]) + 1), int(max_points))
-        ny = min(max(ny0, round((w[3] - w[2]) / cell[1]) + 1), int(max_points))
+        nx = min(max(nx0, round((w[1] - w[0]) / cell[0]) + 1), cap[0])
+        ny = min(max(ny0, round((w[3] - w[2]) / cell[1]) + 1), cap[1])
         xs = np.linspace(w[0], w[1], nx)
         ys = np.linspace(w[2], w[3], ny)
     att = np.full(lab.shape, NO_CONVERGENCE, dtype=np.int64)
@@ -751,5 +752,6 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
     entries += [outcome(k, mapper.n_iter) for k in sorted(OUTCOMES, reverse=True) if k in present]
     basin = _basin_result(mapper, xs, ys, lab, out["iterations"])
     meta = dict(basin.metadata, max_period=int(max_period), extend=bool(extend),
-                max_extensions=int(max_extensions), max_points=int(max_points))
+                max_extensions=int(max_extensions),
+                max_points=None if max_points is None else int(max_points))
     return AttractorBasin(xs, ys, att, tuple(entries), basin, tuple(windows), edges, meta)
