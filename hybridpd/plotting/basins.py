@@ -172,16 +172,9 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     ax.set_ylabel("$y_1$ before the impact")
     ax.set_title(title if title is not None else basin_title(meta), fontsize=9)
     if legend:
-        note = (f"slice: $\\phi = \\phi^* = {fp[0]:.4g}$, $y_2 = y_2^* = {fp[2]:.4g}$; "
-                f"{len(x)} x {len(y)} points")
-        if outside:
-            note += "\nsection points outside the window: " + ", ".join(outside)
-        if edges:
-            note += ("\nthe symmetric orbit's basin reaches the window's edge ("
-                     + ", ".join(e.replace("x1", "$x_1$").replace("y1", "$y_1$") for e in edges)
-                     + "):\nit may extend beyond the window")
         ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=1,
-                  fontsize=8, frameon=False, title=note, title_fontsize=8)
+                  fontsize=8, frameon=False, title=_note(fp, len(x), len(y), outside, edges),
+                  title_fontsize=8)
     return fig
 
 
@@ -207,3 +200,16 @@ def _mark(ax, a, xy, n_total: int, color):
                     label=f"section points of the {a.name} (projected{part}"
                           f"{_stability_words(a)})")
     return ln
+
+
+def _note(fp, nx: int, ny: int, outside, edges) -> str:
+    """Legend title: the slice's fixed coordinates, the grid, what lies outside the window."""
+    note = (f"slice: $\\phi = \\phi^* = {fp[0]:.4g}$, $y_2 = y_2^* = {fp[2]:.4g}$; "
+            f"{nx} x {ny} points")
+    if outside:
+        note += "\nsection points outside the window: " + ", ".join(outside)
+    if edges:
+        note += ("\nthe symmetric orbit's basin reaches the window's edge ("
+                 + ", ".join(e.replace("x1", "$x_1$").replace("y1", "$y_1$") for e in edges)
+                 + "):\nit may extend beyond the window")
+    return note

@@ -726,7 +726,7 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
     fp = mapper.fixed_point
     centre = (fp[1] + mapper.map.pair.L, fp[2] + fp[3])
     windows = []
-    while True:
+    while True:   # bounded: at most max_extensions + 1 windows
         windows.append((float(xs[0]), float(xs[-1]), float(ys[0]), float(ys[-1])))
         out = _label_grid(mapper, xs, ys, cat.tail_length, executor=executor,
                           chunk_size=chunk_size, progress=progress, max_workers=max_workers)
@@ -739,14 +739,7 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
         ny = min(max(ny0, round((w[3] - w[2]) / cell[1]) + 1), cap[1])
         xs = np.linspace(w[0], w[1], nx)
         ys = np.linspace(w[2], w[3], ny)
-    att = np.full(lab.shape, NO_CONVERGENCE, dtype=np.int64)
-    att[lab == 0] = 0
-    att[lab == 2] = DIVERGED
-    att[lab == 3] = STICKING
-    att[lab == 4] = UNRESOLVED
-    att[lab == OFF_SECTION] = OFF_SECTION_LABEL
-    nc = lab == 1
-    att[nc] = cat.assign(out["tail"][nc])
+    att = _attractor_labels(lab, out["tail"], cat)
     present = set(np.unique(att).tolist())
     entries = [a for a in cat.attractors if a.label == 0 or a.label in present]
     entries += [outcome(k, mapper.n_iter) for k in sorted(OUTCOMES, reverse=True) if k in present]
@@ -755,3 +748,14 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
                 max_extensions=int(max_extensions),
                 max_points=None if max_points is None else int(max_points))
     return AttractorBasin(xs, ys, att, tuple(entries), basin, tuple(windows), edges, meta)
+
+
+def _attractor_labels(lab: np.ndarray, tails: np.ndarray, cat: CycleCatalog) -> np.ndarray:
+    """Attractor labels from the paper's labels; unconverged points by their tails."""
+    att = np.full(lab.shape, NO_CONVERGENCE, dtype=np.int64)
+    for paper, code in ((0, 0), (2, DIVERGED), (3, STICKING), (4, UNRESOLVED),
+                        (OFF_SECTION, OFF_SECTION_LABEL)):
+        att[lab == paper] = code
+    nc = lab == 1
+    att[nc] = cat.assign(tails[nc])
+    return att
