@@ -22,7 +22,7 @@ at the point of smallest phase.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -260,6 +260,13 @@ class CycleCatalog:
                          self._name(k, label), k, pts, orb.multipliers,
                          float(orb.spectral_radius), orb.stable, walls, float(orb.residual))
 
+    def _add(self, att: Attractor) -> None:
+        same = [i for i, a in enumerate(self.attractors) if a.label > 0 and a.period == att.period]
+        if len(same) == 1:   # a second cycle of this period: the first becomes "A"
+            first = self.attractors[same[0]]
+            self.attractors[same[0]] = replace(first, name=f"{first.name} A")
+        self.attractors.append(att)
+
     def _known(self, att: Attractor) -> Attractor | None:
         """An attractor already catalogued with the same cycle (up to a cyclic shift)."""
         for a in self.attractors:
@@ -331,9 +338,11 @@ class CycleCatalog:
                 continue
             tried += 1
             att = self._refine(tails[i, -1], int(per[j]), len(self.attractors))
-            if att is None or self._known(att) is not None:
+            # keep a new cycle only if the tail that led to it lies on it
+            if (att is None or self._known(att) is not None
+                    or not self._match(tails[i:i + 1], att)[0]):
                 continue
-            self.attractors.append(att)
+            self._add(att)
             rest = free[lab[free] == NO_CONVERGENCE]
             lab[rest] = np.where(self._match(tails[rest], att), att.label, NO_CONVERGENCE)
         return lab
