@@ -181,12 +181,13 @@ def _check_label_by_simulation(P, ab, label, s, n_iter, criterion=1e-3):
         assert near[label] and to_fp >= criterion
 
 
-@pytest.mark.parametrize("case,e,kp,kv,n_iter", [
-    ("collocated", 0.1, 10.0, 20.0, 1500),     # symmetric orbit and the period-2 motion
-    ("collocated", 0.9, 2.0, 1.0, 1500),       # symmetric orbit and a period-3 orbit
-    ("noncollocated", 0.1, 10.0, 20.0, 300),   # unstable symmetric orbit: no convergence
+@pytest.mark.parametrize("case,e,kp,kv,n_iter,periods", [
+    ("collocated", 0.1, 10.0, 20.0, 1500, [2]),        # symmetric orbit, period-2 motion
+    ("collocated", 0.9, 2.0, 1.0, 1500, [3]),          # symmetric orbit, a period-3 orbit
+    ("noncollocated", 0.1, 10.0, 20.0, 300, []),       # unstable symmetric orbit
+    ("noncollocated", 0.5, 20.0, 2.0, 600, [1, 1, 2, 3]),  # four other cycles coexist
 ])
-def test_attractor_labels_agree_with_direct_simulation(case, e, kp, kv, n_iter):
+def test_attractor_labels_agree_with_direct_simulation(case, e, kp, kv, n_iter, periods):
     o = symmetric_orbit(ImpactPair(0.1, e, 0.75), PDGains(kp, kv), 5.0, case=case)
     mapper = ImpactMapper.from_orbit(o, n_iter=n_iter)
     ab = attractor_basin(mapper, (-3, 5, 16), (-2, 10, 16), extend=False)
@@ -204,10 +205,13 @@ def test_attractor_labels_agree_with_direct_simulation(case, e, kp, kv, n_iter):
                 continue
             _check_label_by_simulation(P, ab, a.label, s, n_iter)
     assert seen >= set(np.unique(ab.labels).tolist())
-    if case == "collocated":
-        assert any(a.period == (2 if e == 0.1 else 3) for a in ab.attractors if a.label > 0)
-    else:
-        assert ab.measure(0).count == 0 and ab.measure(NO_CONVERGENCE).fraction == 1.0
+    cycles = [a for a in ab.attractors if a.label > 0]
+    assert sorted(a.period for a in cycles) == periods
+    assert len({a.name for a in ab.attractors}) == len(ab.attractors)
+    for a in cycles:   # every listed cycle is a stable fixed point of P^k with a basin
+        assert a.stable and a.residual < 1e-10 and ab.measure(a.label).count > 0
+    if o.stable is False:
+        assert ab.measure(0).count == 0
 
 
 def test_cycles_are_deduplicated_up_to_a_cyclic_shift():
@@ -432,7 +436,8 @@ def test_cli_basin_prints_attractors_and_measures(capsys):
 @pytest.mark.slow
 @pytest.mark.parametrize("case,e,kp,kv", [("collocated", 0.1, 10.0, 20.0),
                                           ("collocated", 0.9, 2.0, 1.0),
-                                          ("noncollocated", 0.1, 10.0, 20.0)])
+                                          ("noncollocated", 0.1, 10.0, 20.0),
+                                          ("noncollocated", 0.5, 20.0, 2.0)])
 def test_attractor_labels_agree_with_direct_simulation_many_points(case, e, kp, kv):
     o = symmetric_orbit(ImpactPair(0.1, e, 0.75), PDGains(kp, kv), 5.0, case=case)
     mapper = ImpactMapper.from_orbit(o)
