@@ -148,6 +148,18 @@ def test_period2_attractor_is_a_fixed_point_of_P2_not_of_P():
         assert _wrapped_sup(_power(P, s, 1), s, P.period) > 1e-2
     # the points are one cycle: P maps the first to the second
     assert _wrapped_sup(_power(P, a.points[0], 1), a.points[1], P.period) < 1e-10
+    # the hybrid-automaton simulator (event location, python-control loop), started just
+    # after the impact at points[0], meets the +L wall at points[1], then at points[0]
+    T, L = P.period, o.pair.L
+    s0 = a.points[0]
+    post = o.pair.impact(np.array([s0[1] + L, s0[2] + s0[3], s0[1], s0[2]]), +1)
+    tr = o.system().simulate(post, (s0[0], s0[0] + 2.6 * T))
+    plus = np.flatnonzero(tr.walls == 1)[:2]
+    assert len(plus) == 2
+    for j, i in enumerate(plus):
+        _x1, y1, x2, y2 = tr.pre[i]
+        s_sim = np.array([tr.impact_times[i] % T, x2, y2, y1 - y2])
+        assert _wrapped_sup(s_sim, a.points[(j + 1) % 2], T) < 1e-9
     # multipliers against finite differences of the simulated map (chain rule over the cycle)
     J = P.jacobian_fd(a.points[1]) @ P.jacobian_fd(a.points[0])
     ev = np.sort(np.abs(np.linalg.eigvals(J)))[::-1]
