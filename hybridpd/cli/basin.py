@@ -3,8 +3,6 @@ from __future__ import annotations
 
 import json
 
-import numpy as np
-
 from hybridpd.cli._common import add_plant, add_sweep, clearance, command, progress_wanted
 
 DESCRIPTION = ("Iterates the impact map from every point of a section slice in the "
@@ -35,15 +33,19 @@ def register(sub):
                    help="iterations of the impact map (two impacts each)")
     p.add_argument("--no-early-exit", action="store_true",
                    help="run every trajectory for all iterations")
+    p.add_argument("--max-period", type=int, default=8,
+                   help="largest period of P searched for attractors")
+    p.add_argument("--max-extensions", type=int, default=3,
+                   help="window extensions while the symmetric orbit's basin touches the edge "
+                        "(0: keep the window)")
     add_sweep(p)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    from hybridpd.analysis.impactmap import ImpactMap
     from hybridpd.analysis.orbits import symmetric_orbit
     from hybridpd.model import ImpactPair, PDGains
-    from hybridpd.sweeps.basins import LABELS, ImpactMapper, basin_of_attraction
+    from hybridpd.sweeps.basins import LABELS, ImpactMapper, attractor_basin
 
     L, x10 = clearance(args)
     orb = symmetric_orbit(ImpactPair(args.mu, args.e, L, args.m2), PDGains(args.kp, args.kv),
@@ -56,13 +58,19 @@ def run(args) -> int:
             raise ValueError(f"--{nm} NUM must be an integer, got {num:g}")
     if args.iterations < 1:
         raise ValueError(f"--iterations must be >= 1, got {args.iterations}")
-    mapper = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference(), orb.case),
-                          orb.fixed_point, n_iter=args.iterations,
-                          early_exit=not args.no_early_exit)
-    b = basin_of_attraction(mapper, args.x1, args.y1, executor=args.executor,
-                            max_workers=args.workers, progress=progress_wanted(args))
+    if not 1 <= args.max_period <= 64:
+        raise ValueError(f"--max-period must be in [1, 64], got {args.max_period}")
+    if args.max_extensions < 0:
+        raise ValueError(f"--max-extensions must be >= 0, got {args.max_extensions}")
+    mapper = ImpactMapper.from_orbit(orb, n_iter=args.iterations,
+                                     early_exit=not args.no_early_exit)
+    ab = attractor_basin(mapper, args.x1, args.y1, max_period=args.max_period,
+                         extend=args.max_extensions > 0, max_extensions=args.max_extensions,
+                         executor=args.executor, max_workers=args.workers,
+                         progress=progress_wanted(args))
+    b = ab.basin
     if args.out:
-        b.save(args.out)
+        ab.save(args.out)
     fp = b.fixed_point
     if args.json:
         print(json.dumps({
@@ -73,11 +81,16 @@ def run(args) -> int:
                             "y1": float(fp[2] + fp[3]), "y2": float(fp[2])},
             "converged_fraction": b.converged_fraction, "spectral_radius": orb.spectral_radius,
             "stable": orb.stable, "certified_radius": mapper.certified_radius,
+            "attractor_labels": ab.labels.tolist(), **ab.to_dict(),
         }))
         return 0
-    print(f"{args.case} basin, e = {args.e:g}, kp = {args.kp:g}, kv = {args.kv:g}: converged "
-          f"{100 * b.converged_fraction:.2f}% of the on-section grid")
-    counts = np.bincount(b.labels.ravel(), minlength=len(LABELS))
-    for name, c in zip(LABELS, counts):
-        print(f"  {name:15s} {int(c)}")
+    print(f"{args.case} basin, e = {args.e:g}, kp = {args.kp:g}, kv = {args.kv:g} "
+          f"(slice phi = phi* = {fp[0]:.6g}, y2 = y2* = {fp[2]:.6g})")
+    for line in ab.summary():
+        print(f"  {line}")
+    for a in ab.attractors:
+        if a.periodic:
+            pts = "; ".join(f"({p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g}, {p[3]:.6g})" for p in a.points)
+            print(f"  {a.name}: section points (phi, z1, z2, z4) {pts}; multipliers "
+                  + ", ".join(f"{abs(z):.4g}" for z in a.multipliers) + " (moduli)")
     return 0

@@ -2,7 +2,9 @@
 
 * :func:`plot_regions` — Figs 4-5: existence and stability regions for several ``e``
   superposed; the intersection (exists and stable) shaded.
-* :func:`plot_basin` — Figs 6-7: the basin slice ``(x1, y1)`` with the fixed point marked.
+* :func:`plot_basin` — Figs 6-7: the basin slice ``(x1, y1)`` coloured by the attractor each
+  point reaches (colour-blind-safe), the attractors' section points marked, each basin's share
+  in the legend.
 * :func:`plot_trajectory` — positions, gap and impacts against time, and the phase portrait.
 * :func:`plot_bifurcation` — a brute-force bifurcation diagram (iterates of the impact map
   against a parameter) with continued branches overlaid.

@@ -1,39 +1,215 @@
-"""plot basin: see :mod:`hybridpd.plotting`."""
+"""plot basin: see :mod:`hybridpd.plotting`.
+
+Colours follow Okabe & Ito's colour-blind-safe palette: the symmetric orbit blue, other
+periodic orbits orange, bluish green, reddish purple, yellow (in label order), sticking sky blue,
+divergence vermillion, no convergence grey, unresolved flights black; the half-plane off the
+section (``y1 <= y2*``) is hatched.
+"""
 from __future__ import annotations
 
 import numpy as np
 
+from hybridpd.analysis.attractors import (
+    DIVERGED,
+    NO_CONVERGENCE,
+    OFF_SECTION_LABEL,
+    STICKING,
+    UNRESOLVED,
+    outcome,
+)
 from hybridpd.plotting._common import figure
-from hybridpd.sweeps.basins import LABELS
+from hybridpd.sweeps.basins import AttractorBasin, BasinResult, format_percent
+
+__all__ = ["basin_colors", "basin_title", "plot_basin"]
+
+_SYMMETRIC = "#0072B2"
+_PERIODIC = ("#E69F00", "#009E73", "#CC79A7", "#F0E442")
+_OUTCOME_COLORS = {NO_CONVERGENCE: "#999999", DIVERGED: "#D55E00", STICKING: "#56B4E9",
+                   UNRESOLVED: "#000000", OFF_SECTION_LABEL: "#FFFFFF"}
+_MARKERS = ("D", "o", "s", "^", "v", "P")
+# the paper's labels as attractor codes (a BasinResult has no attractor identification)
+_FROM_PAPER = {0: 0, 1: NO_CONVERGENCE, 2: DIVERGED, 3: STICKING, 4: UNRESOLVED,
+               5: OFF_SECTION_LABEL}
 
 
-def plot_basin(basin, ax=None, title=None):
-    """The basin slice with labels as colours and the fixed point marked."""
-    from matplotlib.colors import ListedColormap
-    from matplotlib.patches import Patch
+def basin_colors(labels) -> dict:
+    """Colour of each attractor label (``0`` symmetric, ``>= 1`` periodic, negative outcomes)."""
+    out = {}
+    for k in labels:
+        k = int(k)
+        if k == 0:
+            out[k] = _SYMMETRIC
+        elif k > 0:
+            out[k] = _PERIODIC[(k - 1) % len(_PERIODIC)]
+        else:
+            out[k] = _OUTCOME_COLORS[k]
+    return out
 
 
-    fig, ax = figure(ax, figsize=(6, 5))
-    colors = ["#3b75af", "#f2f2f2", "#d95f02", "#7570b3", "#e7298a", "#ffffff"]
-    cmap = ListedColormap(colors)
-    x, y = basin.x1, basin.y1
+def basin_title(meta: dict) -> str:
+    """Two title lines: case, restitution and gains; then the conventions (mu, gamma, omega, n,
+    m2). Values the metadata does not hold are left out."""
+    gamma = meta.get("gamma")
+    if gamma is None and meta.get("x10") and meta.get("L") is not None:
+        gamma = meta["L"] / meta["x10"]
+    vals = dict(meta, gamma=gamma)
+
+    def part(keys):
+        return ", ".join(f"{sym} = {vals[k]:g}" for k, sym in keys if vals.get(k) is not None)
+
+    first = part((("e", "$e$"), ("kp", "$k_p$"), ("kv", "$k_v$")))
+    second = part((("mu", "$\\mu$"), ("gamma" if gamma is not None else "L",
+                                        "$\\gamma$" if gamma is not None else "$L$"),
+                   ("omega", "$\\omega$"), ("n", "$n$"), ("m2", "$m_2$")))
+    return f"{str(meta.get('case', '')).capitalize()} PD: {first}\n{second}"
+
+
+def _as_attractor_basin(b):
+    """Labels and entries of either result type."""
+    if isinstance(b, AttractorBasin):
+        return b.labels, list(b.attractors), b.basin, b.edges
+    if isinstance(b, BasinResult):
+        lab = np.vectorize(_FROM_PAPER.get, otypes=[np.int64])(b.labels)
+        entries = []
+        for k in sorted(set(np.unique(lab).tolist()) | {0}, reverse=True):
+            if k == 0:
+                from hybridpd.analysis.attractors import Attractor
+
+                entries.insert(0, Attractor(0, "symmetric", "converged to the symmetric orbit",
+                                            1, b.fixed_point.reshape(1, 4)))
+            else:
+                entries.append(outcome(k, b.metadata.get("n_iter")))
+        return lab, entries, b, ()
+    raise ValueError(f"basin must be an AttractorBasin or a BasinResult, got {type(b).__name__}")
+
+
+def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
+    """The basin slice ``(x1, y1)`` coloured by attractor, with section points marked.
+
+    Parameters
+    ----------
+    basin : AttractorBasin or BasinResult
+        An attractor-labelled basin (:func:`hybridpd.sweeps.basins.attractor_basin`), or the
+        paper's labels only (:func:`hybridpd.sweeps.basins.basin_of_attraction`).
+    ax : matplotlib Axes, optional
+        Draw there; else a new constrained-layout figure.
+    title : str, optional
+        Replaces the default title (case, gains and conventions).
+    legend : bool
+        Draw the legend (below the axes, outside the data).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Notes
+    -----
+    The legend lists every label present on the grid with its share of the on-section grid
+    (:func:`hybridpd.sweeps.basins.format_percent`), then the markers: the symmetric orbit's
+    fixed point and the section points of the other periodic orbits, projected on the slice
+    (they have their own ``phi`` and ``y2``). The slice's fixed coordinates ``phi*`` and
+    ``y2*`` are stated under the axes.
+    """
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.patches import Patch, Rectangle
+
+    lab, entries, pb, edges = _as_attractor_basin(basin)
+    if ax is None:
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(6.4, 6.6), layout="constrained")
+        ax = fig.add_subplot(1, 1, 1)
+    else:
+        fig, ax = figure(ax)
+    meta = dict(pb.metadata)
+    L = float(meta.get("L", 0.0))
+    x, y = pb.x1, pb.y1
     dx = (x[-1] - x[0]) / max(len(x) - 1, 1)
     dy = (y[-1] - y[0]) / max(len(y) - 1, 1)
-    ax.imshow(basin.labels, origin="lower", cmap=cmap, vmin=-0.5, vmax=len(LABELS) - 0.5,
-              extent=(x[0] - dx / 2, x[-1] + dx / 2, y[0] - dy / 2, y[-1] + dy / 2),
-              aspect="auto", interpolation="nearest")
-    fp = basin.fixed_point
-    L = basin.metadata.get("L", 0.0)
-    ax.plot(fp[1] + L, fp[2] + fp[3], marker="*", color="gold", markeredgecolor="k",
-            markersize=14, label="fixed point")
-    present = sorted(set(np.unique(basin.labels).tolist()))
-    handles = [Patch(facecolor=colors[k], edgecolor="gray", label=LABELS[k]) for k in present]
-    handles.append(ax.lines[-1])
-    ax.legend(handles=handles, loc="best", fontsize=8)
-    ax.set_xlabel("x1 at impact")
-    ax.set_ylabel("y1 (pre-impact)")
-    m = basin.metadata
-    ax.set_title(title or (f"{m.get('case', '')}: e = {m.get('e', float('nan')):g}, kp = "
-                           f"{m.get('kp', float('nan')):g}, kv = {m.get('kv', float('nan')):g}; "
-                           f"converged {100 * basin.converged_fraction:.1f}%"), fontsize=9)
+    codes = sorted(a.label for a in entries)
+    colors = basin_colors(codes)
+    # one colour bin per code present; off-section cells are left to the hatched band
+    idx = np.searchsorted(codes, lab)
+    img = np.ma.masked_where(lab == OFF_SECTION_LABEL, idx)
+    cmap = ListedColormap([colors[k] for k in codes])
+    norm = BoundaryNorm(np.arange(len(codes) + 1) - 0.5, len(codes))
+    extent = (x[0] - dx / 2, x[-1] + dx / 2, y[0] - dy / 2, y[-1] + dy / 2)
+    ax.imshow(img, origin="lower", cmap=cmap, norm=norm, extent=extent, aspect="auto",
+              interpolation="nearest")
+    fp = pb.fixed_point
+    handles = []
+    present = set(np.unique(lab).tolist())
+    for a in entries:
+        if a.label not in present:
+            continue
+        if a.label == OFF_SECTION_LABEL:
+            continue
+        share = format_percent(int((lab == a.label).sum()), int((lab != OFF_SECTION_LABEL).sum()))
+        handles.append(Patch(facecolor=colors[a.label], edgecolor="0.3",
+                             label=f"{a.name}: {share}"))
+    if OFF_SECTION_LABEL in present:
+        band = Rectangle((extent[0], extent[2]), extent[1] - extent[0],
+                         min(fp[2], extent[3]) - extent[2], facecolor="white",
+                         edgecolor="0.45", hatch="///", linewidth=0, zorder=1.5,
+                         label="off the section ($y_1 \\leq y_2^*$)")
+        ax.add_patch(band)
+        handles.append(band)
+    outside = []
+    for a in entries:
+        if a.label < 0:
+            continue
+        xy = a.slice_points(L)
+        inside = ((xy[:, 0] >= extent[0]) & (xy[:, 0] <= extent[1]) & (xy[:, 1] >= extent[2])
+                  & (xy[:, 1] <= extent[3]))
+        if not inside.any():
+            outside.append(a.name)
+            continue
+        ln = _mark(ax, a, xy[inside], len(xy), colors[a.label])
+        handles.append(ln)
+    ax.set_xlim(extent[0], extent[1])
+    ax.set_ylim(extent[2], extent[3])
+    ax.set_xlabel("$x_1$ at the impact")
+    ax.set_ylabel("$y_1$ before the impact")
+    ax.set_title(title if title is not None else basin_title(meta), fontsize=9)
+    if legend:
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=1,
+                  fontsize=8, frameon=False, title=_note(fp, len(x), len(y), outside, edges),
+                  title_fontsize=8)
     return fig
+
+
+def _stability_words(a) -> str:
+    if a.stable is None or not np.isfinite(a.spectral_radius):
+        return ""
+    return (", stable" if a.stable else
+            f", unstable: spectral radius {a.spectral_radius:.4g}")
+
+
+def _mark(ax, a, xy, n_total: int, color):
+    """Markers of an attractor's section points inside the window (projected on the slice)."""
+    part = "" if len(xy) == n_total else f", {len(xy)} of {n_total} inside the window"
+    if a.label == 0:
+        (ln,) = ax.plot(xy[:, 0], xy[:, 1], ls="none", marker="*", ms=15, mfc="white",
+                        mec="black", mew=1.2, zorder=3,
+                        label=f"fixed point of the symmetric orbit{_stability_words(a)}")
+        return ln
+    k = (a.label - 1) % len(_MARKERS)
+    # drawn over the (larger) star, so both show where they overlap
+    (ln,) = ax.plot(xy[:, 0], xy[:, 1], ls="none", marker=_MARKERS[k], ms=7, mfc=color,
+                    mec="black", mew=1.2, zorder=4,
+                    label=f"section points of the {a.name} (projected{part}"
+                          f"{_stability_words(a)})")
+    return ln
+
+
+def _note(fp, nx: int, ny: int, outside, edges) -> str:
+    """Legend title: the slice's fixed coordinates, the grid, what lies outside the window."""
+    note = (f"slice: $\\phi = \\phi^* = {fp[0]:.4g}$, $y_2 = y_2^* = {fp[2]:.4g}$; "
+            f"{nx} x {ny} points")
+    if outside:
+        note += "\nsection points outside the window: " + ", ".join(outside)
+    if edges:
+        note += ("\nthe symmetric orbit's basin reaches the window's edge ("
+                 + ", ".join(e.replace("x1", "$x_1$").replace("y1", "$y_1$") for e in edges)
+                 + "):\nit may extend beyond the window")
+    return note

@@ -1,4 +1,4 @@
-"""Basins of attraction of a fixed point of the impact map (paper Figs 6-7).
+"""Basins of attraction of the impact map (paper Figs 6-7), labelled by attractor and measured.
 
 Two layers, after Attractors.jl: a **mapper** that takes one initial condition on the section
 to a label, and **basins** as a thin layer that applies a mapper over a 2-D grid.
@@ -28,6 +28,17 @@ of the previous 32 to within ``1e-12`` (relative), the trajectory sits on a peri
 ``P`` and iterate ``n_iter`` is known; it is used only when that iterate's criterion value is
 not within ``1e-6`` (relative) of the threshold. The tests compare labels with and without the
 early exits on grids, and ``early_exit=False`` runs every trajectory to the end.
+
+**Attractors.** :func:`attractor_basin` labels each point with the attractor it reaches:
+``0`` the symmetric orbit (the paper's criterion above), ``1, 2, ...`` other periodic orbits of
+``P`` found in the iterates ``n_iter .. n_iter + max_period + 2`` of the unconverged points and
+refined by Newton on ``P^k`` (:class:`hybridpd.analysis.attractors.CycleCatalog`), negative
+codes for sticking, divergence, no convergence within the iterations, unresolved flights and
+points off the section. The result lists the attractors (section points, period, multipliers,
+stability) and measures each basin (grid count, share of the on-section grid, area). While the
+symmetric orbit's basin touches the window's edge the window is extended (a bounded number of
+times); the result says whether it still does. :func:`format_percent` never rounds a share to
+``100 %`` or ``0 %`` when some points differ.
 """
 from __future__ import annotations
 
@@ -37,12 +48,24 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg import solve_discrete_lyapunov
 
+from hybridpd.analysis.attractors import (
+    DIVERGED,
+    NO_CONVERGENCE,
+    OFF_SECTION_LABEL,
+    OUTCOMES,
+    STICKING,
+    UNRESOLVED,
+    Attractor,
+    CycleCatalog,
+    outcome,
+)
 from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.model import check_array, check_axis, check_int, check_positive
-from hybridpd.pair.batch import map_labels
+from hybridpd.pair.batch import impact_map, map_labels
 
-__all__ = ["LABELS", "BasinResult", "ImpactMapper", "basin_of_attraction", "load_basin",
-           "section_grid"]
+__all__ = ["LABELS", "AttractorBasin", "BasinMeasure", "BasinResult", "ImpactMapper",
+           "attractor_basin", "basin_of_attraction", "format_percent", "load_attractor_basin",
+           "load_basin", "section_grid"]
 
 LABELS = ("converged", "not_converged", "diverged", "zeno_sticking", "unresolved", "off_section")
 OFF_SECTION = 5
@@ -91,8 +114,26 @@ class ImpactMapper:
         self.cert_Q = np.eye(4)
         self.cert_r2 = 0.0
         self.cycle_tol = 1e-12 if early_exit else 0.0
+        # conventions the map does not hold (order n, x10, gamma), for metadata and titles
+        self.conventions: dict = {}
         if early_exit:
             self.cert_Q, self.cert_r2 = self._certify()
+
+    @classmethod
+    def from_orbit(cls, orbit, **kw) -> ImpactMapper:
+        """Mapper for the fixed point of a :class:`~hybridpd.analysis.orbits.SymmetricOrbitResult`.
+
+        Keyword arguments go to the constructor; the orbit's ``n``, ``x10`` and ``gamma = L /
+        x10`` are kept in :attr:`conventions` (they reach the basin's metadata).
+        """
+        if not getattr(orbit, "exists", False):
+            raise ValueError(f"orbit must be an existing symmetric orbit, got "
+                             f"{getattr(orbit, 'reason', orbit)!r}")
+        m = cls(ImpactMap(orbit.pair, orbit.gains, orbit.reference(), orbit.case),
+                orbit.fixed_point, **kw)
+        m.conventions = {"n": int(orbit.n), "x10": float(orbit.x10),
+                         "gamma": float(orbit.pair.L / orbit.x10)}
+        return m
 
     @staticmethod
     def label_name(label: int) -> str:
@@ -331,20 +372,12 @@ def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chun
         raise ValueError(f"mapper must be an ImpactMapper, got {type(mapper).__name__}")
     xs = check_axis("x1", x1)
     ys = check_axis("y1", y1)
-    L = mapper.map.pair.L
-    grid = section_grid(mapper.fixed_point, L, xs, ys)
-    pts = grid.reshape(-1, 4)
-    from hybridpd.sweeps.sweep import run_sweep
+    out = _label_grid(mapper, xs, ys, 0, executor=executor, chunk_size=chunk_size, store=store,
+                      progress=progress, max_workers=max_workers)
+    return _basin_result(mapper, xs, ys, out["label"], out["iterations"])
 
-    res = run_sweep(_label_chunk, {"phi": pts[:, 0], "z1": pts[:, 1], "z2": pts[:, 2],
-                                   "z4": pts[:, 3]},
-                    chunk_size=chunk_size, executor=executor, max_workers=max_workers,
-                    store=store, progress=progress, func_kwargs={"mapper": _MapperSpec.of(mapper)},
-                    metadata={"kind": "basin"},
-                    label=f"basin {mapper.map.case.value} e={mapper.map.pair.e:g}")
-    lab, its = res.outputs["label"], res.outputs["iterations"]
-    lab = lab.reshape(len(ys), len(xs))
-    its = its.reshape(len(ys), len(xs))
+
+def _basin_result(mapper, xs, ys, lab, its) -> BasinResult:
     on = lab != OFF_SECTION
     frac = float((lab[on] == 0).mean()) if np.any(on) else 0.0
     m = mapper.map
@@ -354,7 +387,27 @@ def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chun
         "xm": m.reference.xm, "n_iter": mapper.n_iter, "criterion": mapper.criterion,
         "certified_radius": mapper.certified_radius,
     }
+    meta.update(mapper.conventions)
     return BasinResult(xs, ys, lab, its, mapper.fixed_point.copy(), frac, meta)
+
+
+def _label_grid(mapper: ImpactMapper, xs, ys, tail: int, *, executor="serial", chunk_size=None,
+                store=None, progress=False, max_workers=None) -> dict:
+    """Labels, iterations (and tails) of the slice grid, each reshaped to ``(ny, nx, ...)``."""
+    grid = section_grid(mapper.fixed_point, mapper.map.pair.L, xs, ys)
+    pts = grid.reshape(-1, 4)
+    spec = _MapperSpec.of(mapper)
+    from hybridpd.sweeps.sweep import run_sweep
+
+    res = run_sweep(_label_chunk, {"phi": pts[:, 0], "z1": pts[:, 1], "z2": pts[:, 2],
+                                   "z4": pts[:, 3]},
+                    chunk_size=chunk_size, executor=executor, max_workers=max_workers,
+                    store=store, progress=progress,
+                    func_kwargs={"mapper": spec, "tail": tail}, metadata={"kind": "basin"},
+                    label=f"basin {mapper.map.case.value} e={mapper.map.pair.e:g}")
+    out = res.outputs
+    shape = (len(ys), len(xs))
+    return {k: np.asarray(v).reshape(shape + np.shape(v)[1:]) for k, v in out.items()}
 
 
 @dataclass(frozen=True)
@@ -380,18 +433,373 @@ class _MapperSpec:
                    m.cert_r2, m.cycle_tol, m.map.tol, m.map.max_impacts)
 
 
-def _label_chunk(chunk, mapper: _MapperSpec):
+def _label_chunk(chunk, mapper: _MapperSpec, tail: int = 0):
     S = np.stack([chunk["phi"], chunk["z1"], chunk["z2"], chunk["z4"]], axis=1)
     lab = np.full(S.shape[0], OFF_SECTION, dtype=np.int64)
     its = np.zeros(S.shape[0], dtype=np.int64)
-    valid = S[:, 3] > 0
+    final = np.full(S.shape, np.nan)
+    valid = np.isfinite(S).all(axis=1) & (S[:, 3] > 0)
+    params = np.array(mapper.params)
+    c = 0 if mapper.case == "collocated" else 1
     if np.any(valid):
-        c = 0 if mapper.case == "collocated" else 1
-        lv, iv, _ = map_labels(np.array(mapper.params), c, np.ascontiguousarray(S[valid]),
-                               np.array(mapper.fixed_point), mapper.n_iter, mapper.criterion,
-                               np.array(mapper.cert_Q).reshape(4, 4), mapper.cert_r2,
-                               mapper.escape, mapper.tol, mapper.max_impacts, True,
-                               mapper.cycle_tol)
+        lv, iv, fv = map_labels(params, c, np.ascontiguousarray(S[valid]),
+                                np.array(mapper.fixed_point), mapper.n_iter, mapper.criterion,
+                                np.array(mapper.cert_Q).reshape(4, 4), mapper.cert_r2,
+                                mapper.escape, mapper.tol, mapper.max_impacts, True,
+                                mapper.cycle_tol)
         lab[valid] = lv
         its[valid] = iv
-    return {"label": lab, "iterations": its}
+        final[valid] = fv
+    out = {"label": lab, "iterations": its}
+    if tail > 0:
+        # only the trajectories that did not meet the criterion need their tail
+        out["tail"] = _tails(params, c, final, lab == 1, tail, mapper)
+    return out
+
+
+def _tails(params, c, final, which, n, mapper: _MapperSpec) -> np.ndarray:
+    """Iterates ``0..n`` of ``P`` from ``final[which]`` (NaN elsewhere and after a failure)."""
+    tails = np.full((final.shape[0], n + 1, 4), np.nan)
+    idx = np.flatnonzero(which)
+    tails[idx, 0] = final[idx]
+    cur = final[idx]
+    for j in range(1, n + 1):
+        if idx.size == 0:
+            break
+        out, status, _ = impact_map(params, c, np.ascontiguousarray(cur), mapper.tol,
+                                    mapper.max_impacts)
+        ok = (status == 0) & (out[:, 3] > 0)
+        idx, cur = idx[ok], out[ok]
+        tails[idx, j] = cur
+    return tails
+
+
+# ----------------------------------------------------------------------------------------
+# Attractor-labelled basins with a measure
+# ----------------------------------------------------------------------------------------
+
+
+def format_percent(part, whole=None, digits: int = 2) -> str:
+    """A percentage that never rounds to 100 % or 0 % when some points differ.
+
+    Parameters
+    ----------
+    part : int or float
+        A count (with ``whole``) or a fraction in ``[0, 1]``.
+    whole : int, optional
+        Total count.
+    digits : int
+        Decimals shown.
+
+    Examples
+    --------
+    >>> format_percent(9999, 10000), format_percent(99999, 100000), format_percent(1, 100000)
+    ('99.99 %', '>99.99 %', '<0.01 %')
+    >>> format_percent(0, 5), format_percent(5, 5), format_percent(0.25)
+    ('0 %', '100 %', '25.00 %')
+    """
+    if whole is not None:
+        if not (int(whole) == whole and whole > 0 and 0 <= part <= whole):
+            raise ValueError(f"need 0 <= part <= whole with whole > 0, got {part!r}/{whole!r}")
+        frac = part / whole
+        exact0, exact1 = part == 0, part == whole
+    else:
+        frac = float(part)
+        if not 0.0 <= frac <= 1.0:
+            raise ValueError(f"part must be a fraction in [0, 1], got {part!r}")
+        exact0, exact1 = frac == 0.0, frac == 1.0
+    if exact0:
+        return "0 %"
+    if exact1:
+        return "100 %"
+    step = 10.0 ** -digits
+    p = 100.0 * frac
+    if round(p, digits) >= 100.0:
+        return f">{100.0 - step:.{digits}f} %"
+    if round(p, digits) <= 0.0:
+        return f"<{step:.{digits}f} %"
+    return f"{p:.{digits}f} %"
+
+
+@dataclass(frozen=True)
+class BasinMeasure:
+    """Size of one attractor's basin on the grid.
+
+    Attributes
+    ----------
+    label : int
+    name : str
+    count : int
+        Grid points with this label.
+    fraction : float
+        ``count`` over the on-section grid points (``off_section``: over all points).
+    area : float
+        ``count`` times the grid cell area (``x1``-``y1`` units).
+    percent : str
+        ``fraction`` formatted by :func:`format_percent`.
+    """
+
+    label: int
+    name: str
+    count: int
+    fraction: float
+    area: float
+    percent: str
+
+
+@dataclass(frozen=True)
+class AttractorBasin:
+    """Attractor-labelled basin slice ``(x1, y1)`` (``phi = phi*``, ``y2 = y2*``).
+
+    Attributes
+    ----------
+    x1, y1 : ndarray
+        Grid axes of the final window.
+    labels : ndarray of int, shape (len(y1), len(x1))
+        Attractor labels: ``0`` the symmetric orbit (the paper's criterion), ``1, 2, ...`` other
+        periodic orbits of ``P`` (see :attr:`attractors`), negative codes the outcomes of
+        :data:`hybridpd.analysis.attractors.OUTCOMES`.
+    attractors : tuple of Attractor
+        The symmetric orbit, every periodic attractor found, and the outcomes present.
+    basin : BasinResult
+        The paper's labels (:data:`LABELS`) on the same grid.
+    windows : tuple of (x1min, x1max, y1min, y1max)
+        Every window labelled, the last one is the grid's.
+    edges : tuple of str
+        Sides (``"x1 min"``, ``"x1 max"``, ``"y1 min"``, ``"y1 max"``) of the final window on
+        which a point of the symmetric orbit's basin lies.
+    metadata : dict
+    """
+
+    x1: np.ndarray
+    y1: np.ndarray
+    labels: np.ndarray
+    attractors: tuple
+    basin: BasinResult
+    windows: tuple
+    edges: tuple
+    metadata: dict = field(default_factory=dict)
+
+    @property
+    def reaches_edge(self) -> bool:
+        """The symmetric orbit's basin touches the final window's edge: its measure is a lower
+        bound on a larger window."""
+        return bool(self.edges)
+
+    @property
+    def window(self) -> tuple:
+        return self.windows[-1]
+
+    @property
+    def fixed_point(self) -> np.ndarray:
+        return self.basin.fixed_point
+
+    def attractor(self, label: int):
+        """The :class:`Attractor` with ``label``."""
+        for a in self.attractors:
+            if a.label == label:
+                return a
+        raise ValueError(f"label must be one of {[a.label for a in self.attractors]}, "
+                         f"got {label!r}")
+
+    def _cell(self) -> float:
+        dx = (self.x1[-1] - self.x1[0]) / max(len(self.x1) - 1, 1)
+        dy = (self.y1[-1] - self.y1[0]) / max(len(self.y1) - 1, 1)
+        return float(dx * dy)
+
+    def measure(self, label: int) -> BasinMeasure:
+        """Count, fraction, area and formatted percentage of the basin of ``label``."""
+        a = self.attractor(label)
+        n = int((self.labels == label).sum())
+        whole = self.labels.size if label == OFF_SECTION_LABEL else int(
+            (self.labels != OFF_SECTION_LABEL).sum())
+        frac = n / whole if whole else 0.0
+        pct = format_percent(n, whole) if whole else "0 %"
+        return BasinMeasure(label, a.name, n, frac, n * self._cell(), pct)
+
+    def measures(self) -> list:
+        """:meth:`measure` of every entry of :attr:`attractors`."""
+        return [self.measure(a.label) for a in self.attractors]
+
+    def summary(self) -> list:
+        """Lines in words: window, edge flag, then one line per attractor."""
+        x0, x1, y0, y1 = self.window
+        lines = [(f"window x1 in [{x0:g}, {x1:g}], y1 in [{y0:g}, {y1:g}] "
+                 f"({len(self.x1)} x {len(self.y1)} points, {len(self.windows)} window(s) tried)")]
+        if self.reaches_edge:
+            lines.append("the symmetric orbit's basin reaches the window edge ("
+                         + ", ".join(self.edges) + "): its measure is a lower bound")
+        for a, m in zip(self.attractors, self.measures()):
+            extra = ""
+            if a.periodic:
+                rho = a.spectral_radius
+                stab = "stable" if a.stable else ("unstable" if a.stable is False else "?")
+                extra = f"; {stab}, spectral radius {rho:.4g}"
+            where = "window" if a.label == OFF_SECTION_LABEL else "on-section grid"
+            lines.append(f"{m.name}: {m.percent} of the {where}, area {m.area:.4g}{extra}")
+        return lines
+
+    def to_dict(self) -> dict:
+        """JSON-ready description (without the label array)."""
+        return {"window": list(self.window), "windows": [list(w) for w in self.windows],
+                "edges": list(self.edges), "reaches_edge": self.reaches_edge,
+                "shape": list(self.labels.shape),
+                "attractors": [dict(a.to_dict(), count=m.count, fraction=m.fraction,
+                                    area=m.area, percent=m.percent)
+                               for a, m in zip(self.attractors, self.measures())],
+                "metadata": dict(self.metadata)}
+
+    def save(self, path) -> None:
+        """Write to ``.npz`` (see :func:`load_attractor_basin`)."""
+        from hybridpd.sweeps.sweep import save_npz
+
+        b = self.basin
+        save_npz(path, {"x1": self.x1, "y1": self.y1, "labels": self.labels,
+                        "criterion_labels": b.labels, "iterations": b.iterations,
+                        "fixed_point": b.fixed_point},
+                 {"kind": "attractor_basin", "attractors": [a.to_dict() for a in self.attractors],
+                  "windows": [list(w) for w in self.windows], "edges": list(self.edges),
+                  "basin_metadata": b.metadata, "converged_fraction": b.converged_fraction,
+                  **self.metadata})
+
+
+def load_attractor_basin(path) -> AttractorBasin:
+    """Read an :class:`AttractorBasin` written by :meth:`AttractorBasin.save`."""
+    from hybridpd.sweeps.sweep import load_npz
+
+    a, meta = load_npz(path)
+    if meta.pop("kind", None) != "attractor_basin":
+        raise ValueError(f"{path} does not hold an attractor basin")
+    atts = tuple(Attractor.from_dict(d) for d in meta.pop("attractors"))
+    windows = tuple(tuple(w) for w in meta.pop("windows"))
+    edges = tuple(meta.pop("edges"))
+    b = BasinResult(a["x1"], a["y1"], a["criterion_labels"], a["iterations"], a["fixed_point"],
+                    float(meta.pop("converged_fraction")), meta.pop("basin_metadata"))
+    return AttractorBasin(a["x1"], a["y1"], a["labels"], atts, b, windows, edges, meta)
+
+
+_EDGE_NAMES = ("x1 min", "x1 max", "y1 min", "y1 max")
+
+
+def _edges(lab: np.ndarray) -> tuple:
+    hit = lab == 0
+    return tuple(n for n, h in zip(_EDGE_NAMES, (hit[:, 0].any(), hit[:, -1].any(),
+                                                 hit[0, :].any(), hit[-1, :].any())) if h)
+
+
+def _grow(window, centre, edges) -> tuple:
+    """Push each side in ``edges`` out to twice its distance from ``centre`` (at least half
+    the window's span)."""
+    x0, x1, y0, y1 = window
+    cx, cy = centre
+    sx, sy = x1 - x0, y1 - y0
+    if "x1 min" in edges:
+        x0 -= max(cx - x0, 0.5 * sx)
+    if "x1 max" in edges:
+        x1 += max(x1 - cx, 0.5 * sx)
+    if "y1 min" in edges:
+        y0 -= max(cy - y0, 0.5 * sy)
+    if "y1 max" in edges:
+        y1 += max(y1 - cy, 0.5 * sy)
+    return (x0, x1, y0, y1)
+
+
+def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
+                    extend: bool = True, max_extensions: int = 3, max_points=None,
+                    executor="serial", chunk_size=None, progress=False,
+                    max_workers=None) -> AttractorBasin:
+    """Label the slice ``(x1, y1)`` by the attractor each point reaches, and measure the basins.
+
+    Each grid point first gets the paper's label (:class:`ImpactMapper`); converged points are
+    the symmetric orbit's basin (label 0). For the others the iterates ``n_iter .. n_iter +
+    max_period + 2`` are examined by a :class:`~hybridpd.analysis.attractors.CycleCatalog`:
+    a repeating tail is refined by Newton on ``P^k`` into a periodic orbit (label ``>= 1``),
+    else the point did not converge. Failed flights keep their outcome (sticking, diverged,
+    unresolved).
+
+    With ``extend``, while a point of the symmetric orbit's basin lies on the window's edge,
+    the touching sides are pushed out to twice their distance from the fixed point ``(x1*,
+    y1*)`` (at least half the span) and the grid is relabelled, at most ``max_extensions``
+    times, with the same number of points (so the cells grow) unless ``max_points`` allows
+    more. The result says whether the basin still reaches the final window's edge
+    (:attr:`AttractorBasin.reaches_edge`).
+
+    Parameters
+    ----------
+    mapper : ImpactMapper
+    x1, y1 : (min, max, num)
+        The first window's grid axes.
+    max_period : int
+        Largest period of ``P`` searched in the tails.
+    extend : bool
+    max_extensions : int
+        ``>= 0``.
+    max_points : int, optional
+        Bound on the points per axis of an extended window, which then keeps the first
+        window's cell size up to that bound (default: every window has the first window's
+        number of points on each axis).
+    executor, chunk_size, progress, max_workers
+        As in :func:`basin_of_attraction`.
+
+    Returns
+    -------
+    AttractorBasin
+
+    Examples
+    --------
+    >>> from hybridpd import ImpactPair, PDGains
+    >>> from hybridpd.analysis.orbits import symmetric_orbit
+    >>> orb = symmetric_orbit(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0)
+    >>> ab = attractor_basin(ImpactMapper.from_orbit(orb), (-3, 5, 12), (-2, 10, 12))
+    >>> [a.name for a in ab.attractors][:2]
+    ['symmetric orbit (period 1)', 'period-2 orbit']
+    """
+    xs = check_axis("x1", x1)
+    ys = check_axis("y1", y1)
+    if not (int(max_extensions) == max_extensions and max_extensions >= 0):
+        raise ValueError(f"max_extensions must be an integer >= 0, got {max_extensions!r}")
+    nx0, ny0 = len(xs), len(ys)
+    if max_points is not None and not (int(max_points) == max_points
+                                       and max_points >= max(nx0, ny0)):
+        raise ValueError(f"max_points must be an integer >= the first window's points per "
+                         f"axis ({max(nx0, ny0)}), got {max_points!r}")
+    cap = (nx0, ny0) if max_points is None else (int(max_points), int(max_points))
+    cell = (float(xs[-1] - xs[0]) / max(nx0 - 1, 1), float(ys[-1] - ys[0]) / max(ny0 - 1, 1))
+    cat = CycleCatalog(mapper.map, mapper.fixed_point, criterion=mapper.criterion,
+                       max_period=max_period)
+    fp = mapper.fixed_point
+    centre = (fp[1] + mapper.map.pair.L, fp[2] + fp[3])
+    windows = []
+    while True:   # bounded: at most max_extensions + 1 windows
+        windows.append((float(xs[0]), float(xs[-1]), float(ys[0]), float(ys[-1])))
+        out = _label_grid(mapper, xs, ys, cat.tail_length, executor=executor,
+                          chunk_size=chunk_size, progress=progress, max_workers=max_workers)
+        lab = out["label"]
+        edges = _edges(lab)
+        if not (extend and edges) or len(windows) > max_extensions:
+            break
+        w = _grow(windows[-1], centre, edges)
+        nx = min(max(nx0, round((w[1] - w[0]) / cell[0]) + 1), cap[0])
+        ny = min(max(ny0, round((w[3] - w[2]) / cell[1]) + 1), cap[1])
+        xs = np.linspace(w[0], w[1], nx)
+        ys = np.linspace(w[2], w[3], ny)
+    att = _attractor_labels(lab, out["tail"], cat)
+    present = set(np.unique(att).tolist())
+    entries = [a for a in cat.attractors if a.label == 0 or a.label in present]
+    entries += [outcome(k, mapper.n_iter) for k in sorted(OUTCOMES, reverse=True) if k in present]
+    basin = _basin_result(mapper, xs, ys, lab, out["iterations"])
+    meta = dict(basin.metadata, max_period=int(max_period), extend=bool(extend),
+                max_extensions=int(max_extensions),
+                max_points=None if max_points is None else int(max_points))
+    return AttractorBasin(xs, ys, att, tuple(entries), basin, tuple(windows), edges, meta)
+
+
+def _attractor_labels(lab: np.ndarray, tails: np.ndarray, cat: CycleCatalog) -> np.ndarray:
+    """Attractor labels from the paper's labels; unconverged points by their tails."""
+    att = np.full(lab.shape, NO_CONVERGENCE, dtype=np.int64)
+    for paper, code in ((0, 0), (2, DIVERGED), (3, STICKING), (4, UNRESOLVED),
+                        (OFF_SECTION, OFF_SECTION_LABEL)):
+        att[lab == paper] = code
+    nc = lab == 1
+    att[nc] = cat.assign(tails[nc])
+    return att
