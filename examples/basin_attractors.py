@@ -6,19 +6,21 @@ basin finds that motion (a cycle of the impact map P, refined by Newton on P^2),
 section points and multipliers, and measures every basin; the window grows until the
 symmetric orbit's basin no longer touches its edge.
 
-Run: ``python examples/basin_attractors.py [outdir]`` (about 10 s).
+Run: ``python examples/basin_attractors.py [--out DIR] [--quick]`` (about 10 s).
 """
-from _out import out_dir
+from _out import example_args
 
 from hybridpd import ImpactPair, PDGains
 from hybridpd.analysis.orbits import symmetric_orbit
 from hybridpd.plotting import plot_basin
 from hybridpd.sweeps.basins import ImpactMapper, attractor_basin
 
+ARGS = example_args(__doc__)
+NUM = 12 if ARGS.quick else 60
 orb = symmetric_orbit(ImpactPair(mu=0.1, e=0.1, L=0.75), PDGains(kp=10, kv=20), omega=5.0,
                       x10=1.0, n=1, case="collocated")
 mapper = ImpactMapper.from_orbit(orb)          # the paper's criterion, 1500 iterations
-ab = attractor_basin(mapper, (-3, 5, 60), (-2, 10, 60), max_points=120)
+ab = attractor_basin(mapper, (-3, 5, NUM), (-2, 10, NUM), max_points=2 * NUM)
 for line in ab.summary():
     print(line)
 for a in ab.attractors:
@@ -27,6 +29,6 @@ for a in ab.attractors:
               f"{[round(float(abs(z)), 6) for z in a.multipliers]}")
         for s in a.points:
             print(f"    (phi, z1, z2, z4) = ({s[0]:.6f}, {s[1]:.6f}, {s[2]:.6f}, {s[3]:.6f})")
-out = out_dir()
+out = ARGS.out
 plot_basin(ab).savefig(out / "basin_attractors.png", dpi=120)
 print(f"figure written to {out / 'basin_attractors.png'}")

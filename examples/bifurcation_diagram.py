@@ -58,7 +58,12 @@ def parse():
     p.add_argument("--coordinate", default="phi",
                    choices=["phi", "z1", "z2", "z4", "x1", "y1", "x2", "y2"],
                    help="section coordinate on the y axis (default phi)")
-    return p.parse_args()
+    p.add_argument("--quick", action="store_true",
+                   help="a few values and iterations: a smoke test, not the figure")
+    args = p.parse_args()
+    if args.quick:
+        args.num, args.iterations, args.keep = 12, 80, 10
+    return args
 
 
 def report(title, br):

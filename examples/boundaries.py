@@ -61,6 +61,8 @@ def main():
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default="boundaries-out",
                     help="output directory (created), default ./boundaries-out")
+    ap.add_argument("--quick", action="store_true",
+                    help="accepted for uniformity with the other examples (this one is fast)")
     args = ap.parse_args()
     from hybridpd.plotting.boundaries import CODIM2_STYLES, KIND_STYLES
 

@@ -12,7 +12,9 @@ SCRIPTS = sorted((ROOT / "symbolic").glob("*.py"))
 
 
 def _run(args, cwd, timeout=600):
-    env = dict(os.environ, MPLBACKEND="Agg")
+    # the checkout under test, whatever hybridpd the interpreter has installed
+    path = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
+    env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=path)
     return subprocess.run([sys.executable, *map(str, args)], check=False, cwd=cwd, env=env,
                           capture_output=True, text=True, timeout=timeout)
 
