@@ -492,7 +492,7 @@ class SectionMap:
     True
     """
 
-    def __init__(self, section: Section, *, t_max: float | None = None, max_jumps: int = 1000,
+    def __init__(self, section: Section, *, t_max: float | None = None, max_jumps: int = 10_000,
                  max_steps: int = 10_000_000, zeno: ZenoOptions | None = None):
         if not isinstance(section, Section):
             raise ValueError(f"section must be a Section, got {type(section).__name__}")
@@ -606,7 +606,11 @@ class SectionMap:
         scale = np.abs(sec.c) @ np.abs(f_hit) + 1e-300
         grazing = (any(j[4] == "grazing" for j in jumps)
                    or abs(sec.c @ f_hit) <= 1e-9 * scale)
-        DP = self._jacobian(s, z0, bufs, nb, z_hit) if jacobian else None
+        DP = None
+        if jacobian:
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                DP, tangent = self._jacobian(s, z0, bufs, nb, z_hit)
+            grazing = grazing or tangent
         return MapResult(img, True, "returned", t0, t_hit, z_hit, mode_final, jumps, grazing,
                          DP)
 
@@ -660,6 +664,7 @@ class SectionMap:
         nseg = int(bufs[2][10])
         Z = np.eye(n)
         q = 0
+        tangent = False
         for m in range(nb + 1):
             # flows of the segments at jump count m, then jump m + 1 (table index m)
             while q < nseg and sj[q] == m:
@@ -669,7 +674,9 @@ class SectionMap:
                 q += 1
             if m == nb:
                 break
-            Z = self._jump_saltation(m, jg, jsrc, jdst, jkind, jpre, jpost, pk) @ Z
+            S, tan = self._jump_saltation(m, jg, jsrc, jdst, jkind, jpre, jpost, pk)
+            Z = S @ Z
+            tangent = tangent or tan
         mode = ha.modes[sec.mode_index]
         f = mode.A @ z_hit + mode.b
         cf = sec.c @ f
@@ -678,24 +685,26 @@ class SectionMap:
         E = sec.embedding(s)
         Dy = sec.C @ Zhit @ E
         if not sec.has_phase:
-            return Dy
+            return Dy, tangent
         row = dtau @ E
         row[0] += 1.0
-        return np.vstack([row, Dy])
+        return np.vstack([row, Dy]), tangent
 
     def _jump_saltation(self, q, jg, jsrc, jdst, jkind, jpre, jpost, pk) -> np.ndarray:
         ha = self.section.automaton
         n = ha.n_states
         src, dst, g = int(jsrc[q]), int(jdst[q]), int(jg[q])
         if jkind[q] == 3:
-            return pk.Rz[src, g, :n, :n]
+            return pk.Rz[src, g, :n, :n], False
         R = pk.Rh[src, g, :n, :n]
         c = ha.modes[src].guards[g].c
         ms, md = ha.modes[src], ha.modes[dst]
         zm, zp = jpre[q, :n], jpost[q, :n]
         fm = ms.A @ zm + ms.b
         fp = md.A @ zp + md.b
-        return R + np.outer(fp - R @ fm, c) / (c @ fm)
+        cf = c @ fm
+        tangent = abs(cf) <= 1e-9 * (np.abs(c) @ np.abs(fm)) or jkind[q] == 2
+        return R + np.outer(fp - R @ fm, c) / cf, tangent
 
 
 def _check_k(k) -> int:
