@@ -375,7 +375,7 @@ def _to_return(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, targ
     pre-jump state is left in ``w`` and its time in ``fc[0]``; the tables hold the run.
     """
     N1 = w0.shape[0]
-    J = max(J0, k)
+    J = min(max(J0, k), J_max)
     while True:
         for i in range(N1):
             w[i] = w0[i]
