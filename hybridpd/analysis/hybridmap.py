@@ -59,6 +59,7 @@ __all__ = [
     "SectionMap",
     "exosystem",
     "impact_pair_section",
+    "mechanical_section",
 ]
 
 #: Codes of :attr:`MapResult.status`.
@@ -342,6 +343,47 @@ def impact_pair_section(system, wall: int = 1) -> Section:
     return Section(ha, "free", "wall+" if wall == 1 else "wall-", exo=(4, 5), period=T,
                    exo_state=system.reference.exo_state(0.0), coords=np.array(rows),
                    names=names)
+
+
+def mechanical_section(model, contact: int = 0, wall: int = 1, *, period=None,
+                       mode: str | None = None) -> Section:
+    """The section of a contact of a mechanical automaton (:mod:`hybridpd.mechanics`).
+
+    Pre-impact states of rigid contact ``contact`` on its ``wall`` bound (``+1``: ``hi``), or
+    the entry into a compliant contact, in the free mode (or ``mode``). Coordinates: the
+    reference phase ``phi = t mod T`` (sine references; ``period`` is required for a sum of
+    sines) and the non-exosystem states except the pivot of the gap (module docstring).
+
+    Parameters
+    ----------
+    model : MechanicalAutomaton
+    contact : int
+        0-based contact index (file order).
+    wall : {+1, -1}
+    period : float, optional
+        Common period of a sum-of-sines reference.
+    mode : str, optional
+        Mode of the section (default the free mode).
+    """
+    if wall not in (1, -1):
+        raise ValueError(f"wall must be +1 or -1, got {wall!r}")
+    contacts = model.contacts
+    if isinstance(contact, bool) or int(contact) != contact or not 0 <= contact < len(contacts):
+        raise ValueError(f"contact must be an index in [0, {len(contacts)}), got {contact!r}")
+    contact = int(contact)
+    sign = "+" if wall > 0 else "-"
+    name = f"contact{contact}{sign}" if contacts[contact].rigid else f"enter{contact}{sign}"
+    mode = model.free_mode if mode is None else mode
+    ref = model.loop.reference
+    exo = tuple(int(i) for i in model.layout["exo"])
+    omegas = tuple(ref.omegas)
+    if period is None and omegas:
+        if max(omegas) - min(omegas) > 1e-12 * max(omegas):
+            raise ValueError("the reference has several frequencies: give period=")
+        period = 2 * math.pi / omegas[0]
+    sec = Section(model.automaton, mode, name, exo=exo, period=period,
+                  exo_state=ref.exo_state(0.0))
+    return sec
 
 
 # ----------------------------------------------------------------------------------------
