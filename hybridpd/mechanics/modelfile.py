@@ -222,8 +222,8 @@ def _system(t) -> MechanicalSystem:
     except ValueError as exc:
         msg = str(exc)
         key = msg.split(" ", 1)[0].rstrip(":")
-        raise ValueError(msg if key in ("mass", "damping", "stiffness", "input")
-                         and msg.startswith(key) else f"system: {msg}") from None
+        raise ValueError(f"system.{msg}" if key in ("mass", "damping", "stiffness", "input")
+                         else f"system: {msg}") from None
 
 
 def _contact(where, t, system) -> Contact:
