@@ -11,26 +11,30 @@ A mode is a pair (compliant configuration, sticking contact):
 
 * the compliant configuration says, for every compliant contact, whether its spring-damper is
   engaged at ``hi`` (``+1``), at ``lo`` (``-1``) or not (``0``);
-* the sticking part is ``None`` (free) or ``(k, wall)``: rigid contact ``k`` held on that bound.
+* the sticking part ``S`` is a set of ``(k, wall)``: rigid contacts held on a bound (empty:
+  free). Several contacts can be held at once (a gear train with every mesh engaged) when
+  their normals are independent.
 
-Mode names: ``"free"`` or ``"stick{k}{+|-}"``, followed by ``"/c{j}{+|-},..."`` for the engaged
-compliant contacts (e.g. ``"free"``, ``"free/c1+"``, ``"stick0-/c1+"``).
+Mode names: ``"free"`` or ``"stick{k}{+|-}..."`` (e.g. ``"stick0+"``, ``"stick0+1-"``),
+followed by ``"/c{j}{+|-},..."`` for the engaged compliant contacts (e.g. ``"free/c1+"``).
 
 Flows: the loop's ``z' = A z + b`` plus the engaged Kelvin-Voigt forces; while sticking on
-contact ``k`` (normal ``w``) the accelerations ``a`` are projected in the metric of ``M``,
-``a_s = a - M^-1 w (w . a) / (w . M^-1 w)``, so that ``w . q`` stays on its bound; the
-contact force multiplier is ``lambda = -(w . a) / (w . M^-1 w)`` (generalised force
-``lambda w``).
+``S`` (normals ``W = [w_k]``) the accelerations ``a`` are projected in the metric of ``M``,
+``a_s = a - M^-1 W (W^T M^-1 W)^-1 W^T a``, so that every ``w_k . q`` stays on its bound; the
+contact force multipliers are ``lambda = -(W^T M^-1 W)^-1 W^T a`` (generalised force
+``W lambda``).
 
 Guards (``g > 0`` admissible, all with ``direction = -1`` except sampling):
 
 * ``contact{k}{+|-}`` (rigid ``k`` at ``hi`` / ``lo``): ``g = hi - w.q`` / ``w.q - lo``; reset
-  Newton's law in the metric of ``M`` (:mod:`hybridpd.mechanics.contacts`); target the same
-  mode (from a sticking mode: the free mode of the same configuration); accumulating impacts
-  enter ``stick{k}{+|-}`` through the plastic projection (``zeno_target``).
-* ``release{k}{+|-}``: ``g = -wall * lambda``: the contact force would have to pull; reset
-  the plastic projection (so that rounding accumulated while sticking cannot leave the free
-  flow outside the gap), target the free mode of the configuration.
+  Newton's law in the metric of ``M`` (:mod:`hybridpd.mechanics.contacts`), and while sticking
+  on ``S`` in the constrained metric ``M_S^-1 = M^-1 - M^-1 W (W^T M^-1 W)^-1 W^T M^-1`` (the
+  held contacts stay held); target the same mode; accumulating impacts enter the mode
+  sticking on ``S + {k}`` through the plastic projection onto all of its contacts
+  (``zeno_target``; none if the normals are dependent: the run then ends with ``ZENO``).
+* ``release{k}{+|-}`` (``k`` in ``S``): ``g = -wall * lambda_k``: the contact force would have
+  to pull; reset the plastic projection onto ``S`` (so that rounding accumulated while
+  sticking cannot leave the flow outside a gap), target the mode sticking on ``S - {k}``.
 * ``enter{j}{+|-}`` / ``leave{j}{+|-}`` (compliant ``j``): the penetration changes sign;
   identity reset, target the configuration with ``j`` engaged / released.
 * ``sample`` (sampled-data loops): ``g = s - dt`` with ``direction = +1`` on the clock; reset
@@ -55,11 +59,11 @@ __all__ = ["GuardInfo", "MechanicalAutomaton", "ModeInfo", "build_automaton"]
 @dataclass(frozen=True)
 class ModeInfo:
     """What a mode means: ``config[j]`` in ``{-1, 0, +1}`` per contact (compliant ones only
-    non-zero), ``stick = (k, wall)`` or ``None``."""
+    non-zero), ``stick``: tuple of the held ``(k, wall)`` (empty: free)."""
 
     name: str
     config: tuple
-    stick: tuple | None
+    stick: tuple
 
 
 @dataclass(frozen=True)
@@ -93,9 +97,10 @@ class MechanicalAutomaton:
     gap_rows : ndarray, shape (m, N)
         ``w_k . q = gap_rows[k] @ z``.
     impact_resets : dict
-        ``(k, wall)`` -> ``(R, r)``: Newton's law of rigid contact ``k`` (``R`` shape ``(N, N)``).
+        ``(k, wall)`` -> ``(R, r)``: Newton's law of rigid contact ``k`` in the free modes
+        (``R`` shape ``(N, N)``).
     plastic_resets : dict
-        ``(k, wall)`` -> ``(R, r)``: projection onto the contact (sticking entry, release).
+        ``(k, wall)`` -> ``(R, r)``: projection onto that one contact (sticking entry).
     free_mode : str
         The mode without engaged contacts (``"free"``).
     """
@@ -145,75 +150,104 @@ def _label(c):
     return f" ({c.name})" if c.name else ""
 
 
+def _sign(w):
+    return "+" if w > 0 else "-"
+
+
 def _mode_name(config, stick):
-    base = "free" if stick is None else f"stick{stick[0]}{'+' if stick[1] > 0 else '-'}"
-    eng = [f"c{j}{'+' if s > 0 else '-'}" for j, s in enumerate(config) if s]
+    base = "free" if not stick else "stick" + "".join(f"{k}{_sign(w)}" for k, w in stick)
+    eng = [f"c{j}{_sign(s)}" for j, s in enumerate(config) if s]
     return base + ("/" + ",".join(eng) if eng else "")
 
 
-def _contact_geometry(loop, contacts):
-    sysm = loop.system
-    N, lay = loop.n_states, loop.layout
-    for k, c in enumerate(contacts):
-        if not isinstance(c, Contact):
-            raise ValueError(f"contacts[{k}] must be a Contact")
-        if c.normal.shape != (sysm.n,):
-            raise ValueError(f"contact {k}: normal must have shape ({sysm.n},), got "
-                             f"{c.normal.shape}")
-    gap = np.zeros((len(contacts), N))
-    Mw = np.zeros((len(contacts), sysm.n))
-    for k, c in enumerate(contacts):
-        gap[k, lay["q"]] = c.normal
-        Mw[k] = np.linalg.solve(sysm.M, c.normal)
-    return gap, Mw
+class _Geometry:
+    """Normals, bounds and the metric of ``M`` on the closed-loop state."""
+
+    def __init__(self, loop, contacts):
+        sysm = loop.system
+        self.loop, self.contacts = loop, contacts
+        N, lay = loop.n_states, loop.layout
+        for k, c in enumerate(contacts):
+            if not isinstance(c, Contact):
+                raise ValueError(f"contacts[{k}] must be a Contact")
+            if c.normal.shape != (sysm.n,):
+                raise ValueError(f"contact {k}: normal must have shape ({sysm.n},), got "
+                                 f"{c.normal.shape}")
+        self.n, self.N = sysm.n, N
+        self.iq, self.iv = lay["q"], lay["v"]
+        self.gap = np.zeros((len(contacts), N))
+        self.Mw = np.zeros((len(contacts), sysm.n))
+        for k, c in enumerate(contacts):
+            self.gap[k, self.iq] = c.normal
+            self.Mw[k] = np.linalg.solve(sysm.M, c.normal)
+
+    def bound(self, k, wall):
+        c = self.contacts[k]
+        return c.hi if wall > 0 else c.lo
+
+    def held(self, stick):
+        """``(W (n, s), M^-1 W, G^-1 = (W^T M^-1 W)^-1, beta)`` or None if dependent."""
+        ks = [k for k, _ in stick]
+        W = np.array([self.contacts[k].normal for k in ks]).T
+        MW = self.Mw[ks].T
+        G = W.T @ MW
+        if np.linalg.cond(G) > 1e10:
+            return None
+        beta = np.array([self.bound(k, w) for k, w in stick])
+        return W, MW, np.linalg.inv(G), beta
+
+    def projection(self, stick):
+        """Plastic projection onto every contact of ``stick``: ``(R, r)`` or None."""
+        h = self.held(stick)
+        if h is None:
+            return None
+        W, MW, Gi, beta = h
+        P = np.eye(self.n) - MW @ Gi @ W.T
+        R = np.eye(self.N)
+        r = np.zeros(self.N)
+        R[np.ix_(self.iq, self.iq)] = P
+        R[np.ix_(self.iv, self.iv)] = P
+        r[self.iq] = MW @ (Gi @ beta)
+        return R, r
+
+    def impact(self, k, stick):
+        """Newton's law of contact ``k`` with the contacts of ``stick`` held: ``(R, r)``."""
+        c = self.contacts[k]
+        mw = self.Mw[k]
+        if stick:
+            W, MW, Gi, _ = self.held(stick)
+            mw = mw - MW @ (Gi @ (W.T @ mw))
+        wmw = float(c.normal @ mw)
+        if not wmw > 1e-12 * float(c.normal @ self.Mw[k]):
+            return None                      # k is held through the others: cannot fire
+        R = np.eye(self.N)
+        R[np.ix_(self.iv, self.iv)] = (np.eye(self.n)
+                                       - (1.0 + c.restitution) * np.outer(mw, c.normal) / wmw)
+        return R, np.zeros(self.N)
+
+    def flow(self, config, stick):
+        """``(A, b, lam_rows (s, N), lam_b (s,))`` of a mode (``None`` multipliers if free)."""
+        A, b = self.loop.A.copy(), self.loop.b.copy()
+        iq, iv = self.iq, self.iv
+        for j, s in enumerate(config):
+            if s == 0:
+                continue
+            c = self.contacts[j]
+            A[np.ix_(iv, iq)] -= c.stiffness * np.outer(self.Mw[j], c.normal)
+            A[np.ix_(iv, iv)] -= c.damping * np.outer(self.Mw[j], c.normal)
+            b[iv] += c.stiffness * self.bound(j, s) * self.Mw[j]
+        if not stick:
+            return A, b, None, None
+        W, MW, Gi, _ = self.held(stick)
+        lam_rows = -Gi @ (W.T @ A[iv])
+        lam_b = -Gi @ (W.T @ b[iv])
+        A[iv] += MW @ lam_rows
+        b[iv] += MW @ lam_b
+        return A, b, lam_rows, lam_b
 
 
-def _resets(loop, contacts, Mw):
-    lay = loop.layout
-    N = loop.n_states
-    iq, iv = lay["q"], lay["v"]
-    impact, plastic = {}, {}
-    for k, c in enumerate(contacts):
-        w, mw = c.normal, Mw[k]
-        wmw = float(w @ mw)
-        P = np.eye(len(w)) - np.outer(mw, w) / wmw
-        for wall, bound in c.bounds:
-            if c.rigid:
-                R = np.eye(N)
-                R[np.ix_(iv, iv)] = np.eye(len(w)) - (1.0 + c.restitution) * np.outer(mw, w) / wmw
-                impact[(k, wall)] = (R, np.zeros(N))
-            R = np.eye(N)
-            r = np.zeros(N)
-            R[np.ix_(iq, iq)] = P
-            R[np.ix_(iv, iv)] = P
-            r[iq] = mw * (bound / wmw)
-            plastic[(k, wall)] = (R, r)
-    return impact, plastic
-
-
-def _flow(loop, contacts, Mw, config, stick):
-    """``(A, b, lambda_row, lambda_const)`` of a mode."""
-    A, b = loop.A.copy(), loop.b.copy()
-    lay = loop.layout
-    iq, iv = lay["q"], lay["v"]
-    for j, s in enumerate(config):
-        if s == 0:
-            continue
-        c = contacts[j]
-        bound = c.hi if s > 0 else c.lo
-        A[np.ix_(iv, iq)] -= c.stiffness * np.outer(Mw[j], c.normal)
-        A[np.ix_(iv, iv)] -= c.damping * np.outer(Mw[j], c.normal)
-        b[iv] += c.stiffness * bound * Mw[j]
-    if stick is None:
-        return A, b, None, None
-    k = stick[0]
-    w, mw = contacts[k].normal, Mw[k]
-    wmw = float(w @ mw)
-    lam_row = -(w @ A[iv]) / wmw
-    lam_b = -float(w @ b[iv]) / wmw
-    A[iv] += np.outer(mw, lam_row)
-    b[iv] += mw * lam_b
-    return A, b, lam_row, lam_b
+def _add(stick, k, wall):
+    return tuple(sorted(set(stick) | {(k, wall)}))
 
 
 def build_automaton(loop: MechanicalLoop, contacts) -> MechanicalAutomaton:
@@ -243,45 +277,52 @@ def build_automaton(loop: MechanicalLoop, contacts) -> MechanicalAutomaton:
     if not isinstance(loop, MechanicalLoop):
         raise ValueError("loop must be a MechanicalLoop")
     contacts = tuple(contacts)
-    gap, Mw = _contact_geometry(loop, contacts)
-    impact, plastic = _resets(loop, contacts, Mw)
+    geo = _Geometry(loop, contacts)
+    impact = {(k, w): geo.impact(k, ()) for k, c in enumerate(contacts) if c.rigid
+              for w, _ in c.bounds}
+    plastic = {(k, w): geo.projection(((k, w),)) for k, c in enumerate(contacts) if c.rigid
+               for w, _ in c.bounds}
     choices = [(0,) + tuple(w for w, _ in c.bounds) if not c.rigid else (0,) for c in contacts]
-    sticks = [None] + [(k, w) for k, c in enumerate(contacts) if c.rigid for w, _ in c.bounds]
+    held = [((0, None),) if not c.rigid else ((0, None),) + tuple((1, w) for w, _ in c.bounds)
+            for c in contacts]
+    sticks = []
+    for combo in itertools.product(*held):
+        stick = tuple((k, w) for k, (on, w) in enumerate(combo) if on)
+        if not stick or geo.held(stick) is not None:
+            sticks.append(stick)
     modes, minfo, ginfo = [], {}, {}
     for config in itertools.product(*choices):
         for stick in sticks:
             name = _mode_name(config, stick)
             minfo[name] = ModeInfo(name, tuple(config), stick)
-            A, b, lam_row, lam_b = _flow(loop, contacts, Mw, config, stick)
-            guards = _guards(loop, contacts, gap, impact, plastic, config, stick, lam_row,
-                             lam_b, name, ginfo)
+            A, b, lam_rows, lam_b = geo.flow(config, stick)
+            guards = _guards(geo, config, stick, lam_rows, lam_b, name, ginfo, set(sticks))
             modes.append(Mode(name, A, b=b, guards=tuple(guards)))
     ha = HybridAutomaton(modes, state_names=loop.state_names)
     return MechanicalAutomaton(automaton=ha, loop=loop, contacts=contacts, modes=minfo,
-                               guards=ginfo, gap_rows=gap, impact_resets=impact,
-                               plastic_resets=plastic, free_mode=_mode_name(
-                                   (0,) * len(contacts), None))
+                               guards=ginfo, gap_rows=geo.gap, impact_resets=impact,
+                               plastic_resets=plastic,
+                               free_mode=_mode_name((0,) * len(contacts), ()))
 
 
-def _sign(w):
-    return "+" if w > 0 else "-"
-
-
-def _guards(loop, contacts, gap, impact, plastic, config, stick, lam_row, lam_b, name,
-            ginfo):
-    free_same = _mode_name(config, None)
+def _guards(geo, config, stick, lam_rows, lam_b, name, ginfo, sticks):
+    loop, contacts, gap = geo.loop, geo.contacts, geo.gap
+    held = {k for k, _ in stick}
     out = []
     for k, c in enumerate(contacts):
+        if k in held:
+            continue
         for wall, bound in c.bounds:
-            gname = None
             if c.rigid:
-                if stick is not None and stick[0] == k:
+                reset = geo.impact(k, stick)
+                if reset is None:
                     continue
                 gname = f"contact{k}{_sign(wall)}"
+                to = _add(stick, k, wall)
+                zt = (dict(zeno_target=_mode_name(config, to), zeno_reset=geo.projection(to))
+                      if to in sticks else {})
                 out.append(Guard(gname, c=-wall * gap[k], d=wall * bound, direction=-1,
-                                 reset=impact[(k, wall)], target=free_same, priority=2,
-                                 zeno_target=_mode_name(config, (k, wall)),
-                                 zeno_reset=plastic[(k, wall)]))
+                                 reset=reset, priority=2, **zt))
                 ginfo[(name, gname)] = GuardInfo("impact", k, wall)
             elif config[k] == 0:
                 cfg = list(config)
@@ -297,11 +338,12 @@ def _guards(loop, contacts, gap, impact, plastic, config, stick, lam_row, lam_b,
                 out.append(Guard(gname, c=wall * gap[k], d=-wall * bound, direction=-1,
                                  target=_mode_name(tuple(cfg), stick), priority=2))
                 ginfo[(name, gname)] = GuardInfo("leave", k, wall)
-    if stick is not None:
-        k, wall = stick
+    for i, (k, wall) in enumerate(stick):
         gname = f"release{k}{_sign(wall)}"
-        out.append(Guard(gname, c=-wall * lam_row, d=-wall * lam_b, direction=-1,
-                         reset=plastic[(k, wall)], target=free_same, priority=1))
+        rest = tuple(s for s in stick if s[0] != k)
+        out.append(Guard(gname, c=-wall * lam_rows[i], d=-wall * float(lam_b[i]), direction=-1,
+                         reset=geo.projection(stick), target=_mode_name(config, rest),
+                         priority=1))
         ginfo[(name, gname)] = GuardInfo("release", k, wall)
     if loop.sampled:
         cl = np.zeros(loop.n_states)

@@ -1,0 +1,131 @@
+"""An independent reference: a ``solve_ivp`` loop with terminal events for PD-controlled
+mechanical systems with rigid contacts.
+
+Written from the equations, not from the automaton: the right-hand side evaluates
+``M q'' = -C q' - K q + B u`` with ``u = m_ff xd'' + kp (xd - c.q) + kv (xd' - c.v)`` and
+``xd = a cos(w t)`` directly, each contact bound is a terminal event, and an impact solves
+for the impulse ``P`` along ``w`` with ``w . (v + P M^-1 w) = -e w . v``. It has no sticking
+(it stops when impacts pile up at one instant) and can miss two crossings within one step.
+It exists for the tests and as the benchmarks' baseline.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+__all__ = ["NaiveMechanicalResult", "naive_mechanical"]
+
+
+@dataclass(frozen=True)
+class NaiveMechanicalResult:
+    """Impacts found by :func:`naive_mechanical`.
+
+    Attributes
+    ----------
+    impact_times : ndarray, shape (k,)
+    contacts, walls : ndarray of int, shape (k,)
+    pre, post : ndarray, shape (k, 2n)
+        Mechanical states ``[q_1, v_1, ...]`` before / after each impact.
+    t_final : float
+    n_rhs : int
+        Right-hand-side evaluations.
+    stopped : str
+        ``"end_time"``, ``"max_impacts"`` or ``"pile_up"`` (impacts at one instant).
+    """
+
+    impact_times: np.ndarray
+    contacts: np.ndarray
+    walls: np.ndarray
+    pre: np.ndarray
+    post: np.ndarray
+    t_final: float
+    n_rhs: int
+    stopped: str
+
+
+def naive_mechanical(M, C, K, B, contacts, kp, kv, measure, amplitude, omega, feedforward,
+                     x0, t_span, max_impacts=1000, rtol=1e-12, atol=1e-13,
+                     method="DOP853") -> NaiveMechanicalResult:
+    """Simulate with ``solve_ivp`` (see the module docstring).
+
+    Parameters
+    ----------
+    M, C, K : array_like, shape (n, n)
+    B, measure : array_like, shape (n,)
+        Input direction and measured direction ``c``.
+    contacts : sequence of (normal, lo, hi, e)
+        ``lo`` / ``hi`` may be None.
+    kp, kv, amplitude, omega, feedforward : float
+    x0 : array_like, shape (2n,)
+        ``[q_1, v_1, ..., q_n, v_n]``.
+    t_span : (float, float)
+    max_impacts : int
+    rtol, atol, method
+        Passed to :func:`scipy.integrate.solve_ivp`.
+    """
+    M, C, K = (np.asarray(a, float) for a in (M, C, K))
+    B, c = np.asarray(B, float), np.asarray(measure, float)
+    n = M.shape[0]
+
+    def rhs(t, x):
+        q, v = x[0::2], x[1::2]
+        xd = amplitude * np.cos(omega * t)
+        vd = -amplitude * omega * np.sin(omega * t)
+        ad = -amplitude * omega ** 2 * np.cos(omega * t)
+        u = feedforward * ad + kp * (xd - c @ q) + kv * (vd - c @ v)
+        a = np.linalg.solve(M, -C @ v - K @ q + B * u)
+        out = np.empty(2 * n)
+        out[0::2], out[1::2] = v, a
+        return out
+
+    events, meta = [], []
+    for k, (w, lo, hi, e) in enumerate(contacts):
+        w = np.asarray(w, float)
+        for wall, bound in ((-1, lo), (1, hi)):
+            if bound is None:
+                continue
+
+            def ev(t, x, w=w, wall=wall, bound=bound):
+                return wall * (bound - w @ x[0::2])
+            ev.terminal = True
+            ev.direction = -1
+            events.append(ev)
+            meta.append((k, wall, w, e))
+
+    t, t_end = float(t_span[0]), float(t_span[1])
+    x = np.asarray(x0, float).copy()
+    rec = {"t": [], "k": [], "wall": [], "pre": [], "post": []}
+    n_rhs, stopped, last = 0, "end_time", (None, -np.inf)
+    while t < t_end:
+        if len(rec["t"]) >= max_impacts:
+            stopped = "max_impacts"
+            break
+        sol = solve_ivp(rhs, (t, t_end), x, method=method, rtol=rtol, atol=atol, events=events)
+        n_rhs += sol.nfev
+        if sol.status != 1:
+            if sol.status < 0:
+                raise RuntimeError(f"solve_ivp failed: {sol.message}")
+            t, x = t_end, sol.y[:, -1].copy()
+            break
+        i = min((j for j in range(len(events)) if sol.t_events[j].size),
+                key=lambda j: sol.t_events[j][0])
+        t_ev = float(sol.t_events[i][0])
+        if t_ev - last[1] < 1e-12 * max(1.0, abs(t_ev)):
+            t, stopped = t_ev, "pile_up"
+            break
+        k, wall, w, e = meta[i]
+        pre = sol.y_events[i][0].copy()
+        v = pre[1::2]
+        mw = np.linalg.solve(M, w)
+        impulse = -(1.0 + e) * (w @ v) / (w @ mw)
+        post = pre.copy()
+        post[1::2] = v + impulse * mw
+        for key, val in (("t", t_ev), ("k", k), ("wall", wall), ("pre", pre), ("post", post)):
+            rec[key].append(val)
+        t, x, last = t_ev, post, (i, t_ev)
+    return NaiveMechanicalResult(
+        np.asarray(rec["t"], float), np.asarray(rec["k"], int), np.asarray(rec["wall"], int),
+        np.asarray(rec["pre"], float).reshape(-1, 2 * n),
+        np.asarray(rec["post"], float).reshape(-1, 2 * n), t, n_rhs, stopped)
