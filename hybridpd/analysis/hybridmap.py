@@ -346,11 +346,15 @@ def impact_pair_section(system, wall: int = 1) -> Section:
 
 
 def mechanical_section(model, contact: int = 0, wall: int = 1, *, period=None,
-                       mode: str | None = None) -> Section:
+                       mode: str | None = None, event: str = "impact") -> Section:
     """The section of a contact of a mechanical automaton (:mod:`hybridpd.mechanics`).
 
-    Pre-impact states of rigid contact ``contact`` on its ``wall`` bound (``+1``: ``hi``), or
-    the entry into a compliant contact, in the free mode (or ``mode``). Coordinates: the
+    ``event="impact"``: pre-impact states of rigid contact ``contact`` on its ``wall`` bound
+    (``+1``: ``hi``), or the entry into a compliant contact, in the free mode (or ``mode``).
+    ``event="release"``: the end of sticking on that bound (mode ``stick{k}{+|-}``), a
+    section crossed once per sticking phase, however many impacts precede it (the contact
+    reopens tangentially there, so finite differences across it may see an immediate
+    re-sticking; the multipliers equal those of the impact section). Coordinates: the
     reference phase ``phi = t mod T`` (sine references; ``period`` is required for a sum of
     sines) and the non-exosystem states except the pivot of the gap (module docstring).
 
@@ -372,7 +376,15 @@ def mechanical_section(model, contact: int = 0, wall: int = 1, *, period=None,
         raise ValueError(f"contact must be an index in [0, {len(contacts)}), got {contact!r}")
     contact = int(contact)
     sign = "+" if wall > 0 else "-"
-    name = f"contact{contact}{sign}" if contacts[contact].rigid else f"enter{contact}{sign}"
+    if event not in ("impact", "release"):
+        raise ValueError(f"event must be 'impact' or 'release', got {event!r}")
+    if event == "release":
+        if not contacts[contact].rigid:
+            raise ValueError(f"event 'release': contact {contact} is compliant (no sticking)")
+        name = f"release{contact}{sign}"
+        mode = f"stick{contact}{sign}" if mode is None else mode
+    else:
+        name = f"contact{contact}{sign}" if contacts[contact].rigid else f"enter{contact}{sign}"
     mode = model.free_mode if mode is None else mode
     ref = model.loop.reference
     exo = tuple(int(i) for i in model.layout["exo"])
@@ -698,15 +710,14 @@ class SectionMap:
     def _jacobian(self, s, z0, bufs, nb, z_hit) -> np.ndarray:
         sec = self.section
         ha = sec.automaton
-        pk = ha.packed
         n = ha.n_states
-        jg, jsrc, jdst, jkind = bufs[5], bufs[6], bufs[7], bufs[8]
-        jpre, jpost = bufs[9], bufs[10]
+        jt = bufs[3]
         st0, st1, smode, sj = bufs[11], bufs[12], bufs[13], bufs[14]
         nseg = int(bufs[2][10])
         Z = np.eye(n)
         q = 0
         tangent = False
+        tgrad = []        # d t_jump / d z0 of every jump so far
         for m in range(nb + 1):
             # flows of the segments at jump count m, then jump m + 1 (table index m)
             while q < nseg and sj[q] == m:
@@ -716,8 +727,8 @@ class SectionMap:
                 q += 1
             if m == nb:
                 break
-            S, tan = self._jump_saltation(m, jg, jsrc, jdst, jkind, jpre, jpost, pk)
-            Z = S @ Z
+            Z, tg, tan = self._jump(m, bufs, Z, tgrad, jt)
+            tgrad.append(tg)
             tangent = tangent or tan
         mode = ha.modes[sec.mode_index]
         f = mode.A @ z_hit + mode.b
@@ -732,21 +743,51 @@ class SectionMap:
         row[0] += 1.0
         return np.vstack([row, Dy]), tangent
 
-    def _jump_saltation(self, q, jg, jsrc, jdst, jkind, jpre, jpost, pk) -> np.ndarray:
+    def _jump(self, q, bufs, Z, tgrad, jt):
+        """Sensitivity after jump ``q``: ``(Z+, d t_q / d z0, tangential)``.
+
+        A guard crossing gets its saltation matrix. A Zeno switch at the estimated
+        accumulation time ``t_inf = t_k + D r / (1 - r)`` (``D = t_k - t_{k-1}``,
+        ``r = D / (t_{k-1} - t_{k-2})``, the last resolved impacts of the guard; ``t_k`` for
+        an immediate accumulation) gets ``Z+ = R_z Z + (R_z f- - f+) dt_inf``, with ``dt_inf``
+        from the impact-time sensitivities: the derivative of the simulated map.
+        """
         ha = self.section.automaton
+        pk = ha.packed
         n = ha.n_states
+        jg, jsrc, jdst, jkind, jpre, jpost = (bufs[5], bufs[6], bufs[7], bufs[8], bufs[9],
+                                              bufs[10])
         src, dst, g = int(jsrc[q]), int(jdst[q]), int(jg[q])
-        if jkind[q] == 3:
-            return pk.Rz[src, g, :n, :n], False
-        R = pk.Rh[src, g, :n, :n]
-        c = ha.modes[src].guards[g].c
         ms, md = ha.modes[src], ha.modes[dst]
         zm, zp = jpre[q, :n], jpost[q, :n]
         fm = ms.A @ zm + ms.b
         fp = md.A @ zp + md.b
+        if jkind[q] == 3:
+            Rz = pk.Rz[src, g, :n, :n]
+            tg = self._zeno_time_gradient(q, jt, jg, jsrc, jkind, tgrad, n)
+            return Rz @ Z + np.outer(Rz @ fm - fp, tg), tg, False
+        R = pk.Rh[src, g, :n, :n]
+        c = ha.modes[src].guards[g].c
         cf = c @ fm
         tangent = abs(cf) <= 1e-9 * (np.abs(c) @ np.abs(fm)) or jkind[q] == 2
-        return R + np.outer(fp - R @ fm, c) / cf, tangent
+        tg = -(c @ Z) / cf
+        return R @ Z + np.outer(fp - R @ fm, c @ Z) / cf, tg, tangent
+
+    @staticmethod
+    def _zeno_time_gradient(q, jt, jg, jsrc, jkind, tgrad, n):
+        same = [i for i in range(q - 1, max(q - 4, -1), -1)
+                if jg[i] == jg[q] and jsrc[i] == jsrc[q] and jkind[i] != 3]
+        if len(same) < 3 or same != list(range(q - 1, q - 4, -1)) or jt[q] == jt[q - 1]:
+            return tgrad[q - 1].copy() if q >= 1 and jt[q] == jt[q - 1] else np.zeros(n)
+        k, k1, k2 = same
+        D, D1 = jt[k] - jt[k1], jt[k1] - jt[k2]
+        r = D / D1
+        if not (0.0 < r < 1.0) or abs(jt[k] + D * r / (1 - r) - jt[q]) > \
+                1e-9 * max(1.0, abs(jt[q])):
+            return np.zeros(n)      # another rule (dt_min, end time) set t_inf: no gradient
+        dD = tgrad[k] - tgrad[k1]
+        dr = (dD - r * (tgrad[k1] - tgrad[k2])) / D1
+        return tgrad[k] + (dD * r + D * dr / (1 - r)) / (1 - r)
 
 
 def _check_k(k) -> int:

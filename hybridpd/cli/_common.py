@@ -18,13 +18,13 @@ class Parser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
-def add_plant(p, *, xm=True, gamma=False):
-    p.add_argument("--case", required=True, choices=["collocated", "noncollocated"])
-    p.add_argument("--mu", type=float, required=True, help="mass ratio m1/m2 (> 0)")
+def add_plant(p, *, xm=True, gamma=False, required=True):
+    p.add_argument("--case", required=required, choices=["collocated", "noncollocated"])
+    p.add_argument("--mu", type=float, required=required, help="mass ratio m1/m2 (> 0)")
     p.add_argument("--m2", type=float, default=1.0, help="secondary mass (> 0), default 1")
-    p.add_argument("--omega", type=float, required=True, help="reference frequency (> 0)")
+    p.add_argument("--omega", type=float, required=required, help="reference frequency (> 0)")
     if gamma:
-        g = p.add_mutually_exclusive_group(required=True)
+        g = p.add_mutually_exclusive_group(required=required)
         g.add_argument("--L", type=float, help="half clearance (> 0)")
         g.add_argument("--gamma", type=float, help="L / x10 (> 0)")
         p.add_argument("--x10", type=float, default=1.0, help="primary-mass amplitude, default 1")

@@ -1,23 +1,51 @@
-"""``hybridpd orbit``."""
+"""``hybridpd orbit``: the pair's symmetric orbit, or a periodic orbit of a model file."""
 from __future__ import annotations
 
 import json
 
-from hybridpd.cli._common import add_plant, clearance
+from hybridpd.cli._common import UsageError, add_plant, clearance
+
+# the pair options: required without --model, not used with it
+_PAIR = ("case", "mu", "omega", "e", "kp", "kv")
 
 
 def register(sub):
-    p = sub.add_parser("orbit", help="symmetric periodic orbit: existence and stability")
-    add_plant(p, xm=False, gamma=True)
-    p.add_argument("--e", type=float, required=True, help="restitution coefficient in [0, 1]")
+    p = sub.add_parser("orbit", help="symmetric periodic orbit of the pair (existence and "
+                       "stability), or a periodic orbit of a mechanical model file (--model)")
+    add_plant(p, xm=False, gamma=True, required=False)
+    p.add_argument("--e", type=float, default=None, help="restitution coefficient in [0, 1]")
     p.add_argument("--n", type=int, default=1, help="odd orbit order (period n T)")
-    p.add_argument("--kp", type=float, required=True)
-    p.add_argument("--kv", type=float, required=True)
+    p.add_argument("--kp", type=float, default=None)
+    p.add_argument("--kv", type=float, default=None)
+    p.add_argument("--model", default=None, metavar="FILE.toml",
+                   help="mechanical model file (then the impact-pair options are not used)")
+    p.add_argument("--contact", type=int, default=0,
+                   help="--model: 0-based contact whose impacts define the section")
+    p.add_argument("--wall", type=int, choices=[-1, 1], default=None,
+                   help="--model: +1 (hi) or -1 (lo) bound of the contact (default hi)")
+    p.add_argument("--event", default="impact", choices=["impact", "release"],
+                   help="--model: section on the contact's impacts, or on the ends of its "
+                   "sticking phases")
+    p.add_argument("--period", type=int, default=1,
+                   help="--model: returns to the section per period (k of P^k)")
+    p.add_argument("--guess", type=float, nargs="+", default=None,
+                   help="--model: section point (default: the last impact of a transient "
+                   "simulation from the file's initial state)")
+    p.add_argument("--transient", type=float, default=None,
+                   help="--model: time of that simulation (default 50 periods)")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    if args.model is not None:
+        return _run_model(args)
+    missing = [f"--{k}" for k in _PAIR if getattr(args, k) is None]
+    if args.L is None and args.gamma is None:
+        missing.append("--L or --gamma")
+    if missing:
+        raise UsageError(f"the following arguments are required: {', '.join(missing)} "
+                         "(or give --model FILE.toml)")
     from hybridpd.analysis.orbits import symmetric_orbit
     from hybridpd.model import ImpactPair, PDGains
 
@@ -33,6 +61,43 @@ def run(args) -> int:
     print(f"  viability margin = {orb.viability_margin:.6g}")
     if orb.exists:
         mods = ", ".join(f"{abs(z):.6g}" for z in orb.multipliers)
+        print(f"  multipliers |lambda| = {mods}")
+        print(f"  spectral radius = {orb.spectral_radius:.10g} -> "
+              f"{'stable' if orb.stable else 'unstable'}"
+              f"{'' if orb.hyperbolic else ' (not hyperbolic)'}")
+    return 0
+
+
+def _run_model(args) -> int:
+    from hybridpd.analysis.periodic import orbit_from_model
+    from hybridpd.mechanics.modelfile import load_model
+
+    if args.period < 1:
+        raise UsageError(f"--period must be >= 1, got {args.period}")
+    model = load_model(args.model)
+    orb, P = orbit_from_model(model, args.contact, args.wall, args.period, guess=args.guess,
+                              transient=args.transient, event=args.event)
+    sec = P.section
+    d = orb.to_dict()
+    n = model.system.n
+    lay = model.automaton.layout
+    z = orb.z
+    d.update({"model": model.source, "contact": args.contact,
+              "wall": 1 if sec.guard.endswith("+") else -1, "event": args.event,
+              "T": sec.period, "t0": float(orb.s[0]) if sec.has_phase else None,
+              "pre": [float(z[lay["q"][i]]) if j == 0 else float(z[lay["v"][i]])
+                      for i in range(n) for j in (0, 1)]})
+    if args.json:
+        print(json.dumps(d))
+        return 0
+    print(f"{model.source}: period-{orb.period} orbit on contact {args.contact} "
+          f"(wall {d['wall']:+d}): {orb.reason} after {orb.iterations} Newton iterations "
+          f"(residual {orb.residual:.3g})")
+    print("  section point: " + ", ".join(f"{k} = {v:.10g}" for k, v in zip(orb.names, orb.s)))
+    print(f"  period {orb.t_period:.10g}; impact sequence: "
+          + " ".join(f"{g}({k})" for g, k in orb.signature))
+    if orb.converged:
+        mods = ", ".join(f"{abs(m):.6g}" for m in orb.multipliers)
         print(f"  multipliers |lambda| = {mods}")
         print(f"  spectral radius = {orb.spectral_radius:.10g} -> "
               f"{'stable' if orb.stable else 'unstable'}"
