@@ -206,7 +206,7 @@ class Section:
         self.C, self.names = self._coords(coords, names)
         cf = self.c[list(self.free)]
         M = np.vstack([self.C[:, self.free], cf[None, :]])
-        if abs(np.linalg.det(M)) < 1e-12 * max(1.0, np.abs(M).max()) ** M.shape[0]:
+        if not np.linalg.cond(M) < 1e12:
             raise ValueError("coords: with the guard row they must determine the "
                              "non-exosystem state (the matrix [C; c] is singular)")
         self._Minv = np.linalg.inv(M)
