@@ -203,6 +203,7 @@ class Section:
         self.period = None if period is None else float(period)
         self.free = tuple(i for i in range(n) if i not in self.exo)
         self.e0 = self._exo_state(exo_state, reference)
+        self._eig = None
         self.C, self.names = self._coords(coords, names)
         cf = self.c[list(self.free)]
         M = np.vstack([self.C[:, self.free], cf[None, :]])
@@ -270,7 +271,17 @@ class Section:
 
     def exo_at(self, t) -> np.ndarray:
         """Exosystem state at time ``t``."""
-        return expm(self.E * float(t)) @ self.e0 if self.exo else np.zeros(0)
+        if not self.exo:
+            return np.zeros(0)
+        if self._eig is None:
+            lam, V = np.linalg.eig(self.E)
+            # a well-conditioned eigenbasis (oscillators, constants) is exact and cheap
+            self._eig = (lam, V, np.linalg.solve(V, self.e0)) if np.linalg.cond(V) < 1e6 \
+                else False
+        if self._eig is False:
+            return expm(self.E * float(t)) @ self.e0
+        lam, V, c = self._eig
+        return (V @ (np.exp(lam * float(t)) * c)).real
 
     def check_point(self, s) -> np.ndarray:
         s = np.asarray(s, float)

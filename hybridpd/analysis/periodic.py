@@ -296,7 +296,7 @@ def _dist(s, fp, T, Q):
 @njit(cache=True)
 def _label_kernel(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target, zt, Rz,
                   dt_min, zf, zi, gc, gdir, W0, T0, gm, gi, k, t_max, J_max, max_steps, C, T,
-                  fp, n_iter, criterion, Q, r2, escape, S_out, w, fc, ic, jt, jj, jg, jsrc,
+                  FP, n_iter, criterion, QS, R2, escape, S_out, w, fc, ic, jt, jj, jg, jsrc,
                   jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out):
     N = W0.shape[0]
     N1 = W0.shape[1]
@@ -310,7 +310,7 @@ def _label_kernel(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, t
             w0[i] = W0[p, i]
         t0 = T0[p]
         label = -1
-        e2 = 0.0
+        e2 = np.inf
         for it in range(n_iter):
             st, nb, _J = _to_return(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng,
                                     Rh, target, zt, Rz, dt_min, zf, zi, gc, gdir, w0, t0, gm,
@@ -332,7 +332,13 @@ def _label_kernel(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, t
             _coords(w, fc[0], C, T, s)
             for i in range(s.shape[0]):
                 S_out[p, i] = s[i]
-            q, e2 = _dist(s, fp, T, Q)
+            e2 = np.inf
+            hit = False
+            for c in range(FP.shape[0]):
+                q, ec = _dist(s, FP[c], T, QS[c])
+                e2 = min(e2, ec)
+                if q < R2[c]:
+                    hit = True
             big = False
             for i in range(s.shape[0]):
                 if not (abs(s[i]) <= escape):
@@ -340,7 +346,7 @@ def _label_kernel(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, t
             if big:
                 label = _DIVERGED
                 break
-            if q < r2:
+            if hit:
                 label = _CONVERGED
                 break
             for i in range(N1):
@@ -356,8 +362,9 @@ class SectionMapper:
     """Map a section point to a label by iterating ``P^k`` (the mapper of :mod:`hybridpd.sweeps.basins`).
 
     Labels are those of :data:`hybridpd.sweeps.basins.LABELS`: ``converged`` when, after
-    ``n_iter`` iterations, the squared distance to ``fixed_point`` in section coordinates
-    (phase wrapped) is below ``criterion``; ``diverged`` (non-finite, beyond ``escape``, or no
+    ``n_iter`` iterations, the squared distance in section coordinates (phase wrapped) to the
+    cycle is below ``criterion`` (for ``period = k > 1`` the cycle's ``k`` section points
+    ``P^j(fixed_point)`` are all fixed points of ``P^k``; the nearest counts); ``diverged`` (non-finite, beyond ``escape``, or no
     further return in the section's mode within ``t_max``); ``zeno_sticking`` (accumulation
     without sticking mode, or still in another mode, e.g. stuck, at ``t_max``);
     ``unresolved`` (jump or step bound); ``off_section`` (the flow does not fire the guard at
@@ -368,7 +375,7 @@ class SectionMapper:
     ``P^k`` contracts; the largest ball (inside half the criterion ball) whose sampled images
     fall inside ``(1 + rho_t) / 2`` of its radius, on nested spheres, is used at 0.9 of its
     radius: an iterate inside it is labelled ``converged`` at once (numerical, sampled
-    certification, not interval-rigorous).
+    certification, not interval-rigorous; one ball per cycle point).
 
     Parameters
     ----------
@@ -409,9 +416,20 @@ class SectionMapper:
         if not (escape > 0 and math.isfinite(escape)):
             raise ValueError(f"escape must be > 0, got {escape!r}")
         self.n_iter, self.criterion, self.escape = int(n_iter), float(criterion), float(escape)
-        self.cert_Q, self.cert_r2 = np.eye(P.dim), 0.0
+        # the cycle's points on the section: P^k fixes each of them (k returns per period)
+        cyc = [self.fixed_point]
+        for _ in range(self.period - 1):
+            r = P.apply(cyc[-1])
+            if not r.ok:
+                break
+            cyc.append(r.s)
+        self.cycle = np.ascontiguousarray(cyc)
+        K = len(cyc)
+        self.cert_Q = np.tile(np.eye(P.dim), (K, 1, 1))
+        self.cert_r2 = np.zeros(K)
         if early_exit:
-            self.cert_Q, self.cert_r2 = self._certify()
+            for c in range(K):
+                self.cert_Q[c], self.cert_r2[c] = self._certify(self.cycle[c])
 
     @staticmethod
     def label_name(label: int) -> str:
@@ -420,11 +438,12 @@ class SectionMapper:
 
     @property
     def certified_radius(self) -> float:
-        """Radius (``Q``-norm) of the early-exit ball (0 without early exit)."""
-        return math.sqrt(self.cert_r2)
+        """Radius (``Q``-norm) of the early-exit ball at ``fixed_point`` (0 without)."""
+        return math.sqrt(float(self.cert_r2[0]))
 
-    def _run(self, S, n_iter, Q, r2):
+    def _run(self, S, n_iter, Qs, r2s, targets=None):
         P = self.map
+        targets = self.cycle if targets is None else targets
         sec = P.section
         S = np.asarray(S, float).reshape(-1, P.dim)
         N = S.shape[0]
@@ -447,7 +466,7 @@ class SectionMapper:
                                    T0[valid], sec.mode_index, sec.guard_index, self.period,
                                    P._t_max(self.period), P.max_jumps, P.max_steps,
                                    np.ascontiguousarray(sec.C), sec.period or 0.0,
-                                   self.fixed_point, int(n_iter), self.criterion, Q, r2,
+                                   targets, int(n_iter), self.criterion, Qs, r2s,
                                    self.escape, sub := np.full((int(valid.sum()), P.dim), np.nan),
                                    *bufs)
             lab[valid], its[valid], out[valid] = lv, iv, sub
@@ -462,8 +481,8 @@ class SectionMapper:
         """Label of one section point."""
         return int(self.labels(np.asarray(s, float).reshape(1, -1))[0][0])
 
-    def _certify(self):
-        P, k, fp = self.map, self.period, self.fixed_point
+    def _certify(self, fp):
+        P, k = self.map, self.period
         dim = P.dim
         try:
             DP = P.jacobian(fp, k)
@@ -484,13 +503,13 @@ class SectionMapper:
         lam = np.linalg.eigvalsh(Li.T @ Li).max()
         r = math.sqrt(self.criterion / lam) * 0.5
         Lq_inv_T = np.linalg.inv(np.linalg.cholesky(Q).T)
-        dirs = np.random.default_rng(12345).normal(size=(400, dim))
+        dirs = np.random.default_rng(12345).normal(size=(100 + 25 * dim, dim))
         dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
         for _ in range(30):
             ok = True
             for frac in (1.0, 0.5, 0.25, 0.1):
                 pts = fp + (r * frac) * dirs @ Lq_inv_T.T
-                lab, _, img = self._run(pts, 1, np.eye(dim), 0.0)
+                lab, _, img = self._run(pts, 1, np.eye(dim)[None], np.zeros(1), fp[None])
                 if np.any(lab == OFF_SECTION) or not np.all(np.isfinite(img)):
                     ok = False
                     break
@@ -540,7 +559,7 @@ def section_basin(mapper: SectionMapper, axis_x, axis_y, x, y, *, executor="seri
 
         res = run_sweep(_label_chunk, pts, names=[f"s{i}" for i in range(pts.shape[1])],
                         chunk_size=chunk_size, executor=executor, max_workers=max_workers,
-                        progress=progress, func_kwargs={"mapper": mapper},
+                        progress=progress, func_kwargs={"mapper": _PickledMapper.of(mapper)},
                         metadata={"kind": "section_basin"})
         lab, its = res.outputs["label"], res.outputs["iterations"]
     lab = lab.reshape(Y.shape)
@@ -562,9 +581,28 @@ def _axis_index(a, names) -> int:
     return int(a)
 
 
-def _label_chunk(chunk, mapper: SectionMapper):
+@dataclass(frozen=True, eq=False)
+class _PickledMapper:
+    """A mapper as bytes (the sweep records its arguments by digest and ships them to the
+    worker processes)."""
+
+    blob: np.ndarray
+
+    @classmethod
+    def of(cls, mapper: SectionMapper) -> _PickledMapper:
+        import pickle
+
+        return cls(np.frombuffer(pickle.dumps(mapper), dtype=np.uint8))
+
+    def load(self) -> SectionMapper:
+        import pickle
+
+        return pickle.loads(self.blob.tobytes())
+
+
+def _label_chunk(chunk, mapper: _PickledMapper):
     S = np.stack([chunk[f"s{i}"] for i in range(len(chunk))], axis=1)
-    lab, its = mapper.labels(S)
+    lab, its = mapper.load().labels(S)
     return {"label": lab, "iterations": its}
 
 
