@@ -80,3 +80,39 @@ def test_builder_returning_an_automaton_and_bad_input():
         continue_family(build, [7.7, 1.66], 0.8, 0.8, section=sec)
     bad = continue_family(build, [1.0, -0.5], 0.8, 0.82, section=sec)
     assert bad.termination.startswith("start failed") and not bad.points
+
+
+def test_design_gains_for_a_desired_amplitude_matches_the_symmetric_orbit():
+    from hybridpd.analysis.hybriddesign import design_gains, orbit_amplitude
+
+    pair = ImpactPair(0.1, 0.5, 0.75)
+    orb = symmetric_orbit(pair, PDGains(10, 20), W)
+    base = ControlledImpactPair(pair, PDGains(10, 20), orb.reference())
+    d = {}
+    for name, g in (("kp", PDGains(11, 20)), ("kv", PDGains(10, 21))):
+        o = ControlledImpactPair(pair, g, orb.reference())
+        d[name] = (o.loop.A - base.loop.A, o.loop.force - base.loop.force)
+
+    def build(g):       # the loop matrices are affine in (kp, kv)
+        s = copy.copy(base)
+        s.loop = dataclasses.replace(
+            base.loop, A=base.loop.A + (g[0] - 10) * d["kp"][0] + (g[1] - 20) * d["kv"][0],
+            force=base.loop.force + (g[0] - 10) * d["kp"][1] + (g[1] - 20) * d["kv"][1])
+        s.automaton = s._build_automaton()
+        return SectionMap(impact_pair_section(s))
+
+    r = design_gains(build, [12.0, 20.0], orb.fixed_point, state="x1", amplitude=1.0,
+                     bounds=[(1, 60), (1, 60)])
+    assert r.success, r.message
+    assert r.spectral_radius < 0.5 * r.initial_spectral_radius
+    # independent check: the closed-form symmetric orbit at the designed gains needs the same
+    # reference amplitude for x10 = 1 and has the same multipliers
+    kp, kv = r.gains
+    chk = symmetric_orbit(pair, PDGains(kp, kv), W)
+    assert chk.exists and abs(chk.xm - orb.xm) < 1e-6
+    assert abs(chk.spectral_radius - r.spectral_radius) < 1e-6
+    P = build(r.gains)
+    assert abs(orbit_amplitude(P, r.orbit, "x1") - 1.0) < 1e-6
+    with pytest.raises(ValueError, match="bounds"):
+        design_gains(build, [12.0, 20.0], orb.fixed_point, state="x1", amplitude=1.0,
+                     bounds=[(1, 60)])

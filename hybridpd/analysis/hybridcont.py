@@ -124,7 +124,7 @@ def _map_factory(builder, section, map_options):
     cache = {}   # the last few maps (corrector and parameter derivative revisit them)
 
     def make(p) -> SectionMap:
-        p = float(p)
+        p = p if isinstance(p, tuple) else float(p)     # tuples: several parameters
         if p in cache:
             return cache[p]
         if len(cache) >= 8:
