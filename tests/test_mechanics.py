@@ -309,3 +309,16 @@ def test_reference_and_measurement_semantics():
     assert xd == pytest.approx(np.cos(2.0 * t))
     u = 3.2 * ad + 20.0 * (xd - q[2]) + 5.0 * (vd - v[2])
     assert loop.force @ z == pytest.approx(u, rel=1e-12)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["drivetrain", "sampled_drivetrain", "compliant_contact"])
+def test_examples_run_and_write_their_figure(name, tmp_path):
+    import os
+
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    r = subprocess.run([sys.executable, str(ROOT / "examples" / f"{name}.py"), "--out",
+                        str(tmp_path)], capture_output=True, text=True, env=env, check=False)
+    assert r.returncode == 0, r.stderr
+    png = tmp_path / f"{name}.png"
+    assert png.exists() and png.stat().st_size > 10_000

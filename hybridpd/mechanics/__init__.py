@@ -13,6 +13,8 @@ from hybridpd.mechanics.automaton import (
 )
 from hybridpd.mechanics.contacts import Contact
 from hybridpd.mechanics.loop import MechanicalLoop, Reference, mechanical_loop
+from hybridpd.mechanics.modelfile import MechanicalModel, load_model, model_from_dict
+from hybridpd.mechanics.simulate import MechanicalTrajectory, simulate
 from hybridpd.mechanics.system import MechanicalSystem
 
 __all__ = [
@@ -20,9 +22,14 @@ __all__ = [
     "GuardInfo",
     "MechanicalAutomaton",
     "MechanicalLoop",
+    "MechanicalModel",
     "MechanicalSystem",
+    "MechanicalTrajectory",
     "ModeInfo",
     "Reference",
     "build_automaton",
+    "load_model",
     "mechanical_loop",
+    "model_from_dict",
+    "simulate",
 ]

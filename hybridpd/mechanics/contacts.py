@@ -132,7 +132,7 @@ class Contact:
 
     @property
     def bounds(self) -> tuple:
-        """``((wall, bound), ...)`` for the bounds present: ``wall = -1`` at ``lo``, ``+1`` at ``hi``."""
+        """``((wall, bound), ...)``: the bounds present (``wall`` -1 at ``lo``, +1 at ``hi``)."""
         out = []
         if self.lo is not None:
             out.append((-1, self.lo))

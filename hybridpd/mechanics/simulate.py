@@ -19,13 +19,16 @@ records stop before that instant.
 Contact tolerance
 -----------------
 A rigid gap never exceeds its bound by more than the event-location rounding bound
-(``~1e-12`` relative to the state scale) plus, after a sticking phase, the projection's
-rounding; the tests check ``1e-9 (1 + |bound|)``. The one exception is the unresolved tail
+(``~1e-12`` relative to the state scale) plus, during a sticking phase, the drift of the
+constrained flow by rounding; the tests check ``1e-9 (1 + |bound|) + 1e-12 ||w||_1 max|q|``
+(``max|q|`` over the run). The one exception is the unresolved tail
 of an accumulation of impacts, ``[t_k, t_inf]`` (:attr:`MechanicalTrajectory.zeno_tails`):
 the infinitely many, geometrically small impacts there are not computed (see
 :mod:`hybridpd.hybrid.automaton`), and the state reported inside a tail is the flow of the
 mode before the accumulation, which may cross the contact by about the size of the last
-resolved rebound; the state at ``t_inf`` is projected back onto the contact.
+resolved rebound (and other contacts are not checked there); the state at ``t_inf`` is
+projected back onto the contact, and any other contact then found violated fires at once.
+The states recorded between several jumps at one instant are intermediate.
 """
 from __future__ import annotations
 
