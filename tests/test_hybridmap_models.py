@@ -110,3 +110,38 @@ def test_sampled_data_orbit_dp(tmp_path):
     assert r.ok and sum(1 for j in r.jumps if j[2] == "sample") > 20
     fd = P.jacobian_fd(s, h=1e-7)
     assert np.max(np.abs(fd - r.DP)) < 1e-6 * max(1.0, np.max(np.abs(r.DP))), names
+
+
+@pytest.mark.slow
+def test_pid_backlash_example_runs_and_writes_its_figure(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, PYTHONPATH=str(root), OPENBLAS_NUM_THREADS="1")
+    r = subprocess.run([sys.executable, str(root / "examples" /
+                                            "pid_backlash_describing_function.py"),
+                        "--out", str(tmp_path), "--quick"], capture_output=True, text=True,
+                       env=env, timeout=900, check=False)
+    assert r.returncode == 0, r.stderr
+    assert "describing function: A =" in r.stdout and "exact cycle" in r.stdout
+    assert (tmp_path / "pid_backlash_describing_function.png").stat().st_size > 10_000
+
+
+@pytest.mark.slow
+def test_drivetrain_basin_early_exit_does_not_change_labels():
+    from hybridpd.analysis.periodic import SectionMapper, section_basin
+
+    model = load_model(MODELS / "drivetrain.toml")
+    po, P = orbit_from_model(model, 0, 1, 8)
+    names = P.section.names
+    i, j = names.index("motor"), names.index("motor_dot")
+    x = (po.s[i] - 2.0, po.s[i] + 2.0, 6)
+    y = (po.s[j] - 8.0, po.s[j] + 8.0, 6)
+    fast = section_basin(SectionMapper(P, po.s, period=8, n_iter=60), "motor", "motor_dot", x,
+                         y)
+    full = section_basin(SectionMapper(P, po.s, period=8, n_iter=60, early_exit=False),
+                         "motor", "motor_dot", x, y)
+    assert np.array_equal(fast.labels, full.labels)
+    assert fast.iterations.sum() < full.iterations.sum()
