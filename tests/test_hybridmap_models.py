@@ -66,6 +66,9 @@ def test_orbit_cli_with_a_model_file(capsys):
     assert d["exists"] and d["stable"] and d["contact"] == 0 and d["wall"] == 1
     assert len(d["multipliers"]) == len(d["fixed_point"]) == 6 and len(d["pre"]) == 6
     assert abs(d["t_period"] - np.pi) < 1e-9 and d["T"] == pytest.approx(np.pi)
+    pre, post = np.array(d["pre"]), np.array(d["post"])     # [q_load, v_load, q_gear, ...]
+    assert np.array_equal(post[[0, 2, 4, 5]], pre[[0, 2, 4, 5]])  # Newton's law: load, gear
+    assert post[1] != pre[1] and post[3] != pre[3] and d["phi0"] == d["fixed_point"][0]
     g = [str(v) for v in d["fixed_point"]]
     assert main(["orbit", "--model", str(f), "--period", "8", "--guess", *g]) == 0
     assert "converged" in capsys.readouterr().out

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
+
 from hybridpd.cli._common import UsageError, add_plant, clearance
 
 # the pair options: required without --model, not used with it
@@ -82,11 +84,18 @@ def _run_model(args) -> int:
     n = model.system.n
     lay = model.automaton.layout
     z = orb.z
+    pk = sec.automaton.packed
+    zp = (pk.Rh[sec.mode_index, sec.guard_index] @ np.append(z, 1.0))[:-1]
+
+    def mech(x):      # [q_1, v_1, ..., q_n, v_n]
+        return [float(x[lay["q"][i]]) if j == 0 else float(x[lay["v"][i]])
+                for i in range(n) for j in (0, 1)]
+
     d.update({"model": model.source, "contact": args.contact,
               "wall": 1 if sec.guard.endswith("+") else -1, "event": args.event,
-              "T": sec.period, "t0": float(orb.s[0]) if sec.has_phase else None,
-              "pre": [float(z[lay["q"][i]]) if j == 0 else float(z[lay["v"][i]])
-                      for i in range(n) for j in (0, 1)]})
+              "T": sec.period, "phi0": float(orb.s[0]) if sec.has_phase else None,
+              "t0": float(orb.s[0]) if sec.has_phase else 0.0, "n": orb.period,
+              "pre": mech(z), "post": mech(zp)})
     if args.json:
         print(json.dumps(d))
         return 0
