@@ -3,8 +3,10 @@
 1. The impact pair (collocated, e = 0.5, the symmetric orbit of the README's parameters), near
    its fixed point: applications of ``P`` per second and ``DP`` per second through
 
-   * the general path (:class:`hybridpd.analysis.hybridmap.SectionMap`, one point per call,
-     and the compiled batch loop of :class:`hybridpd.analysis.periodic.SectionMapper`),
+   * the general path (:class:`hybridpd.analysis.hybridmap.SectionMap`, one point per call;
+     the compiled batch loop of :class:`hybridpd.analysis.periodic.SectionMapper`, one
+     application per point, with the section embedding in Python; and its iterations of
+     ``P`` inside the compiled loop, as a basin uses it),
    * the compiled closed-form engine (:class:`hybridpd.analysis.impactmap.ImpactMap`, batch;
      ``DP`` from the symbolic blocks),
    * the naive ``solve_ivp`` loop (DOP853, rtol 1e-10, atol 1e-12; one ``P`` = 2 impacts;
@@ -54,12 +56,16 @@ def pair_rates():
     m = SectionMapper(P, orb.fixed_point, n_iter=1, early_exit=False)
     m.labels(S[:10])
     t_batch, _ = best_of(lambda: m.labels(S))
+    mi = SectionMapper(P, orb.fixed_point, n_iter=200, early_exit=False)
+    mi.labels(S[:2])
+    t_it, (_, its) = best_of(lambda: mi.labels(S[:50]))
     t_cf, _ = best_of(lambda: Q.apply(S))
     t_cf_dp, _ = best_of(lambda: [Q.jacobian(s) for s in S[:n1]])
     per_imp, _ = naive_per_impact(n_impacts=100)
     r = {
         "general, per call": n1 / t_gen,
         "general, compiled batch": N / t_batch,
+        "general, compiled iterations": its.sum() / t_it,
         "closed form, batch": N / t_cf,
         "naive solve_ivp": 1.0 / (2 * per_imp),
     }

@@ -148,3 +148,6 @@ def test_drivetrain_basin_early_exit_does_not_change_labels():
                          "motor", "motor_dot", x, y)
     assert np.array_equal(fast.labels, full.labels)
     assert fast.iterations.sum() < full.iterations.sum()
+    par = section_basin(SectionMapper(P, po.s, period=8, n_iter=60), "motor", "motor_dot", x,
+                        y, executor="processes", max_workers=2, chunk_size=9)
+    assert np.array_equal(par.labels, fast.labels)
