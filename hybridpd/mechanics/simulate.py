@@ -192,44 +192,53 @@ def simulate(model: MechanicalAutomaton, x0, t_span, max_impacts: int = 100_000,
     return _wrap(model, traj, time_tol)
 
 
-def _simultaneous(model, k, t, pre, time_tol):
-    """True if another rigid contact closes within ``time_tol`` of this impact and the two
-    impulses are not independent (see the module docstring)."""
-    sysm = model.loop.system
-    iv = model.layout["v"]
-    wi = model.contacts[k].normal
-    Mwi = np.linalg.solve(sysm.M, wi)
-    speed_i = abs(float(wi @ pre[iv])) / np.linalg.norm(wi)
-    tau = time_tol * (1.0 + abs(t))
-    for j, c in enumerate(model.contacts):
-        if j == k or not c.rigid:
-            continue
-        wn = np.linalg.norm(c.normal)
-        s = float(model.gap_rows[j] @ pre) / wn
-        speed = float(c.normal @ pre[iv]) / wn
-        for wall, bound in c.bounds:
-            closing, dist = wall * speed, wall * (bound / wn - s)
-            # a contact merely touching (closing speed ~ 0) is left to the sequential rule
-            if closing <= 1e-6 * speed_i or dist > closing * tau + 1e-15 * (1 + abs(bound)):
+class _Coupling:
+    """Per-model constants of the simultaneous-contact test (computed once per run)."""
+
+    def __init__(self, model):
+        sysm = model.loop.system
+        W = np.array([c.normal for c in model.contacts]).reshape(len(model.contacts), -1)
+        self.rigid = [j for j, c in enumerate(model.contacts) if c.rigid]
+        self.norm = np.linalg.norm(W, axis=1) if W.size else np.zeros(0)
+        G = W @ np.linalg.solve(sysm.M, W.T) if W.size else np.zeros((0, 0))
+        d = np.sqrt(np.abs(np.diag(G)))
+        # impulses i and j are independent when w_i . M^-1 w_j = 0 (relative to 1e-12)
+        self.coupled = np.abs(G) > 1e-12 * np.outer(d, d)
+
+    def simultaneous(self, model, k, t, pre, time_tol):
+        """True if another rigid contact closes within ``time_tol`` of this impact and the
+        two impulses are not independent (see the module docstring)."""
+        iv = model.layout["v"]
+        v = pre[iv]
+        speed_i = abs(float(model.contacts[k].normal @ v)) / self.norm[k]
+        tau = time_tol * (1.0 + abs(t))
+        for j in self.rigid:
+            if j == k or not self.coupled[k, j]:
                 continue
-            cross = float(c.normal @ Mwi)
-            scale = math.sqrt(abs(float(c.normal @ np.linalg.solve(sysm.M, c.normal))
-                                  * float(wi @ Mwi)))
-            if abs(cross) > 1e-12 * scale:
-                return True
-    return False
+            c = model.contacts[j]
+            s = float(model.gap_rows[j] @ pre) / self.norm[j]
+            speed = float(c.normal @ v) / self.norm[j]
+            for wall, bound in c.bounds:
+                closing, dist = wall * speed, wall * (bound / self.norm[j] - s)
+                # a contact merely touching (closing speed ~ 0) is left to the sequential rule
+                if closing > 1e-6 * speed_i and dist <= closing * tau + 1e-15 * (1 + abs(bound)):
+                    return True
+        return False
 
 
 def _wrap(model, traj, time_tol) -> MechanicalTrajectory:
     n = model.loop.system.n
     jt = traj.jumps
     info = [model.guards[(s, g)] for s, g in zip(jt.source, jt.guard)]
+    coupling = _Coupling(model) if len(model.contacts) > 1 else None
     t_final, termination = traj.t_final, _TERMINATIONS[traj.termination.value]
     stop = len(jt)
     for i, gi in enumerate(info):
         if (gi.kind == "impact" and jt.kind[i] != "zeno"
                 and not model.modes[jt.source[i]].stick
-                and _simultaneous(model, gi.contact, float(jt.t[i]), jt.pre[i], time_tol)):
+                and coupling is not None
+                and coupling.simultaneous(model, gi.contact, float(jt.t[i]), jt.pre[i],
+                                          time_tol)):
             stop, t_final, termination = i, float(jt.t[i]), "simultaneous_contact"
             break
     imp = [i for i in range(stop) if info[i].kind == "impact" and jt.kind[i] != "zeno"]
