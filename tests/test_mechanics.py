@@ -322,3 +322,47 @@ def test_examples_run_and_write_their_figure(name, tmp_path):
     assert r.returncode == 0, r.stderr
     png = tmp_path / f"{name}.png"
     assert png.exists() and png.stat().st_size > 10_000
+
+
+def _pair_dict():
+    return tomllib.loads((MODELS / "impact_pair.toml").read_text())
+
+
+def test_model_file_transfer_function_controller_poles():
+    """tf from err: closed-loop poles of x2 are the roots of m2 s^2 den + num (independent of
+    python-control's interconnection), plus the free x1 (0, 0) and the exosystem (+-5i)."""
+    d = _pair_dict()
+    d["controller"] = {"type": "tf", "num": [20.0, 10.0], "den": [1.0, 10.0], "measure": "x2"}
+    loop = model_from_dict(d).automaton.loop
+    expect = np.r_[np.roots(np.polyadd(np.polymul([1.0, 0.0, 0.0], [1.0, 10.0]),
+                                       [20.0, 10.0])), 0.0, 0.0, 5j, -5j]
+    got = np.linalg.eigvals(loop.A)
+    for lam in expect:
+        assert np.min(np.abs(got - lam)) < 1e-6
+    assert loop.state_names[-1] == "c1"
+
+
+def test_model_file_state_space_discrete_delay_and_sensors():
+    d = _pair_dict()
+    d["controller"] = {"type": "ss", "A": [[0.5]], "B": [[1.0, 0.0]], "C": [[2.0]],
+                       "D": [[10.0, 3.0]], "measure": "x2", "measure_velocity": "x1",
+                       "dt": 0.01, "delay": 1}
+    d["reference"] = {"type": "sum_of_sines", "amplitudes": [1.0, 0.5], "omegas": [5.0, 7.0],
+                      "feedforward_mass": 1.0}
+    m = model_from_dict(d)
+    loop = m.automaton.loop
+    assert loop.dt == 0.01 and loop.delay == 1
+    assert loop.state_names == ("x1", "x1_dot", "x2", "x2_dot", "pc1", "ps1", "pc2", "ps2",
+                                "c1", "h0", "h1", "s")
+    R, r = loop.sample_reset
+    z = np.arange(1.0, 13.0)
+    zp = R @ z + r
+    xd = z[4] + z[6]
+    vd = -5.0 * z[5] - 7.0 * z[7]
+    ad = -25.0 * z[4] - 49.0 * z[6]
+    err, err_dot = xd - z[2], vd - z[1]                 # position of x2, velocity of x1
+    assert zp[8] == pytest.approx(0.5 * z[8] + err)     # x+ = A x + B [err, err_dot]
+    assert zp[9] == pytest.approx(ad + 2.0 * z[8] + 10.0 * err + 3.0 * err_dot)
+    assert zp[10] == z[9] and zp[11] == z[11] - 0.01    # shift register, clock
+    tr = m.simulate(1.0)
+    assert tr.termination == "end_time" and tr.samples.size >= 99
