@@ -20,7 +20,7 @@ from hybridpd.mechanics import (
 )
 from hybridpd.mechanics.modelfile import load_model, model_from_dict
 from hybridpd.mechanics.naive import naive_mechanical
-from hybridpd.mechanics.simulate import simulate
+from hybridpd.mechanics.simulate import simulate, simulate_state
 from hybridpd.pair.impactpair import ControlledImpactPair
 
 if sys.version_info >= (3, 11):
@@ -366,3 +366,22 @@ def test_model_file_state_space_discrete_delay_and_sensors():
     assert zp[10] == z[9] and zp[11] == z[11] - 0.01    # shift register, clock
     tr = m.simulate(1.0)
     assert tr.termination == "end_time" and tr.samples.size >= 99
+
+
+def test_restart_from_a_full_state_reproduces_the_run():
+    """simulate_state from the state at t = 1 (sampled-data loop: clock and held force
+    included) continues the same trajectory: impact times and sampling instants."""
+    d = _pair_dict()
+    d["controller"]["dt"] = 0.01
+    m = model_from_dict(d)
+    ma = m.automaton
+    full = m.simulate(3.0)
+    t_mid = 1.0005                               # between two samples
+    part = simulate_state(ma, full(t_mid), (t_mid, 3.0))
+    later = full.impact_times[full.impact_times > t_mid]
+    assert later.size >= 2
+    np.testing.assert_allclose(part.impact_times, later, atol=1e-12)
+    np.testing.assert_allclose(part.samples, full.samples[full.samples > t_mid], atol=1e-12)
+    assert ma.guard_name(0, -1) == "contact0-"
+    with pytest.raises(ValueError, match="no guard"):
+        ma.guard_name(1, 1)

@@ -124,6 +124,19 @@ class MechanicalAutomaton:
         """Index arrays ``q, v, exo, ctrl, hold`` and the ``clock`` index (see the loop)."""
         return self.loop.layout
 
+    def guard_name(self, contact: int, wall: int, kind: str = "impact") -> str:
+        """Name of the guard of ``kind`` (``'impact'``, ``'release'``, ``'enter'``,
+        ``'leave'``) for ``contact`` at ``wall`` (the same name in every mode that has it)."""
+        prefix = {"impact": "contact", "release": "release", "enter": "enter",
+                  "leave": "leave"}.get(kind)
+        if prefix is None:
+            raise ValueError(f"kind must be 'impact', 'release', 'enter' or 'leave', "
+                             f"got {kind!r}")
+        name = f"{prefix}{int(contact)}{_sign(wall)}"
+        if not any(g == name for _, g in self.guards):
+            raise ValueError(f"no guard {name!r} (contact {contact}, wall {wall:+d})")
+        return name
+
     def initial_state(self, q0, v0, t0: float = 0.0, controller_state=None) -> np.ndarray:
         """Full state at ``t0`` (see :meth:`MechanicalLoop.initial_state`)."""
         return self.loop.initial_state(q0, v0, t0, controller_state)

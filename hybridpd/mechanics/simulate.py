@@ -39,7 +39,7 @@ import numpy as np
 
 from hybridpd.mechanics.automaton import MechanicalAutomaton
 
-__all__ = ["MechanicalTrajectory", "simulate"]
+__all__ = ["MechanicalTrajectory", "simulate", "simulate_state"]
 
 _TERMINATIONS = {0: "end_time", 1: "jump_limit", 2: "zeno", 3: "nonfinite", 4: "step_limit"}
 
@@ -174,22 +174,59 @@ def simulate(model: MechanicalAutomaton, x0, t_span, max_impacts: int = 100_000,
     if x0.shape != (2 * n,):
         raise ValueError(f"x0 must have shape ({2 * n},) = [q_1, v_1, ..., q_n, v_n], "
                          f"got {x0.shape}")
+    t0, _ = _check_span(t_span)
+    z0 = model.initial_state(x0[0::2], x0[1::2], t0, controller_state)
+    return simulate_state(model, z0, t_span, model.initial_mode(z0), max_impacts, time_tol,
+                          **options)
+
+
+def simulate_state(model: MechanicalAutomaton, z0, t_span, mode: str | None = None,
+                   max_impacts: int = 100_000, time_tol: float = 1e-12,
+                   **options) -> MechanicalTrajectory:
+    """Simulate from a full closed-loop state (e.g. a point of a Poincare section).
+
+    Parameters
+    ----------
+    model : MechanicalAutomaton
+    z0 : array_like, shape (N,)
+        Closed-loop state in the layout of ``model.layout`` (exosystem, controller, held
+        force and clock included; no sample is taken at ``t0``).
+    t_span : (float, float)
+    mode : str, optional
+        Mode to start in (default: checked to lie inside every contact, ``model.free_mode``).
+    max_impacts, time_tol, **options
+        As in :func:`simulate`.
+
+    Returns
+    -------
+    MechanicalTrajectory
+    """
+    if not isinstance(model, MechanicalAutomaton):
+        raise ValueError("model must be a MechanicalAutomaton (see build_automaton)")
+    t0, t1 = _check_span(t_span)
+    if isinstance(max_impacts, bool) or int(max_impacts) != max_impacts or max_impacts < 1:
+        raise ValueError(f"max_impacts must be an int >= 1, got {max_impacts!r}")
+    z0 = np.asarray(z0, dtype=float)
+    if mode is None:
+        mode = model.initial_mode(z0)
+    elif mode not in model.modes:
+        raise ValueError(f"mode must be one of {sorted(model.modes)}, got {mode!r}")
+    loop = model.loop
+    max_jumps = int(max_impacts)
+    if loop.sampled:
+        max_jumps += math.ceil((t1 - t0) / loop.dt) + 2
+    traj = model.automaton.simulate(z0, mode, (t0, t1), max_jumps=max_jumps, **options)
+    return _wrap(model, traj, time_tol)
+
+
+def _check_span(t_span):
     try:
         t0, t1 = (float(v) for v in t_span)
     except (TypeError, ValueError):
         raise ValueError(f"t_span must be a pair (t0, t1), got {t_span!r}") from None
     if not (math.isfinite(t0) and math.isfinite(t1) and t1 > t0):
         raise ValueError(f"t_span must be finite and increasing, got {t_span!r}")
-    if isinstance(max_impacts, bool) or int(max_impacts) != max_impacts or max_impacts < 1:
-        raise ValueError(f"max_impacts must be an int >= 1, got {max_impacts!r}")
-    z0 = model.initial_state(x0[0::2], x0[1::2], t0, controller_state)
-    mode0 = model.initial_mode(z0)
-    loop = model.loop
-    max_jumps = int(max_impacts)
-    if loop.sampled:
-        max_jumps += math.ceil((t1 - t0) / loop.dt) + 2
-    traj = model.automaton.simulate(z0, mode0, (t0, t1), max_jumps=max_jumps, **options)
-    return _wrap(model, traj, time_tol)
+    return t0, t1
 
 
 class _Coupling:
