@@ -135,6 +135,8 @@ def random_spec(draw):
                                             st.sampled_from(["both", "lo", "hi"]),
                                             st.booleans()), max_size=3)),
         "dt": draw(st.sampled_from([0.0, 0.05])),
+        "delay": draw(st.integers(0, 1)),
+        "lead": draw(st.booleans()),
     }
 
 
@@ -165,10 +167,15 @@ def build(spec):
                                     damping=float(rng.uniform(0, 5))))
     kp, kv = float(rng.uniform(0, 20)), float(rng.uniform(0, 10))
     dt = spec["dt"]
-    ctrl = (kp, kv) if dt == 0 else discrete_pd(dt, kp, kv)
+    if spec["lead"]:                               # a dynamic controller from err alone
+        ctrl = ct.tf([kv, kp], [0.05, 1.0])
+        ctrl = ctrl if dt == 0 else ct.c2d(ctrl, dt, "tustin")
+    else:
+        ctrl = (kp, kv) if dt == 0 else discrete_pd(dt, kp, kv)
     ref = Reference.sine(float(rng.uniform(0, 1)), float(rng.uniform(0.5, 10)),
                          float(rng.uniform(0, 1)))
-    loop = mechanical_loop(sysm, ctrl, ref, f"q{rng.integers(n)}")
+    loop = mechanical_loop(sysm, ctrl, ref, f"q{rng.integers(n)}",
+                           delay=spec["delay"] if dt else 0)
     x0 = np.zeros(2 * n)
     x0[1::2] = rng.normal(size=n)
     return build_automaton(loop, contacts), x0

@@ -41,6 +41,11 @@ Guards (``g > 0`` admissible, all with ``direction = -1`` except sampling):
   :attr:`MechanicalLoop.sample_reset`; target the same mode.
 
 Priorities for simultaneous events: impacts and compliant switches 2, releases 1, samples 0.
+
+Size: one mode per compliant configuration (``prod_j (1 + number of bounds of j)`` over the
+compliant contacts) times one per set of held rigid contacts with independent normals (at
+most ``prod_k (1 + number of bounds of k)``); for ``m`` contacts at most ``3^m`` modes, each
+an exact LTI flow prepared once.
 """
 from __future__ import annotations
 
