@@ -385,3 +385,51 @@ def test_restart_from_a_full_state_reproduces_the_run():
     assert ma.guard_name(0, -1) == "contact0-"
     with pytest.raises(ValueError, match="no guard"):
         ma.guard_name(1, 1)
+
+
+def test_both_meshes_held_against_an_independent_constrained_solve():
+    """A phase of the gear train with both meshes held: the state and the release time
+    against solve_ivp on the Lagrange (KKT) formulation, M a = f + W lambda, W^T a = 0, with
+    the force written from the raw model, released when a multiplier changes sign."""
+    from scipy.integrate import solve_ivp
+
+    m = load_model(MODELS / "gear_train.toml")
+    s = m.system
+    tr = m.simulate(3.0)
+    seg = tr.hybrid.segments
+    i = next(j for j in range(len(seg)) if seg.mode[j] in ("stick0+1+", "stick0-1-")
+             and seg.t_end[j] - seg.t_start[j] > 0.3)
+    t0, t1 = seg.t_start[i], seg.t_end[i]
+    walls = (1, 1) if seg.mode[i] == "stick0+1+" else (-1, -1)
+    W = np.array([c.normal for c in m.contacts]).T
+    n = s.n
+
+    def kkt(t, x):
+        q, v = x[0::2], x[1::2]
+        xd, vd = np.cos(3.0 * t), -3.0 * np.sin(3.0 * t)
+        u = 30.0 * (xd - q[0]) + 6.0 * (vd - v[0])
+        f = -s.C @ v - s.K @ q + s.B * u
+        KKT = np.block([[s.M, -W], [W.T, np.zeros((2, 2))]])
+        sol = np.linalg.solve(KKT, np.r_[f, 0.0, 0.0])
+        return sol[:n], sol[n:]
+
+    def rhs(t, x):
+        out = np.empty(2 * n)
+        out[0::2], out[1::2] = x[1::2], kkt(t, x)[0]
+        return out
+
+    events = []
+    for k in range(2):
+        def ev(t, x, k=k):
+            return -walls[k] * kkt(t, x)[1][k]          # > 0 while the mesh pushes
+        ev.terminal, ev.direction = True, -1
+        events.append(ev)
+    x0 = tr.mechanical(t0 + 1e-9)
+    sol = solve_ivp(rhs, (t0 + 1e-9, t1 + 1.0), x0, method="DOP853", rtol=1e-12, atol=1e-13,
+                    events=events)
+    t_rel = min(te[0] for te in sol.t_events if te.size)
+    assert abs(t_rel - t1) < 1e-7
+    mid = 0.5 * (t0 + t1)
+    ref_mid = solve_ivp(rhs, (t0 + 1e-9, mid), x0, method="DOP853", rtol=1e-12,
+                        atol=1e-13).y[:, -1]
+    np.testing.assert_allclose(tr.mechanical(mid), ref_mid, atol=1e-8)
