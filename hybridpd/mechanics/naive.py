@@ -73,54 +73,18 @@ def naive_mechanical(M, C, K, B, contacts, kp, kv, measure, amplitude, omega, fe
         Sampling period of a zero-order-hold PD (0: continuous). Samples at ``t0 + k dt``,
         the first at ``t0``.
     """
-    M, C, K = (np.asarray(a, float) for a in (M, C, K))
-    B, c = np.asarray(B, float), np.asarray(measure, float)
+    M = np.asarray(M, float)
     n = M.shape[0]
-    soft = [(np.asarray(w, float), lo, hi, k_, c_) for w, lo, hi, e, *kc in contacts
-            if e is None for k_, c_ in [kc]]
-
-    def law(t, x):
-        q, v = x[0::2], x[1::2]
-        xd = amplitude * np.cos(omega * t)
-        vd = -amplitude * omega * np.sin(omega * t)
-        ad = -amplitude * omega ** 2 * np.cos(omega * t)
-        return feedforward * ad + kp * (xd - c @ q) + kv * (vd - c @ v)
-
-    def rhs(t, x, held):
-        q, v = x[0::2], x[1::2]
-        u = law(t, x) if held is None else held
-        f = -C @ v - K @ q + B * u
-        for w, lo, hi, k_, c_ in soft:
-            s = w @ q
-            for bound, pen in ((hi, None if hi is None else s - hi),
-                               (lo, None if lo is None else lo - s)):
-                if bound is not None and pen > 0:
-                    f = f - (k_ * (s - bound) + c_ * (w @ v)) * w
-        out = np.empty(2 * n)
-        out[0::2], out[1::2] = v, np.linalg.solve(M, f)
-        return out
-
-    events, meta = [], []
-    for k, (w, lo, hi, e, *_) in enumerate(contacts):
-        w = np.asarray(w, float)
-        for wall, bound in ((-1, lo), (1, hi)):
-            if bound is None:
-                continue
-
-            def ev(t, x, held, w=w, wall=wall, bound=bound):
-                return wall * (bound - w @ x[0::2])
-            ev.terminal = True
-            ev.direction = -1
-            events.append(ev)
-            meta.append((k, wall, w, e))
+    rhs, law = _equations(M, C, K, B, contacts, kp, kv, measure, amplitude, omega,
+                          feedforward)
+    events, meta = _events(contacts)
     # compliant bounds are watched for engagement while free and for release while engaged
     # (a fixed direction per segment: the restart point, on the bound, is not an event)
     engaged = {i: False for i, (_, _, _, e) in enumerate(meta) if e is None}
-
     t0, t_end = float(t_span[0]), float(t_span[1])
     t, x = t0, np.asarray(x0, float).copy()
     rec = {"t": [], "k": [], "wall": [], "pre": [], "post": []}
-    n_rhs, stopped, last, k_sample = 0, "end_time", (None, -np.inf), 0
+    n_rhs, stopped, last, k_sample = 0, "end_time", -np.inf, 0
     held = law(t0, x) if dt > 0 else None
     while t < t_end:
         if len(rec["t"]) >= max_impacts:
@@ -145,26 +109,73 @@ def naive_mechanical(M, C, K, B, contacts, kp, kv, measure, amplitude, omega, fe
         t_ev = float(sol.t_events[i][0])
         k, wall, w, e = meta[i]
         pre = sol.y_events[i][0].copy()
+        post = pre
         if e is None:                        # compliant engagement or release: just restart
-            if not engaged[i]:
-                for key, val in (("t", t_ev), ("k", k), ("wall", wall), ("pre", pre),
-                                 ("post", pre)):
-                    rec[key].append(val)
             engaged[i] = not engaged[i]
             t, x = t_ev, pre
-            continue
-        if t_ev - last[1] < 1e-12 * max(1.0, abs(t_ev)):
-            t, stopped = t_ev, "pile_up"
-            break
-        v = pre[1::2]
-        mw = np.linalg.solve(M, w)
-        impulse = -(1.0 + e) * (w @ v) / (w @ mw)
-        post = pre.copy()
-        post[1::2] = v + impulse * mw
+            if not engaged[i]:
+                continue
+        else:
+            if t_ev - last < 1e-12 * max(1.0, abs(t_ev)):
+                t, stopped = t_ev, "pile_up"
+                break
+            mw = np.linalg.solve(M, w)
+            post = pre.copy()
+            post[1::2] += -(1.0 + e) * (w @ pre[1::2]) / (w @ mw) * mw
+            t, x, last = t_ev, post, t_ev
         for key, val in (("t", t_ev), ("k", k), ("wall", wall), ("pre", pre), ("post", post)):
             rec[key].append(val)
-        t, x, last = t_ev, post, (i, t_ev)
     return NaiveMechanicalResult(
         np.asarray(rec["t"], float), np.asarray(rec["k"], int), np.asarray(rec["wall"], int),
         np.asarray(rec["pre"], float).reshape(-1, 2 * n),
         np.asarray(rec["post"], float).reshape(-1, 2 * n), t, n_rhs, stopped)
+
+
+def _equations(M, C, K, B, contacts, kp, kv, measure, amplitude, omega, feedforward):
+    """``rhs(t, x, held)`` and the control law ``law(t, x)``, written from the model."""
+    C, K = np.asarray(C, float), np.asarray(K, float)
+    B, c = np.asarray(B, float), np.asarray(measure, float)
+    n = M.shape[0]
+    soft = [(np.asarray(w, float), lo, hi, k_, c_) for w, lo, hi, e, *kc in contacts
+            if e is None for k_, c_ in [kc]]
+
+    def law(t, x):
+        q, v = x[0::2], x[1::2]
+        xd = amplitude * np.cos(omega * t)
+        vd = -amplitude * omega * np.sin(omega * t)
+        ad = -amplitude * omega ** 2 * np.cos(omega * t)
+        return feedforward * ad + kp * (xd - c @ q) + kv * (vd - c @ v)
+
+    def rhs(t, x, held):
+        q, v = x[0::2], x[1::2]
+        u = law(t, x) if held is None else held
+        f = -C @ v - K @ q + B * u
+        for w, lo, hi, k_, c_ in soft:
+            s = w @ q
+            if hi is not None and s > hi:
+                f = f - (k_ * (s - hi) + c_ * (w @ v)) * w
+            if lo is not None and s < lo:
+                f = f - (k_ * (s - lo) + c_ * (w @ v)) * w
+        out = np.empty(2 * n)
+        out[0::2], out[1::2] = v, np.linalg.solve(M, f)
+        return out
+
+    return rhs, law
+
+
+def _events(contacts):
+    """One terminal event per contact bound (positive inside the gap) and its meaning."""
+    events, meta = [], []
+    for k, (w, lo, hi, e, *_) in enumerate(contacts):
+        w = np.asarray(w, float)
+        for wall, bound in ((-1, lo), (1, hi)):
+            if bound is None:
+                continue
+
+            def ev(t, x, held, w=w, wall=wall, bound=bound):
+                return wall * (bound - w @ x[0::2])
+            ev.terminal = True
+            ev.direction = -1
+            events.append(ev)
+            meta.append((k, wall, w, e))
+    return events, meta
