@@ -20,7 +20,7 @@ from hybridpd.mechanics import (
 )
 from hybridpd.mechanics.modelfile import load_model, model_from_dict
 from hybridpd.mechanics.naive import naive_mechanical
-from hybridpd.mechanics.simulate import simulate
+from hybridpd.mechanics.simulate import simulate, simulate_state
 from hybridpd.pair.impactpair import ControlledImpactPair
 
 if sys.version_info >= (3, 11):
@@ -322,3 +322,114 @@ def test_examples_run_and_write_their_figure(name, tmp_path):
     assert r.returncode == 0, r.stderr
     png = tmp_path / f"{name}.png"
     assert png.exists() and png.stat().st_size > 10_000
+
+
+def _pair_dict():
+    return tomllib.loads((MODELS / "impact_pair.toml").read_text())
+
+
+def test_model_file_transfer_function_controller_poles():
+    """tf from err: closed-loop poles of x2 are the roots of m2 s^2 den + num (independent of
+    python-control's interconnection), plus the free x1 (0, 0) and the exosystem (+-5i)."""
+    d = _pair_dict()
+    d["controller"] = {"type": "tf", "num": [20.0, 10.0], "den": [1.0, 10.0], "measure": "x2"}
+    loop = model_from_dict(d).automaton.loop
+    expect = np.r_[np.roots(np.polyadd(np.polymul([1.0, 0.0, 0.0], [1.0, 10.0]),
+                                       [20.0, 10.0])), 0.0, 0.0, 5j, -5j]
+    got = np.linalg.eigvals(loop.A)
+    for lam in expect:
+        assert np.min(np.abs(got - lam)) < 1e-6
+    assert loop.state_names[-1] == "c1"
+
+
+def test_model_file_state_space_discrete_delay_and_sensors():
+    d = _pair_dict()
+    d["controller"] = {"type": "ss", "A": [[0.5]], "B": [[1.0, 0.0]], "C": [[2.0]],
+                       "D": [[10.0, 3.0]], "measure": "x2", "measure_velocity": "x1",
+                       "dt": 0.01, "delay": 1}
+    d["reference"] = {"type": "sum_of_sines", "amplitudes": [1.0, 0.5], "omegas": [5.0, 7.0],
+                      "feedforward_mass": 1.0}
+    m = model_from_dict(d)
+    loop = m.automaton.loop
+    assert loop.dt == 0.01 and loop.delay == 1
+    assert loop.state_names == ("x1", "x1_dot", "x2", "x2_dot", "pc1", "ps1", "pc2", "ps2",
+                                "c1", "h0", "h1", "s")
+    R, r = loop.sample_reset
+    z = np.arange(1.0, 13.0)
+    zp = R @ z + r
+    xd = z[4] + z[6]
+    vd = -5.0 * z[5] - 7.0 * z[7]
+    ad = -25.0 * z[4] - 49.0 * z[6]
+    err, err_dot = xd - z[2], vd - z[1]                 # position of x2, velocity of x1
+    assert zp[8] == pytest.approx(0.5 * z[8] + err)     # x+ = A x + B [err, err_dot]
+    assert zp[9] == pytest.approx(ad + 2.0 * z[8] + 10.0 * err + 3.0 * err_dot)
+    assert zp[10] == z[9] and zp[11] == z[11] - 0.01    # shift register, clock
+    tr = m.simulate(1.0)
+    assert tr.termination == "end_time" and tr.samples.size >= 99
+
+
+def test_restart_from_a_full_state_reproduces_the_run():
+    """simulate_state from the state at t = 1 (sampled-data loop: clock and held force
+    included) continues the same trajectory: impact times and sampling instants."""
+    d = _pair_dict()
+    d["controller"]["dt"] = 0.01
+    m = model_from_dict(d)
+    ma = m.automaton
+    full = m.simulate(3.0)
+    t_mid = 1.0005                               # between two samples
+    part = simulate_state(ma, full(t_mid), (t_mid, 3.0))
+    later = full.impact_times[full.impact_times > t_mid]
+    assert later.size >= 2
+    np.testing.assert_allclose(part.impact_times, later, atol=1e-12)
+    np.testing.assert_allclose(part.samples, full.samples[full.samples > t_mid], atol=1e-12)
+    assert ma.guard_name(0, -1) == "contact0-"
+    with pytest.raises(ValueError, match="no guard"):
+        ma.guard_name(1, 1)
+
+
+def test_both_meshes_held_against_an_independent_constrained_solve():
+    """A phase of the gear train with both meshes held: the state and the release time
+    against solve_ivp on the Lagrange (KKT) formulation, M a = f + W lambda, W^T a = 0, with
+    the force written from the raw model, released when a multiplier changes sign."""
+    from scipy.integrate import solve_ivp
+
+    m = load_model(MODELS / "gear_train.toml")
+    s = m.system
+    tr = m.simulate(3.0)
+    seg = tr.hybrid.segments
+    i = next(j for j in range(len(seg)) if seg.mode[j] in ("stick0+1+", "stick0-1-")
+             and seg.t_end[j] - seg.t_start[j] > 0.3)
+    t0, t1 = seg.t_start[i], seg.t_end[i]
+    walls = (1, 1) if seg.mode[i] == "stick0+1+" else (-1, -1)
+    W = np.array([c.normal for c in m.contacts]).T
+    n = s.n
+
+    def kkt(t, x):
+        q, v = x[0::2], x[1::2]
+        xd, vd = np.cos(3.0 * t), -3.0 * np.sin(3.0 * t)
+        u = 30.0 * (xd - q[0]) + 6.0 * (vd - v[0])
+        f = -s.C @ v - s.K @ q + s.B * u
+        KKT = np.block([[s.M, -W], [W.T, np.zeros((2, 2))]])
+        sol = np.linalg.solve(KKT, np.r_[f, 0.0, 0.0])
+        return sol[:n], sol[n:]
+
+    def rhs(t, x):
+        out = np.empty(2 * n)
+        out[0::2], out[1::2] = x[1::2], kkt(t, x)[0]
+        return out
+
+    events = []
+    for k in range(2):
+        def ev(t, x, k=k):
+            return -walls[k] * kkt(t, x)[1][k]          # > 0 while the mesh pushes
+        ev.terminal, ev.direction = True, -1
+        events.append(ev)
+    x0 = tr.mechanical(t0 + 1e-9)
+    sol = solve_ivp(rhs, (t0 + 1e-9, t1 + 1.0), x0, method="DOP853", rtol=1e-12, atol=1e-13,
+                    events=events)
+    t_rel = min(te[0] for te in sol.t_events if te.size)
+    assert abs(t_rel - t1) < 1e-7
+    mid = 0.5 * (t0 + t1)
+    ref_mid = solve_ivp(rhs, (t0 + 1e-9, mid), x0, method="DOP853", rtol=1e-12,
+                        atol=1e-13).y[:, -1]
+    np.testing.assert_allclose(tr.mechanical(mid), ref_mid, atol=1e-8)

@@ -16,6 +16,7 @@ from hybridpd.mechanics import (
     build_automaton,
     mechanical_loop,
 )
+from hybridpd.mechanics.naive import naive_mechanical
 from hybridpd.mechanics.simulate import simulate
 
 PAIR = MechanicalSystem(["x1", "x2"], M=[[0.1, 0.0], [0.0, 1.0]], B=[0.0, 1.0])
@@ -79,6 +80,35 @@ def test_sampled_loop_converges_to_the_continuous_one_at_first_order():
     assert abs(order - 1.0) < 0.15, order
 
 
+ZERO = np.zeros((2, 2))
+
+
+@pytest.mark.parametrize("measure,c", [("x2", [0.0, 1.0]), ("x1", [1.0, 0.0])])
+def test_sampled_loop_against_an_independent_zoh_solve_ivp_loop(measure, c):
+    tr = simulate(pair_model(discrete_pd(0.01), measure), X0, (0.0, 5.0), max_impacts=30)
+    ref = naive_mechanical(PAIR.M, ZERO, ZERO, PAIR.B, [([1, -1], -0.75, 0.75, 0.5)], 10.0,
+                           20.0, c, 1.0, 5.0, 1.0, X0, (0.0, 5.0), max_impacts=30, dt=0.01,
+                           rtol=1e-13, atol=1e-14)
+    k = min(tr.n_impacts, ref.impact_times.size)
+    assert k >= 9
+    np.testing.assert_array_equal(tr.walls[:k], ref.walls[:k])
+    assert np.max(np.abs(tr.impact_times[:k] - ref.impact_times[:k])) < 1e-8
+
+
+@pytest.mark.parametrize("k", [1e4, 1e6])
+def test_compliant_contact_against_an_independent_solve_ivp_loop(k):
+    con = kelvin_voigt(k, 0.2)
+    ma = pair_model((10.0, 20.0), "x1", contact=con)
+    tr = simulate(ma, X0, (0.0, 2.0))
+    entries = np.array([e[0] for e in compliant_events(ma, tr)])
+    ref = naive_mechanical(PAIR.M, ZERO, ZERO, PAIR.B,
+                           [([1, -1], -0.75, 0.75, None, con.stiffness, con.damping)], 10.0,
+                           20.0, [1.0, 0.0], 1.0, 5.0, 1.0, X0, (0.0, 2.0), max_impacts=1000,
+                           rtol=1e-13, atol=1e-14)
+    assert entries.size == ref.impact_times.size >= 40
+    assert np.max(np.abs(entries - ref.impact_times)) < 1e-8
+
+
 def kelvin_voigt(k, zeta):
     mstar = 0.1 / 1.1
     return Contact([1.0, -1.0], -0.75, 0.75, stiffness=k, damping=2 * zeta * math.sqrt(k * mstar))
@@ -135,6 +165,8 @@ def random_spec(draw):
                                             st.sampled_from(["both", "lo", "hi"]),
                                             st.booleans()), max_size=3)),
         "dt": draw(st.sampled_from([0.0, 0.05])),
+        "delay": draw(st.integers(0, 1)),
+        "lead": draw(st.booleans()),
     }
 
 
@@ -165,10 +197,15 @@ def build(spec):
                                     damping=float(rng.uniform(0, 5))))
     kp, kv = float(rng.uniform(0, 20)), float(rng.uniform(0, 10))
     dt = spec["dt"]
-    ctrl = (kp, kv) if dt == 0 else discrete_pd(dt, kp, kv)
+    if spec["lead"]:                               # a dynamic controller from err alone
+        ctrl = ct.tf([kv, kp], [0.05, 1.0])
+        ctrl = ctrl if dt == 0 else ct.c2d(ctrl, dt, "tustin")
+    else:
+        ctrl = (kp, kv) if dt == 0 else discrete_pd(dt, kp, kv)
     ref = Reference.sine(float(rng.uniform(0, 1)), float(rng.uniform(0.5, 10)),
                          float(rng.uniform(0, 1)))
-    loop = mechanical_loop(sysm, ctrl, ref, f"q{rng.integers(n)}")
+    loop = mechanical_loop(sysm, ctrl, ref, f"q{rng.integers(n)}",
+                           delay=spec["delay"] if dt else 0)
     x0 = np.zeros(2 * n)
     x0[1::2] = rng.normal(size=n)
     return build_automaton(loop, contacts), x0

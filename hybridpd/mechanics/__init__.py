@@ -14,7 +14,7 @@ from hybridpd.mechanics.automaton import (
 from hybridpd.mechanics.contacts import Contact
 from hybridpd.mechanics.loop import MechanicalLoop, Reference, mechanical_loop
 from hybridpd.mechanics.modelfile import MechanicalModel, load_model, model_from_dict
-from hybridpd.mechanics.simulate import MechanicalTrajectory, simulate
+from hybridpd.mechanics.simulate import MechanicalTrajectory, simulate, simulate_state
 from hybridpd.mechanics.system import MechanicalSystem
 
 __all__ = [
@@ -32,4 +32,5 @@ __all__ = [
     "mechanical_loop",
     "model_from_dict",
     "simulate",
+    "simulate_state",
 ]

@@ -41,6 +41,11 @@ Guards (``g > 0`` admissible, all with ``direction = -1`` except sampling):
   :attr:`MechanicalLoop.sample_reset`; target the same mode.
 
 Priorities for simultaneous events: impacts and compliant switches 2, releases 1, samples 0.
+
+Size: one mode per compliant configuration (``prod_j (1 + number of bounds of j)`` over the
+compliant contacts) times one per set of held rigid contacts with independent normals (at
+most ``prod_k (1 + number of bounds of k)``); for ``m`` contacts at most ``3^m`` modes, each
+an exact LTI flow prepared once.
 """
 from __future__ import annotations
 
@@ -123,6 +128,19 @@ class MechanicalAutomaton:
     def layout(self) -> dict:
         """Index arrays ``q, v, exo, ctrl, hold`` and the ``clock`` index (see the loop)."""
         return self.loop.layout
+
+    def guard_name(self, contact: int, wall: int, kind: str = "impact") -> str:
+        """Name of the guard of ``kind`` (``'impact'``, ``'release'``, ``'enter'``,
+        ``'leave'``) for ``contact`` at ``wall`` (the same name in every mode that has it)."""
+        prefix = {"impact": "contact", "release": "release", "enter": "enter",
+                  "leave": "leave"}.get(kind)
+        if prefix is None:
+            raise ValueError(f"kind must be 'impact', 'release', 'enter' or 'leave', "
+                             f"got {kind!r}")
+        name = f"{prefix}{int(contact)}{_sign(wall)}"
+        if not any(g == name for _, g in self.guards):
+            raise ValueError(f"no guard {name!r} (contact {contact}, wall {wall:+d})")
+        return name
 
     def initial_state(self, q0, v0, t0: float = 0.0, controller_state=None) -> np.ndarray:
         """Full state at ``t0`` (see :meth:`MechanicalLoop.initial_state`)."""

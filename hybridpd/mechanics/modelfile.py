@@ -21,6 +21,7 @@ TOML layout (every key is checked; a bad file raises ``ValueError`` naming the k
     kp = 10.0
     kv = 20.0
     measure = "gear"                     # DOF name (or a list of n weights)
+    # measure_velocity = "motor"         # velocity sensor elsewhere (default: as measure)
     # dt = 0.001                         # discrete-time controller, zero-order hold
     # delay = 0                          # input delay in whole samples (with dt)
 
@@ -64,8 +65,8 @@ _TABLES = {
     "system": {"dofs", "mass", "masses", "damping", "stiffness", "input"},
     "contact": {"between", "dof", "normal", "lo", "hi", "restitution", "stiffness", "damping",
                 "name"},
-    "controller": {"type", "kp", "kv", "num", "den", "A", "B", "C", "D", "measure", "dt",
-                   "delay"},
+    "controller": {"type", "kp", "kv", "num", "den", "A", "B", "C", "D", "measure",
+                   "measure_velocity", "dt", "delay"},
     "reference": {"type", "amplitude", "omega", "feedforward_mass", "value", "amplitudes",
                   "omegas"},
     "initial": {"q", "v", "t0"},
@@ -179,9 +180,9 @@ def model_from_dict(data: dict, source: str = "<dict>") -> MechanicalModel:
         raise ValueError("contact: must be an array of tables [[contact]]")
     contacts = tuple(_contact(f"contact[{i}]", c, system) for i, c in enumerate(raw))
     reference = _reference(data.get("reference", {"type": "constant", "value": 0.0}))
-    controller, measure, delay = _controller(data["controller"], system)
+    controller, measure, measure_v, delay = _controller(data["controller"], system)
     loop = _reraise("controller", mechanical_loop, system, controller, reference, measure,
-                    delay)
+                    delay, measure_v)
     model = build_automaton(loop, contacts)
     x0, t0 = _initial(data.get("initial", {}), system)
     z0 = loop.initial_state(x0[0::2], x0[1::2], t0)
@@ -318,7 +319,8 @@ def _controller(t, system):
     kind = t.get("type")
     if kind not in _CTRL_KEYS:
         raise ValueError(f"controller.type: must be one of {sorted(_CTRL_KEYS)}, got {kind!r}")
-    extra = sorted(set(t) - _CTRL_KEYS[kind] - {"type", "measure", "dt", "delay"})
+    extra = sorted(set(t) - _CTRL_KEYS[kind]
+                   - {"type", "measure", "measure_velocity", "dt", "delay"})
     if extra:
         raise ValueError(f"controller.{extra[0]}: not a key of type {kind!r}")
     for k in sorted(_CTRL_KEYS[kind]):
@@ -326,11 +328,8 @@ def _controller(t, system):
             raise ValueError(f"controller.{k}: required for type {kind!r}")
     if "measure" not in t:
         raise ValueError("controller.measure: required (the measured DOF)")
-    measure = t["measure"]
-    if isinstance(measure, str):
-        _reraise("controller.measure", system.index, measure)
-    else:
-        measure = _array("controller.measure", measure, (system.n,))
+    measure = _measured(t, "measure", system)
+    measure_v = _measured(t, "measure_velocity", system) if "measure_velocity" in t else None
     dt = 0.0
     if "dt" in t:
         dt = float(_array("controller.dt", t["dt"], ()))
@@ -373,7 +372,15 @@ def _controller(t, system):
         else:
             A, B, C = np.zeros((0, 0)), np.zeros((0, m)), np.zeros((1, 0))
         sysc = ct.ss(A, B, C, D, dt)
-    return sysc, measure, delay
+    return sysc, measure, measure_v, delay
+
+
+def _measured(t, key, system):
+    m = t[key]
+    if isinstance(m, str):
+        _reraise(f"controller.{key}", system.index, m)
+        return m
+    return _array(f"controller.{key}", m, (system.n,))
 
 
 def _initial(t, system):

@@ -39,7 +39,7 @@ import numpy as np
 
 from hybridpd.mechanics.automaton import MechanicalAutomaton
 
-__all__ = ["MechanicalTrajectory", "simulate"]
+__all__ = ["MechanicalTrajectory", "simulate", "simulate_state"]
 
 _TERMINATIONS = {0: "end_time", 1: "jump_limit", 2: "zeno", 3: "nonfinite", 4: "step_limit"}
 
@@ -174,62 +174,108 @@ def simulate(model: MechanicalAutomaton, x0, t_span, max_impacts: int = 100_000,
     if x0.shape != (2 * n,):
         raise ValueError(f"x0 must have shape ({2 * n},) = [q_1, v_1, ..., q_n, v_n], "
                          f"got {x0.shape}")
+    t0, _ = _check_span(t_span)
+    z0 = model.initial_state(x0[0::2], x0[1::2], t0, controller_state)
+    return simulate_state(model, z0, t_span, model.initial_mode(z0), max_impacts, time_tol,
+                          **options)
+
+
+def simulate_state(model: MechanicalAutomaton, z0, t_span, mode: str | None = None,
+                   max_impacts: int = 100_000, time_tol: float = 1e-12,
+                   **options) -> MechanicalTrajectory:
+    """Simulate from a full closed-loop state (e.g. a point of a Poincare section).
+
+    Parameters
+    ----------
+    model : MechanicalAutomaton
+    z0 : array_like, shape (N,)
+        Closed-loop state in the layout of ``model.layout`` (exosystem, controller, held
+        force and clock included; no sample is taken at ``t0``).
+    t_span : (float, float)
+    mode : str, optional
+        Mode to start in (default: checked to lie inside every contact, ``model.free_mode``).
+    max_impacts, time_tol, **options
+        As in :func:`simulate`.
+
+    Returns
+    -------
+    MechanicalTrajectory
+    """
+    if not isinstance(model, MechanicalAutomaton):
+        raise ValueError("model must be a MechanicalAutomaton (see build_automaton)")
+    t0, t1 = _check_span(t_span)
+    if isinstance(max_impacts, bool) or int(max_impacts) != max_impacts or max_impacts < 1:
+        raise ValueError(f"max_impacts must be an int >= 1, got {max_impacts!r}")
+    z0 = np.asarray(z0, dtype=float)
+    if mode is None:
+        mode = model.initial_mode(z0)
+    elif mode not in model.modes:
+        raise ValueError(f"mode must be one of {sorted(model.modes)}, got {mode!r}")
+    loop = model.loop
+    max_jumps = int(max_impacts)
+    if loop.sampled:
+        max_jumps += math.ceil((t1 - t0) / loop.dt) + 2
+    traj = model.automaton.simulate(z0, mode, (t0, t1), max_jumps=max_jumps, **options)
+    return _wrap(model, traj, time_tol)
+
+
+def _check_span(t_span):
     try:
         t0, t1 = (float(v) for v in t_span)
     except (TypeError, ValueError):
         raise ValueError(f"t_span must be a pair (t0, t1), got {t_span!r}") from None
     if not (math.isfinite(t0) and math.isfinite(t1) and t1 > t0):
         raise ValueError(f"t_span must be finite and increasing, got {t_span!r}")
-    if isinstance(max_impacts, bool) or int(max_impacts) != max_impacts or max_impacts < 1:
-        raise ValueError(f"max_impacts must be an int >= 1, got {max_impacts!r}")
-    z0 = model.initial_state(x0[0::2], x0[1::2], t0, controller_state)
-    mode0 = model.initial_mode(z0)
-    loop = model.loop
-    max_jumps = int(max_impacts)
-    if loop.sampled:
-        max_jumps += math.ceil((t1 - t0) / loop.dt) + 2
-    traj = model.automaton.simulate(z0, mode0, (t0, t1), max_jumps=max_jumps, **options)
-    return _wrap(model, traj, time_tol)
+    return t0, t1
 
 
-def _simultaneous(model, k, t, pre, time_tol):
-    """True if another rigid contact closes within ``time_tol`` of this impact and the two
-    impulses are not independent (see the module docstring)."""
-    sysm = model.loop.system
-    iv = model.layout["v"]
-    wi = model.contacts[k].normal
-    Mwi = np.linalg.solve(sysm.M, wi)
-    speed_i = abs(float(wi @ pre[iv])) / np.linalg.norm(wi)
-    tau = time_tol * (1.0 + abs(t))
-    for j, c in enumerate(model.contacts):
-        if j == k or not c.rigid:
-            continue
-        wn = np.linalg.norm(c.normal)
-        s = float(model.gap_rows[j] @ pre) / wn
-        speed = float(c.normal @ pre[iv]) / wn
-        for wall, bound in c.bounds:
-            closing, dist = wall * speed, wall * (bound / wn - s)
-            # a contact merely touching (closing speed ~ 0) is left to the sequential rule
-            if closing <= 1e-6 * speed_i or dist > closing * tau + 1e-15 * (1 + abs(bound)):
+class _Coupling:
+    """Per-model constants of the simultaneous-contact test (computed once per run)."""
+
+    def __init__(self, model):
+        sysm = model.loop.system
+        W = np.array([c.normal for c in model.contacts]).reshape(len(model.contacts), -1)
+        self.rigid = [j for j, c in enumerate(model.contacts) if c.rigid]
+        self.norm = np.linalg.norm(W, axis=1) if W.size else np.zeros(0)
+        G = W @ np.linalg.solve(sysm.M, W.T) if W.size else np.zeros((0, 0))
+        d = np.sqrt(np.abs(np.diag(G)))
+        # impulses i and j are independent when w_i . M^-1 w_j = 0 (relative to 1e-12)
+        self.coupled = np.abs(G) > 1e-12 * np.outer(d, d)
+
+    def simultaneous(self, model, k, t, pre, time_tol):
+        """True if another rigid contact closes within ``time_tol`` of this impact and the
+        two impulses are not independent (see the module docstring)."""
+        iv = model.layout["v"]
+        v = pre[iv]
+        speed_i = abs(float(model.contacts[k].normal @ v)) / self.norm[k]
+        tau = time_tol * (1.0 + abs(t))
+        for j in self.rigid:
+            if j == k or not self.coupled[k, j]:
                 continue
-            cross = float(c.normal @ Mwi)
-            scale = math.sqrt(abs(float(c.normal @ np.linalg.solve(sysm.M, c.normal))
-                                  * float(wi @ Mwi)))
-            if abs(cross) > 1e-12 * scale:
-                return True
-    return False
+            c = model.contacts[j]
+            s = float(model.gap_rows[j] @ pre) / self.norm[j]
+            speed = float(c.normal @ v) / self.norm[j]
+            for wall, bound in c.bounds:
+                closing, dist = wall * speed, wall * (bound / self.norm[j] - s)
+                # a contact merely touching (closing speed ~ 0) is left to the sequential rule
+                if closing > 1e-6 * speed_i and dist <= closing * tau + 1e-15 * (1 + abs(bound)):
+                    return True
+        return False
 
 
 def _wrap(model, traj, time_tol) -> MechanicalTrajectory:
     n = model.loop.system.n
     jt = traj.jumps
     info = [model.guards[(s, g)] for s, g in zip(jt.source, jt.guard)]
+    coupling = _Coupling(model) if len(model.contacts) > 1 else None
     t_final, termination = traj.t_final, _TERMINATIONS[traj.termination.value]
     stop = len(jt)
     for i, gi in enumerate(info):
         if (gi.kind == "impact" and jt.kind[i] != "zeno"
                 and not model.modes[jt.source[i]].stick
-                and _simultaneous(model, gi.contact, float(jt.t[i]), jt.pre[i], time_tol)):
+                and coupling is not None
+                and coupling.simultaneous(model, gi.contact, float(jt.t[i]), jt.pre[i],
+                                          time_tol)):
             stop, t_final, termination = i, float(jt.t[i]), "simultaneous_contact"
             break
     imp = [i for i in range(stop) if info[i].kind == "impact" and jt.kind[i] != "zeno"]
