@@ -3,6 +3,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 from hybridpd import ImpactPair, PDGains
 from hybridpd.analysis.hybridmap import (
@@ -117,18 +119,22 @@ def _ball():
     return SectionMap(sec)
 
 
-def _ball_dp(t, v, t1, v1):
-    """Closed-form Jacobian of the exact ball map (t, v) -> (t', v') (table a sin w t)."""
-    xt = lambda s: A_T * math.sin(W_T * s)
-    vt = lambda s: A_T * W_T * math.cos(W_T * s)
-    at = lambda s: -A_T * W_T ** 2 * math.sin(W_T * s)
+def _ball_dp(t, v, t1, v1, e=E_BALL, a=A_T, w=W_T):
+    """Closed-form Jacobian of the exact ball map (t, v) -> (t', v') (table a sin w t).
+
+    From x_t(t) + u D - g D^2 / 2 = x_t(t + D), u = (1 + e) v_t(t) - e v, v' = u - g D by
+    implicit differentiation; r' = v' - v_t(t') is the relative approach speed at t'.
+    """
+    xt = lambda s: a * math.sin(w * s)
+    vt = lambda s: a * w * math.cos(w * s)
+    at = lambda s: -a * w ** 2 * math.sin(w * s)
     D = t1 - t
-    u = (1 + E_BALL) * vt(t) - E_BALL * v
+    u = (1 + e) * vt(t) - e * v
     r1 = u - G * D - vt(t1)                       # relative pre-impact velocity at t'
-    Gt = vt(t) + (1 + E_BALL) * at(t) * D - vt(t1)
-    assert abs(xt(t) + u * D - G * D * D / 2 - xt(t1)) < 1e-12
-    return np.array([[1 - Gt / r1, E_BALL * D / r1],
-                     [(1 + E_BALL) * at(t) + G * Gt / r1, -E_BALL - G * E_BALL * D / r1]])
+    Gt = vt(t) + (1 + e) * at(t) * D - vt(t1)
+    assert abs(xt(t) + u * D - G * D * D / 2 - xt(t1)) < 1e-11 * max(1.0, abs(u * D))
+    return np.array([[1 - Gt / r1, e * D / r1],
+                     [(1 + e) * at(t) + G * Gt / r1, -e - G * e * D / r1]])
 
 
 def test_ball_period_one_orbit_closed_form():
@@ -248,3 +254,22 @@ def test_section_mapper_agrees_with_pair_mapper():
     assert np.array_equal(m_slow.labels(pts)[0], lab)
     b = section_basin(m, "z1", "z4", (-1.0, 1.0, 4), (0.5, 3.0, 3))
     assert b.labels.shape == (3, 4) and b.metadata["axes"] == ["z1", "z4"]
+
+
+@settings(max_examples=40, deadline=None)
+@given(e=st.floats(0.05, 0.95), a=st.floats(0.005, 0.2), f=st.floats(1.0, 4.0),
+       phase=st.floats(0.0, 1.0), v=st.floats(-6.0, -0.3))
+def test_ball_dp_closed_form_random(e, a, f, phase, v):
+    """Saltation-chain DP of the ball map against its closed form at random section points."""
+    w = 2 * math.pi * f
+    ha = bouncing_ball(g=G, e=e, amplitude=a, omega=w)
+    P = SectionMap(Section(ha, "flight", "impact",
+                           reference=(ball_initial_state(0.0, 0.0, amplitude=a, omega=w), 0.0)),
+                   max_jumps=20)
+    s = np.array([phase * 2 * math.pi / w, v + a * w * math.cos(phase * 2 * math.pi)])
+    r = P.apply(s, jacobian=True)
+    assume(r.ok and not r.grazing)
+    vt1 = a * w * math.cos(w * r.t_hit)
+    assume(abs(r.s[1] - vt1) > 0.05)              # not a near-grazing return
+    ref = _ball_dp(s[0], s[1], r.t_hit, r.s[1], e, a, w)
+    assert np.max(np.abs(r.DP - ref)) < 1e-8 * max(1.0, np.max(np.abs(ref)))
