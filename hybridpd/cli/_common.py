@@ -80,19 +80,20 @@ def unknown_flag_message(flag: str, known) -> str:
     return f"unknown option {flag}{hint}"
 
 
-def add_plant(p, *, xm=True, gamma=False):
-    p.add_argument("--case", required=True, type=case_type, metavar="CASE",
+def add_plant(p, *, xm=True, gamma=False, required=True):
+    p.add_argument("--case", required=required, type=case_type, metavar="CASE",
                    help="collocated (the PD loop measures the secondary mass x2, the one it "
                         "pushes) or noncollocated (it measures the primary mass x1 through "
                         "the backlash; alias non-collocated)")
-    p.add_argument("--mu", type=float, required=True, help="mass ratio m1/m2 (> 0)")
+    p.add_argument("--mu", type=float, required=required, help="mass ratio m1/m2 (> 0)")
     p.add_argument("--m2", type=float, default=1.0, help="secondary mass m2 (> 0)")
-    p.add_argument("--omega", type=float, required=True, help="reference frequency (> 0)")
+    p.add_argument("--omega", type=float, required=required, help="reference frequency (> 0)")
     if gamma:
-        g = p.add_mutually_exclusive_group(required=True)
+        g = p.add_mutually_exclusive_group(required=required)
         g.add_argument("--L", type=float, help="half clearance (> 0)")
         g.add_argument("--gamma", type=float, help="L / x10 (> 0)")
-        p.add_argument("--x10", type=float, default=1.0, help="amplitude of the primary mass's desired motion (> 0)")
+        p.add_argument("--x10", type=float, default=1.0,
+                       help="amplitude of the primary mass's desired motion (> 0)")
     else:
         p.add_argument("--L", type=float, required=True, help="half clearance (> 0)")
     if xm:

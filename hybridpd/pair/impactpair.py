@@ -81,15 +81,19 @@ class ImpactPairTrajectory:
         return self.hybrid(t)
 
     def to_dict(self) -> dict:
-        """JSON-ready summary (the CLI's ``simulate --json`` format)."""
+        """JSON-ready summary (the CLI's ``simulate --json`` format).
+
+        The same format as a mechanical model's (:mod:`hybridpd.mechanics.simulate`): the
+        pair has one contact, number 0.
+        """
         return {
             "impacts": [
-                {"t": float(t), "wall": int(w), "pre": [float(v) for v in p],
+                {"t": float(t), "contact": 0, "wall": int(w), "pre": [float(v) for v in p],
                  "post": [float(v) for v in q], "grazing": bool(g)}
                 for t, w, p, q, g in zip(self.impact_times, self.walls, self.pre, self.post,
                                          self.grazing)
             ],
-            "sticking": [[float(a), float(b)] for a, b in self.sticking],
+            "sticking": [[float(a), float(b), 0] for a, b in self.sticking],
             "termination": self.termination.name.lower(),
             "t_final": float(self.t_final),
         }

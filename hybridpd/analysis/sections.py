@@ -1,0 +1,90 @@
+"""Sections of the project's models for :mod:`hybridpd.analysis.hybridmap`.
+
+* :func:`impact_pair_section`: the paper's section of the controlled impact pair,
+  coordinates ``(phi, z1, z2, z4, controller states)``;
+* :func:`mechanical_section`: a contact's impacts (or the ends of its sticking phases) of a
+  mechanical automaton of :mod:`hybridpd.mechanics`.
+
+Both are also importable from :mod:`hybridpd.analysis.hybridmap`.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from hybridpd.analysis.hybridmap import Section
+
+__all__ = ["impact_pair_section", "mechanical_section"]
+
+
+def impact_pair_section(system, wall: int = 1) -> Section:
+    """The paper's section of a :class:`~hybridpd.pair.impactpair.ControlledImpactPair`.
+
+    Pre-impact states on the ``wall`` (``+1``: ``z3 = +L``), coordinates
+    ``(phi, z1, z2, z4, c_1, ...)`` = ``(t mod T, x2, y2, y1 - y2, controller states)``.
+    """
+    if wall not in (1, -1):
+        raise ValueError(f"wall must be +1 or -1, got {wall!r}")
+    ha = system.automaton
+    n = ha.n_states
+    rows = [np.eye(n)[2], np.eye(n)[3], np.eye(n)[1] - np.eye(n)[3]]
+    rows += [np.eye(n)[i] for i in range(6, n)]
+    names = ("z1", "z2", "z4") + tuple(ha.state_names[6:])
+    T = system.reference.period
+    return Section(ha, "free", "wall+" if wall == 1 else "wall-", exo=(4, 5), period=T,
+                   exo_state=system.reference.exo_state(0.0), coords=np.array(rows),
+                   names=names)
+
+
+def mechanical_section(model, contact: int = 0, wall: int = 1, *, period=None,
+                       mode: str | None = None, event: str = "impact") -> Section:
+    """The section of a contact of a mechanical automaton (:mod:`hybridpd.mechanics`).
+
+    ``event="impact"``: pre-impact states of rigid contact ``contact`` on its ``wall`` bound
+    (``+1``: ``hi``), or the entry into a compliant contact, in the free mode (or ``mode``).
+    ``event="release"``: the end of sticking on that bound (mode ``stick{k}{+|-}``), a
+    section crossed once per sticking phase, however many impacts precede it (the contact
+    reopens tangentially there, so finite differences across it may see an immediate
+    re-sticking; the multipliers equal those of the impact section). Coordinates: the
+    reference phase ``phi = t mod T`` (sine references; ``period`` is required for a sum of
+    sines) and the non-exosystem states except the pivot of the gap (module docstring).
+
+    Parameters
+    ----------
+    model : MechanicalAutomaton
+    contact : int
+        0-based contact index (file order).
+    wall : {+1, -1}
+    period : float, optional
+        Common period of a sum-of-sines reference.
+    mode : str, optional
+        Mode of the section (default the free mode).
+    """
+    if wall not in (1, -1):
+        raise ValueError(f"wall must be +1 or -1, got {wall!r}")
+    contacts = model.contacts
+    if isinstance(contact, bool) or int(contact) != contact or not 0 <= contact < len(contacts):
+        raise ValueError(f"contact must be an index in [0, {len(contacts)}), got {contact!r}")
+    contact = int(contact)
+    sign = "+" if wall > 0 else "-"
+    if event not in ("impact", "release"):
+        raise ValueError(f"event must be 'impact' or 'release', got {event!r}")
+    if event == "release":
+        if not contacts[contact].rigid:
+            raise ValueError(f"event 'release': contact {contact} is compliant (no sticking)")
+        name = f"release{contact}{sign}"
+        mode = f"stick{contact}{sign}" if mode is None else mode
+    else:
+        name = f"contact{contact}{sign}" if contacts[contact].rigid else f"enter{contact}{sign}"
+    mode = model.free_mode if mode is None else mode
+    ref = model.loop.reference
+    exo = tuple(int(i) for i in model.layout["exo"])
+    omegas = tuple(ref.omegas)
+    if period is None and omegas:
+        if max(omegas) - min(omegas) > 1e-12 * max(omegas):
+            raise ValueError("the reference has several frequencies: give period=")
+        period = 2 * math.pi / omegas[0]
+    sec = Section(model.automaton, mode, name, exo=exo, period=period,
+                  exo_state=ref.exo_state(0.0))
+    return sec

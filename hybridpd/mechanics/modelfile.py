@@ -1,0 +1,394 @@
+"""Model files: a mechanical system, its contacts, controller, reference and initial state.
+
+TOML layout (every key is checked; a bad file raises ``ValueError`` naming the key)::
+
+    [system]
+    dofs = ["load", "gear", "motor"]     # unique names, n = len(dofs)
+    mass = [[...], ...]                  # M (n x n, symmetric positive definite)
+    # masses = [m_1, ..., m_n]           # or a diagonal M (not both)
+    damping = [[...]]                    # C (optional, zeros)
+    stiffness = [[...]]                  # K (optional, zeros)
+    input = [0.0, 0.0, 1.0]              # B (n,), required
+
+    [[contact]]                          # one of: between = [a, b] (gap q_a - q_b),
+    between = ["load", "gear"]           #   dof = "name" (gap q_dof), normal = [w_1..w_n]
+    lo = -0.75                           # either bound may be omitted (not both)
+    hi = 0.75
+    restitution = 0.5                    # rigid; or stiffness = k, damping = c (compliant)
+
+    [controller]
+    type = "pd"                          # "pd" (kp, kv) | "tf" (num, den) | "ss" (A, B, C, D)
+    kp = 10.0
+    kv = 20.0
+    measure = "gear"                     # DOF name (or a list of n weights)
+    # measure_velocity = "motor"         # velocity sensor elsewhere (default: as measure)
+    # dt = 0.001                         # discrete-time controller, zero-order hold
+    # delay = 0                          # input delay in whole samples (with dt)
+
+    [reference]                          # "sine" | "constant" | "sum_of_sines"; optional
+    type = "sine"                        #   (default: constant 0)
+    amplitude = 1.0
+    omega = 5.0
+    feedforward_mass = 1.0               # adds feedforward_mass * xd'' (default 0)
+
+    [initial]
+    q = [0.3, 0.0, 0.0]                  # default zeros
+    v = [0.5, 0.0, 0.0]                  # default zeros
+    t0 = 0.0                             # default 0
+
+Semantics: ``u = feedforward_mass xd'' + kp (xd - q_m) + kv (xd' - v_m)`` along ``input``
+(``tf``: from ``err = xd - y``; ``ss``: from ``err`` or ``[err, err_dot]``, by the number of
+inputs); ``sine`` is ``xd = amplitude cos(omega t)`` in absolute time, ``constant`` is
+``xd = value``, ``sum_of_sines`` is ``sum amplitudes[i] cos(omegas[i] t)``.
+"""
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from hybridpd.mechanics.automaton import MechanicalAutomaton, build_automaton
+from hybridpd.mechanics.contacts import Contact
+from hybridpd.mechanics.loop import Reference, mechanical_loop
+from hybridpd.mechanics.system import MechanicalSystem
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["MechanicalModel", "load_model", "model_from_dict"]
+
+_TABLES = {
+    "system": {"dofs", "mass", "masses", "damping", "stiffness", "input"},
+    "contact": {"between", "dof", "normal", "lo", "hi", "restitution", "stiffness", "damping",
+                "name"},
+    "controller": {"type", "kp", "kv", "num", "den", "A", "B", "C", "D", "measure",
+                   "measure_velocity", "dt", "delay"},
+    "reference": {"type", "amplitude", "omega", "feedforward_mass", "value", "amplitudes",
+                  "omegas"},
+    "initial": {"q", "v", "t0"},
+}
+_CTRL_KEYS = {"pd": {"kp", "kv"}, "tf": {"num", "den"}, "ss": {"A", "B", "C", "D"}}
+_REF_KEYS = {"sine": {"amplitude", "omega", "feedforward_mass"}, "constant": {"value"},
+             "sum_of_sines": {"amplitudes", "omegas", "feedforward_mass"}}
+
+
+@dataclass(frozen=True, eq=False)  # array fields: identity semantics
+class MechanicalModel:
+    """A loaded model file.
+
+    Attributes
+    ----------
+    system : MechanicalSystem
+    contacts : tuple of Contact
+    automaton : MechanicalAutomaton
+        The closed loop with its contacts (``automaton.loop`` is the loop).
+    x0 : ndarray, shape (2n,)
+        Initial mechanical state ``[q_1, v_1, ..., q_n, v_n]``.
+    t0 : float
+        Initial time.
+    source : str
+        File name (or ``"<dict>"``).
+    """
+
+    system: MechanicalSystem
+    contacts: tuple
+    automaton: MechanicalAutomaton = field(repr=False)
+    x0: np.ndarray
+    t0: float
+    source: str = "<dict>"
+
+    def simulate(self, t_end: float, max_impacts: int = 100_000, **options):
+        """Simulate from the file's initial state over ``[t0, t_end]``."""
+        from hybridpd.mechanics.simulate import simulate
+
+        if not float(t_end) > self.t0:
+            raise ValueError(f"t_end must be > t0 = {self.t0:g}, got {t_end!r}")
+        return simulate(self.automaton, self.x0, (self.t0, float(t_end)),
+                        max_impacts=max_impacts, **options)
+
+
+def load_model(path) -> MechanicalModel:
+    """Load a TOML model file (see the module docstring); ``ValueError`` naming the key.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> import hybridpd
+    >>> f = Path(hybridpd.__file__).parents[1] / "examples" / "models" / "impact_pair.toml"
+    >>> m = load_model(f) if f.exists() else None
+    >>> m is None or m.system.dofs == ("x1", "x2")
+    True
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ValueError(f"model file {str(path)!r}: cannot read ({exc.strerror})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"model file {p.name}: invalid TOML ({exc})") from None
+    return model_from_dict(data, source=str(p))
+
+
+def _check_keys(where, table, allowed):
+    if not isinstance(table, dict):
+        raise ValueError(f"{where} must be a table")
+    unknown = sorted(set(table) - allowed)
+    if unknown:
+        raise ValueError(f"{where}.{unknown[0]}: unknown key (allowed: {sorted(allowed)})")
+
+
+def _array(key, value, shape=None):
+    try:
+        a = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{key}: must be numbers, got {value!r}") from None
+    if shape is not None and a.shape != shape:
+        raise ValueError(f"{key}: must have shape {shape}, got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{key}: must be finite")
+    return a
+
+
+def _reraise(key, fn, *args, **kw):
+    try:
+        return fn(*args, **kw)
+    except ValueError as exc:
+        raise ValueError(f"{key}: {exc}") from None
+
+
+def model_from_dict(data: dict, source: str = "<dict>") -> MechanicalModel:
+    """Build a :class:`MechanicalModel` from the parsed TOML tables (same checks as a file)."""
+    if not isinstance(data, dict):
+        raise ValueError("model must be a table")
+    unknown = sorted(set(data) - set(_TABLES))
+    if unknown:
+        raise ValueError(f"{unknown[0]}: unknown table (allowed: {sorted(_TABLES)})")
+    for t in ("system", "controller"):
+        if t not in data:
+            raise ValueError(f"{t}: missing table [{t}]")
+    system = _system(data["system"])
+    raw = data.get("contact", [])
+    if isinstance(raw, dict):
+        raw = [raw]
+    if not isinstance(raw, list):
+        raise ValueError("contact: must be an array of tables [[contact]]")
+    contacts = tuple(_contact(f"contact[{i}]", c, system) for i, c in enumerate(raw))
+    reference = _reference(data.get("reference", {"type": "constant", "value": 0.0}))
+    controller, measure, measure_v, delay = _controller(data["controller"], system)
+    loop = _reraise("controller", mechanical_loop, system, controller, reference, measure,
+                    delay, measure_v)
+    model = build_automaton(loop, contacts)
+    x0, t0 = _initial(data.get("initial", {}), system)
+    z0 = loop.initial_state(x0[0::2], x0[1::2], t0)
+    model.initial_mode(z0)
+    return MechanicalModel(system, contacts, model, x0, t0, source)
+
+
+def _system(t) -> MechanicalSystem:
+    _check_keys("system", t, _TABLES["system"])
+    if "dofs" not in t:
+        raise ValueError("system.dofs: required (list of DOF names)")
+    dofs = t["dofs"]
+    if not isinstance(dofs, list) or not all(isinstance(d, str) for d in dofs) or not dofs:
+        raise ValueError("system.dofs: must be a non-empty list of names")
+    dup = sorted({d for d in dofs if dofs.count(d) > 1})
+    if dup:
+        raise ValueError(f"system.dofs: duplicate DOF names {dup}")
+    n = len(dofs)
+    if "mass" in t and "masses" in t:
+        raise ValueError("system.masses: give either mass (matrix) or masses (diagonal), "
+                         "not both")
+    if "mass" in t:
+        M = _array("system.mass", t["mass"], (n, n))
+    elif "masses" in t:
+        m = _array("system.masses", t["masses"], (n,))
+        if not np.all(m > 0):
+            raise ValueError("system.masses: must all be > 0")
+        M = np.diag(m)
+    else:
+        raise ValueError("system.mass: required (or masses)")
+    C = _array("system.damping", t["damping"], (n, n)) if "damping" in t else None
+    K = _array("system.stiffness", t["stiffness"], (n, n)) if "stiffness" in t else None
+    if "input" not in t:
+        raise ValueError(f"system.input: required (B, {n} numbers)")
+    B = _array("system.input", t["input"], (n,))
+    try:
+        return MechanicalSystem(tuple(dofs), M, C, K, B)
+    except ValueError as exc:
+        msg = str(exc)
+        key = msg.split(" ", 1)[0].rstrip(":")
+        raise ValueError(f"system.{msg}" if key in ("mass", "damping", "stiffness", "input")
+                         else f"system: {msg}") from None
+
+
+def _contact(where, t, system) -> Contact:
+    _check_keys(where, t, _TABLES["contact"])
+    forms = [k for k in ("between", "dof", "normal") if k in t]
+    if len(forms) != 1:
+        raise ValueError(f"{where}.between: give exactly one of between / dof / normal, got "
+                         f"{forms or 'none'}")
+    form = forms[0]
+    n = system.n
+    if form == "between":
+        pair = t["between"]
+        if (not isinstance(pair, list) or len(pair) != 2
+                or not all(isinstance(d, str) for d in pair) or pair[0] == pair[1]):
+            raise ValueError(f"{where}.between: must be two different DOF names")
+        w = np.zeros(n)
+        w[_reraise(f"{where}.between", system.index, pair[0])] = 1.0
+        w[_reraise(f"{where}.between", system.index, pair[1])] = -1.0
+    elif form == "dof":
+        if not isinstance(t["dof"], str):
+            raise ValueError(f"{where}.dof: must be a DOF name")
+        w = np.zeros(n)
+        w[_reraise(f"{where}.dof", system.index, t["dof"])] = 1.0
+    else:
+        w = _array(f"{where}.normal", t["normal"], (n,))
+    if "restitution" in t and ("stiffness" in t or "damping" in t):
+        raise ValueError(f"{where}.restitution: give restitution (rigid) or stiffness/damping "
+                         "(compliant), not both")
+    for k in ("lo", "hi", "restitution", "stiffness", "damping"):
+        if k in t:
+            _array(f"{where}.{k}", t[k], ())
+    if "lo" in t and "hi" in t and not float(t["lo"]) < float(t["hi"]):
+        raise ValueError(f"{where}.lo: must be < hi, got lo = {t['lo']!r}, hi = {t['hi']!r}")
+    if "lo" not in t and "hi" not in t:
+        raise ValueError(f"{where}.hi: give lo, hi or both")
+    if "restitution" in t and not 0.0 <= float(t["restitution"]) <= 1.0:
+        raise ValueError(f"{where}.restitution: must be in [0, 1], got {t['restitution']!r}")
+    if "damping" in t and "stiffness" not in t:
+        raise ValueError(f"{where}.stiffness: required with damping (compliant contact)")
+    if "stiffness" in t and not float(t["stiffness"]) > 0:
+        raise ValueError(f"{where}.stiffness: must be > 0, got {t['stiffness']!r}")
+    if "damping" in t and not float(t["damping"]) >= 0:
+        raise ValueError(f"{where}.damping: must be >= 0, got {t['damping']!r}")
+    name = t.get("name", "")
+    if not isinstance(name, str):
+        raise ValueError(f"{where}.name: must be a string")
+    return _reraise(where, Contact, w, t.get("lo"), t.get("hi"), t.get("restitution"),
+                    t.get("stiffness"), t.get("damping"), name)
+
+
+def _reference(t) -> Reference:
+    _check_keys("reference", t, _TABLES["reference"])
+    kind = t.get("type", "sine")
+    if kind not in _REF_KEYS:
+        raise ValueError(f"reference.type: must be one of {sorted(_REF_KEYS)}, got {kind!r}")
+    extra = sorted(set(t) - _REF_KEYS[kind] - {"type"})
+    if extra:
+        raise ValueError(f"reference.{extra[0]}: not a key of type {kind!r}")
+    ff = t.get("feedforward_mass", 0.0)
+    if kind == "sine":
+        for k in ("amplitude", "omega"):
+            if k not in t:
+                raise ValueError(f"reference.{k}: required for type 'sine'")
+        a = float(_array("reference.amplitude", t["amplitude"], ()))
+        w = float(_array("reference.omega", t["omega"], ()))
+        if a < 0:
+            raise ValueError(f"reference.amplitude: must be >= 0, got {a!r}")
+        if not w > 0:
+            raise ValueError(f"reference.omega: must be > 0, got {w!r}")
+        _array("reference.feedforward_mass", ff, ())
+        return _reraise("reference.feedforward_mass", Reference.sine, a, w, ff)
+    if kind == "constant":
+        if "value" not in t:
+            raise ValueError("reference.value: required for type 'constant'")
+        return Reference.constant(float(_array("reference.value", t["value"], ())))
+    for k in ("amplitudes", "omegas"):
+        if k not in t:
+            raise ValueError(f"reference.{k}: required for type 'sum_of_sines'")
+    a = _array("reference.amplitudes", t["amplitudes"])
+    w = _array("reference.omegas", t["omegas"], a.shape)
+    if a.ndim != 1:
+        raise ValueError("reference.amplitudes: must be a list of numbers")
+    if np.any(a < 0) or np.any(w <= 0):
+        raise ValueError("reference.omegas: amplitudes must be >= 0 and omegas > 0")
+    return _reraise("reference.feedforward_mass", Reference.sum_of_sines, a, w, ff)
+
+
+def _controller(t, system):
+    import control as ct
+
+    _check_keys("controller", t, _TABLES["controller"])
+    kind = t.get("type")
+    if kind not in _CTRL_KEYS:
+        raise ValueError(f"controller.type: must be one of {sorted(_CTRL_KEYS)}, got {kind!r}")
+    extra = sorted(set(t) - _CTRL_KEYS[kind]
+                   - {"type", "measure", "measure_velocity", "dt", "delay"})
+    if extra:
+        raise ValueError(f"controller.{extra[0]}: not a key of type {kind!r}")
+    for k in sorted(_CTRL_KEYS[kind]):
+        if k not in t and not (kind == "ss" and k == "A"):
+            raise ValueError(f"controller.{k}: required for type {kind!r}")
+    if "measure" not in t:
+        raise ValueError("controller.measure: required (the measured DOF)")
+    measure = _measured(t, "measure", system)
+    measure_v = _measured(t, "measure_velocity", system) if "measure_velocity" in t else None
+    dt = 0.0
+    if "dt" in t:
+        dt = float(_array("controller.dt", t["dt"], ()))
+        if not dt > 0:
+            raise ValueError(f"controller.dt: must be > 0 (sampling period), got {t['dt']!r}")
+    delay = t.get("delay", 0)
+    if isinstance(delay, bool) or not isinstance(delay, int) or delay < 0:
+        raise ValueError(f"controller.delay: must be an integer >= 0, got {delay!r}")
+    if delay and not dt:
+        raise ValueError("controller.delay: needs a discrete-time controller (give dt)")
+    if kind == "pd":
+        kp = float(_array("controller.kp", t["kp"], ()))
+        kv = float(_array("controller.kv", t["kv"], ()))
+        sysc = ct.ss(np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)), [[kp, kv]], dt)
+    elif kind == "tf":
+        num = _array("controller.num", t["num"])
+        den = _array("controller.den", t["den"])
+        if num.ndim != 1 or den.ndim != 1 or not den.size or den[0] == 0:
+            raise ValueError("controller.den: num and den must be coefficient lists with a "
+                             "non-zero leading den coefficient")
+        if np.trim_zeros(num, "f").size > den.size:
+            raise ValueError("controller.num: improper transfer function (degree of num > "
+                             "degree of den) cannot be realised")
+        sysc = ct.tf(num, den, dt)
+    else:
+        D = np.atleast_2d(_array("controller.D", t["D"]))
+        if D.shape not in ((1, 1), (1, 2)):
+            raise ValueError(f"controller.D: must have shape (1, 1) or (1, 2), got {D.shape}")
+        m = D.shape[1]
+        if "A" in t and np.size(t["A"]):
+            A = np.atleast_2d(_array("controller.A", t["A"]))
+            k = A.shape[0]
+            if A.shape != (k, k):
+                raise ValueError(f"controller.A: must be square, got {A.shape}")
+            B = _array("controller.B", t["B"]).reshape(k, -1) if np.size(t["B"]) == k * m \
+                else _array("controller.B", t["B"], (k, m))
+            C = _array("controller.C", t["C"]).reshape(1, -1)
+            if C.shape != (1, k):
+                raise ValueError(f"controller.C: must have shape (1, {k}), got {C.shape}")
+        else:
+            A, B, C = np.zeros((0, 0)), np.zeros((0, m)), np.zeros((1, 0))
+        sysc = ct.ss(A, B, C, D, dt)
+    return sysc, measure, measure_v, delay
+
+
+def _measured(t, key, system):
+    m = t[key]
+    if isinstance(m, str):
+        _reraise(f"controller.{key}", system.index, m)
+        return m
+    return _array(f"controller.{key}", m, (system.n,))
+
+
+def _initial(t, system):
+    _check_keys("initial", t, _TABLES["initial"])
+    n = system.n
+    q = _array("initial.q", t.get("q", [0.0] * n), (n,))
+    v = _array("initial.v", t.get("v", [0.0] * n), (n,))
+    t0 = float(_array("initial.t0", t.get("t0", 0.0), ()))
+    x0 = np.empty(2 * n)
+    x0[0::2], x0[1::2] = q, v
+    return x0, t0

@@ -1,0 +1,153 @@
+"""The general map on mechanical models: the pair as a model file, the drivetrain, the CLI."""
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hybridpd import ImpactPair, PDGains
+from hybridpd.analysis.hybridmap import mechanical_section
+from hybridpd.analysis.orbits import symmetric_orbit
+from hybridpd.analysis.periodic import measured_contraction, orbit_from_model
+from hybridpd.cli import main
+from hybridpd.mechanics.modelfile import load_model, model_from_dict
+
+MODELS = Path(__file__).resolve().parents[1] / "examples" / "models"
+
+
+def _pair_model(case, xm, e=0.5):
+    return model_from_dict({
+        "system": {"dofs": ["x1", "x2"], "masses": [0.1, 1.0], "input": [0.0, 1.0]},
+        "contact": [{"between": ["x1", "x2"], "lo": -0.75, "hi": 0.75, "restitution": e}],
+        "controller": {"type": "pd", "kp": 10.0, "kv": 20.0,
+                       "measure": "x2" if case == "collocated" else "x1"},
+        "reference": {"type": "sine", "amplitude": xm, "omega": 5.0, "feedforward_mass": 1.0},
+        "initial": {"q": [0.3, 0.0], "v": [0.5, 0.0]}})
+
+
+@pytest.mark.parametrize("case", ["collocated", "noncollocated"])
+def test_pair_model_file_orbit_matches_symmetric_orbit(case):
+    orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0, case=case)
+    model = _pair_model(case, orb.xm)
+    sec = mechanical_section(model.automaton, 0, 1)
+    assert sec.names == ("phi", "x1_dot", "x2", "x2_dot")
+    phi, z1, z2, z4 = orb.fixed_point
+    guess = np.array([phi, z2 + z4, z1, z2])          # (phi, y1, x2, y2)
+    eps = 1e-3 if orb.stable else 1e-7
+    po, _ = orbit_from_model(model, 0, 1, guess=guess + eps)
+    assert po.converged, po.reason
+    s = po.s
+    assert np.max(np.abs(np.array([s[0], s[2], s[3], s[1] - s[3]]) - orb.fixed_point)) < 1e-9
+    rho = orb.spectral_radius
+    assert np.max(np.abs(np.sort_complex(po.multipliers) - np.sort_complex(orb.multipliers))) \
+        < 1e-9 * max(1.0, rho)
+
+
+def test_drivetrain_dp_through_chatter_and_sticking_matches_finite_differences():
+    model = load_model(MODELS / "drivetrain.toml")
+    po, P = orbit_from_model(model, 0, 1, 8)
+    assert po.converged and po.stable
+    kinds = [k for _, k in po.signature]
+    assert kinds.count("zeno") == 2 and len(po.signature) == 20
+    fd = P.jacobian_fd(po.s, 8, h=1e-6)
+    assert np.max(np.abs(fd - po.DP)) < 1e-6 * max(1.0, np.max(np.abs(po.DP)))
+    # the release section sees the same orbit: the same multipliers
+    pr, _ = orbit_from_model(model, 0, 1, 1, event="release")
+    assert pr.converged
+    assert np.max(np.abs(pr.multipliers[:3] - po.multipliers[:3])) < 1e-8
+    rho = measured_contraction(P, po.s, 8, n_iter=40, eps=1e-6, n_dirs=1)
+    assert abs(rho - po.spectral_radius) < 3e-2 * po.spectral_radius
+
+
+def test_orbit_cli_with_a_model_file(capsys):
+    f = MODELS / "drivetrain.toml"
+    assert main(["orbit", "--model", str(f), "--contact", "0", "--period", "8", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["exists"] and d["stable"] and d["contact"] == 0 and d["wall"] == 1
+    assert len(d["multipliers"]) == len(d["fixed_point"]) == 6 and len(d["pre"]) == 6
+    assert abs(d["t_period"] - np.pi) < 1e-9 and d["T"] == pytest.approx(np.pi)
+    pre, post = np.array(d["pre"]), np.array(d["post"])     # [q_load, v_load, q_gear, ...]
+    assert np.array_equal(post[[0, 2, 4, 5]], pre[[0, 2, 4, 5]])  # Newton's law: load, gear
+    assert post[1] != pre[1] and post[3] != pre[3] and d["phi0"] == d["fixed_point"][0]
+    g = [str(v) for v in d["fixed_point"]]
+    assert main(["orbit", "--model", str(f), "--period", "8", "--guess", *g]) == 0
+    assert "converged" in capsys.readouterr().out
+    assert main(["orbit", "--model", str(f), "--event", "release", "--json"]) == 0
+    d2 = json.loads(capsys.readouterr().out)
+    assert abs(d2["spectral_radius"] - d["spectral_radius"]) < 1e-8
+
+
+def test_orbit_cli_bad_input(capsys):
+    f = str(MODELS / "drivetrain.toml")
+    assert main(["orbit", "--model", f, "--contact", "5"]) == 2
+    assert "contact" in capsys.readouterr().err
+    assert main(["orbit", "--model", f, "--guess", "1", "2"]) == 2
+    assert "guess" in capsys.readouterr().err
+    assert main(["orbit", "--model", f, "--period", "0"]) == 2
+    assert main(["orbit", "--mu", "0.1"]) == 2
+    assert "--model" in capsys.readouterr().err
+    assert main(["orbit", "--case", "collocated", "--mu", "0.1", "--omega", "5", "--L", "0.75",
+                 "--e", "0.5", "--kp", "10", "--kv", "20", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["exists"]
+
+
+def test_sampled_data_orbit_dp(tmp_path):
+    """A discrete PD (ZOH, dt = T / 200) on the pair: the sampling instants are jumps of the
+    map; DP through them matches finite differences."""
+    model = model_from_dict({
+        "system": {"dofs": ["x1", "x2"], "masses": [0.1, 1.0], "input": [0.0, 1.0]},
+        "contact": [{"between": ["x1", "x2"], "lo": -0.75, "hi": 0.75, "restitution": 0.5}],
+        "controller": {"type": "pd", "kp": 10.0, "kv": 20.0, "measure": "x2",
+                       "dt": 2 * np.pi / 5.0 / 200},
+        "reference": {"type": "sine", "amplitude": 1.0, "omega": 5.0, "feedforward_mass": 1.0},
+        "initial": {"q": [0.3, 0.0], "v": [0.5, 0.0]}})
+    from hybridpd.analysis.hybridmap import SectionMap
+    from hybridpd.analysis.periodic import _guess_from_simulation
+
+    sec = mechanical_section(model.automaton, 0, 1)
+    P = SectionMap(sec)
+    s = _guess_from_simulation(model, sec, 20.0)
+    names = sec.names
+    assert "s" in names                      # the sampling clock is a section coordinate
+    r = P.apply(s, jacobian=True)
+    assert r.ok and sum(1 for j in r.jumps if j[2] == "sample") > 20
+    fd = P.jacobian_fd(s, h=1e-7)
+    assert np.max(np.abs(fd - r.DP)) < 1e-6 * max(1.0, np.max(np.abs(r.DP))), names
+
+
+@pytest.mark.slow
+def test_pid_backlash_example_runs_and_writes_its_figure(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, PYTHONPATH=str(root), OPENBLAS_NUM_THREADS="1")
+    r = subprocess.run([sys.executable, str(root / "examples" /
+                                            "pid_backlash_describing_function.py"),
+                        "--out", str(tmp_path), "--quick"], capture_output=True, text=True,
+                       env=env, timeout=900, check=False)
+    assert r.returncode == 0, r.stderr
+    assert "describing function: A =" in r.stdout and "exact cycle" in r.stdout
+    assert (tmp_path / "pid_backlash_describing_function.png").stat().st_size > 10_000
+
+
+@pytest.mark.slow
+def test_drivetrain_basin_early_exit_does_not_change_labels():
+    from hybridpd.analysis.periodic import SectionMapper, section_basin
+
+    model = load_model(MODELS / "drivetrain.toml")
+    po, P = orbit_from_model(model, 0, 1, 8)
+    names = P.section.names
+    i, j = names.index("motor"), names.index("motor_dot")
+    x = (po.s[i] - 2.0, po.s[i] + 2.0, 6)
+    y = (po.s[j] - 8.0, po.s[j] + 8.0, 6)
+    fast = section_basin(SectionMapper(P, po.s, period=8, n_iter=60), "motor", "motor_dot", x,
+                         y)
+    full = section_basin(SectionMapper(P, po.s, period=8, n_iter=60, early_exit=False),
+                         "motor", "motor_dot", x, y)
+    assert np.array_equal(fast.labels, full.labels)
+    assert fast.iterations.sum() < full.iterations.sum()
+    par = section_basin(SectionMapper(P, po.s, period=8, n_iter=60), "motor", "motor_dot", x,
+                        y, executor="processes", max_workers=2, chunk_size=9)
+    assert np.array_equal(par.labels, fast.labels)
