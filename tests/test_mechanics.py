@@ -433,3 +433,28 @@ def test_both_meshes_held_against_an_independent_constrained_solve():
     ref_mid = solve_ivp(rhs, (t0 + 1e-9, mid), x0, method="DOP853", rtol=1e-12,
                         atol=1e-13).y[:, -1]
     np.testing.assert_allclose(tr.mechanical(mid), ref_mid, atol=1e-8)
+
+
+@pytest.mark.parametrize("vb,expect_mode,expect_v", [
+    # b pulls a away from the stop through the slot: the stop cannot hold, Newton's law free
+    (-1.0, "free", [-0.75, -0.25]),
+    # b pushes a into the stop: a stays held, b rebounds as from a wall
+    (+1.0, "stick0+", [0.0, -0.5]),
+])
+def test_impact_on_a_held_mass_releases_it_only_if_the_stop_would_pull(vb, expect_mode,
+                                                                     expect_v):
+    """Mass a is pressed against a stop (a <= 0.5) by the controller; mass b (free) reaches
+    the end of its slot |a - b| <= 0.4 on a (e = 0.5, unit masses)."""
+    s = MechanicalSystem(["a", "b"], M=np.eye(2), B=[1.0, 0.0])
+    loop = mechanical_loop(s, (1.0, 0.0), Reference.constant(2.0), "a")
+    ma = build_automaton(loop, [Contact([1, 0], hi=0.5, restitution=0.5),
+                                Contact([1, -1], -0.4, 0.4, restitution=0.5)])
+    b0 = 0.3 if vb < 0 else 0.7                  # a - b = 0.2 or -0.2
+    tr = simulate(ma, [0.5, 0.0, b0, vb], (0.0, 0.3))
+    assert tr.sticking and tr.sticking[0][2] == 0 and tr.sticking[0][0] == 0.0
+    k = int(np.flatnonzero(tr.contacts == 1)[0])
+    assert tr.impact_times[k] == pytest.approx(0.2, abs=1e-12)
+    np.testing.assert_allclose(tr.post[k][1::2], expect_v, atol=1e-12)
+    jt = tr.hybrid.jumps
+    i = int(np.flatnonzero(np.asarray(jt.guard) == "contact1" + ("+" if vb < 0 else "-"))[0])
+    assert jt.target[i] == expect_mode

@@ -7,7 +7,7 @@ location, compiled jump loop) plus the metadata an analysis needs (:class:`Mecha
 
 Modes
 -----
-A mode is a pair (compliant configuration, sticking contact):
+A mode is a pair (compliant configuration, set of held contacts):
 
 * the compliant configuration says, for every compliant contact, whether its spring-damper is
   engaged at ``hi`` (``+1``), at ``lo`` (``-1``) or not (``0``);
@@ -28,9 +28,11 @@ Guards (``g > 0`` admissible, all with ``direction = -1`` except sampling):
 
 * ``contact{k}{+|-}`` (rigid ``k`` at ``hi`` / ``lo``): ``g = hi - w.q`` / ``w.q - lo``; reset
   Newton's law in the metric of ``M`` (:mod:`hybridpd.mechanics.contacts`), and while sticking
-  on ``S`` in the constrained metric ``M_S^-1 = M^-1 - M^-1 W (W^T M^-1 W)^-1 W^T M^-1`` (the
-  held contacts stay held); target the same mode; accumulating impacts enter the mode
-  sticking on ``S + {k}`` through the plastic projection onto all of its contacts
+  on ``S`` in the constrained metric ``M_S^-1 = M^-1 - M^-1 W (W^T M^-1 W)^-1 W^T M^-1``: the
+  held contacts whose reaction impulse pushes stay held, those that would have to pull are
+  released first (decided from the geometry, :meth:`_Geometry.impact_held`); target the
+  mode holding what stays held (the same mode if all do); accumulating impacts enter the mode
+  that also holds ``k`` through the plastic projection onto all of its contacts
   (``zeno_target``; none if the normals are dependent: the run then ends with ``ZENO``).
 * ``release{k}{+|-}`` (``k`` in ``S``): ``g = -wall * lambda_k``: the contact force would have
   to pull; reset the plastic projection onto ``S`` (so that rounding accumulated while
@@ -228,6 +230,25 @@ class _Geometry:
         r[self.iq] = MW @ (Gi @ beta)
         return R, r
 
+    def impact_held(self, k, wall, stick):
+        """The contacts of ``stick`` that stay held through an impact of ``k`` at ``wall``.
+
+        With all of ``stick`` held, the reaction impulses there are ``Lambda = -(W^T M^-1
+        W)^-1 W^T M^-1 w_k P`` with the sign of ``P`` fixed by the wall, so whether a held
+        contact would have to pull is known from the geometry alone: such contacts are
+        released (the worst first, then the rest is re-examined).
+        """
+        held = list(stick)
+        while held:
+            W, _, Gi, _ = self.held(tuple(held))
+            r = Gi @ (W.T @ self.Mw[k])
+            pull = [s_j * wall * r[i] for i, (_, s_j) in enumerate(held)]
+            worst = int(np.argmax(pull))
+            if pull[worst] <= 1e-12 * (1.0 + float(np.abs(r).max())):
+                break
+            del held[worst]
+        return tuple(held)
+
     def impact(self, k, stick):
         """Newton's law of contact ``k`` with the contacts of ``stick`` held: ``(R, r)``."""
         c = self.contacts[k]
@@ -332,15 +353,17 @@ def _guards(geo, config, stick, lam_rows, lam_b, name, ginfo, sticks):
             continue
         for wall, bound in c.bounds:
             if c.rigid:
-                reset = geo.impact(k, stick)
-                if reset is None:
-                    continue
+                if geo.impact(k, stick) is None:
+                    continue                 # k cannot move while the others are held
+                kept = geo.impact_held(k, wall, stick)
+                reset = geo.impact(k, kept)
                 gname = f"contact{k}{_sign(wall)}"
-                to = _add(stick, k, wall)
+                to = _add(kept, k, wall)
                 zt = (dict(zeno_target=_mode_name(config, to), zeno_reset=geo.projection(to))
                       if to in sticks else {})
                 out.append(Guard(gname, c=-wall * gap[k], d=wall * bound, direction=-1,
-                                 reset=reset, priority=2, **zt))
+                                 reset=reset, target=_mode_name(config, kept), priority=2,
+                                 **zt))
                 ginfo[(name, gname)] = GuardInfo("impact", k, wall)
             elif config[k] == 0:
                 cfg = list(config)

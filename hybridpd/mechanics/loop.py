@@ -359,7 +359,7 @@ def _plant(system, c, cv):
                  outputs=names + ["y", "y_dot"], name="plant"), names
 
 
-def _finish(sys, blocks_order, names_out):
+def _finish(sys, blocks_order):
     """Reorder the interconnected states as ``blocks_order`` (subsystem-prefixed labels)."""
     labels = list(sys.state_labels)
     perm = [labels.index(s) for s in blocks_order]
@@ -389,7 +389,7 @@ def _continuous(system, ctrl, ref, c, cv):
     ctrl_names = list(ctrl.state_labels)
     order = ([f"plant_{s}" for s in mech] + [f"exo_{s}" for s in exo.state_labels]
              + [f"ctrl_{s}" for s in ctrl_names])
-    A, C = _finish(sys, order, outs)
+    A, C = _finish(sys, order)
     names = tuple(mech) + tuple(exo.state_labels) + tuple(ctrl_names)
     N = A.shape[0]
     n2, ne, nc = len(mech), exo.nstates, ctrl.nstates
@@ -425,7 +425,7 @@ def _sampled(system, ctrl, ref, c, cv, dt, delay):
                           ignore_inputs=["exo_unused", "hold_unused"])
     order = ([f"plant_{s}" for s in mech] + [f"exo_{s}" for s in exo.state_labels]
              + [f"hold_{s}" for s in hold_names])
-    Ac, Cc = _finish(sys, order, outs)
+    Ac, Cc = _finish(sys, order)
     n2, ne, nc = len(mech), exo.nstates, ctrl.nstates
     N = n2 + ne + nc + nh + 1
     ic = np.arange(n2 + ne, n2 + ne + nc)          # controller states sit between exo and hold

@@ -136,6 +136,7 @@ def _equations(M, C, K, B, contacts, kp, kv, measure, amplitude, omega, feedforw
     C, K = np.asarray(C, float), np.asarray(K, float)
     B, c = np.asarray(B, float), np.asarray(measure, float)
     n = M.shape[0]
+    Minv = np.linalg.inv(M)
     soft = [(np.asarray(w, float), lo, hi, k_, c_) for w, lo, hi, e, *kc in contacts
             if e is None for k_, c_ in [kc]]
 
@@ -157,7 +158,7 @@ def _equations(M, C, K, B, contacts, kp, kv, measure, amplitude, omega, feedforw
             if lo is not None and s < lo:
                 f = f - (k_ * (s - lo) + c_ * (w @ v)) * w
         out = np.empty(2 * n)
-        out[0::2], out[1::2] = v, np.linalg.solve(M, f)
+        out[0::2], out[1::2] = v, Minv @ f
         return out
 
     return rhs, law
