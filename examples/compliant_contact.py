@@ -40,7 +40,10 @@ def parse(argv=None):
     p.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "hybridpd-examples",
                    help="directory for the figure (default: %(default)s)")
     p.add_argument("--zeta", type=float, default=0.2, help="contact damping ratio in (0, 1)")
-    return p.parse_args(argv)
+    p.add_argument("--quick", action="store_true",
+                   help="a shorter run: a smoke test of the example, not its figure")
+    args = p.parse_args(argv)
+    return args
 
 
 def run(contact, t_end=0.6):

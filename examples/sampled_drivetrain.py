@@ -38,7 +38,12 @@ def parse(argv=None):
     p.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "hybridpd-examples",
                    help="directory for the figure (default: %(default)s)")
     p.add_argument("--t-end", type=float, default=12.0, help="simulated time (s)")
-    return p.parse_args(argv)
+    p.add_argument("--quick", action="store_true",
+                   help="a shorter run: a smoke test of the example, not its figure")
+    args = p.parse_args(argv)
+    if args.quick:
+        args.t_end = min(args.t_end, 2.0)
+    return args
 
 
 def simulate(t_end, dt=None, delay=0):
