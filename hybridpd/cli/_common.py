@@ -18,7 +18,7 @@ class Parser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
-def add_plant(p, *, xm=True, gamma=False):
+def add_plant(p, *, xm=True, gamma=False, L_required=True):
     p.add_argument("--case", required=True, choices=["collocated", "noncollocated"])
     p.add_argument("--mu", type=float, required=True, help="mass ratio m1/m2 (> 0)")
     p.add_argument("--m2", type=float, default=1.0, help="secondary mass (> 0), default 1")
@@ -29,7 +29,7 @@ def add_plant(p, *, xm=True, gamma=False):
         g.add_argument("--gamma", type=float, help="L / x10 (> 0)")
         p.add_argument("--x10", type=float, default=1.0, help="primary-mass amplitude, default 1")
     else:
-        p.add_argument("--L", type=float, required=True, help="half clearance (> 0)")
+        p.add_argument("--L", type=float, required=L_required, help="half clearance (> 0)")
     if xm:
         p.add_argument("--xm", type=float, required=True, help="reference amplitude (>= 0)")
 

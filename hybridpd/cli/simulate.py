@@ -1,14 +1,28 @@
-"""``hybridpd simulate``."""
+"""``hybridpd simulate``.
+
+The plant and reference are given either as ``--L`` and ``--xm`` (clearance and reference
+amplitude) or as ``--gamma`` and ``--x10`` (``L = gamma x10``, and ``xm`` the amplitude that
+realises the symmetric orbit with primary-mass amplitude ``x10`` at these gains). Both may be
+given when they agree.
+"""
 from __future__ import annotations
 
 import json
+import math
 
 from hybridpd.cli._common import add_plant
 
 
 def register(sub):
     p = sub.add_parser("simulate", help="simulate the controlled impact pair")
-    add_plant(p)
+    add_plant(p, xm=False, L_required=False)
+    p.add_argument("--xm", type=float, default=None, help="reference amplitude (>= 0)")
+    p.add_argument("--gamma", type=float, default=None,
+                   help="L / x10 (> 0); with --x10 instead of --L/--xm")
+    p.add_argument("--x10", type=float, default=None,
+                   help="primary-mass amplitude (> 0, default 1 with --gamma): xm is the "
+                        "amplitude realising the symmetric orbit")
+    p.add_argument("--n", type=int, default=1, help="orbit order for --x10 (odd)")
     p.add_argument("--e", type=float, required=True, help="restitution coefficient in [0, 1]")
     p.add_argument("--kp", type=float, required=True)
     p.add_argument("--kv", type=float, required=True)
@@ -19,20 +33,63 @@ def register(sub):
     p.set_defaults(func=run)
 
 
+def _agree(a, b, rtol=1e-6):
+    return math.isclose(a, b, rel_tol=rtol, abs_tol=1e-12)
+
+
+def geometry(args):
+    """``(L, xm)`` from ``--L/--xm`` or ``--gamma/--x10`` (see the module docstring)."""
+    from hybridpd.analysis.orbits import symmetric_orbit
+    from hybridpd.model import ImpactPair, PDGains, check_positive
+
+    relative = args.gamma is not None or args.x10 is not None
+    if args.L is None and args.gamma is None:
+        raise ValueError("give the clearance: --L, or --gamma with --x10")
+    if args.xm is None and not relative:
+        raise ValueError("give the reference: --xm, or --x10 (with --gamma or --L)")
+    L = None if args.L is None else check_positive("L", args.L)
+    x10 = None
+    if relative:
+        x10 = check_positive("x10", 1.0 if args.x10 is None else args.x10)
+    if args.gamma is not None:
+        Lg = check_positive("gamma", args.gamma) * x10
+        if L is not None and not _agree(L, Lg):
+            raise ValueError(f"--L {L:g} disagrees with --gamma {args.gamma:g} x --x10 "
+                             f"{x10:g} = {Lg:g}; give one pair or consistent values")
+        L = Lg
+    xm = args.xm
+    if xm is not None and xm < 0:
+        raise ValueError(f"xm must be >= 0, got {xm!r}")
+    if relative:
+        orb = symmetric_orbit(ImpactPair(args.mu, args.e, L, args.m2),
+                              PDGains(args.kp, args.kv), args.omega, x10=x10, n=args.n,
+                              case=args.case)
+        if not math.isfinite(orb.xm) or orb.xm <= 0:
+            raise ValueError(f"--x10 {x10:g}: no reference amplitude realises it ({orb.reason})")
+        if xm is not None and not _agree(xm, orb.xm):
+            raise ValueError(f"--xm {xm:g} disagrees with the amplitude {orb.xm:.10g} that "
+                             f"realises --x10 {x10:g}; give one pair or consistent values")
+        xm = orb.xm
+    return L, xm
+
+
 def run(args) -> int:
     from hybridpd.model import ImpactPair, PDGains, Reference
     from hybridpd.pair.impactpair import ControlledImpactPair
 
-    sysm = ControlledImpactPair(ImpactPair(args.mu, args.e, args.L, args.m2),
-                                PDGains(args.kp, args.kv), Reference(args.xm, args.omega),
+    L, xm = geometry(args)
+    sysm = ControlledImpactPair(ImpactPair(args.mu, args.e, L, args.m2),
+                                PDGains(args.kp, args.kv), Reference(xm, args.omega),
                                 args.case)
     traj = sysm.simulate(args.x0, (0.0, args.t_end), max_impacts=args.max_impacts)
     d = traj.to_dict()
+    d["L"], d["xm"] = L, xm
     if args.json:
         print(json.dumps(d))
         return 0
-    print(f"{args.case} impact pair, t in [0, {traj.t_final:g}]: {traj.n_impacts} impacts "
-          f"({int((traj.walls > 0).sum())} on wall +L, {int((traj.walls < 0).sum())} on -L), "
+    print(f"{args.case} impact pair (L = {L:g}, xm = {xm:.10g}), t in [0, {traj.t_final:g}]: "
+          f"{traj.n_impacts} impacts ({int((traj.walls > 0).sum())} on wall +L, "
+          f"{int((traj.walls < 0).sum())} on -L), "
           f"{len(traj.sticking)} sticking interval(s); stopped: {d['termination']}")
     for imp in d["impacts"][:10]:
         print(f"  t = {imp['t']:.10f}  wall {imp['wall']:+d}  pre = "

@@ -154,7 +154,9 @@ def m2_study(settings: Settings, *, log=None) -> M2Study:
         cmp = robustness_comparison(mu=P["mu"], gamma=P["gamma"], x10=settings.x10, m2=m2,
                                     n=P["n"], omega=P["omega"], e=0.5,
                                     grid=settings.comparison_grid,
-                                    uncertainty_grid=settings.uncertainty_grid)
+                                    uncertainty_grid=settings.uncertainty_grid,
+                                    n_starts=settings.design_search[0],
+                                    maxiter=settings.design_search[1])
         chk = C.check_5(cmp)
         verdicts[5].append(chk["verdict"])
         evidence[5].append(chk)
@@ -182,8 +184,11 @@ def _basin_step(orbit, settings: Settings, *, executor, max_workers, progress):
 
 
 def run_convention(m2, settings: Settings, out, *, executor="processes", max_workers=None,
-                   progress=False, log=None, tick=None) -> ConventionRun:
-    """Figs 3-7, their data and the conclusions' checks under one ``m2`` (see module doc)."""
+                   progress=False, log=None, tick=None, figure_hook=None) -> ConventionRun:
+    """Figs 3-7, their data and the conclusions' checks under one ``m2`` (see module doc).
+
+    ``figure_hook(path, fig)``, if given, sees every figure before it is saved.
+    """
     from hybridpd.analysis.design import robustness_comparison
     from hybridpd.analysis.orbits import symmetric_orbit
     from hybridpd.sweeps.regions import region_map
@@ -232,6 +237,7 @@ def run_convention(m2, settings: Settings, out, *, executor="processes", max_wor
     run.comparison = robustness_comparison(
         mu=P["mu"], gamma=P["gamma"], x10=settings.x10, m2=m2, n=P["n"], omega=P["omega"],
         e=0.5, grid=settings.comparison_grid, uncertainty_grid=settings.uncertainty_grid,
+        n_starts=settings.design_search[0], maxiter=settings.design_search[1],
         kp_range=(0.1 * s, 100.0 * s),
         kv_range=(0.1 * s, 100.0 * s))
     (d / "robustness.json").write_text(json.dumps([r.to_dict() for r in run.comparison.rows],
@@ -245,7 +251,7 @@ def run_convention(m2, settings: Settings, out, *, executor="processes", max_wor
                   4: C.check_4(meas("collocated"), meas("noncollocated")),
                   5: C.check_5(run.comparison)}
     t0 = time.perf_counter()
-    _figures(run, settings)
+    _figures(run, settings, figure_hook)
     run.timings["figures"] = time.perf_counter() - t0
     tick(f"m2 = {m2:g}: figures")
     return run
@@ -256,7 +262,13 @@ def _params_text(run) -> dict:
                 x10=run.x10)
 
 
-def _figures(run: ConventionRun, settings: Settings):
+def _save(fig, path, hook, dpi=110):
+    if hook is not None:
+        hook(path, fig)
+    fig.savefig(path, dpi=dpi)
+
+
+def _figures(run: ConventionRun, settings: Settings, hook=None):
     from hybridpd.plotting.basins import plot_basin
     from hybridpd.plotting.orbit import plot_orbit_phase
     from hybridpd.plotting.regions import plot_region_panels
@@ -266,12 +278,12 @@ def _figures(run: ConventionRun, settings: Settings):
     mark = (PAPER["kp"], PAPER["kv"])
     fig = plot_region_panels(run.maps["collocated"], mark=mark, params=par,
                              title="Fig. 4, collocated PD")
-    fig.savefig(d / "fig4_regions_collocated.png", dpi=110)
+    _save(fig, d / "fig4_regions_collocated.png", hook)
     fig = plot_region_panels(run.maps["noncollocated"], zoom=run.maps["zoom"], mark=mark,
                              params=par, title="Fig. 5, non-collocated PD")
-    fig.savefig(d / "fig5_regions_noncollocated.png", dpi=110)
+    _save(fig, d / "fig5_regions_noncollocated.png", hook)
     fig = plot_orbit_phase([run.orbits[(c, e)] for c in CASES for e in PAPER["e"]], params=par)
-    fig.savefig(d / "fig3_orbit.png", dpi=110)
+    _save(fig, d / "fig3_orbit.png", hook)
     from matplotlib.figure import Figure
 
     for case, name, label in (("collocated", "fig6_basins_collocated.png", "Fig. 6"),
@@ -292,7 +304,7 @@ def _figures(run: ConventionRun, settings: Settings):
             plot_basin(b, ax=ax, title=f"e = {e:g}: converged {_pct(b.converged_fraction)}")
         fig.suptitle(f"{label}, {case} PD at $k_p$ = {PAPER['kp']:g}, $k_v$ = {PAPER['kv']:g}; "
                      + _param_line(par), fontsize=10)
-        fig.savefig(d / name, dpi=100)
+        _save(fig, d / name, hook, dpi=100)
 
 
 def _wrap(text, width=44):
@@ -331,7 +343,8 @@ def resolve_conventions(settings: Settings, study: M2Study | None) -> list:
 
 
 def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_workers=None,
-              progress=True, log=print, settings: Settings | None = None) -> Path:
+              progress=True, log=print, settings: Settings | None = None,
+              figure_hook=None) -> Path:
     """Compute Figs 3-7 under every convention, the studies, ``summary.md`` and ``.json``.
 
     Parameters
@@ -350,6 +363,8 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
         ``None`` for silence.
     settings : Settings, optional
         Conventions and grid sizes (overrides ``mode``).
+    figure_hook : callable, optional
+        ``figure_hook(path, fig)`` sees every figure before it is saved (e.g. for checks).
 
     Returns
     -------
@@ -404,13 +419,14 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
     runs = []
     for m2 in resolve_conventions(settings, study):
         runs.append(run_convention(m2, settings, out, executor=executor,
-                                   max_workers=max_workers, progress=False, log=say, tick=tick))
+                                   max_workers=max_workers, progress=False, log=say, tick=tick,
+                                   figure_hook=figure_hook))
     from hybridpd.plotting.regions import plot_m2_study, plot_param_study
 
-    plot_m2_study(study, m2_range=settings.m2_range,
-                  runs=[r.m2 for r in runs]).savefig(out / "m2_study.png", dpi=110)
+    _save(plot_m2_study(study, m2_range=settings.m2_range, runs=[r.m2 for r in runs]),
+          out / "m2_study.png", figure_hook)
     for name, ps in studies.items():
-        plot_param_study(ps).savefig(out / f"{name}_study.png", dpi=110)
+        _save(plot_param_study(ps), out / f"{name}_study.png", figure_hook)
     timings["total"] = time.perf_counter() - t_start
     path = write_summary(out, settings=settings, mode=mode, study=study, studies=studies,
                          runs=runs, timings=timings)

@@ -57,6 +57,9 @@ class Settings:
         Gain grid of the robustness comparison (conclusion 5).
     uncertainty_grid : (int, int)
         Plants ``(e, mu)`` of that comparison's uncertainty box.
+    design_search : (n_starts, maxiter)
+        Local refinements of the comparison's best designs (they do not change the shares of
+        the gain box that conclusion 5 rests on).
     m2 : tuple of float or ``"auto"``
         The conventions for the secondary mass; ``"auto"`` is the geometric centre of the
         ``m2`` interval (within :attr:`m2_range`) where all three non-collocated orbits at the
@@ -91,6 +94,7 @@ class Settings:
     iterations: int = 1500
     comparison_grid: tuple = (48, 48)
     uncertainty_grid: tuple = (5, 5)
+    design_search: tuple = (3, 150)
     m2: tuple = (1.0, AUTO)
     x10: float = 1.0
     basin_window: tuple = (-3.0, 5.0, -2.0, 10.0)
@@ -121,6 +125,8 @@ class Settings:
             _count("comparison_grid", v)
         for v in self.uncertainty_grid:
             _count("uncertainty_grid", v)
+        for v in self.design_search:
+            _count("design_search", v, 1)
         if not self.m2:
             raise ValueError("m2 must list at least one convention")
         for v in self.m2:
@@ -144,7 +150,8 @@ class Settings:
     def quick(cls, **kw) -> Settings:
         """Coarse grids: about a minute on 2 cores."""
         base = dict(gains=(50.0, 50.0, 61), zoom=(20.0, 6.0, 61), basin=(41, 41),
-                    comparison_grid=(12, 12), uncertainty_grid=(3, 3), verdict_grid=31,
+                    comparison_grid=(12, 12), uncertainty_grid=(3, 3), design_search=(1, 40),
+                    verdict_grid=31,
                     param_points=25, param_grid=21)
         return cls(**{**base, **kw})
 
