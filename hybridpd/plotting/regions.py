@@ -161,6 +161,18 @@ def _legend_from_gids(fig, axes, *, loc="outside lower center", ncol=4):
     return [h.get_label() for h in handles]
 
 
+def _axes_legend(ax):
+    """The gid legend of one axes, beside it (outside the data)."""
+    from matplotlib.figure import Figure
+
+    tmp = Figure()
+    labels = _legend_from_gids(tmp, [ax])
+    if tmp.legends:
+        handles = tmp.legends[0].legend_handles
+        ax.legend(handles=handles, labels=labels, loc="upper left", bbox_to_anchor=(1.02, 1.0),
+                  fontsize=7, frameon=False, borderaxespad=0.0)
+
+
 def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, title=None):
     """One panel per ``e`` (Figs 4-5): the stable region filled, boundaries marked.
 
@@ -198,7 +210,7 @@ def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, ti
             from hybridpd.reproduce.pipeline import _pct
 
             _panel(ax, X, Y, m.exists[k], m.stable[k], curves=cv if row == 0 else None,
-                   mark=mark, title=f"e = {e:g}{' (zoom)' if row else ''}: exists {_pct(fe)}, "
+                   mark=mark, title=f"e = {e:g}{' (zoom)' if row else ''}\nexists {_pct(fe)}, "
                                     f"exists and stable {_pct(fs)}")
             ax.set_xlabel(_axis_label(m.x_name))
             ax.set_ylabel(_axis_label(m.y_name))
@@ -244,6 +256,7 @@ def plot_regions(rm, ax=None, title=None, curves=None):
                         f"e = {e:g}: existence boundary (ticks on the existing side)")
     if curves is not None:
         _draw_curves(ax, curves, {})
+    _axes_legend(ax)
     ax.set_xlabel(_axis_label(rm.x_name))
     ax.set_ylabel(_axis_label(rm.y_name))
     ax.set_title(title or f"{rm.case}: {param_line(_params_of(rm))}", fontsize=9)

@@ -325,8 +325,9 @@ def _pct(f) -> str:
 
 
 def _param_line(par) -> str:
-    return (rf"$\mu$ = {par['mu']:g}, $\gamma$ = {par['gamma']:g}, $\omega$ = {par['omega']:g}, "
-            f"n = {par['n']}, $m_2$ = {par['m2']:g}, $x_{{10}}$ = {par['x10']:g}")
+    from hybridpd.plotting.regions import param_line
+
+    return param_line(par)
 
 
 def resolve_conventions(settings: Settings, study: M2Study | None) -> list:
