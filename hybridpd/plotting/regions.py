@@ -277,9 +277,15 @@ def plot_m2_study(study, *, m2_range=None, runs=()):
             ax.loglog(study.rho_grid, rho, color=_COLORS[k], gid=f"e = {key[1]:g}")
             for iv in study.intervals[case][key[1]]:
                 for end in (iv.lo, iv.hi):
-                    if end.kind != "window":
+                    if end.kind == "stability":
                         ax.plot(end.m2, 1.0, "o", color=_COLORS[k], mec="k", ms=6,
-                                gid="interval end (bifurcation)")
+                                gid="interval end: a multiplier on the unit circle")
+                    elif end.kind != "window":
+                        y = np.interp(np.log(end.m2), np.log(study.rho_grid),
+                                      np.where(np.isfinite(rho), rho, np.nanmax(rho)))
+                        ax.plot(end.m2, y, "s", color=_COLORS[k], mec="k", ms=6,
+                                gid=f"interval end: {end.kind} lost (grazing)"
+                                if end.kind == "viability" else f"interval end: {end.kind}")
         ax.axhline(1.0, color="0.4", lw=0.8, ls=":", gid="spectral radius 1")
         for m in runs:
             ax.axvline(m, color="k", lw=1.0, ls="-.", gid="convention of the run")

@@ -155,6 +155,17 @@ def _studies(d, w):
             for k, e in enumerate(s["e"]):
                 w(f"| {case} | {e:g} | " + " | ".join(_p(q["both"][k][i]) for i in idx) + " |")
         w("")
+        w(f"Range of {name} where some gains of the box give an existing stable orbit, and "
+          f"where the share peaks:\n")
+        for case, q in s["fractions"].items():
+            for k, e in enumerate(s["e"]):
+                both = q["both"][k]
+                on = [v for v, f in zip(vals, both) if f and f > 0]
+                peak = max(range(len(vals)), key=lambda i, b=both: b[i] or 0)
+                rng = f"[{min(on):.3g}, {max(on):.3g}]" if on else "nowhere"
+                w(f"- {case}, e = {e:g}: {rng}; peak {_p(both[peak])} at {name} = "
+                  f"{vals[peak]:.3g}")
+        w("")
         w("Limits (derived in `symbolic/limits.py`), computed shares (exists / both) per e:\n")
         for v, per in s["limits"].items():
             for case, q in per.items():
@@ -175,6 +186,11 @@ def render(d: dict) -> str:
         _conclusion(con, d, w)
     _runs(d, w)
     _studies(d, w)
+    w("## The paper's remarks on mu, checked\n")
+    for r in d.get("remarks", []):
+        w(f"- *{r['statement']}* **{r['verdict']}**: " + "; ".join(
+            f"{k}: {v['verdict']}" for k, v in r["evidence"].items()))
+    w("")
     w("## Files\n")
     w("`m2_study.png`, `mu_study.png`, `gamma_study.png`; per convention `m2=<value>/` with "
       "`fig3_orbit.png`, `fig4_regions_collocated.png`, `fig5_regions_noncollocated.png`, "

@@ -27,7 +27,7 @@ SCHEMA = {
     "type": "object",
     "required": ["schema_version", "mode", "paper", "conventions", "conclusions",
                  "m2_stable_intervals", "m2_interval_ends", "m2_study", "runs", "studies",
-                 "timings"],
+                 "remarks", "timings"],
     "properties": {
         "schema_version": {"type": "integer", "enum": [1]},
         "mode": {"type": "string"},
@@ -67,6 +67,10 @@ SCHEMA = {
             "type": "object", "required": ["m2", "gain_box_scale", "orbits", "regions",
                                            "basins", "directory"]}},
         "studies": {"type": "object", "required": ["mu", "gamma"]},
+        "remarks": {"type": "array", "items": {
+            "type": "object", "required": ["id", "statement", "verdict", "evidence"],
+            "properties": {"verdict": {"type": "string",
+                                       "enum": [C.AGREES, C.CONTRADICTED]}}}},
         "timings": {"type": "object", "additionalProperties": {"type": "number"}},
     },
 }
@@ -180,6 +184,41 @@ def _run_dict(r) -> dict:
             "regions": regions, "basins": basins, "timings": r.timings}
 
 
+def remarks(studies) -> list:
+    """The paper's remarks on ``mu`` (section 5) as computed verdicts, per case and ``e``.
+
+    * existence shrinks as ``mu`` grows: the existence share at the largest ``mu`` of the
+      study is below the one at the smallest, and vanishes at ``mu = 1e4``;
+    * ``mu -> 0`` facilitates control: the exists-and-stable share at ``mu = 1e-4`` is at least
+      the one at the paper's ``mu = 0.1``.
+    """
+    s = studies["mu"]
+    vals = np.asarray(s.values)
+    k01 = int(np.argmin(np.abs(np.log(vals / PAPER["mu"]))))
+    out = []
+    ev_a, ev_b, ok_a, ok_b = {}, {}, True, True
+    for case, q in s.fractions.items():
+        ex, both = np.asarray(q["exists"]), np.asarray(q["both"])
+        lim0, liminf = s.limits["0.0001"][case], s.limits["10000"][case]
+        for k, e in enumerate(s.e):
+            a = bool(ex[k, -1] < ex[k, 0] and liminf["exists"][k] == 0)
+            b = bool(lim0["both"][k] >= both[k, k01])
+            ok_a &= a
+            ok_b &= b
+            key = f"{case} e={e:g}"
+            ev_a[key] = {"exists_at_min_mu": ex[k, 0], "exists_at_max_mu": ex[k, -1],
+                         "exists_at_1e4": liminf["exists"][k],
+                         "largest_increase": float(np.max(np.diff(ex[k]), initial=0.0)),
+                         "verdict": C._v(a)}
+            ev_b[key] = {"both_at_1e-4": lim0["both"][k], "mu_paper": float(vals[k01]),
+                         "both_at_mu_paper": both[k, k01], "verdict": C._v(b)}
+    out.append({"id": "mu-existence", "statement": "The existence region tends to decrease "
+                "with increasing mu.", "verdict": C._v(ok_a), "evidence": ev_a})
+    out.append({"id": "mu-small", "statement": "As mu tends to zero control becomes easier.",
+                "verdict": C._v(ok_b), "evidence": ev_b})
+    return out
+
+
 def build_summary(*, settings, mode, study, studies, runs, timings) -> dict:
     """The ``summary.json`` dict (see :data:`SCHEMA`)."""
     conclusions = []
@@ -212,6 +251,7 @@ def build_summary(*, settings, mode, study, studies, runs, timings) -> dict:
                      "robust_grid": list(study.robust_grid)},
         "runs": [_run_dict(r) for r in runs],
         "studies": {k: v.to_dict() for k, v in studies.items()},
+        "remarks": remarks(studies),
         "timings": timings,
     }
     return _clean(out)
