@@ -240,7 +240,7 @@ def plot_regions(rm, ax=None, title=None, curves=None):
     for k, e in enumerate(rm.e):
         c = _COLORS[k % len(_COLORS)]
         st = rm.stable[k].astype(float)
-        lab = f"e = {e:g}: exists and stable"
+        lab = f"e = {e:g}: exists, stable"
         if st.any():
             cs = ax.contourf(X, Y, st, levels=[0.5, 1.5], colors="none",
                              hatches=[hatches[k % len(hatches)]])
@@ -252,8 +252,7 @@ def plot_regions(rm, ax=None, title=None, curves=None):
                     pass
             _tag_contour(ax.contour(X, Y, st, levels=[0.5], colors=[c], linewidths=1.2), lab)
         if rm.exists[k].any() and not rm.exists[k].all():
-            _side_ticks(ax, X, Y, rm.exists[k], c,
-                        f"e = {e:g}: existence boundary (ticks on the existing side)")
+            _side_ticks(ax, X, Y, rm.exists[k], c, f"e = {e:g}: exists on the ticked side")
     if curves is not None:
         _draw_curves(ax, curves, {})
     _axes_legend(ax)

@@ -82,8 +82,14 @@ def param_shares(case, name, values, kp_axis, kv_axis, *, e, fixed) -> dict:
         raise ValueError(f"name must be 'mu' or 'gamma', got {name!r}")
     es = np.atleast_1d(np.asarray(e, float))
     vals = np.atleast_1d(np.asarray(values, float))
-    E, V, KV, KP = np.meshgrid(es, vals, np.asarray(kv_axis, float),
-                               np.asarray(kp_axis, float), indexing="ij")
+    kp_axis, kv_axis = np.asarray(kp_axis, float), np.asarray(kv_axis, float)
+    # bounded memory: about 1e5 grid points (and their 4x4 Jacobians) at a time
+    per = max(1, int(1e5 // (len(es) * kp_axis.size * kv_axis.size)))
+    if vals.size > per:
+        parts = [param_shares(case, name, vals[i:i + per], kp_axis, kv_axis, e=es,
+                              fixed=fixed) for i in range(0, vals.size, per)]
+        return {q: np.concatenate([p[q] for p in parts], axis=1) for q in parts[0]}
+    E, V, KV, KP = np.meshgrid(es, vals, kv_axis, kp_axis, indexing="ij")
     mu, L = _plant(name, V, fixed)
     kw = dict(mu=mu, e=E, L=L, omega=fixed["omega"], m2=fixed["m2"], x10=fixed["x10"],
               n=fixed["n"])

@@ -153,10 +153,8 @@ def m2_study(settings: Settings, *, log=None) -> M2Study:
     for m2 in robust_grid:
         cmp = robustness_comparison(mu=P["mu"], gamma=P["gamma"], x10=settings.x10, m2=m2,
                                     n=P["n"], omega=P["omega"], e=0.5,
-                                    grid=settings.comparison_grid,
-                                    uncertainty_grid=settings.uncertainty_grid,
-                                    n_starts=settings.design_search[0],
-                                    maxiter=settings.design_search[1])
+                                    grid=settings.m2_robust_grid, uncertainty_grid=(3, 3),
+                                    n_starts=1, maxiter=40)
         chk = C.check_5(cmp)
         verdicts[5].append(chk["verdict"])
         evidence[5].append(chk)
@@ -302,7 +300,7 @@ def _figures(run: ConventionRun, settings: Settings, hook=None):
                         fontsize=9, transform=ax.transAxes)
                 continue
             plot_basin(b, ax=ax, title=f"e = {e:g}: converged {_pct(b.converged_fraction)}")
-        fig.suptitle(f"{label}, {case} PD at $k_p$ = {PAPER['kp']:g}, $k_v$ = {PAPER['kv']:g}; "
+        fig.suptitle(f"{label}, {case.replace('non', 'non-')} PD at $k_p$ = {PAPER['kp']:g}, $k_v$ = {PAPER['kv']:g}; "
                      + _param_line(par), fontsize=10)
         _save(fig, d / name, hook, dpi=100)
 
@@ -389,7 +387,7 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
     if progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=3 + 5 * n_conv + 1, desc="reproduce", unit="step", leave=False)
+        bar = tqdm(total=3 + 6 * n_conv + 1, desc="reproduce", unit="step", leave=False)
 
     def tick(msg):
         say(msg)
@@ -403,9 +401,12 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
     study = m2_study(settings, log=say)
     timings["m2 study"] = time.perf_counter() - t0
     tick(f"m2 study: chosen m2 = {study.chosen_m2}")
+    conventions = resolve_conventions(settings, study)
+    if not conventions:
+        raise ValueError(f"m2: 'auto' found no m2 in {list(settings.m2_range)} where all "
+                         "non-collocated orbits are stable; give a value of m2 as well")
     fixed = dict(mu=PAPER["mu"], gamma=PAPER["gamma"], x10=settings.x10,
-                 m2=float(resolve_conventions(settings, study)[0]), omega=PAPER["omega"],
-                 n=PAPER["n"])
+                 m2=conventions[0], omega=PAPER["omega"], n=PAPER["n"])
     s = fixed["m2"]
     kp_axis = np.linspace(0.1 * s, settings.gains[0] * s, settings.param_grid)
     kv_axis = np.linspace(0.1 * s, settings.gains[1] * s, settings.param_grid)
@@ -418,9 +419,9 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
         timings[f"{name} study"] = time.perf_counter() - t0
         tick(f"{name} study")
     runs = []
-    for m2 in resolve_conventions(settings, study):
+    for m2 in conventions:
         runs.append(run_convention(m2, settings, out, executor=executor,
-                                   max_workers=max_workers, progress=False, log=say, tick=tick,
+                                   max_workers=max_workers, progress=progress, log=say, tick=tick,
                                    figure_hook=figure_hook))
     from hybridpd.plotting.regions import plot_m2_study, plot_param_study
 

@@ -76,7 +76,8 @@ class Settings:
     m2_verdicts : int
         Points of the log grid of ``m2`` on which the conclusions are re-evaluated.
     m2_robust : int
-        Points of that grid on which conclusion 5 (a design optimisation) is re-evaluated.
+        Points of that grid on which conclusion 5 (a design optimisation) is re-evaluated,
+        with a gain grid of ``m2_robust_grid``, 3 x 3 plants and one short local search.
     verdict_grid : int
         Gain-grid size (per axis) of the region maps behind the verdicts against ``m2``.
     mu_range, gamma_range : (lo, hi)
@@ -102,6 +103,7 @@ class Settings:
     m2_grid: int = 2001
     m2_verdicts: int = 9
     m2_robust: int = 3
+    m2_robust_grid: tuple = (12, 12)
     verdict_grid: int = 41
     mu_range: tuple = (0.01, 10.0)
     gamma_range: tuple = (0.05, 2.0)
@@ -143,6 +145,8 @@ class Settings:
         _count("m2_grid", self.m2_grid, 3)
         _count("m2_verdicts", self.m2_verdicts, 2)
         _count("m2_robust", self.m2_robust, 1)
+        for v in self.m2_robust_grid:
+            _count("m2_robust_grid", v)
         for nm in ("verdict_grid", "param_points", "param_grid"):
             _count(nm, getattr(self, nm))
 
@@ -159,8 +163,8 @@ class Settings:
     def full(cls, **kw) -> Settings:
         """The 200 x 200 grids of the paper's figures (a few minutes on 2 cores)."""
         base = dict(gains=(50.0, 50.0, 201), zoom=(20.0, 6.0, 201), basin=(201, 201),
-                    m2_grid=8001, m2_verdicts=17, m2_robust=5, verdict_grid=81,
-                    param_points=81, param_grid=61)
+                    m2_grid=8001, m2_verdicts=17, m2_robust=5, m2_robust_grid=(16, 16),
+                    verdict_grid=81, param_points=61, param_grid=41)
         return cls(**{**base, **kw})
 
     def with_(self, **kw) -> Settings:
