@@ -217,6 +217,9 @@ def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, ti
             axes.append(ax)
     _legend_from_gids(fig, axes)
     head = title or f"{rm.case} PD"
+    if mark is not None and not any(a.get_gid() == PAPER_GAINS for ax in axes
+                                    for a in ax.get_children()):
+        head += f" (the point $k_p$ = {mark[0]:g}, $k_v$ = {mark[1]:g} lies outside the box)"
     fig.suptitle(f"{head}: {param_line(params or _params_of(rm))}", fontsize=10)
     return fig
 
@@ -280,8 +283,8 @@ def plot_m2_study(study, *, m2_range=None, runs=()):
                         ax.plot(end.m2, 1.0, "o", color=_COLORS[k], mec="k", ms=6,
                                 gid="interval end: a multiplier on the unit circle")
                     elif end.kind != "window":
-                        y = np.interp(np.log(end.m2), np.log(study.rho_grid),
-                                      np.where(np.isfinite(rho), rho, np.nanmax(rho)))
+                        ok = np.isfinite(rho)
+                        y = np.interp(np.log(end.m2), np.log(study.rho_grid[ok]), rho[ok])
                         ax.plot(end.m2, y, "s", color=_COLORS[k], mec="k", ms=6,
                                 gid=f"interval end: {end.kind} lost (grazing)"
                                 if end.kind == "viability" else f"interval end: {end.kind}")
