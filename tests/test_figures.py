@@ -96,7 +96,7 @@ def test_region_figures_use_maths_labels(figures):
             assert {ax.get_ylabel() for ax in fig.axes} == {"$k_v$"}
 
 
-def test_region_plots_accept_traced_curves():
+def test_region_plots_accept_traced_curves(tmp_path):
     rm = region_map("noncollocated", x=("kp", 0.1, 20, 9), y=("kv", 0.1, 6, 9), e=[0.1, 0.5],
                     mu=0.1, omega=5.0, gamma=0.75)
     t = np.linspace(0, 1, 20)
@@ -109,6 +109,14 @@ def test_region_plots_accept_traced_curves():
              ln.get_gid()]
     assert len(drawn) == 2 * len(curves)
     assert any(np.allclose(ln.get_xdata(), curves[0].x) for ln in drawn)
+    # other kinds of traced boundaries get their own legend entries
+    more = [SimpleNamespace(kind="grazing", x=t, y=t), SimpleNamespace(kind="neimark_sacker",
+                                                                       x=t, y=2 * t)]
+    fig = plot_region_panels(rm, curves={0.1: more, 0.5: []})
+    labels = _legend_labels(fig)
+    assert {"grazing boundary (traced)", "neimark sacker boundary (traced)"} <= labels
+    assert labels == _gids(fig)
+    fig.savefig(tmp_path / "curves.png", dpi=80)
     # the compact variant: all e on one axes, hatched, legend beside the axes
     fig = Figure(figsize=(8, 4), layout="constrained")
     plot_regions(rm, ax=fig.add_subplot(1, 1, 1), curves=curves)

@@ -58,8 +58,9 @@ def _tag_contour(cs, label):
     return cs
 
 
-def _side_ticks(ax, X, Y, field, color, label, every=6):
-    """Short ticks on the ``field > 0.5`` side of its 0.5 contour (the existing side)."""
+def _side_ticks(ax, X, Y, field, color, label, every=6, line=True):
+    """Short ticks on the ``field > 0.5`` side of its 0.5 contour (the existing side); the
+    dashed contour itself unless ``line`` is False (traced curves are drawn instead)."""
     from scipy.ndimage import gaussian_filter
 
     f = gaussian_filter(field.astype(float), 1.0)
@@ -69,9 +70,12 @@ def _side_ticks(ax, X, Y, field, color, label, every=6):
     cs = ax.contour(X, Y, field.astype(float), levels=[0.5], colors=[color], linewidths=1.2,
                     linestyles="--")
     _tag_contour(cs, label)
+    paths = cs.allsegs[0]
+    if not line:
+        cs.remove()
     segs = []
     nx, ny = len(x), len(y)
-    for path in cs.allsegs[0]:
+    for path in paths:
         for px, py in path[::every]:
             # gradient in axes-fraction units, sampled at the nearest grid node
             i = int(np.clip(round((py - y[0]) / sy * (ny - 1)), 0, ny - 1))
@@ -89,14 +93,19 @@ def _side_ticks(ax, X, Y, field, color, label, every=6):
     return cs
 
 
+#: Traced boundary kinds drawn like the existence boundary (the rest like stability's).
+_EXISTENCE_KINDS = ("existence", "grazing", "viability", "xm_zero", "sticking")
+
+
 def _draw_curves(ax, curves, labels):
-    styles = {"existence": dict(color=EXIST, ls="--", lw=1.2),
-              "stability": dict(color=FILL_EDGE, ls="-", lw=1.4)}
+    """Traced boundaries: existence-type kinds dashed black, the others solid blue."""
     for c in curves:
         kind = str(getattr(c, "kind", "boundary"))
-        st = styles.get(kind.split(":")[0], dict(color="0.3", ls="-.", lw=1.2))
-        lab = labels.get(kind, f"{kind} boundary (traced)")
-        ax.plot(np.asarray(c.x), np.asarray(c.y), gid=lab, **st)
+        base = kind.split(":")[0]
+        ex = base.startswith(_EXISTENCE_KINDS)
+        st = dict(color=EXIST, ls="--", lw=1.2) if ex else dict(color=FILL_EDGE, ls="-", lw=1.4)
+        lab = labels.get(base, f"{base.replace('_', ' ')} boundary (traced)")
+        ax.plot(np.asarray(c.x, float), np.asarray(c.y, float), gid=lab, **st)
 
 
 def _panel(ax, X, Y, ex, st, *, curves=None, mark=None, title=None):
@@ -114,6 +123,9 @@ def _panel(ax, X, Y, ex, st, *, curves=None, mark=None, title=None):
                                     linewidths=1.2), lab_st)
     else:
         _draw_curves(ax, curves, {"existence": lab_ex, "stability": lab_st})
+        if ex.any() and not ex.all():
+            # the existing side still comes from the grid
+            _side_ticks(ax, X, Y, ex, EXIST, lab_ex, line=False)
     if mark is not None:
         xl, yl = (X[0, 0], X[0, -1]), (Y[0, 0], Y[-1, 0])
         if xl[0] <= mark[0] <= xl[1] and yl[0] <= mark[1] <= yl[1]:
