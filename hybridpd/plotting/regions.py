@@ -228,7 +228,7 @@ def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, ti
             ax.set_ylabel(_axis_label(m.y_name))
             axes.append(ax)
     _legend_from_gids(fig, axes)
-    head = title or f"{rm.case} PD"
+    head = title or f"{_CASE.get(rm.case, rm.case)} PD"
     if mark is not None and not any(a.get_gid() == PAPER_GAINS for ax in axes
                                     for a in ax.get_children()):
         head += f" (the point $k_p$ = {mark[0]:g}, $k_v$ = {mark[1]:g} lies outside the box)"
