@@ -1341,7 +1341,7 @@ class RobustnessComparison:
         return "\n".join(lines)
 
 
-def robustness_comparison(*, mu=0.1, gamma=0.75, x10=1.0, n=1, omega=5.0, e=0.5,
+def robustness_comparison(*, mu=0.1, gamma=0.75, x10=1.0, m2=1.0, n=1, omega=5.0, e=0.5,
                           e_range=(0.3, 0.7), mu_range=(0.08, 0.12), x10_tol=0.1,
                           kp_range=(0.1, 100.0), kv_range=(0.1, 100.0), grid=(48, 48),
                           uncertainty_grid=(5, 5), cases=("collocated", "noncollocated"),
@@ -1364,7 +1364,7 @@ def robustness_comparison(*, mu=0.1, gamma=0.75, x10=1.0, n=1, omega=5.0, e=0.5,
     >>> [r.case for r in cmp.rows]
     ['collocated', 'noncollocated']
     """
-    common = dict(mu=mu, e=e, omega=omega, gamma=gamma, x10=x10, n=n, kp_range=kp_range,
+    common = dict(mu=mu, e=e, omega=omega, gamma=gamma, x10=x10, m2=m2, n=n, kp_range=kp_range,
                   kv_range=kv_range, grid=grid, **design_kwargs)
     rows = []
     for case in cases:
@@ -1379,8 +1379,9 @@ def robustness_comparison(*, mu=0.1, gamma=0.75, x10=1.0, n=1, omega=5.0, e=0.5,
         nom_box = None
         if nom is not None:
             nom_box = robustness(case, nom.kp, nom.kv, nom.xm, mu=mu, e=e, omega=omega,
-                                 gamma=gamma, x10=x10, n=n, e_range=e_range, mu_range=mu_range,
-                                 uncertainty_grid=uncertainty_grid, x10_tol=x10_tol)
+                                 gamma=gamma, x10=x10, m2=m2, n=n, e_range=e_range,
+                                 mu_range=mu_range, uncertainty_grid=uncertainty_grid,
+                                 x10_tol=x10_tol)
         try:
             rob = design(case, e_range=e_range, mu_range=mu_range,
                          uncertainty_grid=uncertainty_grid, x10_tol=x10_tol, **common)
@@ -1394,7 +1395,7 @@ def robustness_comparison(*, mu=0.1, gamma=0.75, x10=1.0, n=1, omega=5.0, e=0.5,
                                   nominal=nom,
                                   nominal_gains_over_box=nom_box, robust=rob,
                                   robust_failure=failure))
-    settings = {"mu": mu, "gamma": gamma, "x10": x10, "n": n, "omega": omega, "e": e,
+    settings = {"mu": mu, "gamma": gamma, "x10": x10, "m2": m2, "n": n, "omega": omega, "e": e,
                 "e_range": list(e_range), "mu_range": list(mu_range), "x10_tol": x10_tol,
                 "kp_range": list(kp_range), "kv_range": list(kv_range), "grid": list(grid),
                 "uncertainty_grid": list(uncertainty_grid)}

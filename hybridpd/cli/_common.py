@@ -80,7 +80,7 @@ def unknown_flag_message(flag: str, known) -> str:
     return f"unknown option {flag}{hint}"
 
 
-def add_plant(p, *, xm=True, gamma=False, required=True):
+def add_plant(p, *, xm=True, gamma=False, required=True, L_required=True):
     p.add_argument("--case", required=required, type=case_type, metavar="CASE",
                    help="collocated (the PD loop measures the secondary mass x2, the one it "
                         "pushes) or noncollocated (it measures the primary mass x1 through "
@@ -95,7 +95,7 @@ def add_plant(p, *, xm=True, gamma=False, required=True):
         p.add_argument("--x10", type=float, default=1.0,
                        help="amplitude of the primary mass's desired motion (> 0)")
     else:
-        p.add_argument("--L", type=float, required=True, help="half clearance (> 0)")
+        p.add_argument("--L", type=float, required=L_required, help="half clearance (> 0)")
     if xm:
         p.add_argument("--xm", type=float, required=True, help="reference amplitude (>= 0)")
 
@@ -128,6 +128,13 @@ def add_sweep(p):
                    help="worker count (default: all cores)")
     p.add_argument("--out", default=None, help="write the result to this file")
     p.add_argument("--json", action="store_true", help=JSON_HELP)
+    add_quiet(p)
+
+
+def add_quiet(p):
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress on stderr (by default a bar on a terminal, otherwise a "
+                        "line every ~10 s)")
 
 
 def progress_wanted(args) -> bool:

@@ -25,10 +25,11 @@ def register(sub):
                    help="proportional gain kp (> 0)")
     p.add_argument("--kv", type=float, required=True,
                    help="derivative gain kv (> 0)")
-    p.add_argument("--x1", type=float, nargs=3, required=True, metavar=("MIN", "MAX", "NUM"),
-                   help="grid axis: NUM points from MIN to MAX")
-    p.add_argument("--y1", type=float, nargs=3, required=True, metavar=("MIN", "MAX", "NUM"),
-                   help="grid axis: NUM points from MIN to MAX")
+    p.add_argument("--x1", type=float, nargs=3, default=None, metavar=("MIN", "MAX", "NUM"),
+                   help="slice window in x1 (default: the reproduction's, -3 x10 .. 5 x10, "
+                        "41 points)")
+    p.add_argument("--y1", type=float, nargs=3, default=None, metavar=("MIN", "MAX", "NUM"),
+                   help="slice window in y1 (default -2 x10 .. 10 x10, 41 points)")
     p.add_argument("--iterations", type=int, default=1500,
                    help="iterations of the impact map (two impacts each)")
     p.add_argument("--no-early-exit", action="store_true",
@@ -52,6 +53,13 @@ def run(args) -> int:
                           args.omega, x10=x10, n=args.n, case=args.case)
     if not orb.exists:
         raise ValueError(f"no symmetric orbit at these parameters: {orb.reason}")
+    from hybridpd.reproduce.settings import Settings
+
+    win = Settings.__dataclass_fields__["basin_window"].default
+    if args.x1 is None:
+        args.x1 = [win[0] * x10, win[1] * x10, 41]
+    if args.y1 is None:
+        args.y1 = [win[2] * x10, win[3] * x10, 41]
     for nm in ("x1", "y1"):
         num = getattr(args, nm)[2]
         if num != int(num):

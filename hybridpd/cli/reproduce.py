@@ -1,36 +1,96 @@
 """``hybridpd reproduce``."""
 from __future__ import annotations
 
+import json
 import sys
 
-from hybridpd.cli._common import command
+from hybridpd.cli._common import add_quiet, command
 
-DESCRIPTION = ("Reproduces the paper's region maps (Figs 4-5) and basins (Figs 6-7) "
-               "and checks each of its conclusions with numbers, writing the figures,"
-               " the data files and a summary into the output directory.")
+DESCRIPTION = ("Reproduces the paper's figures (Fig. 3 phase plane, Figs 4-5 region "
+               "maps, Figs 6-7 basins) under two conventions for the unstated secondary "
+               "mass m2, runs the convention study (where the paper's orbits exist and are "
+               "stable as m2 varies) and the mu and gamma studies, and checks each of the "
+               "paper's conclusions with numbers, writing figures, data, summary.md and "
+               "summary.json into the output directory.")
 
 
 def register(sub):
-    p = command(sub, "reproduce", help="reproduce the paper's Figs 4-7 and check its conclusions",
+    p = command(sub, "reproduce", help="reproduce the paper's Figs 3-7 and check its conclusions",
                 description=DESCRIPTION,
-                example=("hybridpd reproduce --out paper-figures"))
+                example="hybridpd reproduce --out paper-figures --json")
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--quick", action="store_true", help="coarse grids (default; ~1-2 min)")
-    g.add_argument("--full", action="store_true", help="200 x 200 grids")
+    g.add_argument("--quick", action="store_true", help="coarse grids (default; ~1 min)")
+    g.add_argument("--full", action="store_true", help="200 x 200 grids (a few minutes)")
     p.add_argument("--out", default="reproduce-out", help="output directory")
+    p.add_argument("--m2", nargs="+", default=None, metavar="M2",
+                   help="secondary-mass conventions (> 0, or 'auto' for the study's choice); "
+                        "default: 1 auto")
+    p.add_argument("--x10", type=float, default=None,
+                   help="primary-mass amplitude (> 0), default 1; L = 0.75 x10")
+    p.add_argument("--basin-window", type=float, nargs=4, default=None,
+                   metavar=("X1MIN", "X1MAX", "Y1MIN", "Y1MAX"),
+                   help="basin slice window in units of x10 (default -3 5 -2 10)")
+    p.add_argument("--m2-range", type=float, nargs=2, default=None, metavar=("LO", "HI"),
+                   help="range of the convention study (default 0.1 1000)")
     p.add_argument("--executor", default="processes", choices=["serial", "processes", "dask"],
                    help="where the grid points run")
     p.add_argument("--workers", type=int, default=None,
                    help="worker count (default: all cores)")
+    p.add_argument("--json", action="store_true", help="print summary.json on stdout")
+    add_quiet(p)
     p.set_defaults(func=run)
 
 
-def run(args) -> int:
-    from hybridpd.reproduce import reproduce
+def _m2_values(values):
+    from hybridpd.reproduce import AUTO
 
+    out = []
+    for v in values:
+        if v == AUTO:
+            out.append(AUTO)
+            continue
+        try:
+            out.append(float(v))
+        except ValueError:
+            raise ValueError(f"--m2 values must be numbers > 0 or 'auto', got {v!r}") from None
+    return tuple(out)
+
+
+def run(args) -> int:
+    from hybridpd.reproduce import Settings, reproduce
+
+    kw = {}
+    if args.m2 is not None:
+        kw["m2"] = _m2_values(args.m2)
+    if args.x10 is not None:
+        kw["x10"] = args.x10
+    if args.basin_window is not None:
+        kw["basin_window"] = tuple(args.basin_window)
+    if args.m2_range is not None:
+        kw["m2_range"] = tuple(args.m2_range)
+    settings = Settings.full(**kw) if args.full else Settings.quick(**kw)
     path = reproduce(args.out, mode="full" if args.full else "quick", executor=args.executor,
-                     max_workers=args.workers, progress=sys.stderr.isatty(),
-                     log=lambda m: print(f"hybridpd reproduce: {m}", file=sys.stderr))
-    print(path.read_text())
-    print(f"(written to {path.parent})", file=sys.stderr)
+                     max_workers=args.workers, progress=not args.quiet,
+                     log=_log(args.quiet),
+                     settings=settings)
+    data = json.loads((path.parent / "summary.json").read_text())
+    if args.json:
+        print(json.dumps(data))
+        return 0
+    conv = ", ".join(f"m2 = {m:g}" for m in data["conventions"]["m2"])
+    print(f"conclusion  verdict       by convention ({conv})")
+    for c in data["conclusions"]:
+        by = ", ".join(c["by_convention"].values())
+        print(f"{c['id']:>10}  {c['verdict']:<12}  {by}")
+    ivs = data["m2_stable_intervals"]["noncollocated"]
+    print("non-collocated orbit at kp = 10, kv = 20 exists and is stable for m2 in: "
+          + "; ".join(f"e = {e}: " + (", ".join(f"[{a:.6g}, {b:.6g}]" for a, b in v) or "never")
+                      for e, v in ivs.items()))
+    print(f"written to {path.parent} (summary.md, summary.json, figures)")
     return 0
+
+
+def _log(quiet: bool):
+    if quiet:
+        return lambda m: None
+    return lambda m: print(f"hybridpd reproduce: {m}", file=sys.stderr, flush=True)

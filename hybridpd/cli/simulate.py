@@ -1,13 +1,20 @@
-"""``hybridpd simulate``: the impact pair from options, or any mechanical model file."""
+"""``hybridpd simulate``: the impact pair from options, or any mechanical model file.
+
+The plant and reference are given either as ``--L`` and ``--xm`` (clearance and reference
+amplitude) or as ``--gamma`` and ``--x10`` (``L = gamma x10``, and ``xm`` the amplitude that
+realises the symmetric orbit with primary-mass amplitude ``x10`` at these gains). Both may be
+given when they agree.
+"""
 from __future__ import annotations
 
 import json
+import math
 
 from hybridpd.cli._common import JSON_HELP, UsageError, case_type, command
 
 # the pair options: required without --model, forbidden with it
 _PAIR = ("case", "mu", "m2", "omega", "L", "gamma", "x10", "xm", "e", "kp", "kv", "x0")
-_REQUIRED = ("case", "mu", "omega", "xm", "e", "kp", "kv", "x0")
+_REQUIRED = ("case", "mu", "omega", "e", "kp", "kv", "x0")
 
 DESCRIPTION = ("Simulates the impact pair under PD control (or, with --model, any "
                "mechanical model file) from an initial state: exact flows between "
@@ -35,9 +42,11 @@ def register(sub):
                    help="half clearance (> 0); or give --gamma (and --x10)")
     p.add_argument("--gamma", type=float, default=None, help="clearance ratio L / x10 (> 0)")
     p.add_argument("--x10", type=float, default=None,
-                   help="amplitude of the primary mass's desired motion, with --gamma "
-                        "(> 0; default 1)")
-    p.add_argument("--xm", type=float, default=None, help="reference amplitude (>= 0)")
+                   help="amplitude of the primary mass's desired motion (> 0; default 1 "
+                        "with --gamma): xm is then the amplitude realising the symmetric orbit")
+    p.add_argument("--n", type=int, default=1, help="orbit order for --x10 (odd)")
+    p.add_argument("--xm", type=float, default=None,
+                   help="reference amplitude (>= 0); or give --x10 (with --gamma or --L)")
     p.add_argument("--e", type=float, default=None, help="restitution coefficient in [0, 1]")
     p.add_argument("--kp", type=float, default=None, help="proportional gain kp (> 0)")
     p.add_argument("--kv", type=float, default=None, help="derivative gain kv (> 0)")
@@ -51,6 +60,46 @@ def register(sub):
     p.set_defaults(func=run)
 
 
+def _agree(a, b, rtol=1e-6):
+    return math.isclose(a, b, rel_tol=rtol, abs_tol=1e-12)
+
+
+def geometry(args):
+    """``(L, xm)`` from ``--L/--xm`` or ``--gamma/--x10`` (see the module docstring)."""
+    from hybridpd.analysis.orbits import symmetric_orbit
+    from hybridpd.model import ImpactPair, PDGains, check_positive
+
+    relative = args.gamma is not None or args.x10 is not None
+    if args.L is None and args.gamma is None:
+        raise ValueError("give the clearance: --L, or --gamma with --x10")
+    if args.xm is None and not relative:
+        raise ValueError("give the reference: --xm, or --x10 (with --gamma or --L)")
+    L = None if args.L is None else check_positive("L", args.L)
+    x10 = None
+    if relative:
+        x10 = check_positive("x10", 1.0 if args.x10 is None else args.x10)
+    if args.gamma is not None:
+        Lg = check_positive("gamma", args.gamma) * x10
+        if L is not None and not _agree(L, Lg):
+            raise ValueError(f"--L {L:g} disagrees with --gamma {args.gamma:g} x --x10 "
+                             f"{x10:g} = {Lg:g}; give one pair or consistent values")
+        L = Lg
+    xm = args.xm
+    if xm is not None and xm < 0:
+        raise ValueError(f"xm must be >= 0, got {xm!r}")
+    if relative:
+        orb = symmetric_orbit(ImpactPair(args.mu, args.e, L, args.m2),
+                              PDGains(args.kp, args.kv), args.omega, x10=x10, n=args.n,
+                              case=args.case)
+        if not math.isfinite(orb.xm) or orb.xm <= 0:
+            raise ValueError(f"--x10 {x10:g}: no reference amplitude realises it ({orb.reason})")
+        if xm is not None and not _agree(xm, orb.xm):
+            raise ValueError(f"--xm {xm:g} disagrees with the amplitude {orb.xm:.10g} that "
+                             f"realises --x10 {x10:g}; give one pair or consistent values")
+        xm = orb.xm
+    return L, xm
+
+
 def run(args) -> int:
     if args.model is not None:
         given = [f"--{k.replace('_', '-')}" for k in _PAIR if getattr(args, k) is not None]
@@ -58,9 +107,9 @@ def run(args) -> int:
             raise UsageError(f"--model: cannot be combined with the impact-pair options "
                              f"({', '.join(given)})")
         return _run_model(args)
+    if args.m2 is None:
+        args.m2 = 1.0
     missing = [f"--{k}" for k in _REQUIRED if getattr(args, k) is None]
-    if args.L is None and args.gamma is None:
-        missing.append("--L (or --gamma)")
     if missing:
         raise UsageError(f"the following arguments are required: {', '.join(missing)} "
                          "(or give --model FILE.toml)")
@@ -93,17 +142,19 @@ def _run_pair(args) -> int:
     from hybridpd.model import ImpactPair, PDGains, Reference
     from hybridpd.pair.impactpair import ControlledImpactPair
 
-    m2 = 1.0 if args.m2 is None else args.m2
-    sysm = ControlledImpactPair(ImpactPair(args.mu, args.e, _half_clearance(args), m2),
-                                PDGains(args.kp, args.kv), Reference(args.xm, args.omega),
+    L, xm = geometry(args)
+    sysm = ControlledImpactPair(ImpactPair(args.mu, args.e, L, args.m2),
+                                PDGains(args.kp, args.kv), Reference(xm, args.omega),
                                 args.case)
     traj = sysm.simulate(args.x0, (0.0, args.t_end), max_impacts=args.max_impacts)
     d = traj.to_dict()
+    d["L"], d["xm"] = L, xm
     if args.json:
         print(json.dumps(d))
         return 0
-    print(f"{args.case} impact pair, t in [0, {traj.t_final:g}]: {traj.n_impacts} impacts "
-          f"({int((traj.walls > 0).sum())} on wall +L, {int((traj.walls < 0).sum())} on -L), "
+    print(f"{args.case} impact pair (L = {L:g}, xm = {xm:.10g}), t in [0, {traj.t_final:g}]: "
+          f"{traj.n_impacts} impacts ({int((traj.walls > 0).sum())} on wall +L, "
+          f"{int((traj.walls < 0).sum())} on -L), "
           f"{len(traj.sticking)} sticking interval(s); stopped: {d['termination']}")
     for imp in d["impacts"][:10]:
         print(f"  t = {imp['t']:.10f}  wall {imp['wall']:+d}  pre = "
@@ -114,18 +165,3 @@ def _run_pair(args) -> int:
         print(f"  sticking on [{a:.10f}, {b:.10f}]")
     return 0
 
-
-def _half_clearance(args) -> float:
-    """``--L``, or ``--gamma`` times ``--x10`` (default 1); both only if they agree."""
-    from hybridpd.model import check_positive
-
-    x10 = 1.0 if args.x10 is None else check_positive("x10", args.x10)
-    if args.gamma is None:
-        if args.x10 is not None:
-            raise UsageError("--x10 is only used with --gamma (L = gamma x10)")
-        return check_positive("L", args.L)
-    L = check_positive("gamma", args.gamma) * x10
-    if args.L is not None and abs(check_positive("L", args.L) - L) > 1e-12 * L:
-        raise UsageError(f"--L {args.L:g} and --gamma {args.gamma:g} --x10 {x10:g} disagree "
-                         f"(gamma x10 = {L:g}); give one or the other")
-    return L

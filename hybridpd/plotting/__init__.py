@@ -8,10 +8,14 @@
 * :func:`plot_trajectory` — positions, gap and impacts against time, and the phase portrait.
 * :func:`plot_bifurcation` — a brute-force bifurcation diagram (iterates of the impact map
   against a parameter) with continued branches overlaid.
+* :func:`plot_region_panels` — Figs 4-5 with one panel per ``e``;
+  :func:`plot_orbit_phase` — Fig. 3, the secondary mass's phase plane on the orbit.
 """
 from hybridpd.plotting.basins import plot_basin
 from hybridpd.plotting.bifurcation import plot_bifurcation
-from hybridpd.plotting.regions import plot_regions
+from hybridpd.plotting.orbit import plot_orbit_phase
+from hybridpd.plotting.regions import plot_region_panels, plot_regions
 from hybridpd.plotting.trajectory import plot_trajectory
 
-__all__ = ["plot_basin", "plot_bifurcation", "plot_regions", "plot_trajectory"]
+__all__ = ["plot_basin", "plot_bifurcation", "plot_orbit_phase", "plot_region_panels",
+           "plot_regions", "plot_trajectory"]

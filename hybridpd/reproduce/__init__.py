@@ -1,0 +1,22 @@
+"""Reproduce the paper's results section (Figs 3-7) and settle its conclusions with numbers.
+
+``hybridpd reproduce [--quick | --full] [--out DIR] [--m2 ...] [--x10 X] [--json]`` runs
+:func:`reproduce`:
+
+* **The convention study** (:mod:`~hybridpd.reproduce.study`): only ``kp/m2`` and ``kv/m2``
+  matter and the paper gives no ``m2``. The intervals of ``m2`` where the orbits at the
+  paper's gains exist and are stable (end points are located bifurcation points), and every
+  conclusion's verdict against ``m2`` over ``[0.1, 1000]``.
+* **Figs 3-7 under each convention** (default ``m2 = 1`` and the ``m2`` chosen by the
+  documented rule of :func:`~hybridpd.reproduce.study.choose_m2`), gain boxes scaled by ``m2``.
+* **The conclusions** (:mod:`~hybridpd.reproduce.conclusions`) on existence alone, stability
+  alone and both; **the mu and gamma studies** (:mod:`~hybridpd.reproduce.params`).
+* ``summary.json`` (schema :data:`~hybridpd.reproduce.summary.SCHEMA`) and ``summary.md``.
+
+Every open convention is a field of :class:`Settings`.
+"""
+from hybridpd.reproduce.pipeline import reproduce, run_convention
+from hybridpd.reproduce.settings import AUTO, PAPER, Settings
+from hybridpd.reproduce.summary import SCHEMA, validate
+
+__all__ = ["AUTO", "PAPER", "SCHEMA", "Settings", "reproduce", "run_convention", "validate"]

@@ -1,0 +1,439 @@
+"""The reproduction pipeline: both ``m2`` conventions, the studies, the figures, the summary.
+
+Layout of the output directory::
+
+    summary.md, summary.json          verdicts and every number behind them
+    m2_study.png, mu_study.png, gamma_study.png
+    m2=<value>/                       one directory per convention:
+        fig3_orbit.png, fig4_regions_collocated.png, fig5_regions_noncollocated.png,
+        fig6_basins_collocated.png, fig7_basins_noncollocated.png,
+        regions_*.npz, basin_*.npz, robustness.json
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from hybridpd.model import ImpactPair, PDGains
+from hybridpd.reproduce import conclusions as C
+from hybridpd.reproduce.settings import AUTO, PAPER, Settings
+from hybridpd.reproduce.study import box_fractions, choose_m2, stable_intervals
+
+__all__ = ["ConventionRun", "M2Study", "m2_study", "reproduce", "run_convention"]
+
+CASES = ("collocated", "noncollocated")
+
+
+@dataclass
+class ConventionRun:
+    """Everything computed under one convention ``(m2, x10)``.
+
+    Attributes
+    ----------
+    m2, x10, gamma, L : float
+    scale : float
+        Factor applied to the paper's gain box (``= m2``).
+    maps : dict
+        ``{case: RegionMap}`` on the scaled box, plus ``"zoom"`` (non-collocated).
+    shares : dict
+        ``{case: {"exists" | "stability" | "both": [share per e]}}`` on the scaled box.
+    orbits : dict
+        ``{(case, e): SymmetricOrbitResult}`` at the paper's gains.
+    basins : dict
+        ``{(case, e): BasinResult or None}`` (None: no orbit, or not stable).
+    comparison : RobustnessComparison
+    checks : dict
+        ``{1..5: result of conclusions.check_*}``.
+    directory : Path
+    timings : dict
+    """
+
+    m2: float
+    x10: float
+    gamma: float
+    L: float
+    scale: float
+    maps: dict = field(default_factory=dict)
+    shares: dict = field(default_factory=dict)
+    orbits: dict = field(default_factory=dict)
+    basins: dict = field(default_factory=dict)
+    comparison: object = None
+    checks: dict = field(default_factory=dict)
+    directory: Path = None
+    timings: dict = field(default_factory=dict)
+
+
+@dataclass
+class M2Study:
+    """The convention study (see :mod:`hybridpd.reproduce.study`).
+
+    Attributes
+    ----------
+    intervals : dict
+        ``{case: {e: [StableInterval]}}`` at the paper's gains.
+    chosen_m2 : float or None
+        By :func:`~hybridpd.reproduce.study.choose_m2`.
+    grid : ndarray
+        ``m2`` values of the verdicts.
+    verdicts : dict
+        ``{id: [verdict per grid value]}`` (conclusion 5 on :attr:`robust_grid`).
+    evidence : dict
+        ``{id: [check result per grid value]}``.
+    robust_grid : ndarray
+    rho : dict
+        ``{(case, e): spectral radius along a fine grid}`` for the figure, with ``rho_grid``.
+    """
+
+    intervals: dict
+    chosen_m2: float | None
+    grid: np.ndarray
+    verdicts: dict
+    evidence: dict
+    robust_grid: np.ndarray
+    rho_grid: np.ndarray
+    rho: dict
+
+
+def _say(log):
+    return log or (lambda *_: None)
+
+
+def m2_study(settings: Settings, *, log=None) -> M2Study:
+    """Stable ``m2`` intervals at the paper's gains and every verdict against ``m2``.
+
+    The verdicts use the paper's gain box **as printed** (``kp, kv`` in ``[0.1, max]``, not
+    scaled), so they show what Figs 4-7 would say for each ``m2``.
+    """
+    from hybridpd.analysis.design import robustness_comparison
+    from hybridpd.analysis.orbits import symmetric_orbits
+
+    say = _say(log)
+    P = PAPER
+    common = dict(mu=P["mu"], L=settings.L, omega=P["omega"], x10=settings.x10, n=P["n"])
+    intervals = {case: {e: stable_intervals(case, e, kp=P["kp"], kv=P["kv"],
+                                            m2_range=settings.m2_range, num=settings.m2_grid,
+                                            **common)
+                        for e in P["e"]} for case in CASES}
+    say("m2 study: stable intervals located")
+    chosen = choose_m2(intervals["noncollocated"])
+    lo, hi = settings.m2_range
+    rho_grid = np.logspace(math.log10(lo), math.log10(hi), 400)
+    rho = {}
+    for case in CASES:
+        for e in P["e"]:
+            r = symmetric_orbits(P["kp"], P["kv"], m2=rho_grid, e=e, case=case, **common)
+            rho[(case, e)] = np.where(r.exists, r.spectral_radius, np.nan)
+    grid = np.logspace(math.log10(lo), math.log10(hi), settings.m2_verdicts)
+    g = settings.verdict_grid
+    kp_axis = np.linspace(0.1, settings.gains[0], g)
+    kv_axis = np.linspace(0.1, settings.gains[1], g)
+    verdicts = {k: [] for k in range(1, 6)}
+    evidence = {k: [] for k in range(1, 6)}
+    for m2 in grid:
+        sh = {case: box_fractions(case, kp_axis, kv_axis, e=P["e"], m2=m2, **common)
+              for case in CASES}
+        for k, chk in ((1, C.check_1(sh["collocated"], sh["noncollocated"])),
+                       (2, C.check_2(sh["collocated"], sh["noncollocated"])),
+                       (3, C.check_3(sh["collocated"]))):
+            verdicts[k].append(chk["verdict"])
+            evidence[k].append(chk)
+        st = {case: [bool(symmetric_orbits(P["kp"], P["kv"], m2=m2, e=e, case=case,
+                                           **common).stable) for e in P["e"]]
+              for case in CASES}
+        v4 = C.check_4_necessary(st["collocated"], st["noncollocated"])
+        verdicts[4].append(v4)
+        evidence[4].append({"verdict": v4, "stable": st})
+    say(f"m2 study: verdicts on {len(grid)} values of m2")
+    robust_grid = np.logspace(math.log10(lo), math.log10(hi), settings.m2_robust)
+    for m2 in robust_grid:
+        cmp = robustness_comparison(mu=P["mu"], gamma=P["gamma"], x10=settings.x10, m2=m2,
+                                    n=P["n"], omega=P["omega"], e=0.5,
+                                    grid=settings.m2_robust_grid, uncertainty_grid=(3, 3),
+                                    n_starts=1, maxiter=40)
+        chk = C.check_5(cmp)
+        verdicts[5].append(chk["verdict"])
+        evidence[5].append(chk)
+    say(f"m2 study: conclusion 5 on {len(robust_grid)} values of m2")
+    return M2Study(intervals, chosen, grid, verdicts, evidence, robust_grid, rho_grid, rho)
+
+
+def _basin_step(orbit, settings: Settings, *, executor, max_workers, progress):
+    """Attractor-labelled basin slice of the symmetric orbit (an ``AttractorBasin``).
+
+    The window starts at the settings' window and is extended while the symmetric orbit's
+    basin reaches its edge (at most ``settings.basin_extensions`` times). Returns None when
+    the orbit does not exist or is not stable (its basin is empty).
+    """
+    from hybridpd.sweeps.basins import ImpactMapper, attractor_basin
+
+    if not orbit.exists or not orbit.stable:
+        return None
+    x10 = settings.x10
+    w = settings.basin_window
+    nx, ny = settings.basin
+    mapper = ImpactMapper.from_orbit(orbit, n_iter=settings.iterations)
+    return attractor_basin(mapper, (w[0] * x10, w[1] * x10, nx), (w[2] * x10, w[3] * x10, ny),
+                           extend=settings.basin_extensions > 0,
+                           max_extensions=max(settings.basin_extensions, 1),
+                           executor=executor, max_workers=max_workers, progress=progress)
+
+
+def run_convention(m2, settings: Settings, out, *, executor="processes", max_workers=None,
+                   progress=False, log=None, tick=None, figure_hook=None) -> ConventionRun:
+    """Figs 3-7, their data and the conclusions' checks under one ``m2`` (see module doc).
+
+    ``figure_hook(path, fig)``, if given, sees every figure before it is saved.
+    """
+    from hybridpd.analysis.design import robustness_comparison
+    from hybridpd.analysis.orbits import symmetric_orbit
+    from hybridpd.sweeps.regions import region_map
+
+    say = _say(log)
+    tick = tick or say
+    P = PAPER
+    run = ConventionRun(m2=float(m2), x10=settings.x10, gamma=P["gamma"], L=settings.L,
+                        scale=float(m2))
+    d = Path(out) / f"m2={m2:g}"
+    d.mkdir(parents=True, exist_ok=True)
+    run.directory = d
+    common = dict(mu=P["mu"], omega=P["omega"], L=settings.L, x10=settings.x10, m2=m2,
+                  n=P["n"], e=P["e"])
+    s = run.scale
+    kpm, kvm, num = settings.gains
+    for case in CASES:
+        t0 = time.perf_counter()
+        rm = region_map(case, x=("kp", 0.1 * s, kpm * s, num), y=("kv", 0.1 * s, kvm * s, num),
+                        progress=progress, **common)
+        rm.save(d / f"regions_{case}.npz")
+        run.maps[case] = rm
+        run.shares[case] = box_fractions(case, rm.x, rm.y, **{k: v for k, v in common.items()})
+        run.timings[f"regions {case}"] = time.perf_counter() - t0
+        tick(f"m2 = {m2:g}: regions {case}")
+    zk, zv, zn = settings.zoom
+    run.maps["zoom"] = region_map("noncollocated", x=("kp", 0.1 * s, zk * s, zn),
+                                  y=("kv", 0.1 * s, zv * s, zn), progress=progress, **common)
+    run.maps["zoom"].save(d / "regions_noncollocated_zoom.npz")
+    for case in CASES:
+        for e in P["e"]:
+            run.orbits[(case, e)] = symmetric_orbit(
+                ImpactPair(P["mu"], e, settings.L, m2), PDGains(P["kp"], P["kv"]), P["omega"],
+                x10=settings.x10, n=P["n"], case=case)
+    for case in CASES:
+        t0 = time.perf_counter()
+        for e in P["e"]:
+            b = _basin_step(run.orbits[(case, e)], settings, executor=executor,
+                            max_workers=max_workers, progress=progress)
+            run.basins[(case, e)] = b
+            if b is not None:
+                b.save(d / f"basin_{case}_e{e:g}.npz")
+        run.timings[f"basins {case}"] = time.perf_counter() - t0
+        tick(f"m2 = {m2:g}: basins {case}")
+    t0 = time.perf_counter()
+    run.comparison = robustness_comparison(
+        mu=P["mu"], gamma=P["gamma"], x10=settings.x10, m2=m2, n=P["n"], omega=P["omega"],
+        e=0.5, grid=settings.comparison_grid, uncertainty_grid=settings.uncertainty_grid,
+        n_starts=settings.design_search[0], maxiter=settings.design_search[1],
+        kp_range=(0.1 * s, 100.0 * s),
+        kv_range=(0.1 * s, 100.0 * s))
+    (d / "robustness.json").write_text(json.dumps([r.to_dict() for r in run.comparison.rows],
+                                                  indent=1))
+    run.timings["robustness comparison"] = time.perf_counter() - t0
+    tick(f"m2 = {m2:g}: robustness comparison")
+    col, non = run.shares["collocated"], run.shares["noncollocated"]
+    # areas, not fractions: the windows may have been extended differently
+    meas = lambda case: [None if run.basins[(case, e)] is None
+                         else run.basins[(case, e)].measure(0).area for e in P["e"]]
+    run.checks = {1: C.check_1(col, non), 2: C.check_2(col, non), 3: C.check_3(col),
+                  4: C.check_4(meas("collocated"), meas("noncollocated")),
+                  5: C.check_5(run.comparison)}
+    t0 = time.perf_counter()
+    _figures(run, settings, figure_hook)
+    run.timings["figures"] = time.perf_counter() - t0
+    tick(f"m2 = {m2:g}: figures")
+    return run
+
+
+def _params_text(run) -> dict:
+    return dict(mu=PAPER["mu"], gamma=run.gamma, omega=PAPER["omega"], n=PAPER["n"], m2=run.m2,
+                x10=run.x10)
+
+
+def _save(fig, path, hook, dpi=110):
+    if hook is not None:
+        hook(path, fig)
+    fig.savefig(path, dpi=dpi)
+
+
+def _figures(run: ConventionRun, settings: Settings, hook=None):
+    from hybridpd.plotting.basins import plot_basin
+    from hybridpd.plotting.orbit import plot_orbit_phase
+    from hybridpd.plotting.regions import plot_region_panels
+
+    d = run.directory
+    par = _params_text(run)
+    mark = (PAPER["kp"], PAPER["kv"])
+    fig = plot_region_panels(run.maps["collocated"], mark=mark, params=par,
+                             title="Fig. 4, collocated PD")
+    _save(fig, d / "fig4_regions_collocated.png", hook)
+    fig = plot_region_panels(run.maps["noncollocated"], zoom=run.maps["zoom"], mark=mark,
+                             params=par, title="Fig. 5, non-collocated PD")
+    _save(fig, d / "fig5_regions_noncollocated.png", hook)
+    fig = plot_orbit_phase([run.orbits[(c, e)] for c in CASES for e in PAPER["e"]], params=par)
+    _save(fig, d / "fig3_orbit.png", hook)
+    from matplotlib.figure import Figure
+
+    for case, name, label in (("collocated", "fig6_basins_collocated.png", "Fig. 6"),
+                              ("noncollocated", "fig7_basins_noncollocated.png", "Fig. 7")):
+        es = PAPER["e"]
+        fig = Figure(figsize=(5.4 * len(es), 5.2), layout="constrained")
+        for k, e in enumerate(es):
+            ax = fig.add_subplot(1, len(es), k + 1)
+            b, o = run.basins[(case, e)], run.orbits[(case, e)]
+            if b is None:
+                ax.set_axis_off()
+                why = (o.reason if not o.exists else
+                       f"orbit unstable (spectral radius {o.spectral_radius:.4g}):\n"
+                       "its basin is empty")
+                ax.text(0.5, 0.5, f"e = {e:g}\n{_wrap(why)}", ha="center", va="center",
+                        fontsize=9, transform=ax.transAxes)
+                continue
+            plot_basin(b, ax=ax, title=f"e = {e:g}: symmetric orbit {b.measure(0).percent}")
+        fig.suptitle(f"{label}, {case.replace('non', 'non-')} PD at $k_p$ = {PAPER['kp']:g}, $k_v$ = {PAPER['kv']:g}; "
+                     + _param_line(par), fontsize=10)
+        _save(fig, d / name, hook, dpi=100)
+
+
+def _wrap(text, width=44):
+    import textwrap
+
+    return "\n".join(textwrap.wrap(text, width))
+
+
+def _pct(f) -> str:
+    """A share in percent that never rounds to 0 % or 100 % when it is not exactly that."""
+    p = 100 * float(f)
+    s = f"{p:.1f}%"
+    if 0 < p < 0.05:
+        s = "<0.1%"
+    elif 99.95 <= p < 100:
+        s = ">99.9%"
+    return s
+
+
+def _param_line(par) -> str:
+    from hybridpd.plotting.regions import param_line
+
+    return param_line(par)
+
+
+def resolve_conventions(settings: Settings, study: M2Study | None) -> list:
+    """The ``m2`` values to run: the settings' list with ``"auto"`` replaced by the study's
+    choice (dropped, with a note, when no common interval exists)."""
+    out = []
+    for v in settings.m2:
+        if v == AUTO:
+            if study is not None and study.chosen_m2 is not None:
+                out.append(float(study.chosen_m2))
+        else:
+            out.append(float(v))
+    return list(dict.fromkeys(out))
+
+
+def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_workers=None,
+              progress=True, log=print, settings: Settings | None = None,
+              figure_hook=None) -> Path:
+    """Compute Figs 3-7 under every convention, the studies, ``summary.md`` and ``.json``.
+
+    Parameters
+    ----------
+    out : path
+        Output directory (created).
+    mode : {"quick", "full"}
+        :meth:`Settings.quick` (about a minute on 2 cores) or :meth:`Settings.full`.
+    executor : {"serial", "processes", "dask"}
+        For the basin sweeps (region maps are vectorised and run in-process).
+    max_workers : int, optional
+    progress : bool
+        Progress on stderr: the steps, and the points of the sweeps inside them (a bar on a
+        terminal, a line every ~10 s otherwise).
+    log : callable
+        Receives one-line status messages as the slow steps finish (default ``print``);
+        ``None`` for silence.
+    settings : Settings, optional
+        Conventions and grid sizes (overrides ``mode``).
+    figure_hook : callable, optional
+        ``figure_hook(path, fig)`` sees every figure before it is saved (e.g. for checks).
+
+    Returns
+    -------
+    Path
+        ``summary.md`` (``summary.json`` is beside it).
+    """
+    from hybridpd.reproduce.params import param_study
+    from hybridpd.reproduce.summary import write_summary
+
+    if mode not in ("quick", "full"):
+        raise ValueError(f"mode must be 'quick' or 'full', got {mode!r}")
+    if settings is None:
+        settings = Settings.quick() if mode == "quick" else Settings.full()
+    elif not isinstance(settings, Settings):
+        raise ValueError(f"settings must be a Settings, got {type(settings).__name__}")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    say = _say(log)
+    n_conv = len(settings.m2)
+    from hybridpd.sweeps.progress import Progress
+
+    # the steps; the sweeps inside a step report their own points
+    bar = Progress(3 + 6 * n_conv + 1, "reproduce", unit="step", enabled=bool(progress))
+    bar.__enter__()
+
+    def tick(msg):
+        say(msg)
+        bar.update(1)
+
+    t_start = time.perf_counter()
+    timings = {}
+    t0 = time.perf_counter()
+    study = m2_study(settings, log=say)
+    timings["m2 study"] = time.perf_counter() - t0
+    tick(f"m2 study: chosen m2 = {study.chosen_m2}")
+    conventions = resolve_conventions(settings, study)
+    if not conventions:
+        raise ValueError(f"m2: 'auto' found no m2 in {list(settings.m2_range)} where all "
+                         "non-collocated orbits are stable; give a value of m2 as well")
+    fixed = dict(mu=PAPER["mu"], gamma=PAPER["gamma"], x10=settings.x10,
+                 m2=conventions[0], omega=PAPER["omega"], n=PAPER["n"])
+    s = fixed["m2"]
+    kp_axis = np.linspace(0.1 * s, settings.gains[0] * s, settings.param_grid)
+    kv_axis = np.linspace(0.1 * s, settings.gains[1] * s, settings.param_grid)
+    studies = {}
+    for name, rng in (("mu", settings.mu_range), ("gamma", settings.gamma_range)):
+        t0 = time.perf_counter()
+        studies[name] = param_study(name, values_range=rng, points=settings.param_points,
+                                    kp_axis=kp_axis, kv_axis=kv_axis, e=PAPER["e"],
+                                    fixed=fixed, map_kp=PAPER["kp"] * s)
+        timings[f"{name} study"] = time.perf_counter() - t0
+        tick(f"{name} study")
+    runs = []
+    for m2 in conventions:
+        runs.append(run_convention(m2, settings, out, executor=executor,
+                                   max_workers=max_workers, progress=progress, log=say, tick=tick,
+                                   figure_hook=figure_hook))
+    from hybridpd.plotting.regions import plot_m2_study, plot_param_study
+
+    _save(plot_m2_study(study, m2_range=settings.m2_range, runs=[r.m2 for r in runs]),
+          out / "m2_study.png", figure_hook)
+    for name, ps in studies.items():
+        _save(plot_param_study(ps), out / f"{name}_study.png", figure_hook)
+    timings["total"] = time.perf_counter() - t_start
+    path = write_summary(out, settings=settings, mode=mode, study=study, studies=studies,
+                         runs=runs, timings=timings)
+    tick(f"summary written to {path}")
+    bar.close()
+    return path

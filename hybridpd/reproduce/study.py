@@ -1,0 +1,247 @@
+"""The convention study: how the paper's findings depend on the secondary mass ``m2``.
+
+The closed loop between impacts is ``y2' = xd'' + (kp/m2) err + (kv/m2) err'`` and the impact
+law involves ``mu`` only, so at fixed ``mu`` every result depends on ``(kp, kv, m2)`` through
+``kp/m2`` and ``kv/m2``. The paper gives no ``m2``. This module measures what that leaves open:
+
+* :func:`stable_intervals` — for fixed gains, the intervals of ``m2`` on which the symmetric
+  orbit exists and is stable. Their end points are bifurcation points of the orbit (a
+  multiplier crossing the unit circle, or a grazing that ends viability); each is bracketed on
+  a fine log grid of the vectorised closed form
+  (:func:`hybridpd.analysis.orbits.symmetric_orbits`) and then located by Brent's method on the
+  exact test function (``spectral radius - 1`` or the viability margin), and verified by
+  recomputing that test function at the located point.
+* :func:`choose_m2` — the documented rule for the second convention of a reproduction: the
+  geometric centre of the common interval of all non-collocated orbits.
+* :func:`box_fractions` — shares of a gain box where the orbit exists (alone), where its
+  candidate is stable (alone, viability ignored), and where both hold.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from hybridpd.analysis.orbits import REASONS, symmetric_orbits
+from hybridpd.model import Case, check_positive
+
+__all__ = ["EndPoint", "StableInterval", "box_fractions", "choose_m2", "stable_intervals"]
+
+_VERIFY_TOL = 1e-6
+
+
+@dataclass(frozen=True)
+class EndPoint:
+    """One end of an ``m2`` interval.
+
+    Attributes
+    ----------
+    m2 : float
+        Location.
+    kind : str
+        ``"stability"`` (a multiplier on the unit circle: spectral radius = 1),
+        ``"viability"`` (grazing: viability margin = 0), ``"existence"`` (another loss of
+        existence, located by bisection on the existence flag; see ``reason``) or ``"window"``
+        (the end of the studied range, not a bifurcation).
+    residual : float
+        The test function recomputed at ``m2`` (``rho - 1`` or the margin); NaN for
+        ``"existence"`` and ``"window"``.
+    verified : bool
+        ``|residual| <= 1e-6`` (``"window"``: True; ``"existence"``: the bracket is below
+        ``1e-6`` relative).
+    reason : str
+        For ``"existence"`` ends: why the orbit is lost beyond.
+    """
+
+    m2: float
+    kind: str
+    residual: float
+    verified: bool
+    reason: str = ""
+
+    def to_dict(self) -> dict:
+        return {"m2": self.m2, "kind": self.kind,
+                "residual": None if not math.isfinite(self.residual) else self.residual,
+                "verified": self.verified, "reason": self.reason}
+
+
+@dataclass(frozen=True)
+class StableInterval:
+    """An interval ``[lo.m2, hi.m2]`` of ``m2`` on which the orbit exists and is stable."""
+
+    lo: EndPoint
+    hi: EndPoint
+
+    def bounds(self) -> list:
+        return [self.lo.m2, self.hi.m2]
+
+    def to_dict(self) -> dict:
+        return {"lo": self.lo.to_dict(), "hi": self.hi.to_dict()}
+
+
+def _orbit_fn(case, kp, kv, params):
+    def at(m2, margin=False):
+        return symmetric_orbits(kp, kv, m2=m2, case=case, margin=margin, **params)
+    return at
+
+
+def _locate(at, a, b):
+    """End point between grid points ``a`` (stable side) and ``b`` (other side)."""
+    rb = at(b, margin=True)
+    ra = at(a, margin=True)
+    u = lambda m2: math.log(m2)
+    if bool(rb.exists):
+        f = lambda s: float(at(math.exp(s)).spectral_radius) - 1.0
+        kind = "stability"
+    elif int(rb.reason) == 3 and float(ra.viability_margin) > 0 > float(rb.viability_margin):
+        f = lambda s: float(at(math.exp(s), margin=True).viability_margin)
+        kind = "viability"
+    else:
+        return _bisect_existence(at, a, b, REASONS[int(rb.reason)])
+    s = brentq(f, u(a), u(b), xtol=1e-14, rtol=4 * np.finfo(float).eps, maxiter=200)
+    m2 = math.exp(s)
+    res = f(s)
+    if not math.isfinite(res):
+        return _bisect_existence(at, a, b, REASONS[int(rb.reason)])
+    return EndPoint(m2, kind, res, abs(res) <= _VERIFY_TOL)
+
+
+def _bisect_existence(at, a, b, reason):
+    # the existence flag is all we have here: bisect it (bounded: 80 halvings in log m2)
+    ua, ub = math.log(a), math.log(b)
+    for _ in range(80):
+        if abs(ub - ua) < 1e-12:
+            break
+        um = 0.5 * (ua + ub)
+        if bool(at(math.exp(um)).stable):
+            ua = um
+        else:
+            ub = um
+    return EndPoint(math.exp(0.5 * (ua + ub)), "existence", float("nan"),
+                    abs(ub - ua) < 1e-6, reason)
+
+
+def stable_intervals(case, e, *, kp, kv, mu, L, omega, x10=1.0, n=1, m2_range=(0.1, 1000.0),
+                     num=2001) -> list:
+    """Intervals of ``m2`` where the symmetric orbit exists and is stable, end points located.
+
+    Parameters
+    ----------
+    case : {"collocated", "noncollocated"}
+    e, kp, kv, mu, L, omega, x10, n
+        Fixed parameters of the orbit.
+    m2_range : (lo, hi)
+        Studied range (log axis).
+    num : int
+        Points of the bracketing grid ``logspace(lo, hi, num)``.
+
+    Returns
+    -------
+    list of StableInterval
+        In increasing order; ends at the range limits have kind ``"window"``.
+
+    Examples
+    --------
+    >>> iv = stable_intervals("noncollocated", 0.5, kp=10, kv=20, mu=0.1, L=0.75, omega=5.0)
+    >>> [(round(i.lo.m2, 2), i.lo.kind) for i in iv]
+    [(8.77, 'stability')]
+    """
+    case = Case.parse(case).value
+    lo, hi = (check_positive("m2_range", v) for v in m2_range)
+    if not lo < hi:
+        raise ValueError(f"m2_range must satisfy lo < hi, got {m2_range!r}")
+    if int(num) < 3:
+        raise ValueError(f"num must be >= 3, got {num!r}")
+    params = dict(mu=mu, e=e, L=L, omega=omega, x10=x10, n=n)
+    at = _orbit_fn(case, kp, kv, params)
+    m2 = np.logspace(math.log10(lo), math.log10(hi), int(num))
+    m2[0], m2[-1] = lo, hi
+    ok = at(m2).stable
+    out = []
+    k = 0
+    while k < len(m2):
+        if not ok[k]:
+            k += 1
+            continue
+        j = k
+        while j + 1 < len(m2) and ok[j + 1]:
+            j += 1
+        start = (EndPoint(lo, "window", float("nan"), True) if k == 0
+                 else _locate(at, m2[k], m2[k - 1]))
+        stop = (EndPoint(hi, "window", float("nan"), True) if j == len(m2) - 1
+                else _locate(at, m2[j], m2[j + 1]))
+        out.append(StableInterval(start, stop))
+        k = j + 1
+    return out
+
+
+def intersect(interval_lists) -> list:
+    """Common part of several lists of ``[lo, hi]`` intervals (as ``[lo, hi]`` pairs)."""
+    common = None
+    for ivs in interval_lists:
+        cur = [list(i.bounds()) if isinstance(i, StableInterval) else list(i) for i in ivs]
+        if common is None:
+            common = cur
+            continue
+        common = [[max(a[0], b[0]), min(a[1], b[1])] for a in common for b in cur
+                  if max(a[0], b[0]) < min(a[1], b[1])]
+    return common or []
+
+
+def choose_m2(noncollocated_intervals: dict) -> float | None:
+    """The second convention's ``m2``: geometric centre of the widest (in log) common interval.
+
+    ``noncollocated_intervals`` maps each ``e`` to its :func:`stable_intervals`. The centre is
+    rounded to 3 significant digits (readable figure titles) and kept only if still inside
+    the interval. Returns None when the orbits have no common interval.
+    """
+    common = intersect(noncollocated_intervals.values())
+    if not common:
+        return None
+    lo, hi = max(common, key=lambda iv: math.log(iv[1] / iv[0]))
+    centre = math.sqrt(lo * hi)
+    rounded = float(f"{centre:.3g}")
+    return rounded if lo < rounded < hi else centre
+
+
+def candidate_stability(case, kp, kv, *, mu, e, L, omega, m2, x10=1.0, n=1):
+    """Spectral radius of ``DP`` of the orbit candidate, viability ignored (NaN: no candidate).
+
+    "Stability alone": the multipliers of the solution of (13)-(14) with ``xm > 0``, whether
+    or not the flight between the impacts is viable.
+    """
+    from hybridpd.pair import symbolic
+
+    cand = symbolic.symmetric_orbit(kp=kp, kv=kv, m2=m2, mu=mu, e=e, L=L, w=omega, x10=x10,
+                                    n=n, case=Case.parse(case).value)
+    ok = ~np.asarray(cand.singular, bool) & (np.nan_to_num(cand.xm) > 0)
+    with np.errstate(all="ignore"):
+        DP = np.asarray(symbolic.orbit_jacobian(cand).DP)
+        good = ok & np.all(np.isfinite(DP), axis=(-2, -1))
+        rho = np.full(good.shape, np.nan)
+        if good.any():
+            rho[good] = np.max(np.abs(np.linalg.eigvals(DP[good])), axis=-1)
+    return rho
+
+
+def box_fractions(case, kp_axis, kv_axis, *, e, mu, L, omega, m2, x10=1.0, n=1) -> dict:
+    """Shares of a ``(kp, kv)`` grid in each region, one value per ``e``.
+
+    Returns
+    -------
+    dict
+        ``{"exists": (len(e),), "stability": (len(e),), "both": (len(e),)}``: existence
+        alone (solvable and viable), stability alone (the candidate's spectral radius < 1,
+        viability ignored) and both (the paper's shaded region).
+    """
+    es = np.atleast_1d(np.asarray(e, float))
+    E, KV, KP = np.meshgrid(es, np.asarray(kv_axis, float), np.asarray(kp_axis, float),
+                            indexing="ij")
+    r = symmetric_orbits(KP, KV, mu=mu, e=E, L=L, omega=omega, m2=m2, x10=x10, n=n, case=case)
+    rho = candidate_stability(case, KP, KV, mu=mu, e=E, L=L, omega=omega, m2=m2, x10=x10, n=n)
+    with np.errstate(invalid="ignore"):
+        st = np.nan_to_num(rho, nan=np.inf) < 1.0
+    mean = lambda a: a.mean(axis=(1, 2))
+    return {"exists": mean(r.exists), "stability": mean(st), "both": mean(r.stable)}
