@@ -71,7 +71,10 @@ def derive(case="collocated") -> dict:
 
 
 def _existence(case, kp, kv, m2, mu, e, L, w, x10, n):
-    f = hs._existence_numeric(case)
+    from hybridpd.model import Case
+    from hybridpd.pair.symbolic._numeric import kernel
+
+    f = kernel("existence", Case.parse(case).value)
     m00, m01, m10, m11, b0, b1 = (np.asarray(q, float) for q in
                                   f(kp, kv, m2, mu, e, L, w, x10, n))
     det = m00 * m11 - m01 * m10

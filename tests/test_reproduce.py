@@ -11,7 +11,7 @@ from _reproduce_run import SMALL, small_run
 from hybridpd.reproduce import PAPER, SCHEMA, Settings, validate
 from hybridpd.reproduce import conclusions as C
 from hybridpd.reproduce.study import box_fractions
-from hybridpd.sweeps.basins import load_basin
+from hybridpd.sweeps.basins import load_attractor_basin
 from hybridpd.sweeps.regions import load_region_map
 
 
@@ -43,8 +43,10 @@ def test_reproduce_small(run):
     from hybridpd.reproduce.pipeline import _pct
 
     assert _pct(rm.fraction("stable")[1]) in text   # the summary quotes the data files
-    b = load_basin(out / "m2=1" / "basin_collocated_e0.5.npz")
-    assert b.labels.shape == (5, 6) and np.isin(b.labels, range(6)).all()
+    ab = load_attractor_basin(out / "m2=1" / "basin_collocated_e0.5.npz")
+    b = ab.basin
+    assert b.labels.shape == ab.labels.shape == (5, 6) and np.isin(b.labels, range(6)).all()
+    assert ab.attractors[0].label == 0                 # the symmetric orbit
     assert _pct(b.converged_fraction) in text
 
 
@@ -87,7 +89,7 @@ def test_every_verdict_is_recomputed_from_the_data(run):
                        2: C.check_2(sh["collocated"], sh["noncollocated"]),
                        3: C.check_3(sh["collocated"])}[k]
             elif k == 4:
-                meas = {case: [load_basin(d / f"basin_{case}_e{e:g}.npz").converged_fraction
+                meas = {case: [load_attractor_basin(d / f"basin_{case}_e{e:g}.npz").measure(0).area
                                if (d / f"basin_{case}_e{e:g}.npz").exists() else None
                                for e in PAPER["e"]] for case in ("collocated", "noncollocated")}
                 chk = C.check_4(meas["collocated"], meas["noncollocated"])

@@ -75,7 +75,7 @@ def test_chosen_m2_gives_every_fig7_panel_a_nonempty_basin(intervals, e):
     orb = _orbit("noncollocated", e, m2)
     s = Settings.quick(basin=(9, 9))
     b = _basin_step(orb, s, executor="serial", max_workers=None, progress=False)
-    assert b is not None and b.converged_fraction > 0
+    assert b is not None and b.basin.converged_fraction > 0 and b.measure(0).count > 0
     # and the paper's m2 = 1 has none (unstable or no orbit)
     assert _basin_step(_orbit("noncollocated", e, 1.0), s, executor="serial",
                        max_workers=None, progress=False) is None
