@@ -40,7 +40,7 @@ def test_reproduce_small(run):
     assert text.count("**Verdict: ") == 5
     rm = load_region_map(out / "m2=1" / "regions_collocated.npz")
     assert rm.exists.shape == (3, 9, 9)
-    from hybridpd.reproduce.pipeline import _pct
+    from hybridpd._format import pct as _pct
 
     assert _pct(rm.fraction("stable")[1]) in text   # the summary quotes the data files
     ab = load_attractor_basin(out / "m2=1" / "basin_collocated_e0.5.npz")

@@ -11,7 +11,9 @@ multiplier crosses; Neimark-Sacker: two).
 * :func:`compare_with_mask` - distances between the curves and the mask's boundaries, both
   ways (how far is the farthest mask boundary from a curve, and the farthest curve point from
   a mask boundary);
-* :func:`side_status` - the status just on either side of every curve segment.
+* :func:`side_status` - the status just on either side of every curve segment;
+* :func:`stable_region_edges` - the parts of the curves that bound the exists-and-stable
+  region (what the region figures draw).
 """
 from __future__ import annotations
 
@@ -22,7 +24,8 @@ import numpy as np
 
 from hybridpd.analysis.orbits import symmetric_orbits
 
-__all__ = ["MaskComparison", "compare_with_mask", "region_status", "side_status"]
+__all__ = ["MaskComparison", "compare_with_mask", "region_status", "side_status",
+           "stable_region_edges"]
 
 
 def _status(plane, xv, yv):
@@ -165,4 +168,48 @@ def side_status(result, delta: float = 1e-4, skip: float = 1e-3):
             P = np.clip(mid + sgn * delta * nrm, 0.0, 1.0)
             sides.append(_status(plane, plane.x.from_unit(P[:, 0]), plane.y.from_unit(P[:, 1])))
         out.append((c.kind, sides[0], sides[1]))
+    return out
+
+
+def stable_region_edges(result, delta: float = 1e-4) -> list:
+    """The parts of the traced curves that bound the exists-and-stable region (grazing and
+    existence curves: the parts that bound the existence region).
+
+    A boundary curve of one test function need not bound the region where the orbit exists
+    *and* is stable: a Neimark-Sacker curve inside the unstable region, say, only changes the
+    number of unstable multipliers from 2 to 0... or from 3 to 1. Each curve point is kept
+    where the status (:func:`region_status`) is 0 (exists, stable) on exactly one side,
+    ``delta`` (unit coordinates) off the curve along its normal; elsewhere ``x`` and ``y`` are
+    NaN, so a plotted line breaks there. Curves with no such point are dropped.
+
+    Returns
+    -------
+    list of BoundaryCurve
+        Copies of ``result.curves`` with the non-bounding points set to NaN.
+    """
+    import dataclasses
+
+    plane = result.plane
+    out = []
+    for c in result.curves:
+        U = np.asarray(c.u, float)
+        if len(U) < 2:
+            continue
+        d = np.gradient(U, axis=0)
+        n = np.linalg.norm(d, axis=1)
+        n[n == 0] = 1.0
+        nrm = np.column_stack([-d[:, 1], d[:, 0]]) / n[:, None]
+        # existence-type curves bound the existence region (the figures mark its side too)
+        level = -1 if c.kind in ("grazing", "existence") else 0
+        side = []
+        for sgn in (1.0, -1.0):
+            P = np.clip(U + sgn * delta * nrm, 0.0, 1.0)
+            st = _status(plane, plane.x.from_unit(P[:, 0]), plane.y.from_unit(P[:, 1]))
+            side.append(st == 0 if level == 0 else st == -1)
+        keep = side[0] != side[1]
+        if not keep.any():
+            continue
+        x = np.where(keep, np.asarray(c.x, float), np.nan)
+        y = np.where(keep, np.asarray(c.y, float), np.nan)
+        out.append(dataclasses.replace(c, x=x, y=y))
     return out

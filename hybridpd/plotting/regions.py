@@ -97,6 +97,24 @@ def _side_ticks(ax, X, Y, field, color, label, every=6, line=True):
 _EXISTENCE_KINDS = ("existence", "grazing", "viability", "xm_zero", "sticking")
 
 
+#: Legend words for the traced kinds (the curves are drawn where they bound the shaded region).
+_TRACED_LABELS = {
+    "grazing": "grazing: the orbit stops existing (traced)",
+    "existence": "existence boundary (traced)",
+    "fold": "a multiplier crosses +1 (traced)",
+    "period_doubling": "a multiplier crosses -1 (traced)",
+    "neimark_sacker": "Neimark-Sacker: a complex pair crosses the unit circle (traced)",
+}
+
+
+#: Line styles of the stability kinds (colour-blind-safe, told apart by dash pattern too).
+_TRACED_STYLES = {
+    "fold": dict(color="#D55E00", ls="--", lw=1.5),
+    "period_doubling": dict(color="#CC79A7", ls=":", lw=1.8),
+    "neimark_sacker": dict(color="#0072B2", ls="-", lw=1.5),
+}
+
+
 def _draw_curves(ax, curves, labels):
     """Traced boundaries: existence-type kinds dashed black, the others solid blue."""
     for c in curves:
@@ -104,7 +122,9 @@ def _draw_curves(ax, curves, labels):
         base = kind.split(":")[0]
         ex = base.startswith(_EXISTENCE_KINDS)
         st = dict(color=EXIST, ls="--", lw=1.2) if ex else dict(color=FILL_EDGE, ls="-", lw=1.4)
-        lab = labels.get(base, f"{base.replace('_', ' ')} boundary (traced)")
+        if not ex and base in _TRACED_STYLES:
+            st = _TRACED_STYLES[base]
+        lab = labels.get(base, _TRACED_LABELS.get(base, f"{base.replace('_', ' ')} boundary"))
         ax.plot(np.asarray(c.x, float), np.asarray(c.y, float), gid=lab, **st)
 
 
@@ -196,7 +216,8 @@ def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, ti
         Second row with the same ``e`` on a smaller box.
     curves : dict or list, optional
         Traced boundaries (objects with ``.kind``, ``.x``, ``.y``) drawn instead of the grid
-        contours: a list (same for every panel) or ``{e: list}``.
+        contours: a list (same for every panel of the first row), ``{e: list}``, or
+        ``{(row, e): list}`` (row 1 is the zoom).
     mark : (x, y), optional
         Point marked with a star (e.g. the paper's gains ``(10, 20)``).
     params : dict, optional
@@ -217,11 +238,14 @@ def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, ti
         X, Y = np.meshgrid(m.x, m.y)
         for k, e in enumerate(m.e):
             ax = fig.add_subplot(len(maps), ne, row * ne + k + 1)
-            cv = curves.get(float(e)) if isinstance(curves, dict) else curves
+            if isinstance(curves, dict):  # per e, or per (row, e) with a zoom row
+                cv = curves.get((row, float(e)), curves.get(float(e)) if row == 0 else None)
+            else:
+                cv = curves if row == 0 else None
             fe, fs = m.fraction("exists")[k], m.fraction("stable")[k]
-            from hybridpd.reproduce.pipeline import _pct
+            from hybridpd._format import pct as _pct
 
-            _panel(ax, X, Y, m.exists[k], m.stable[k], curves=cv if row == 0 else None,
+            _panel(ax, X, Y, m.exists[k], m.stable[k], curves=cv,
                    mark=mark, title=f"e = {e:g}{' (zoom)' if row else ''}\nexists {_pct(fe)}, "
                                     f"exists and stable {_pct(fs)}")
             ax.set_xlabel(_axis_label(m.x_name))

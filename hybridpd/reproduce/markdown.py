@@ -11,7 +11,7 @@ def _f(x, nd=4):
 
 
 def _p(x):
-    from hybridpd.reproduce.pipeline import _pct
+    from hybridpd._format import pct as _pct
 
     return "-" if x is None else _pct(x)
 

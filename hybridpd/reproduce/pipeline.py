@@ -278,10 +278,12 @@ def _figures(run: ConventionRun, settings: Settings, hook=None):
     par = _params_text(run)
     mark = (PAPER["kp"], PAPER["kv"])
     fig = plot_region_panels(run.maps["collocated"], mark=mark, params=par,
+                             curves=_traced(run, "collocated", settings),
                              title="Fig. 4, collocated PD")
     _save(fig, d / "fig4_regions_collocated.png", hook)
     fig = plot_region_panels(run.maps["noncollocated"], zoom=run.maps["zoom"], mark=mark,
-                             params=par, title="Fig. 5, non-collocated PD")
+                             params=par, curves=_traced(run, "noncollocated", settings),
+                             title="Fig. 5, non-collocated PD")
     _save(fig, d / "fig5_regions_noncollocated.png", hook)
     fig = plot_orbit_phase([run.orbits[(c, e)] for c in CASES for e in PAPER["e"]], params=par)
     _save(fig, d / "fig3_orbit.png", hook)
@@ -308,21 +310,33 @@ def _figures(run: ConventionRun, settings: Settings, hook=None):
         _save(fig, d / name, hook, dpi=100)
 
 
+def _traced(run: ConventionRun, case: str, settings: Settings):
+    """``{(row, e): curves}`` bounding the exists-and-stable region in each panel's box
+    (row 1: the zoom), or None (grid contours) if not wanted."""
+    if not settings.traced_boundaries:
+        return None
+    from hybridpd.analysis.boundaries import boundary_curves
+    from hybridpd.analysis.boundarymask import stable_region_edges
+
+    out = {}
+    for row, rm in enumerate((run.maps[case], run.maps["zoom"] if case == "noncollocated"
+                              else None)):
+        if rm is None:
+            continue
+        box = dict(x=("kp", float(rm.x[0]), float(rm.x[-1])),
+                   y=("kv", float(rm.y[0]), float(rm.y[-1])))
+        for e in rm.e:
+            res = boundary_curves(case, e=float(e), mu=PAPER["mu"], gamma=run.gamma,
+                                  omega=PAPER["omega"], m2=run.m2, x10=run.x10,
+                                  n=PAPER["n"], **box)
+            out[(row, float(e))] = stable_region_edges(res)
+    return out
+
+
 def _wrap(text, width=44):
     import textwrap
 
     return "\n".join(textwrap.wrap(text, width))
-
-
-def _pct(f) -> str:
-    """A share in percent that never rounds to 0 % or 100 % when it is not exactly that."""
-    p = 100 * float(f)
-    s = f"{p:.1f}%"
-    if 0 < p < 0.05:
-        s = "<0.1%"
-    elif 99.95 <= p < 100:
-        s = ">99.9%"
-    return s
 
 
 def _param_line(par) -> str:

@@ -53,6 +53,9 @@ class Settings:
         Basin grid over :attr:`basin_window`.
     iterations : int
         Iterations of ``P`` for the basin criterion (the paper: 1500).
+    traced_boundaries : bool
+        Draw the region boundaries of Figs 4-5 as traced curves (pseudo-arclength
+        continuation of the test functions, sharp at any zoom) instead of grid contours.
     basin_extensions : int
         Times the basin window may be doubled (about the fixed point) while the symmetric
         orbit's basin reaches its edge; the measure is then reported on the last window,
@@ -98,6 +101,7 @@ class Settings:
     basin: tuple
     iterations: int = 1500
     basin_extensions: int = 1
+    traced_boundaries: bool = True
     comparison_grid: tuple = (48, 48)
     uncertainty_grid: tuple = (5, 5)
     design_search: tuple = (3, 150)

@@ -276,7 +276,7 @@ def _f(x, nd=4):
 
 
 def _pcts(a) -> str:
-    from hybridpd.reproduce.pipeline import _pct
+    from hybridpd._format import pct as _pct
 
     return ", ".join(_pct(v) for v in a)
 
