@@ -1,5 +1,7 @@
 """General LTI controllers between impacts: orbits, impact map and DP against independent checks."""
 import doctest
+import importlib
+import pkgutil
 
 import control as ct
 import numpy as np
@@ -332,8 +334,11 @@ def test_result_helpers_and_json():
 
 
 def test_module_doctests():
-    res = doctest.testmod(lti_mod, optionflags=doctest.ELLIPSIS)
-    assert res.failed == 0 and res.attempted > 5
+    mods = [lti_mod] + [importlib.import_module(f"{lti_mod.__name__}.{m.name}")
+                        for m in pkgutil.iter_modules(lti_mod.__path__)]
+    assert len(mods) >= 5
+    res = [doctest.testmod(m, optionflags=doctest.ELLIPSIS) for m in mods]
+    assert sum(r.failed for r in res) == 0 and sum(r.attempted for r in res) > 5
 
 
 @pytest.mark.slow

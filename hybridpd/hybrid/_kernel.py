@@ -1,0 +1,282 @@
+"""The compiled jump loop of :class:`hybridpd.hybrid.automaton.HybridAutomaton`: ``run_hybrid``.
+
+The loop alternates exact flows to the next event (:func:`hybridpd.hybrid.events.advance`)
+with resets, records jumps and segments in caller-provided buffers and detects Zeno
+accumulations (semantics: :mod:`hybridpd.hybrid.automaton`). Also here: the packed kernel
+inputs (:class:`PackedAutomaton`) and the return and jump-kind codes. The kernels are
+compiled lazily (:mod:`hybridpd._jit`).
+
+Calling contract
+----------------
+``run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target, zt, Rz, dt_min,
+t_end, max_jumps, max_steps, zf, zi, w, fc, ic, jt, jj, jg, jsrc, jdst, jkind, jpre, jpost,
+st0, st1, smode, sj, sw, zt_out) -> code``
+
+The per-mode arrays are stacked over ``M`` modes and padded to ``GM`` guards
+(:attr:`HybridAutomaton.packed`, a :class:`PackedAutomaton`): ``h (M,)``, ``Phi, Ah (M, N1, N1)``,
+``dinv (M, N1)``, ``trunc (M,)``, ``G, gabs (M, GM, Kp1, N1)``, ``gsum (M, GM, N1)``,
+``cnorm (M, GM)``, ``prio (M, GM) int64``, ``ng (M,) int64``, homogeneous resets
+``Rh, Rz (M, GM, N1, N1)`` (``[[R, r], [0, 1]]``), ``target, zt (M, GM) int64`` (``zt = -1``: no
+Zeno target), ``dt_min (M,)``. Scalars: ``t_end``, ``max_jumps``, ``max_steps``;
+``zf = [ratio_max, ratio_rtol]``, ``zi = [enabled, min_ratios, max_instant_jumps]`` (int64).
+Carried state (read and updated, so a full buffer can be resumed): ``w (N1,)`` homogeneous
+state, ``fc (8,)`` float (``fc[0]`` time), ``ic (16,)`` int64 (``ic[0]`` mode, ``ic[1]`` jump
+count ``j``, ``ic[2] = -1``, ``ic[3] = -1`` initially, ``ic[8]`` steps taken, ``ic[9..11]`` entries
+written to the jump/segment/Zeno buffers, reset them to 0 before resuming). Output buffers
+(capacity = first dimension): jumps ``jt, jj, jg, jsrc, jdst, jkind`` (kind 1 crossing,
+2 grazing, 3 zeno), ``jpre, jpost (cap, N1)``; segments ``st0, st1, smode, sj, sw (cap, N1)``;
+``zt_out`` Zeno times. ``code``: 0 end time, 1 jump limit, 2 Zeno, 3 non-finite, 4 step limit,
+5 buffer full (resume with fresh or emptied buffers). A basin-of-attraction engine can call
+it with small buffers and read only ``w``, ``fc[0]``, ``ic[0]``, ``ic[1]``.
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from hybridpd._jit import njit
+from hybridpd.hybrid.events import (
+    EV_GRAZING,
+    EV_NONE,
+    EV_NONFINITE,
+    EV_START,
+    EV_STEP_LIMIT,
+    _matvec,
+    advance,
+    flow_to,
+)
+
+__all__ = ["PackedAutomaton", "run_hybrid"]
+
+_RC_BUFFER_FULL = 5
+_RC_STEP_LIMIT = 4
+_KIND_NAMES = {1: "crossing", 2: "grazing", 3: "zeno"}
+
+
+class PackedAutomaton(NamedTuple):
+    """Stacked per-mode arrays (the inputs of :func:`run_hybrid`; see the module docstring)."""
+
+    h: np.ndarray
+    Phi: np.ndarray
+    Ah: np.ndarray
+    dinv: np.ndarray
+    trunc: np.ndarray
+    G: np.ndarray
+    gabs: np.ndarray
+    gsum: np.ndarray
+    cnorm: np.ndarray
+    prio: np.ndarray
+    ng: np.ndarray
+    Rh: np.ndarray
+    target: np.ndarray
+    zt: np.ndarray
+    Rz: np.ndarray
+
+
+
+@njit(cache=True)
+def _add_seg(st0, st1, smode, sj, sw, ic, t0, t1, mode, j, w):
+    si = ic[10]
+    st0[si] = t0
+    st1[si] = t1
+    smode[si] = mode
+    sj[si] = j
+    for i in range(w.shape[0]):
+        sw[si, i] = w[i]
+    ic[10] = si + 1
+
+
+@njit(cache=True)
+def _add_jump(jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, ic, t, j, g, src, dst, kind, pre,
+              post):
+    k = ic[9]
+    jt[k] = t
+    jj[k] = j
+    jg[k] = g
+    jsrc[k] = src
+    jdst[k] = dst
+    jkind[k] = kind
+    for i in range(pre.shape[0]):
+        jpre[k, i] = pre[i]
+        jpost[k, i] = post[i]
+    ic[9] = k + 1
+
+
+@njit(cache=True)
+def _finite(w):
+    for i in range(w.shape[0]):
+        if not math.isfinite(w[i]):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _zeno_switch(mode, g, t_k, t_inf, h, Phi, Ah, Rz, zt, max_jumps, Kp1, w, fc, ic,
+                 jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out):
+    """Accumulation of guard ``g`` of ``mode`` at ``t_inf`` from state ``w`` at ``t_k``.
+
+    Returns -1 to continue the run, else a termination code.
+    """
+    N1 = w.shape[0]
+    zt_out[ic[11]] = t_inf
+    ic[11] += 1
+    target = zt[mode, g]
+    if target < 0:
+        _add_seg(st0, st1, smode, sj, sw, ic, t_k, t_k, mode, ic[1], w)
+        return 2
+    if ic[1] >= max_jumps:
+        _add_seg(st0, st1, smode, sj, sw, ic, t_k, t_k, mode, ic[1], w)
+        return 1
+    wz = np.empty(N1)
+    post = np.empty(N1)
+    if t_inf > t_k:
+        # the mode's own flow over the unresolved tail of the accumulation
+        _add_seg(st0, st1, smode, sj, sw, ic, t_k, t_inf, mode, ic[1], w)
+        flow_to(w, t_inf - t_k, h[mode], Phi[mode], Ah[mode], Kp1, wz)
+    else:
+        for i in range(N1):
+            wz[i] = w[i]
+    _matvec(Rz[mode, g], wz, post)
+    post[N1 - 1] = 1.0
+    ic[1] += 1
+    _add_jump(jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, ic, t_inf, ic[1], g, mode, target, 3,
+              wz, post)
+    for i in range(N1):
+        w[i] = post[i]
+    fc[0] = t_inf
+    fc[1] = 0.0
+    ic[0] = target
+    ic[2] = -1
+    ic[3] = -1
+    ic[5] = 0
+    ic[6] = 0
+    ic[7] = 0
+    if not _finite(post):
+        _add_seg(st0, st1, smode, sj, sw, ic, t_inf, t_inf, target, ic[1], w)
+        return 3
+    return -1
+
+
+@njit(cache=True)
+def run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target, zt, Rz,
+               dt_min, t_end, max_jumps, max_steps, zf, zi, w, fc, ic,
+               jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out):
+    """Run the automaton from the carried state; see the module docstring for the contract."""
+    # One function on purpose: numba compiles the whole jump loop into one native loop.
+    N1 = w.shape[0]
+    Kp1 = G.shape[2]
+    wout = np.empty(N1)
+    post = np.empty(N1)
+    ratio_max = zf[0]
+    rtol = zf[1]
+    zon = zi[0] != 0
+    min_ratios = zi[1]
+    max_inst = zi[2]
+    while True:
+        if (ic[9] + 2 > jt.shape[0] or ic[10] + 3 > st0.shape[0]
+                or ic[11] + 2 > zt_out.shape[0]):
+            return 5
+        t = fc[0]
+        mode = ic[0]
+        si = ic[10]
+        _add_seg(st0, st1, smode, sj, sw, ic, t, t, mode, ic[1], w)
+        code, tev, g, nst, err = advance(
+            w, t, t_end, h[mode], Phi[mode], Ah[mode], dinv[mode], trunc[mode], G[mode],
+            gabs[mode], gsum[mode], cnorm[mode], prio[mode], ng[mode], ic[2], fc[1],
+            max_steps - ic[8], wout)
+        ic[8] += nst
+        st1[si] = tev
+        if code == EV_NONE or code == EV_NONFINITE or code == EV_STEP_LIMIT:
+            for i in range(N1):
+                w[i] = wout[i]
+            fc[0] = tev
+            if code == EV_NONE:
+                return 0
+            if code == EV_NONFINITE:
+                return 3
+            return 4
+        if code == EV_START and g == ic[2] and zon:
+            # immediate accumulation: the guard that just fired fires again at once
+            rc = _zeno_switch(mode, g, t, t, h, Phi, Ah, Rz, zt, max_jumps, Kp1, w, fc, ic,
+                              jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode,
+                              sj, sw, zt_out)
+            if rc >= 0:
+                return rc
+            continue
+        if ic[1] >= max_jumps:
+            for i in range(N1):
+                w[i] = wout[i]
+            fc[0] = tev
+            return 1
+        _matvec(Rh[mode, g], wout, post)
+        post[N1 - 1] = 1.0
+        tgt = target[mode, g]
+        kind = 2 if code == EV_GRAZING else 1
+        ic[1] += 1
+        _add_jump(jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, ic, tev, ic[1], g, mode, tgt,
+                  kind, wout, post)
+        for i in range(N1):
+            w[i] = post[i]
+        fc[0] = tev
+        ic[0] = tgt
+        if tgt == mode:
+            ic[2] = g
+            fc[1] = err
+        else:
+            ic[2] = -1
+            fc[1] = 0.0
+        if not _finite(post):
+            _add_seg(st0, st1, smode, sj, sw, ic, tev, tev, tgt, ic[1], w)
+            return 3
+        if not zon:
+            continue
+        if tev == t:
+            ic[7] += 1
+            if ic[7] > max_inst:
+                zt_out[ic[11]] = tev
+                ic[11] += 1
+                _add_seg(st0, st1, smode, sj, sw, ic, tev, tev, tgt, ic[1], w)
+                return 2
+        else:
+            ic[7] = 0
+        if tgt != mode:
+            ic[3] = -1
+            continue
+        if not (ic[3] == mode and ic[4] == g and ic[5] >= 1):
+            ic[3] = mode
+            ic[4] = g
+            ic[5] = 1
+            ic[6] = 0
+            fc[2] = tev
+            fc[3] = -1.0
+            fc[4] = -1.0
+            continue
+        dt = tev - fc[2]
+        if fc[3] > 0.0:
+            r = dt / fc[3]
+            if r < ratio_max:
+                if ic[6] >= 1 and abs(r - fc[4]) <= rtol * fc[4]:
+                    ic[6] += 1
+                else:
+                    ic[6] = 1
+            else:
+                ic[6] = 0
+            fc[4] = r
+        fc[3] = dt
+        fc[2] = tev
+        ic[5] += 1
+        if dt <= dt_min[mode] or ic[6] >= min_ratios:
+            r = fc[4]
+            t_inf = tev
+            if 0.0 < r < 1.0:
+                t_inf = tev + dt * r / (1.0 - r)
+            if dt <= dt_min[mode] and t_inf > t_end:
+                t_inf = t_end
+            if t_inf <= t_end:
+                rc = _zeno_switch(mode, g, tev, t_inf, h, Phi, Ah, Rz, zt, max_jumps, Kp1, w,
+                                  fc, ic, jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1,
+                                  smode, sj, sw, zt_out)
+                if rc >= 0:
+                    return rc
