@@ -114,7 +114,8 @@ def test_region_plots_accept_traced_curves(tmp_path):
                                                                        x=t, y=2 * t)]
     fig = plot_region_panels(rm, curves={0.1: more, 0.5: []})
     labels = _legend_labels(fig)
-    assert {"grazing boundary (traced)", "neimark sacker boundary (traced)"} <= labels
+    assert {"grazing: the orbit stops existing (traced)",
+            "Neimark-Sacker: a complex pair crosses the unit circle (traced)"} <= labels
     assert labels == _gids(fig)
     fig.savefig(tmp_path / "curves.png", dpi=80)
     # the compact variant: all e on one axes, hatched, legend beside the axes

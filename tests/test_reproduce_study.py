@@ -6,11 +6,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from hybridpd._format import pct as _pct
 from hybridpd.analysis.orbits import symmetric_orbit, symmetric_orbits
 from hybridpd.model import ImpactPair, PDGains
 from hybridpd.reproduce import PAPER, Settings
 from hybridpd.reproduce import conclusions as C
-from hybridpd.reproduce.pipeline import _basin_step, _pct
+from hybridpd.reproduce.pipeline import _basin_step
 from hybridpd.reproduce.study import candidate_stability, choose_m2, intersect, stable_intervals
 
 COMMON = dict(kp=10.0, kv=20.0, mu=0.1, L=0.75, omega=5.0)

@@ -148,7 +148,6 @@ def _run_pair(args) -> int:
                                 args.case)
     traj = sysm.simulate(args.x0, (0.0, args.t_end), max_impacts=args.max_impacts)
     d = traj.to_dict()
-    d["L"], d["xm"] = L, xm
     if args.json:
         print(json.dumps(d))
         return 0

@@ -181,7 +181,8 @@ def _legend_from_gids(fig, axes, *, loc="outside lower center", ncol=4):
             h = Line2D([], [], color=col, ls=ls, lw=1.2)
         else:
             fc = a.get_facecolor()
-            fc = fc[0] if np.ndim(fc) == 2 and len(fc) else fc
+            if np.ndim(fc) == 2:  # a collection: its first colour, none if it is empty
+                fc = fc[0] if len(fc) else "none"
             h = Patch(facecolor=fc, edgecolor=a.get_edgecolor()[0]
                       if np.ndim(a.get_edgecolor()) == 2 and len(a.get_edgecolor()) else "none",
                       hatch=a.get_hatch() if hasattr(a, "get_hatch") else None)
