@@ -1,6 +1,6 @@
 """A rigid contact against compliant contacts of growing stiffness: convergence.
 
-The impact pair of the README (m1 = 0.1, m2 = 1, half clearance 0.75, PD on x1) with its
+The impact pair of the paper (m1 = 0.1, m2 = 1, half clearance 0.75, PD on x1) with its
 clearance modelled as a Kelvin-Voigt contact: a spring k and damper c act while the gap is
 closed (piecewise-linear modes, the reference [8] of the paper). With the damping ratio
 ``zeta = c / (2 sqrt(k m*))`` fixed (``m* = m1 m2 / (m1 + m2)``), an isolated contact returns

@@ -1,8 +1,8 @@
 """hybridpd: analysis and design of PD control for mechanical systems with dynamic backlash.
 
 The package follows the paper "Analysis of PD control of mechanical systems with dynamic
-backlash" (Mata-Jimenez, Brogliato, Goswami) with the conventions of the README's
-"Conventions" section: state order ``[x1, y1, x2, y2, pc, ps]``, reference
+backlash" (Mata-Jimenez, Brogliato, Goswami) with the conventions of CONVENTIONS.md
+(the repository's conventions page): state order ``[x1, y1, x2, y2, pc, ps]``, reference
 ``xd = xm cos(w t)``, Poincare section ``z3 = x1 - x2 = +L`` (pre-impact) with coordinates
 ``(phi, z1, z2, z4)``.
 

@@ -1,6 +1,6 @@
 """Impact-pair parameters, validation and Newton's impact law (paper eq. (2)).
 
-Conventions (those of the README's "Conventions" section, stated here once and reused
+Conventions (those of CONVENTIONS.md, stated here once and reused
 everywhere):
 
 * State order ``[x1, y1, x2, y2]`` (positions in length units, velocities in length/time)

@@ -8,7 +8,7 @@ on ``P^k`` (:func:`hybridpd.analysis.continuation.find_periodic_orbit`), removes
 same cycle entered at another of its points, i.e. up to a cyclic shift), and gives every
 distinct cycle an integer label ``>= 0``. A tail belongs to a cycle when each of its iterates
 lies within the paper's criterion ball of a point of the cycle: squared distance in ``(x1, y1,
-y2, phi)`` below ``criterion`` (the README's basin convention, phase differences modulo ``T``),
+y2, phi)`` below ``criterion`` (the basin convention of CONVENTIONS.md, phase differences modulo ``T``),
 i.e. the same test the paper applies to the symmetric orbit, applied to every iterate of the
 tail.
 

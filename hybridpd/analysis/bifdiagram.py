@@ -39,7 +39,7 @@ Parameter path: with ``xm`` None (default), the *design path*: at every value th
 amplitude is the one that realises the primary-mass amplitude ``x10`` on the order-``n``
 symmetric orbit (paper (20); the path of
 :func:`~hybridpd.analysis.continuation.continue_symmetric`); with ``xm`` given, ``xm`` is
-fixed. ``gamma`` means ``L / x10`` (README, "Conventions").
+fixed. ``gamma`` means ``L / x10`` (CONVENTIONS.md).
 """
 from __future__ import annotations
 

@@ -21,7 +21,7 @@ product of the Jacobians DP along the iterates.
 
 The reference amplitude xm follows the design at every value: the one that puts the
 primary mass on the order-N symmetric orbit of amplitude x10 (gamma = L / x10, see the
-README's conventions). Every parameter other than the swept one must be given (m2 and x10
+conventions (CONVENTIONS.md)). Every parameter other than the swept one must be given (m2 and x10
 default to 1); the swept one must not be.
 """
 

@@ -17,8 +17,8 @@ normal) chosen so that ``w . v+ = -e w . v-`` (Newton's law). Hence
 
 the impulse in the metric of ``M``: it moves every DOF that ``M`` couples to the contact, the
 generalised momentum changes only along ``w`` (``M v+ - M v- = P w``), and the kinetic energy
-lost is ``(1 - e^2) (w . v-)^2 / (2 w . M^-1 w)``. For the impact pair this is the README's
-law (2). Accumulating impacts (Zeno) end in a *sticking* phase on the constraint
+lost is ``(1 - e^2) (w . v-)^2 / (2 w . M^-1 w)``. For the impact pair this is the
+paper's law (2). Accumulating impacts (Zeno) end in a *sticking* phase on the constraint
 ``s = bound`` (see :mod:`hybridpd.mechanics.automaton`).
 
 *Compliant* (``stiffness = k > 0``, ``damping = c >= 0``): a Kelvin-Voigt spring-damper acting

@@ -312,7 +312,7 @@ def mechanical_loop(system: MechanicalSystem, controller, reference: Reference, 
 
     Examples
     --------
-    The impact pair of the README (``m1 = 0.1``, ``m2 = 1``), collocated PD:
+    The impact pair of the paper (``m1 = 0.1``, ``m2 = 1``), collocated PD:
 
     >>> sysm = MechanicalSystem(["x1", "x2"], M=[[0.1, 0], [0, 1.0]], B=[0, 1])
     >>> cl = mechanical_loop(sysm, (10.0, 20.0), Reference.sine(1.0, 5.0, 1.0), "x2")

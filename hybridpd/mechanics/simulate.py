@@ -112,7 +112,7 @@ class MechanicalTrajectory:
         return self(t)[..., :2 * self.n_dofs]
 
     def to_dict(self) -> dict:
-        """JSON-ready summary (the ``simulate --json`` format, see the README)."""
+        """JSON-ready summary (the ``simulate --json`` format)."""
         return {
             "impacts": [
                 {"t": float(t), "contact": int(k), "wall": int(w),
@@ -156,7 +156,7 @@ def simulate(model: MechanicalAutomaton, x0, t_span, max_impacts: int = 100_000,
 
     Examples
     --------
-    The impact pair of the README (collocated PD) as a general mechanical system:
+    The impact pair of the paper (collocated PD) as a general mechanical system:
 
     >>> from hybridpd.mechanics import (Contact, MechanicalSystem, Reference, build_automaton,
     ...                                 mechanical_loop)

@@ -4,7 +4,7 @@ Conventions
 -----------
 * ``q`` are generalised coordinates (lengths or angles), ``n = len(dofs)``; the mechanical
   state is interleaved, ``[q_1, v_1, ..., q_n, v_n]`` (``v = q'``), which for the impact pair
-  is the README's ``[x1, y1, x2, y2]``.
+  is the impact pair's ``[x1, y1, x2, y2]`` (CONVENTIONS.md).
 * ``u`` is one scalar control force (or torque) applied along the input direction ``B``.
 """
 from __future__ import annotations
@@ -125,7 +125,7 @@ class MechanicalSystem:
     def state_names(self) -> tuple:
         """Interleaved mechanical state names ``(q_1, v_1, ..., q_n, v_n)``.
 
-        The velocity of DOF ``x`` is called ``x_dot`` (for the impact pair: the README's
+        The velocity of DOF ``x`` is called ``x_dot`` (for the impact pair: the
         ``y1, y2`` are ``x1_dot, x2_dot``).
         """
         out = []

@@ -7,7 +7,7 @@ attributes, so that e.g. ``rm.to_dataset().stable.sel(e=0.5).plot()`` draws a st
 The file format follows the suffix of the path: ``.nc`` (netCDF-4, through the ``netCDF4``
 engine) or ``.zarr`` (a Zarr directory); ``.npz`` files of earlier versions stay readable.
 
-Units follow the README's conventions: the model is written in consistent but unspecified
+Units follow the conventions (CONVENTIONS.md): the model is written in consistent but unspecified
 units of length, time and mass (``m2 = 1`` unless given), so the ``units`` attributes name
 dimensions (``"length/time"``, ``"mass/time^2"``) rather than SI units; ``"1"`` means
 dimensionless.

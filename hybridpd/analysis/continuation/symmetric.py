@@ -66,7 +66,7 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
     x10 : float
         Primary-mass amplitude (length); ``gamma = L / x10``. With ``parameter="gamma"`` it
         stays fixed and the clearance follows, ``L = gamma * x10`` (the paper's convention,
-        README "Conventions"); the start is ``gamma = pair.L / x10``.
+        CONVENTIONS.md); the start is ``gamma = pair.L / x10``.
     n : int
         Odd orbit order.
     case : {"collocated", "noncollocated"}

@@ -14,7 +14,7 @@ generate), :mod:`~hybridpd.pair.symbolic.flows` (flows and section coordinates),
 :mod:`~hybridpd.pair.symbolic.section_map` (the impact map and its Jacobian). Everything
 public is re-exported here.
 
-Conventions (those of the README's "Conventions" section)
+Conventions (those of CONVENTIONS.md)
 -----------------------------------------
 * State order ``X = [x1, y1, x2, y2, pc, ps]``: primary mass ``m1 = mu*m2`` (position ``x1``,
   velocity ``y1``), secondary mass ``m2`` (``x2``, ``y2``), exosystem ``pc = xm cos(w t)``,
