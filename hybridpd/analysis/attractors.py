@@ -26,6 +26,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.continuation import find_periodic_orbit
 from hybridpd.analysis.impactmap import ImpactMap
 
@@ -119,6 +120,7 @@ class Attractor:
     stable: bool | None = None
     walls: tuple = ()
     residual: float = float("nan")
+    __repr__ = compact_repr
 
     @property
     def periodic(self) -> bool:

@@ -50,6 +50,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.analysis.orbits import symmetric_orbits
 from hybridpd.model import Case, ImpactPair, PDGains, Reference, check_finite
@@ -149,6 +150,7 @@ class BifurcationDiagram:
     fixed: dict
     design: bool
     settings: dict = field(default_factory=dict)
+    __repr__ = compact_repr
 
     def __len__(self) -> int:
         return int(self.values.size)

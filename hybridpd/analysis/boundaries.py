@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.testfunctions import KINDS, PARAMETERS, Plane, TestValues, make_plane
 from hybridpd.analysis.tracing import Codim2Point, Tracer
 from hybridpd.model import check_positive
@@ -91,6 +92,7 @@ class BoundaryCurve:
     y_name: str
     max_test: float
     u: np.ndarray = field(repr=False)
+    __repr__ = compact_repr
 
     def __len__(self) -> int:
         return len(self.x)
@@ -133,6 +135,7 @@ class BoundaryResult:
     uncovered: int
     seconds: float
     n_evals: int
+    __repr__ = compact_repr
 
     @property
     def x_name(self) -> str:

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.orbits import symmetric_orbits
 
 __all__ = ["MaskComparison", "compare_with_mask", "region_status", "side_status",
@@ -113,6 +114,7 @@ class MaskComparison:
     curves_to_mask_cells: float
     n_mask_edges: int
     cell: float
+    __repr__ = compact_repr
 
 
 def compare_with_mask(result, status, xs, ys) -> MaskComparison:

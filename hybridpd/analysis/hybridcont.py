@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.hybridmap import Section, SectionMap
 from hybridpd.analysis.impactmap import stability
 from hybridpd.analysis.periodic import find_orbit
@@ -64,6 +65,7 @@ class FamilyPoint:
     stable: bool
     signature: tuple
     t_period: float
+    __repr__ = compact_repr
 
 
 @dataclass(frozen=True)
@@ -74,6 +76,7 @@ class FamilyEvent:
     index: int
     p: float
     detail: str = ""
+    __repr__ = compact_repr
 
     def to_dict(self) -> dict:
         return {"kind": self.kind, "index": self.index, "p": float(self.p),
@@ -101,6 +104,7 @@ class FamilyBranch:
     termination: str
     method: str
     period: int
+    __repr__ = compact_repr
 
     @property
     def p(self) -> np.ndarray:

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.hybridcont import _map_factory
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
 
@@ -61,6 +62,7 @@ class GainDesign:
     evaluations: int
     initial_spectral_radius: float
     initial_amplitude: float
+    __repr__ = compact_repr
 
 
 def orbit_amplitude(P, orbit: PeriodicOrbit, state, samples: int = 4000) -> float:

@@ -50,6 +50,7 @@ import numpy as np
 from numba import njit
 from scipy.linalg import expm
 
+from hybridpd._repr import compact_repr
 from hybridpd.hybrid.automaton import HybridAutomaton, ZenoOptions, run_hybrid
 
 __all__ = [
@@ -448,6 +449,7 @@ class MapResult:
     jumps: tuple
     grazing: bool
     DP: np.ndarray | None = field(default=None, repr=False)
+    __repr__ = compact_repr
 
     @property
     def signature(self) -> tuple:

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.hybridmap import (
     ST_RETURNED,
     SectionMap,
@@ -98,6 +99,7 @@ class PeriodicOrbit:
     grazing: bool
     z: np.ndarray = field(repr=False)
     names: tuple = ()
+    __repr__ = compact_repr
 
     def to_dict(self) -> dict:
         """JSON-ready summary (fields of ``hybridpd orbit --json`` where they apply)."""

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.testfunctions import Plane, TestValues
 
 __all__ = ["Codim2Point", "Tracer"]
@@ -64,6 +65,7 @@ class Codim2Point:
     u: np.ndarray = field(repr=False)
     multipliers: np.ndarray = field(repr=False)
     residual: float = float("nan")
+    __repr__ = compact_repr
 
 
 def _perp(g):

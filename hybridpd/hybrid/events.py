@@ -95,6 +95,7 @@ from typing import NamedTuple
 import numpy as np
 
 from hybridpd._jit import njit
+from hybridpd._repr import compact_repr
 
 # re-exported: the kernels below and their users share these
 from hybridpd.hybrid._poly import (
@@ -564,6 +565,7 @@ class CrossingResult:
     kind: str
     state: np.ndarray
     error_bound: float = 0.0
+    __repr__ = compact_repr
 
 
 def first_crossing(A, c, d, z0, t_max, b=None, direction=-1, max_steps=10_000_000,

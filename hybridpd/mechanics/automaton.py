@@ -56,6 +56,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode
 from hybridpd.mechanics.contacts import Contact
 from hybridpd.mechanics.loop import MechanicalLoop
@@ -121,6 +122,7 @@ class MechanicalAutomaton:
     impact_resets: dict = field(repr=False)
     plastic_resets: dict = field(repr=False)
     free_mode: str = "free"
+    __repr__ = compact_repr
 
     @property
     def state_names(self) -> tuple:

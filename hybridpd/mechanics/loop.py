@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.mechanics.system import MechanicalSystem
 
 __all__ = ["MechanicalLoop", "Reference", "mechanical_loop"]
@@ -203,6 +204,7 @@ class MechanicalLoop:
     state_names: tuple
     layout: dict = field(repr=False)
     sys: object = field(repr=False)
+    __repr__ = compact_repr
 
     @property
     def n_states(self) -> int:

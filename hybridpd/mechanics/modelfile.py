@@ -49,6 +49,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.mechanics.automaton import MechanicalAutomaton, build_automaton
 from hybridpd.mechanics.contacts import Contact
 from hybridpd.mechanics.loop import Reference, mechanical_loop
@@ -100,6 +101,7 @@ class MechanicalModel:
     x0: np.ndarray
     t0: float
     source: str = "<dict>"
+    __repr__ = compact_repr
 
     def simulate(self, t_end: float, max_impacts: int = 100_000, **options):
         """Simulate from the file's initial state over ``[t0, t_end]``."""

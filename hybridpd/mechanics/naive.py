@@ -18,6 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from hybridpd._repr import compact_repr
+
 __all__ = ["NaiveMechanicalResult", "naive_mechanical"]
 
 
@@ -47,6 +49,7 @@ class NaiveMechanicalResult:
     t_final: float
     n_rhs: int
     stopped: str
+    __repr__ = compact_repr
 
 
 def naive_mechanical(M, C, K, B, contacts, kp, kv, measure, amplitude, omega, feedforward,

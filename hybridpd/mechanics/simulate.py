@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.mechanics.automaton import MechanicalAutomaton
 
 __all__ = ["MechanicalTrajectory", "simulate", "simulate_state"]
@@ -94,6 +95,7 @@ class MechanicalTrajectory:
     t_final: float
     n_dofs: int
     hybrid: object = field(repr=False)
+    __repr__ = compact_repr
 
     @property
     def n_impacts(self) -> int:

@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
+
 __all__ = ["MechanicalSystem"]
 
 
@@ -63,6 +65,7 @@ class MechanicalSystem:
     C: np.ndarray | None = None
     K: np.ndarray | None = None
     B: np.ndarray | None = None
+    __repr__ = compact_repr
 
     def __post_init__(self):
         if isinstance(self.dofs, str) or not isinstance(self.dofs, Sequence):

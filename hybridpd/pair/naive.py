@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from hybridpd._repr import compact_repr
 from hybridpd.loop import ClosedLoop
 
 __all__ = ["NaiveResult", "naive_simulate"]
@@ -41,6 +42,7 @@ class NaiveResult:
     state_final: np.ndarray
     t_final: float
     n_rhs: int
+    __repr__ = compact_repr
 
 
 def naive_simulate(loop: ClosedLoop, z0, t_span, max_impacts: int = 1000, *,

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.orbits import symmetric_orbits
 from hybridpd.model import Case
 from hybridpd.reproduce.study import candidate_stability
@@ -61,6 +62,7 @@ class ParamStudy:
     maps: dict
     limits: dict
     fixed: dict
+    __repr__ = compact_repr
 
     def to_dict(self) -> dict:
         return {"name": self.name, "values": self.values.tolist(), "e": self.e.tolist(),

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.model import ImpactPair, PDGains
 from hybridpd.reproduce import conclusions as C
 from hybridpd.reproduce.settings import AUTO, PAPER, Settings
@@ -66,6 +67,7 @@ class ConventionRun:
     checks: dict = field(default_factory=dict)
     directory: Path = None
     timings: dict = field(default_factory=dict)
+    __repr__ = compact_repr
 
 
 @dataclass
@@ -97,6 +99,7 @@ class M2Study:
     robust_grid: np.ndarray
     rho_grid: np.ndarray
     rho: dict
+    __repr__ = compact_repr
 
 
 def _say(log):

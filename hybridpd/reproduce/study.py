@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.orbits import REASONS, symmetric_orbits
 from hybridpd.model import Case, check_positive
 
@@ -73,6 +74,7 @@ class StableInterval:
 
     lo: EndPoint
     hi: EndPoint
+    __repr__ = compact_repr
 
     def bounds(self) -> list:
         return [self.lo.m2, self.hi.m2]

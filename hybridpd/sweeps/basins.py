@@ -48,6 +48,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg import solve_discrete_lyapunov
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.attractors import (
     DIVERGED,
     NO_CONVERGENCE,
@@ -283,6 +284,7 @@ class BasinResult:
     fixed_point: np.ndarray
     converged_fraction: float
     metadata: dict = field(default_factory=dict)
+    __repr__ = compact_repr
 
     @property
     def label_names(self) -> tuple:
@@ -579,6 +581,7 @@ class AttractorBasin:
     windows: tuple
     edges: tuple
     metadata: dict = field(default_factory=dict)
+    __repr__ = compact_repr
 
     @property
     def reaches_edge(self) -> bool:

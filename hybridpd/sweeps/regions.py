@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.orbits import REASONS, symmetric_orbits
 from hybridpd.model import Case, check_array, check_named_axis, check_odd_order, check_positive
 
@@ -60,6 +61,7 @@ class RegionMap:
     xm: np.ndarray
     reason: np.ndarray
     metadata: dict = field(default_factory=dict)
+    __repr__ = compact_repr
 
     def cell_area(self) -> float:
         """Area of one grid cell in the axes' units."""

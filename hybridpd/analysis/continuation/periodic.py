@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.continuation._common import (
     _f,
     _fixed_parameters,
@@ -99,6 +100,7 @@ class PeriodicOrbit:
     grazing: bool
     sticking: bool
     parameters: dict
+    __repr__ = compact_repr
 
     def to_dict(self) -> dict:
         """JSON-ready summary."""

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hybridpd._jit import njit
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.continuation._common import _impact_map, _min, _section_point
 from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.model import check_int
@@ -46,6 +47,7 @@ class ImpactStep:
     speed: float
     kind: str
     stick_time: float = 0.0
+    __repr__ = compact_repr
 
 
 @dataclass(frozen=True)
@@ -77,6 +79,7 @@ class MapTrace:
     steps: tuple
     margin: float
     min_speed: float
+    __repr__ = compact_repr
 
     @property
     def walls(self) -> tuple:
