@@ -47,9 +47,9 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 from scipy.linalg import expm
 
+from hybridpd._jit import njit
 from hybridpd._repr import compact_repr
 from hybridpd.hybrid.automaton import HybridAutomaton, ZenoOptions, run_hybrid
 

@@ -39,7 +39,7 @@ from hybridpd.model import (
     check_positive,
 )
 from hybridpd.pair import symbolic
-from hybridpd.pair.batch import STATUS_IMPACT, STATUS_STICK, _eval, next_impact
+from hybridpd.pair.batch import STATUS_IMPACT, STATUS_STICK, _eval, next_impact, turning_margins
 
 __all__ = ["REASONS", "OrbitArrays", "SymmetricOrbitResult", "symmetric_orbit", "symmetric_orbits"]
 
@@ -68,7 +68,6 @@ def _viability_kernel(P, case, phi0, x10, v, x20, y2p, tau, tol, margin, nsamp):
     marg = np.full(N, np.nan)
     for i in range(N):
         p = P[i]
-        L = p[5]
         st, t, wall, X1, _Y1, _X2, _Y2, _graze = next_impact(
             p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i], tau[i] * (1 + 10 * _END_RTOL), tol)
         if st == STATUS_STICK:
@@ -86,31 +85,8 @@ def _viability_kernel(P, case, phi0, x10, v, x20, y2p, tau, tol, margin, nsamp):
             w_c[i] = wall
             x_c[i] = X1
         if margin:
-            # turning points of z3 on (0, tau): sign changes of z4 on a grid, then bisection
-            m = 1.0
-            h = tau[i] / nsamp
-            prev = 0.0
-            for k in range(1, nsamp):
-                s = k * h
-                r = _eval(p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i], s, 0.0)
-                z4 = r[1] - r[3]
-                if k > 1 and z4 * prev < 0.0:
-                    a = s - h
-                    b = s
-                    fa = prev
-                    for _ in range(60):
-                        c = 0.5 * (a + b)
-                        rc = _eval(p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i], c, 0.0)
-                        fc = rc[1] - rc[3]
-                        if fc * fa > 0.0:
-                            a = c
-                            fa = fc
-                        else:
-                            b = c
-                    rc = _eval(p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i], 0.5 * (a + b), 0.0)
-                    m = min(m, (L - abs(rc[0] - rc[2])) / L)
-                prev = z4
-            marg[i] = m
+            marg[i] = turning_margins(p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i], tau[i],
+                                      nsamp)[0]
     return code, t_c, w_c, x_c, marg
 
 

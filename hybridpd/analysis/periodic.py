@@ -25,8 +25,8 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
+from hybridpd._jit import njit
 from hybridpd._repr import compact_repr
 from hybridpd.analysis.hybridmap import (
     ST_RETURNED,

@@ -56,11 +56,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from hybridpd._jit import njit
 from hybridpd.model import Case, check_finite, check_odd_order, check_positive
 from hybridpd.pair import symbolic
-from hybridpd.pair.batch import _eval
+from hybridpd.pair.batch import _eval, turning_margins
 
 __all__ = ["KINDS", "PARAMETERS", "Axis", "Plane", "TestValues", "make_plane"]
 
@@ -154,42 +154,10 @@ def _margin_kernel(P, case, phi0, x10, v, x20, y2p, tau, nsamp):
     acc = np.full(N, np.nan)
     for i in range(N):
         p = P[i]
-        L = p[5]
         r0 = _eval(p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i], 0.0, 0.0)
         acc[i] = r0[4]
-        m = 1.0
-        m2 = 1.0
-        h = tau[i] / nsamp
-        prev = 0.0
-        for k in range(1, nsamp):
-            s = k * h
-            r = _eval(p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i], s, 0.0)
-            z4 = r[1] - r[3]
-            if k > 1 and z4 * prev < 0.0:
-                a = s - h
-                b = s
-                fa = prev
-                for _ in range(64):
-                    c = 0.5 * (a + b)
-                    if c <= a or c >= b:
-                        break
-                    rc = _eval(p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i], c, 0.0)
-                    fc = rc[1] - rc[3]
-                    if fc * fa > 0.0:
-                        a = c
-                        fa = fc
-                    else:
-                        b = c
-                rc = _eval(p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i], 0.5 * (a + b), 0.0)
-                mk = (L - abs(rc[0] - rc[2])) / L
-                if mk < m:
-                    m2 = m
-                    m = mk
-                elif mk < m2:
-                    m2 = mk
-            prev = z4
-        marg[i] = m
-        marg2[i] = m2
+        marg[i], marg2[i] = turning_margins(p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i],
+                                            tau[i], nsamp)
     return marg, marg2, acc
 
 

@@ -171,6 +171,50 @@ def _eval(params, case, phi0, x10, y10, x20, y20, tau, dmax):
     return x1, y1, x2, y2, a2, a3, M2, M3
 
 
+
+@njit(cache=True)
+def turning_margins(params, case, phi0, x1, y1, x2, y2, tau, nsamp):
+    """The two smallest ``(L - |z3|)/L`` at interior turning points of ``z3`` on ``(0, tau)``.
+
+    Turning points are sign changes of ``z4 = y1 - y2`` on a uniform grid of ``nsamp``
+    intervals, refined by bisection; the state is the flight from ``(x1, y1, x2, y2)`` at
+    time ``phi0``. Returns ``(m, m2)``, each 1 when there is no such turning point; where
+    both vanish two turning points graze at once.
+    """
+    L = params[5]
+    m = 1.0
+    m2 = 1.0
+    h = tau / nsamp
+    prev = 0.0
+    for k in range(1, nsamp):
+        s = k * h
+        r = _eval(params, case, phi0, x1, y1, x2, y2, s, 0.0)
+        z4 = r[1] - r[3]
+        if k > 1 and z4 * prev < 0.0:
+            a = s - h
+            b = s
+            fa = prev
+            for _ in range(64):
+                c = 0.5 * (a + b)
+                if c <= a or c >= b:
+                    break
+                rc = _eval(params, case, phi0, x1, y1, x2, y2, c, 0.0)
+                fc = rc[1] - rc[3]
+                if fc * fa > 0.0:
+                    a = c
+                    fa = fc
+                else:
+                    b = c
+            rc = _eval(params, case, phi0, x1, y1, x2, y2, 0.5 * (a + b), 0.0)
+            mk = (L - abs(rc[0] - rc[2])) / L
+            if mk < m:
+                m2 = m
+                m = mk
+            elif mk < m2:
+                m2 = mk
+        prev = z4
+    return m, m2
+
 @njit(cache=True)
 def _safe_step(g, gd, gdd, M2, M3, dmax, ztol):
     """Largest step ``<= dmax`` on which ``g`` provably stays positive (0 if none is proven).
