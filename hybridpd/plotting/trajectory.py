@@ -84,10 +84,10 @@ def plot_trajectory_samples(t, q, v, *, dofs=None, contacts=(), impact_times=(),
     if it.size:
         ax.plot(it, np.full(it.size, np.nanmin(q) if q.size else 0.0), "k|", ms=8,
                 label="impacts")
-    _shade(ax, sticking)
+    _shade(ax, sticking, label="sticking")
     ax.set_xlabel("t")
     ax.set_ylabel("position")
-    ax.legend(loc="upper right", fontsize=8, ncol=min(n + 1, 4))
+    ax.legend(loc="best", fontsize=8, ncol=min(n + 2, 5))
     if title:
         ax.set_title(title, fontsize=9)
     if contacts:
@@ -109,7 +109,7 @@ def plot_trajectory_samples(t, q, v, *, dofs=None, contacts=(), impact_times=(),
         _shade(axg, sticking)
         axg.set_xlabel("t")
         axg.set_ylabel("gap")
-        axg.legend(loc="upper right", fontsize=8)
+        axg.legend(loc="best", fontsize=8)
     for i in range(npp):
         axp = fig.add_subplot(gs[rows - 1, i])
         axp.plot(q[:, i], v[:, i], lw=0.8, color=f"C{i}")
@@ -134,9 +134,9 @@ def _gap_label(c, dofs, k):
     return f"{c['name'] or f'contact {k}'}: {text}"
 
 
-def _shade(ax, sticking):
-    for s in sticking:
-        ax.axvspan(s[0], s[1], color="tab:red", alpha=0.15)
+def _shade(ax, sticking, label=None):
+    for k, s in enumerate(sticking):
+        ax.axvspan(s[0], s[1], color="tab:red", alpha=0.15, label=label if k == 0 else None)
 
 
 def plot_trajectory(traj, L, t=None, fig=None):
