@@ -15,7 +15,7 @@ from hybridpd.cli._common import EXIT_BAD_INPUT, Parser, UsageError
 
 #: Command modules, in the order the help lists them.
 COMMANDS = ("simulate", "orbit", "regions", "basin", "boundaries", "bifurcation", "design",
-            "reproduce")
+            "plot", "reproduce")
 
 
 DESCRIPTION = """\

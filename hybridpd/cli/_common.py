@@ -120,13 +120,17 @@ def command(sub, name: str, *, help: str, description: str, example: str):
 JSON_HELP = "print one JSON object on stdout instead of the summary"
 
 
-def add_sweep(p):
+def add_sweep(p, out=(".nc", ".zarr", ".npz"), what="the result"):
     p.add_argument("--executor", default="serial", choices=["serial", "processes", "dask"],
                    help="where the grid points run: in this process, a process pool, or a "
                         "Dask cluster (dask.distributed)")
     p.add_argument("--workers", type=int, default=None,
                    help="worker count (default: all cores)")
-    p.add_argument("--out", default=None, help="write the result to this file")
+    p.add_argument("--out", default=None, metavar="FILE",
+                   help=f"write the result to this file ({', '.join(out)}, by suffix; "
+                        "draw it later with 'hybridpd plot FILE')")
+    p.add_argument("--plot", default=None, metavar="IMAGE",
+                   help=f"draw {what} to this .png, .pdf or .svg")
     p.add_argument("--json", action="store_true", help=JSON_HELP)
     add_quiet(p)
 
@@ -140,3 +144,44 @@ def add_quiet(p):
 def progress_wanted(args) -> bool:
     # The reporter picks a bar (terminal) or plain lines (logs); only --quiet silences it.
     return not getattr(args, "quiet", False)
+
+
+#: Suffixes of the images that --plot and ``hybridpd plot --out`` write.
+IMAGE_SUFFIXES = (".png", ".pdf", ".svg")
+
+
+def check_image(path, flag: str = "--plot"):
+    """Refuse (ValueError, before any computation) an image path matplotlib is not asked to
+    write: only :data:`IMAGE_SUFFIXES`."""
+    return _check(path, flag, IMAGE_SUFFIXES)
+
+
+def check_out(path, flag: str = "--out", allowed=None):
+    """Refuse (ValueError, before any computation) a result path whose suffix cannot be
+    written (default: ``.nc``, ``.zarr``, ``.npz``)."""
+    from hybridpd.sweeps.labelled import SUFFIXES
+
+    return _check(path, flag, allowed or SUFFIXES)
+
+
+def _check(path, flag, allowed):
+    from hybridpd.sweeps.labelled import check_suffix
+
+    if path is None:
+        return None
+    try:
+        check_suffix(path, flag, allowed)
+    except ValueError:
+        choice = allowed[0] if len(allowed) == 1 else (
+            ", ".join(allowed[:-1]) + " or " + allowed[-1])
+        raise ValueError(f"{flag} must end in {choice} (what this command writes), got "
+                         f"{str(path)!r}") from None
+    return path
+
+
+def save_figure(fig, path) -> None:
+    """Write `fig` to `path` (format from the suffix), creating the folder."""
+    from pathlib import Path
+
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=130)

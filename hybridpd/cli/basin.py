@@ -3,7 +3,16 @@ from __future__ import annotations
 
 import json
 
-from hybridpd.cli._common import add_plant, add_sweep, clearance, command, progress_wanted
+from hybridpd.cli._common import (
+    add_plant,
+    add_sweep,
+    check_image,
+    check_out,
+    clearance,
+    command,
+    progress_wanted,
+    save_figure,
+)
 
 DESCRIPTION = ("Iterates the impact map from every point of a section slice in the "
                "(x1, y1) plane (the other section coordinates at their fixed-point "
@@ -15,7 +24,7 @@ def register(sub):
                 description=DESCRIPTION,
                 example=("hybridpd basin --case collocated --mu 0.1 --e 0.5 --gamma "
                          "0.75 --omega 5 --kp 10 --kv 20 --x1 -3 5 100 --y1 -2 10 100"
-                         " --executor processes"))
+                         " --executor processes --out basin.npz --plot basin.png"))
     add_plant(p, xm=False, gamma=True)
     p.add_argument("--e", type=float, required=True,
                    help="restitution coefficient in [0, 1]")
@@ -39,7 +48,7 @@ def register(sub):
     p.add_argument("--max-extensions", type=int, default=3,
                    help="window extensions while the symmetric orbit's basin touches the edge "
                         "(0: keep the window)")
-    add_sweep(p)
+    add_sweep(p, out=(".npz",), what="the basin (coloured by attractor)")
     p.set_defaults(func=run)
 
 
@@ -48,6 +57,8 @@ def run(args) -> int:
     from hybridpd.model import ImpactPair, PDGains
     from hybridpd.sweeps.basins import LABELS, ImpactMapper, attractor_basin
 
+    check_out(args.out, allowed=(".npz",))
+    check_image(args.plot)
     L, x10 = clearance(args)
     orb = symmetric_orbit(ImpactPair(args.mu, args.e, L, args.m2), PDGains(args.kp, args.kv),
                           args.omega, x10=x10, n=args.n, case=args.case)
@@ -79,6 +90,10 @@ def run(args) -> int:
     b = ab.basin
     if args.out:
         ab.save(args.out)
+    if args.plot:
+        from hybridpd.plotting.basins import plot_basin
+
+        save_figure(plot_basin(ab), args.plot)
     fp = b.fixed_point
     if args.json:
         print(json.dumps({

@@ -5,6 +5,8 @@ import argparse
 import json
 import math
 
+from hybridpd.cli._common import check_image
+
 #: Parameters the command can sweep (``--param NAME``).
 SWEEPABLE = ("kp", "kv", "e", "mu", "gamma", "omega", "m2")
 _REQUIRED = ("e", "mu", "gamma", "omega", "kp", "kv")
@@ -64,7 +66,8 @@ def register(sub):
     p.add_argument("--max-period", type=int, default=32,
                    help="largest period detected (default 32)")
     p.add_argument("--out", required=True, help="write the diagram (.npz)")
-    p.add_argument("--plot", default=None, metavar="PNG", help="also draw the diagram (PNG)")
+    p.add_argument("--plot", default=None, metavar="IMAGE",
+                   help="also draw the diagram (.png, .pdf or .svg)")
     p.add_argument("--coordinate", default="z1",
                    choices=["phi", "z1", "z2", "z4", "x1", "y1", "x2", "y2"],
                    help="section coordinate on the plot's y axis (default z1)")
@@ -110,8 +113,7 @@ def run(args) -> int:
                          f"({args.iterations})")
     if not str(args.out).endswith(".npz"):
         raise ValueError(f"--out must be a .npz file, got {args.out!r}")
-    if args.plot is not None and not str(args.plot).lower().endswith(".png"):
-        raise ValueError(f"--plot must be a .png file, got {args.plot!r}")
+    check_image(args.plot)
     values = np.linspace(lo, hi, num)
     v0 = {k: getattr(args, k) for k in ("e", "mu", "gamma", "omega", "kp", "kv", "m2")}
     v0["m2"] = 1.0 if v0["m2"] is None else v0["m2"]

@@ -3,7 +3,16 @@ from __future__ import annotations
 
 import json
 
-from hybridpd.cli._common import add_plant, add_sweep, clearance, command, progress_wanted
+from hybridpd.cli._common import (
+    add_plant,
+    add_sweep,
+    check_image,
+    check_out,
+    clearance,
+    command,
+    progress_wanted,
+    save_figure,
+)
 
 DESCRIPTION = ("Maps, on a grid of PD gains (kp, kv) and for each restitution "
                "coefficient e, where the symmetric orbit exists (with viability) and "
@@ -15,7 +24,7 @@ def register(sub):
                 description=DESCRIPTION,
                 example=("hybridpd regions --case collocated --mu 0.1 --e 0.1 0.5 0.9"
                          " --gamma 0.75 --omega 5 --kp 0.1 50 200 --kv 0.1 50 200 "
-                         "--out regions.nc"))
+                         "--out regions.nc --plot regions.png"))
     add_plant(p, xm=False, gamma=True)
     p.add_argument("--e", type=float, nargs="+", required=True,
                    help="one or more restitution coefficients in [0, 1]")
@@ -25,13 +34,15 @@ def register(sub):
                    help="grid axis: NUM points from MIN to MAX")
     p.add_argument("--kv", type=float, nargs=3, required=True, metavar=("MIN", "MAX", "NUM"),
                    help="grid axis: NUM points from MIN to MAX")
-    add_sweep(p)
+    add_sweep(p, what="the region map (one panel per e)")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
     from hybridpd.sweeps.regions import region_map
 
+    check_out(args.out)
+    check_image(args.plot)
     L, x10 = clearance(args)
     for nm in ("kp", "kv"):
         num = getattr(args, nm)[2]
@@ -43,6 +54,10 @@ def run(args) -> int:
                     progress=progress_wanted(args))
     if args.out:
         rm.save(args.out)
+    if args.plot:
+        from hybridpd.plotting.regions import plot_region_panels
+
+        save_figure(plot_region_panels(rm), args.plot)
     if args.json:
         print(json.dumps(rm.to_dict()))
         return 0

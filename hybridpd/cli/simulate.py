@@ -10,7 +10,15 @@ from __future__ import annotations
 import json
 import math
 
-from hybridpd.cli._common import JSON_HELP, UsageError, case_type, command
+from hybridpd.cli._common import (
+    JSON_HELP,
+    UsageError,
+    case_type,
+    check_image,
+    check_out,
+    command,
+    save_figure,
+)
 
 # the pair options: required without --model, forbidden with it
 _PAIR = ("case", "mu", "m2", "omega", "L", "gamma", "x10", "xm", "e", "kp", "kv", "x0")
@@ -29,7 +37,8 @@ def register(sub):
                 example=("hybridpd simulate --case collocated --mu 0.1 --e 0.5 --L "
                          "0.75 --omega 5 --kp 10 --kv 20 --xm 1 --x0 0.3 0.5 0 0 "
                          "--t-end 10\n  hybridpd simulate --model "
-                         "examples/models/drivetrain.toml --t-end 20 --json"))
+                         "examples/models/drivetrain.toml --t-end 20 --out run.json "
+                         "--plot run.png"))
     p.add_argument("--model", default=None, metavar="FILE.toml",
                    help="mechanical model file (then the impact-pair options are not used)")
     p.add_argument("--case", default=None, type=case_type, metavar="CASE",
@@ -57,6 +66,14 @@ def register(sub):
     p.add_argument("--max-impacts", type=int, default=100_000,
                    help="stop after this many impacts (the run says why it stopped)")
     p.add_argument("--json", action="store_true", help=JSON_HELP)
+    p.add_argument("--out", default=None, metavar="FILE.json",
+                   help="write the JSON result plus dense samples of the trajectory (times, "
+                        "positions q and velocities v of every DOF), for 'hybridpd plot'")
+    p.add_argument("--samples", type=int, default=2000,
+                   help="number of sampling times written by --out and drawn by --plot")
+    p.add_argument("--plot", default=None, metavar="IMAGE",
+                   help="draw the trajectory (positions, gaps, impacts, phase portraits) "
+                        "to this .png, .pdf or .svg")
     p.set_defaults(func=run)
 
 
@@ -101,6 +118,10 @@ def geometry(args):
 
 
 def run(args) -> int:
+    check_out(args.out, "--out", (".json",))
+    check_image(args.plot)
+    if not 2 <= args.samples <= 1_000_000:
+        raise ValueError(f"--samples must be in [2, 1000000], got {args.samples}")
     if args.model is not None:
         given = [f"--{k.replace('_', '-')}" for k in _PAIR if getattr(args, k) is not None]
         if given:
@@ -122,6 +143,10 @@ def _run_model(args) -> int:
     model = load_model(args.model)
     traj = model.simulate(args.t_end, max_impacts=args.max_impacts)
     d = traj.to_dict()
+    contacts = [{"name": c.name, "normal": [float(w) for w in c.normal],
+                 "lo": c.lo, "hi": c.hi} for c in model.contacts]
+    _write(args, d, traj.mechanical, model.t0, traj.t_final, model.system.dofs, contacts,
+           title=str(model.source), parameters={"model": str(model.source)})
     if args.json:
         print(json.dumps(d))
         return 0
@@ -148,6 +173,13 @@ def _run_pair(args) -> int:
                                 args.case)
     traj = sysm.simulate(args.x0, (0.0, args.t_end), max_impacts=args.max_impacts)
     d = traj.to_dict()
+    params = {"case": args.case, "mu": args.mu, "m2": args.m2, "e": args.e, "L": L,
+              "xm": xm, "omega": args.omega, "kp": args.kp, "kv": args.kv}
+    _write(args, d, lambda t: traj(t)[:, :4], 0.0, traj.t_final, ("x1", "x2"),
+           [{"name": "gap", "normal": [1.0, -1.0], "lo": -L, "hi": L}],
+           title=(f"{args.case} impact pair: mu = {args.mu:g}, e = {args.e:g}, L = {L:g}, "
+                  f"kp = {args.kp:g}, kv = {args.kv:g}, xm = {xm:.6g}, "
+                  f"omega = {args.omega:g}"), parameters=params)
     if args.json:
         print(json.dumps(d))
         return 0
@@ -164,3 +196,45 @@ def _run_pair(args) -> int:
         print(f"  sticking on [{a:.10f}, {b:.10f}]")
     return 0
 
+
+
+def trajectory_record(result: dict, state, t0, t_final, dofs, contacts, *, samples=2000,
+                      title=None, parameters=None) -> dict:
+    """The ``simulate --out`` JSON document: the ``--json`` result plus dense samples.
+
+    ``state(t)`` returns the mechanical states ``[q_1, v_1, ..., q_n, v_n]`` at the times
+    ``t`` (shape ``(len(t), 2n)``); the record holds ``samples = {"t", "q", "v"}`` with
+    ``q`` and ``v`` of shape ``(len(t), n)``, the DOF names, the contacts (normal and
+    bounds of each gap), and ``"kind": "trajectory"`` so that ``hybridpd plot`` recognises
+    it.
+    """
+    import numpy as np
+
+    t = np.linspace(float(t0), float(t_final), int(samples))
+    Z = np.asarray(state(t), float)
+    return {"kind": "trajectory", "format": 1, "title": title, "dofs": list(dofs),
+            "contacts": contacts, "parameters": parameters or {}, **result,
+            "samples": {"t": t.tolist(), "q": Z[:, 0::2].tolist(), "v": Z[:, 1::2].tolist()}}
+
+
+def _write(args, result, state, t0, t_final, dofs, contacts, *, title, parameters):
+    if args.out is None and args.plot is None:
+        return
+    from pathlib import Path
+
+    rec = trajectory_record(result, state, t0, t_final, dofs, contacts,
+                            samples=args.samples, title=title, parameters=parameters)
+    if args.out is not None:
+        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.out).write_text(json.dumps(rec))
+    if args.plot is not None:
+        from hybridpd.plotting.trajectory import plot_trajectory_samples
+
+        imp = result["impacts"]
+        fig = plot_trajectory_samples(
+            rec["samples"]["t"], rec["samples"]["q"], rec["samples"]["v"], dofs=dofs,
+            contacts=contacts, impact_times=[d["t"] for d in imp],
+            impact_contacts=[d["contact"] for d in imp],
+            impact_states=[d["pre"] for d in imp] if imp else None,
+            sticking=result["sticking"], title=title)
+        save_figure(fig, args.plot)

@@ -5,17 +5,27 @@
 * :func:`plot_basin` — Figs 6-7: the basin slice ``(x1, y1)`` coloured by the attractor each
   point reaches (colour-blind-safe), the attractors' section points marked, each basin's share
   in the legend.
-* :func:`plot_trajectory` — positions, gap and impacts against time, and the phase portrait.
+* :func:`plot_trajectory` — positions, gap and impacts against time, and the phase portrait;
+  :func:`plot_model_trajectory` the same for a mechanical model with any number of DOFs,
+  and :func:`plot_trajectory_samples` from arrays (e.g. a ``simulate --out`` JSON file).
 * :func:`plot_bifurcation` — a brute-force bifurcation diagram (iterates of the impact map
   against a parameter) with continued branches overlaid.
 * :func:`plot_region_panels` — Figs 4-5 with one panel per ``e``;
   :func:`plot_orbit_phase` — Fig. 3, the secondary mass's phase plane on the orbit.
+* :func:`plot_file` — any result file hybridpd writes, its kind read from its metadata
+  (``hybridpd plot``).
 """
 from hybridpd.plotting.basins import plot_basin
 from hybridpd.plotting.bifurcation import plot_bifurcation
+from hybridpd.plotting.files import plot_file
 from hybridpd.plotting.orbit import plot_orbit_phase
 from hybridpd.plotting.regions import plot_region_panels, plot_regions
-from hybridpd.plotting.trajectory import plot_trajectory
+from hybridpd.plotting.trajectory import (
+    plot_model_trajectory,
+    plot_trajectory,
+    plot_trajectory_samples,
+)
 
-__all__ = ["plot_basin", "plot_bifurcation", "plot_orbit_phase", "plot_region_panels",
-           "plot_regions", "plot_trajectory"]
+__all__ = ["plot_basin", "plot_bifurcation", "plot_file", "plot_model_trajectory",
+           "plot_orbit_phase", "plot_region_panels", "plot_regions", "plot_trajectory",
+           "plot_trajectory_samples"]

@@ -61,6 +61,7 @@ from hybridpd.analysis.continuation._common import (
     design_xm,
 )
 from hybridpd.analysis.continuation.branch import continue_orbit
+from hybridpd.analysis.continuation.branchio import load_branch
 from hybridpd.analysis.continuation.events import BifurcationEvent, Branch
 from hybridpd.analysis.continuation.newton import map_power_jacobian
 from hybridpd.analysis.continuation.periodic import PeriodicOrbit, find_periodic_orbit
@@ -85,6 +86,7 @@ __all__ = [
     "continue_symmetric",
     "design_xm",
     "find_periodic_orbit",
+    "load_branch",
     "map_power_jacobian",
     "plot_branch",
     "switch_branch",

@@ -142,6 +142,13 @@ class Branch:
         """The events of one kind."""
         return [ev for ev in self.events if ev.kind == kind]
 
+    def save(self, path):
+        """Write to ``.npz`` (read back with
+        :func:`hybridpd.analysis.continuation.load_branch`); returns the path."""
+        from hybridpd.analysis.continuation.branchio import save_branch
+
+        return save_branch(self, path)
+
     def to_dict(self) -> dict:
         """JSON-ready summary (arrays as lists, complex numbers as ``[re, im]``)."""
         return {
