@@ -103,8 +103,10 @@ def _conclusion(con, d, w):
                 else:
                     w(f"  - {_Q[q]}: collocated {_ps(r['collocated'])} -> {r['verdict']}")
         elif k == 4:
-            w(f"- m2 = {m2}: converged share of the window, collocated "
-              f"{_ps(chk['collocated'])}, non-collocated {_ps(chk['noncollocated'])} "
+            area = lambda v: ", ".join("-" if x is None else _f(x, 4) for x in v)
+            w(f"- m2 = {m2}: area of the symmetric orbit's basin in the (x1, y1) slice (the "
+              f"windows may have been extended), collocated {area(chk['collocated'])}, "
+              f"non-collocated {area(chk['noncollocated'])} "
               f"(ratio {', '.join(_f(x, 3) for x in chk['ratio'])}) -> {chk['verdict']}")
         else:
             rs, ra = chk["robust_stable_fraction"], chk["robust_fraction_with_amplitude"]
@@ -128,14 +130,25 @@ def _runs(d, w):
               f"{_f(o['spectral_radius'], 6)} | {st} | {_f(o['viability_margin'], 4)} |")
     w("")
     w("## Basins (Figs 6-7)\n")
-    w("| m2 | case | e | converged (share of the window) | labels |")
-    w("|---|---|---|---|---|")
+    w("Each point of the slice is labelled by the attractor it reaches (the symmetric orbit "
+      "by the paper's criterion, other periodic orbits of P found and refined by Newton on "
+      "P^k); the window is extended while the symmetric orbit's basin reaches its edge.\n")
+    w("| m2 | case | e | window (x1; y1) | symmetric orbit | attractors (share of the window) |")
+    w("|---|---|---|---|---|---|")
     for r in d["runs"]:
         for b in r["basins"]:
-            lab = ("empty: " + b["why_empty"] if not b["measured"] else
-                   ", ".join(f"{k}: {v}" for k, v in b["label_counts"].items() if v))
-            w(f"| {r['m2']:g} | {b['case']} | {b['e']:g} | {_p(b['converged_fraction'])} | "
-              f"{lab} |")
+            if not b["measured"]:
+                w(f"| {r['m2']:g} | {b['case']} | {b['e']:g} | - | - | empty: "
+                  f"{b['why_empty']} |")
+                continue
+            x0, x1, y0, y1 = b["window"]
+            win = f"[{x0:.3g}, {x1:.3g}]; [{y0:.3g}, {y1:.3g}]"
+            if b.get("reaches_edge"):
+                win += " (basin reaches the edge)"
+            att = ", ".join(f"{a['name']}: {a['percent']}" for a in b.get("attractors", ())
+                            if a.get("count"))
+            w(f"| {r['m2']:g} | {b['case']} | {b['e']:g} | {win} | "
+              f"{_p(b['converged_fraction'])} | {att} |")
     w("")
 
 

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.continuation._common import (
     _END_GRAZE,
     _JUMP_TOL,
@@ -57,6 +58,7 @@ class BifurcationEvent:
     located: bool = False
     viable: bool = True
     xm: float = np.nan
+    __repr__ = compact_repr
 
     def to_dict(self) -> dict:
         """JSON-ready summary."""
@@ -134,6 +136,7 @@ class Branch:
     fixed: dict
     n_rejected: int = 0
     newton_iterations: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    __repr__ = compact_repr
 
     def __len__(self) -> int:
         return int(self.parameter.size)

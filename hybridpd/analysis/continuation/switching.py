@@ -40,6 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hybridpd._repr import compact_repr
 from hybridpd.analysis.continuation._common import (
     _Design,
     _in_domain,
@@ -117,6 +118,7 @@ class BranchSwitch:
     branches: tuple
     design: dict | None
     reason: str
+    __repr__ = compact_repr
 
     @property
     def ok(self) -> bool:
