@@ -56,8 +56,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from hybridpd._jit import njit  # lazily: the CLI imports this module for every command
 from hybridpd.model import Case, check_finite, check_odd_order, check_positive
 from hybridpd.pair import symbolic
 from hybridpd.pair.batch import _eval
