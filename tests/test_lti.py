@@ -354,15 +354,19 @@ def test_filtered_pd_rate_down_to_tiny_filters(case):
 
 @pytest.mark.slow
 def test_example_script(tmp_path):
-    import runpy
+    # the full (not --quick) run; the example imports _out from examples/, so it runs as a
+    # script with this checkout first on PYTHONPATH, like tests/test_examples.py
+    import os
+    import subprocess
     import sys
+    from pathlib import Path
 
+    root = Path(__file__).resolve().parents[1]
+    path = os.pathsep.join(filter(None, [str(root), os.environ.get("PYTHONPATH")]))
+    r = subprocess.run([sys.executable, str(root / "examples" / "filtered_pd.py"),
+                        "--out", str(tmp_path)], check=False, cwd=tmp_path, capture_output=True,
+                       text=True, env=dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=path),
+                       timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
     out = tmp_path / "filtered_pd.png"
-    argv = sys.argv
-    try:
-        sys.argv = ["filtered_pd.py", str(out)]
-        runpy.run_path(str(__import__("pathlib").Path(__file__).parents[1] / "examples"
-                           / "filtered_pd.py"), run_name="__main__")
-    finally:
-        sys.argv = argv
     assert out.exists() and out.stat().st_size > 10_000
