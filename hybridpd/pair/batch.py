@@ -173,13 +173,15 @@ def _eval(params, case, phi0, x10, y10, x20, y20, tau, dmax):
 
 
 @njit(cache=True)
-def turning_margins(params, case, phi0, x1, y1, x2, y2, tau, nsamp):
+def turning_margins(params, case, phi0, x1, y1, x2, y2, tau, nsamp, approached=False):
     """The two smallest ``(L - |z3|)/L`` at interior turning points of ``z3`` on ``(0, tau)``.
 
     Turning points are sign changes of ``z4 = y1 - y2`` on a uniform grid of ``nsamp``
     intervals, refined by bisection; the state is the flight from ``(x1, y1, x2, y2)`` at
     time ``phi0``. Returns ``(m, m2)``, each 1 when there is no such turning point; where
-    both vanish two turning points graze at once.
+    both vanish two turning points graze at once. With ``approached`` a maximum of ``z3`` is
+    measured to ``+L`` and a minimum to ``-L`` only (a small hop away from the wall just
+    left is then not a near-grazing).
     """
     L = params[5]
     m = 1.0
@@ -206,7 +208,13 @@ def turning_margins(params, case, phi0, x1, y1, x2, y2, tau, nsamp):
                 else:
                     b = c
             rc = _eval(params, case, phi0, x1, y1, x2, y2, 0.5 * (a + b), 0.0)
-            mk = (L - abs(rc[0] - rc[2])) / L
+            z3 = rc[0] - rc[2]
+            if not approached:
+                mk = (L - abs(z3)) / L
+            elif prev > 0.0:
+                mk = (L - z3) / L      # z4: + -> -, a maximum of z3, towards +L
+            else:
+                mk = (z3 + L) / L      # a minimum of z3, towards -L
             if mk < m:
                 m2 = m
                 m = mk

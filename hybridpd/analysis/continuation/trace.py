@@ -7,7 +7,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridpd._jit import njit
 from hybridpd._repr import compact_repr
 from hybridpd.analysis.continuation._common import _impact_map, _min, _section_point
 from hybridpd.analysis.impactmap import ImpactMap
@@ -15,10 +14,10 @@ from hybridpd.model import check_int
 from hybridpd.pair.batch import (
     STATUS_IMPACT,
     STATUS_STICK,
-    _eval,
     _impact_velocities,
     next_impact,
     stick_release,
+    turning_margins,
 )
 
 
@@ -97,7 +96,6 @@ class MapTrace:
         return self.signature == ((-1, "impact"), (1, "impact"))
 
 
-@njit(cache=True)
 def _flight_margin(params, case, t0, x1, y1, x2, y2, tau, nsamp):
     """Smallest ``distance / L`` to the wall approached at interior turning points of ``z3``.
 
@@ -105,38 +103,9 @@ def _flight_margin(params, case, t0, x1, y1, x2, y2, tau, nsamp):
     refined by bisection. A maximum of ``z3`` is measured to ``+L``, a minimum to ``-L``
     (a small hop away from the wall just left is not a near-grazing).
     """
-    L = params[5]
-    m = 1.0
     if not tau > 0.0:
-        return m
-    h = tau / nsamp
-    prev = 0.0
-    for k in range(1, nsamp):
-        s = k * h
-        r = _eval(params, case, t0, x1, y1, x2, y2, s, 0.0)
-        z4 = r[1] - r[3]
-        if k > 1 and z4 * prev < 0.0:
-            a = s - h
-            b = s
-            fa = prev
-            for _ in range(60):
-                c = 0.5 * (a + b)
-                rc = _eval(params, case, t0, x1, y1, x2, y2, c, 0.0)
-                fc = rc[1] - rc[3]
-                if fc * fa > 0.0:
-                    a = c
-                    fa = fc
-                else:
-                    b = c
-            rc = _eval(params, case, t0, x1, y1, x2, y2, 0.5 * (a + b), 0.0)
-            z3 = rc[0] - rc[2]
-            if prev > 0.0:
-                d = (L - z3) / L       # z4: + -> -, a maximum of z3, towards +L
-            else:
-                d = (z3 + L) / L       # a minimum of z3, towards -L
-            m = min(m, d)
-        prev = z4
-    return m
+        return 1.0
+    return turning_margins(params, case, t0, x1, y1, x2, y2, tau, nsamp, True)[0]
 
 
 def trace_map(impact_map_: ImpactMap, s, *, margin: bool = True,
