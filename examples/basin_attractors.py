@@ -13,7 +13,8 @@ from _out import example_args
 from hybridpd import ImpactPair, PDGains
 from hybridpd.analysis.orbits import symmetric_orbit
 from hybridpd.plotting import plot_basin
-from hybridpd.sweeps.basins import ImpactMapper, attractor_basin
+from hybridpd.sweeps.attractor_basins import attractor_basin
+from hybridpd.sweeps.basins import ImpactMapper
 
 ARGS = example_args(__doc__)
 NUM = 12 if ARGS.quick else 60

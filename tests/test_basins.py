@@ -14,13 +14,11 @@ from hybridpd.analysis.attractors import (
 )
 from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.analysis.orbits import symmetric_orbit
+from hybridpd.sweeps.attractor_basins import attractor_basin, format_percent, load_attractor_basin
 from hybridpd.sweeps.basins import (
     LABELS,
     ImpactMapper,
-    attractor_basin,
     basin_of_attraction,
-    format_percent,
-    load_attractor_basin,
     load_basin,
     section_grid,
 )
@@ -485,3 +483,19 @@ def test_format_percent_is_within_rounding_and_never_at_the_ends(whole, data, di
             assert float(body[1:]) == pytest.approx(step) and p < step
         else:
             assert abs(float(body) - p) <= 0.5 * step + 1e-9 and 0 < float(body) < 100
+
+
+def test_attractor_basin_round_trips_through_every_format(tmp_path):
+    orb = symmetric_orbit(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, case="collocated")
+    ab = attractor_basin(ImpactMapper.from_orbit(orb, n_iter=300), (-3, 5, 10), (-2, 10, 9),
+                         max_points=20, progress=False)
+    ds = ab.to_dataset()
+    assert ds.attractor.dims == ("y1", "x1") and ds.attrs["kind"] == "attractor_basin"
+    for suf in (".nc", ".zarr", ".npz"):
+        r = load_attractor_basin(ab.save(tmp_path / f"b{suf}") or tmp_path / f"b{suf}")
+        np.testing.assert_array_equal(r.labels, ab.labels)
+        np.testing.assert_array_equal(r.basin.labels, ab.basin.labels)
+        np.testing.assert_array_equal(r.x1, ab.x1)
+        assert [a.name for a in r.attractors] == [a.name for a in ab.attractors]
+        assert (r.windows, r.edges) == (ab.windows, ab.edges)
+        assert [m.count for m in r.measures()] == [m.count for m in ab.measures()]

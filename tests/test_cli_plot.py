@@ -48,7 +48,8 @@ def files(tmp_path_factory):
     from hybridpd.analysis.bifdiagram import bifurcation_diagram
     from hybridpd.analysis.continuation import continue_symmetric
     from hybridpd.analysis.orbits import symmetric_orbit
-    from hybridpd.sweeps.basins import ImpactMapper, attractor_basin, basin_of_attraction
+    from hybridpd.sweeps.attractor_basins import attractor_basin
+    from hybridpd.sweeps.basins import ImpactMapper, basin_of_attraction
     from hybridpd.sweeps.regions import region_map
 
     d = tmp_path_factory.mktemp("results")
@@ -65,8 +66,9 @@ def files(tmp_path_factory):
         b.save(d / f"basin{suf}")
         out[f"basin{suf}"] = d / f"basin{suf}"
     ab = attractor_basin(mapper, (-3, 5, 6), (-2, 10, 5), extend=False)
-    ab.save(d / "attractors.npz")
-    out["attractor_basin.npz"] = d / "attractors.npz"
+    for suf in (".nc", ".zarr", ".npz"):
+        ab.save(d / f"attractors{suf}")
+        out[f"attractor_basin{suf}"] = d / f"attractors{suf}"
     diag = bifurcation_diagram(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv",
                                [20.0, 22.0, 24.0], iterations=60, keep=16)
     diag.save(d / "diagram.npz")
@@ -82,7 +84,8 @@ def files(tmp_path_factory):
 
 
 KINDS = ["region_map.nc", "region_map.zarr", "region_map.npz", "basin.nc", "basin.zarr",
-         "basin.npz", "attractor_basin.npz", "bifurcation_diagram.npz", "branch.npz",
+         "basin.npz", "attractor_basin.nc", "attractor_basin.zarr", "attractor_basin.npz",
+         "bifurcation_diagram.npz", "branch.npz",
          "trajectory.json", "model_trajectory.json"]
 
 
@@ -168,7 +171,7 @@ def _no_compute(*args, **kwargs):
     (["plot", "FILE", "--out", "x.jpg"], ".png, .pdf or .svg"),
     (["regions", *REGIONS, "--out", "r.png"], ".nc, .zarr or .npz"),
     (["regions", *REGIONS, "--plot", "r.npz"], ".png, .pdf or .svg"),
-    (["basin", *BASIN, "--out", "b.nc"], ".npz"),
+    (["basin", *BASIN, "--out", "b.png"], ".nc, .zarr or .npz"),
     (["basin", *BASIN, "--plot", "b.gif"], ".png, .pdf or .svg"),
     (["simulate", *SIM, "--out", "run.npz"], ".json"),
     (["simulate", *SIM, "--plot", "run"], ".png, .pdf or .svg"),

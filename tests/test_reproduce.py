@@ -11,7 +11,7 @@ from _reproduce_run import SMALL, small_run
 from hybridpd.reproduce import PAPER, SCHEMA, Settings, validate
 from hybridpd.reproduce import conclusions as C
 from hybridpd.reproduce.study import box_fractions
-from hybridpd.sweeps.basins import load_attractor_basin
+from hybridpd.sweeps.attractor_basins import load_attractor_basin
 from hybridpd.sweeps.regions import load_region_map
 
 

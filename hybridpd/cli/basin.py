@@ -55,9 +55,10 @@ def register(sub):
 def run(args) -> int:
     from hybridpd.analysis.orbits import symmetric_orbit
     from hybridpd.model import ImpactPair, PDGains
-    from hybridpd.sweeps.basins import LABELS, ImpactMapper, attractor_basin
+    from hybridpd.sweeps.attractor_basins import attractor_basin
+    from hybridpd.sweeps.basins import LABELS, ImpactMapper
 
-    check_out(args.out, allowed=(".npz",))
+    check_out(args.out)
     check_image(args.plot)
     L, x10 = clearance(args)
     orb = symmetric_orbit(ImpactPair(args.mu, args.e, L, args.m2), PDGains(args.kp, args.kv),

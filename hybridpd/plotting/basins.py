@@ -18,7 +18,8 @@ from hybridpd.analysis.attractors import (
     outcome,
 )
 from hybridpd.plotting._common import figure
-from hybridpd.sweeps.basins import AttractorBasin, BasinResult, format_percent
+from hybridpd.sweeps.attractor_basins import AttractorBasin, format_percent
+from hybridpd.sweeps.basins import BasinResult
 
 __all__ = ["basin_colors", "basin_title", "plot_basin"]
 
@@ -89,7 +90,7 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     Parameters
     ----------
     basin : AttractorBasin or BasinResult
-        An attractor-labelled basin (:func:`hybridpd.sweeps.basins.attractor_basin`), or the
+        An attractor-labelled basin (:func:`hybridpd.sweeps.attractor_basins.attractor_basin`), or the
         paper's labels only (:func:`hybridpd.sweeps.basins.basin_of_attraction`).
     ax : matplotlib Axes, optional
         Draw there; else a new constrained-layout figure.
@@ -105,7 +106,7 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     Notes
     -----
     The legend lists every label present on the grid with its share of the on-section grid
-    (:func:`hybridpd.sweeps.basins.format_percent`), then the markers: the symmetric orbit's
+    (:func:`hybridpd.sweeps.attractor_basins.format_percent`), then the markers: the symmetric orbit's
     fixed point and the section points of the other periodic orbits, projected on the slice
     (they have their own ``phi`` and ``y2``). The slice's fixed coordinates ``phi*`` and
     ``y2*`` are stated under the axes.

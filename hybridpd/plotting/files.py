@@ -149,7 +149,7 @@ def _basin(path, title=None):
 
 def _attractor_basin(path, title=None):
     from hybridpd.plotting.basins import plot_basin
-    from hybridpd.sweeps.basins import load_attractor_basin
+    from hybridpd.sweeps.attractor_basins import load_attractor_basin
 
     return plot_basin(load_attractor_basin(path), title=title)
 

@@ -209,7 +209,7 @@ def render(d: dict) -> str:
       "`fig3_orbit.png`, `fig4_regions_collocated.png`, `fig5_regions_noncollocated.png`, "
       "`fig6_basins_collocated.png`, `fig7_basins_noncollocated.png`, `regions_*.npz` "
       "(`hybridpd.sweeps.regions.load_region_map`), `basin_*.npz` "
-      "(`hybridpd.sweeps.basins.load_attractor_basin`), `robustness.json`.\n")
+      "(`hybridpd.sweeps.attractor_basins.load_attractor_basin`), `robustness.json`.\n")
     w("## Timings (s)\n")
     for k, v in d["timings"].items():
         w(f"- {k}: {v:.2f}")

@@ -172,7 +172,8 @@ def _basin_step(orbit, settings: Settings, *, executor, max_workers, progress):
     basin reaches its edge (at most ``settings.basin_extensions`` times). Returns None when
     the orbit does not exist or is not stable (its basin is empty).
     """
-    from hybridpd.sweeps.basins import ImpactMapper, attractor_basin
+    from hybridpd.sweeps.attractor_basins import attractor_basin
+    from hybridpd.sweeps.basins import ImpactMapper
 
     if not orbit.exists or not orbit.stable:
         return None
