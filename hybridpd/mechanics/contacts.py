@@ -35,21 +35,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hybridpd.model import check_finite
+
 __all__ = ["Contact"]
 
 
 def _opt_float(name, v):
-    if v is None:
-        return None
-    if isinstance(v, bool):
-        raise ValueError(f"{name} must be a number, got {v!r}")
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {v!r}") from None
-    if not math.isfinite(f):
-        raise ValueError(f"{name} must be finite, got {v!r}")
-    return f
+    return None if v is None else check_finite(name, v)
 
 
 @dataclass(frozen=True, eq=False)  # array field: identity semantics

@@ -38,19 +38,13 @@ import numpy as np
 
 from hybridpd._repr import compact_repr
 from hybridpd.mechanics.system import MechanicalSystem
+from hybridpd.model import check_finite
 
 __all__ = ["MechanicalLoop", "Reference", "mechanical_loop"]
 
 
 def _num(name, v, positive=False, nonneg=False):
-    if isinstance(v, bool):
-        raise ValueError(f"{name} must be a number, got {v!r}")
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {v!r}") from None
-    if not math.isfinite(f):
-        raise ValueError(f"{name} must be finite, got {v!r}")
+    f = check_finite(name, v)
     if positive and not f > 0:
         raise ValueError(f"{name} must be > 0, got {v!r}")
     if nonneg and not f >= 0:
