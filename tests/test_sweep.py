@@ -1,12 +1,6 @@
-"""Tests of the generic sweep engine (hybridpd.sweeps.sweep).
+"""Tests of the generic sweep engine (hybridpd.sweeps.sweep): chunking, executors, Dask,
+validation, time-outs and progress (the store's resume and identity: test_sweep_store.py)."""
 
-The functions swept here are module-level so that process-pool and Dask
-workers can import them by name. Calls are counted through a side channel:
-the function writes one empty file per call into ``log_dir/calls`` (this works
-across processes); ``log_dir`` is part of ``func_kwargs``, hence of the sweep
-identity, so every run that must be comparable uses the same ``log_dir`` and
-clears ``calls/`` in between.
-"""
 
 from __future__ import annotations
 
@@ -14,27 +8,37 @@ import concurrent.futures as cf
 import doctest
 import functools
 import json
-import os
-import signal
 import subprocess
 import sys
-import textwrap
 import time
-import uuid
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
+from _sweepfuncs import (
+    REPO,
+    assert_same_outputs,
+    dtype_switch_func,
+    inplace_func,
+    model_func,
+    not_dict_func,
+    object_func,
+    pid_alive,
+    points_grid,
+    sleepy_func,
+    store_status,
+    sum_func,
+    tree_bytes,
+    wait_until,
+    wrong_length_func,
+)
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import hybridpd.sweeps.store as store_mod
 import hybridpd.sweeps.sweep as sweep_mod
 from hybridpd.sweeps.progress import Progress
 from hybridpd.sweeps.sweep import (
     ChunkError,
-    SweepResult,
     default_chunk_size,
     grid_points,
     load_npz,
@@ -43,164 +47,6 @@ from hybridpd.sweeps.sweep import (
     run_sweep,
     save_npz,
 )
-
-REPO = Path(__file__).resolve().parents[1]
-
-# --------------------------------------------------------------------------
-# Module-level sweep functions (importable by workers)
-# --------------------------------------------------------------------------
-
-
-def model_func(chunk, *, log_dir=None, sleep=0.0, slow_at=None):
-    """Mixed dtypes and trailing shapes; optional call log, failure, delay.
-
-    A file ``log_dir/fail_at`` holding a point index makes the chunk starting
-    there raise (the trigger is outside func_kwargs so the identity does not
-    change between the failing and the resumed run).
-    """
-    i = chunk["i"]
-    start = int(i[0])
-    if log_dir is not None:
-        calls = Path(log_dir) / "calls"
-        calls.mkdir(exist_ok=True)
-        (calls / f"{start}-{os.getpid()}-{uuid.uuid4().hex[:6]}").touch()
-        fail = Path(log_dir) / "fail_at"
-        if fail.exists() and int(fail.read_text()) == start:
-            raise RuntimeError(f"boom at point {start}")
-    if sleep:
-        time.sleep(sleep)
-    if slow_at is not None and start == slow_at:
-        time.sleep(60)
-    kp, kv, e = chunk["kp"], chunk["kv"], chunk["e"]
-    disc = kv**2 - 4.0 * kp
-    root = np.sqrt(disc.astype(complex))
-    return {
-        "disc": disc,
-        "stable": disc < e * kp,
-        "count": (np.floor(kp * 7) % 5).astype(np.int64),
-        "eig": np.stack([(-kv + root) / 2, (-kv - root) / 2], axis=1),  # (m, 2) complex
-        "mat": np.stack([np.outer(a, [1, 2, 3]) for a in np.stack([kp, kv], axis=1)]).astype(
-            np.float32
-        ),
-        "u8": (i % 256).astype(np.uint8),
-    }
-
-
-def sum_func(chunk):
-    return {"s": chunk["x0"] + 2 * chunk["x1"]}
-
-
-def wrong_length_func(chunk):
-    return {"y": chunk["x"][:-1]}
-
-
-def object_func(chunk):
-    return {"y": np.array([object()] * len(chunk["x"]))}
-
-
-def not_dict_func(chunk):
-    return chunk["x"]
-
-
-def dtype_switch_func(chunk):
-    x = chunk["x"]
-    return {"y": x.astype(np.int64) if x[0] == 0 else x}
-
-
-def inplace_func(chunk):
-    chunk["x"] *= 2  # modifies its input: must be allowed, and harmless
-    return {"y": chunk["x"]}
-
-
-def sleepy_func(chunk, *, log_dir):
-    (Path(log_dir) / f"pid-{os.getpid()}").touch()
-    time.sleep(30)
-    return {"y": chunk["x"]}
-
-
-def points_grid(n_kp=13, n_kv=11, es=(0.1, 0.5, 0.9)):
-    axes = {
-        "e": np.asarray(es),
-        "kp": np.linspace(0.5, 30.0, n_kp),
-        "kv": np.linspace(0.1, 40.0, n_kv),
-    }
-    pts, shape = grid_points(axes)
-    pts["i"] = np.arange(len(pts["e"]))
-    return pts, shape
-
-
-def assert_same_outputs(a: SweepResult, b: SweepResult):
-    assert list(a.outputs) == list(b.outputs)
-    for k in a.outputs:
-        assert a.outputs[k].dtype == b.outputs[k].dtype, k
-        assert a.outputs[k].shape == b.outputs[k].shape, k
-        np.testing.assert_array_equal(a.outputs[k], b.outputs[k], err_msg=k)
-
-
-def calls_by_start(log_dir: Path) -> list[int]:
-    d = log_dir / "calls"
-    return sorted(int(p.name.split("-")[0]) for p in d.iterdir()) if d.exists() else []
-
-
-def clear_calls(log_dir: Path):
-    d = log_dir / "calls"
-    if d.exists():
-        for p in d.iterdir():
-            p.unlink()
-
-
-def pid_alive(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/status") as fh:
-            return "\nState:\tZ" not in fh.read()
-    except FileNotFoundError:
-        return False
-    except OSError:  # pragma: no cover - non-Linux
-        try:
-            os.kill(pid, 0)
-        except ProcessLookupError:
-            return False
-        return True
-
-
-def tree_bytes(root: Path) -> dict[str, bytes]:
-    """Every file of a store, by relative path (the store's full on-disk content)."""
-    return {str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
-
-
-def store_status(store: Path) -> str:
-    import zarr
-
-    return zarr.open_group(str(store), mode="r").attrs["hybridpd_sweep"]["status"]
-
-
-def done_chunks(store: Path) -> list[int]:
-    """Chunks flagged done in a store (read by Zarr, possibly while another process writes)."""
-    import zarr
-
-    try:
-        flags = zarr.open_group(str(store), mode="r")["_sweep/done"][:]
-    except Exception:  # noqa: BLE001 - not created yet
-        return []
-    return np.flatnonzero(flags).tolist()
-
-
-def chunk_file(store: Path, name: str, i: int) -> Path:
-    """The Zarr chunk file of sweep chunk `i` of output `name` (Zarr format 2 key)."""
-    import zarr
-
-    ndim = zarr.open_group(str(store), mode="r")[name].ndim
-    return store / name / ".".join([str(i)] + ["0"] * (ndim - 1))
-
-
-def wait_until(cond, timeout=20.0, what="condition"):
-    t_end = time.monotonic() + timeout
-    while time.monotonic() < t_end:
-        if cond():
-            return
-        time.sleep(0.02)
-    raise AssertionError(f"timed out waiting for {what}")
-
 
 # --------------------------------------------------------------------------
 # Chunking and helpers
@@ -441,251 +287,6 @@ def test_dask_worker_error_names_chunk(tmp_path, dask_client):
     assert res.n_resumed + res.n_computed == res.n_chunks == 10
 
 
-# --------------------------------------------------------------------------
-# Resume
-# --------------------------------------------------------------------------
-
-
-@pytest.mark.parametrize("executor,workers", [("serial", None), ("processes", 2)])
-def test_resume_after_worker_error(tmp_path, executor, workers):
-    pts, _ = points_grid()  # 429 points
-    log = tmp_path / "log"
-    log.mkdir()
-    kw = {"chunk_size": 40, "func_kwargs": {"log_dir": str(log)}, "metadata": {"run": 1}}
-    ref = run_sweep(model_func, pts, executor="serial", store=tmp_path / "ref.zarr", **kw)
-    clear_calls(log)
-
-    store = tmp_path / "run.zarr"
-    (log / "fail_at").write_text("200")  # chunk 5 of 11
-    with pytest.raises(ChunkError, match=r"chunk 5 \(points 200:240\)") as info:
-        run_sweep(model_func, pts, executor=executor, max_workers=workers, store=store, **kw)
-    assert info.value.chunk_index == 5 and (info.value.start, info.value.stop) == (200, 240)
-    assert "boom at point 200" in repr(info.value.__cause__) or "boom" in str(info.value)
-    saved = done_chunks(store)
-    assert 5 not in saved
-    if executor == "serial":
-        assert saved == [0, 1, 2, 3, 4]  # everything before the failure is on disk
-    else:
-        # Chunks submitted before the failing one were done or running (not
-        # cancellable) when it failed: all collected and saved.
-        assert set(range(5)) <= set(saved)
-    assert store_status(store) == "running"
-    (log / "fail_at").unlink()
-    clear_calls(log)
-
-    res = run_sweep(model_func, pts, executor=executor, max_workers=workers, store=store, **kw)
-    assert res.n_resumed == len(saved)
-    computed = calls_by_start(log)
-    assert computed == sorted(
-        40 * i for i in range(11) if i not in saved
-    )  # resumed chunks not recomputed
-    assert_same_outputs(ref, res)
-    assert tree_bytes(store) == tree_bytes(tmp_path / "ref.zarr")
-
-    # A finished store is returned as is: nothing is recomputed.
-    clear_calls(log)
-    again = run_sweep(model_func, pts, executor=executor, max_workers=workers, store=store, **kw)
-    assert again.n_resumed == again.n_chunks and calls_by_start(log) == []
-    assert_same_outputs(ref, again)
-
-
-@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow,
-                                                                HealthCheck.function_scoped_fixture])
-@given(n=st.integers(1, 90), cs=st.integers(1, 30), fail=st.integers(0, 10**6))
-def test_any_interrupted_store_resumes_to_the_uninterrupted_store(tmp_path, n, cs, fail):
-    run_dir = tmp_path / uuid.uuid4().hex[:8]
-    log = run_dir / "log"
-    log.mkdir(parents=True)
-    pts = {"i": np.arange(n), "kp": np.linspace(0.5, 30, n), "kv": np.linspace(0.1, 40, n)[::-1],
-           "e": np.full(n, 0.5)}
-    kw = {"chunk_size": cs, "executor": "serial", "progress": False,
-          "func_kwargs": {"log_dir": str(log)}}
-    run_sweep(model_func, pts, store=run_dir / "ref.zarr", **kw)
-    n_chunks = -(-n // cs)
-    k = fail % n_chunks
-    (log / "fail_at").write_text(str(k * cs))
-    with pytest.raises(ChunkError):
-        run_sweep(model_func, pts, store=run_dir / "run.zarr", **kw)
-    assert done_chunks(run_dir / "run.zarr") == list(range(k))
-    (log / "fail_at").unlink()
-    res = run_sweep(model_func, pts, store=run_dir / "run.zarr", **kw)
-    assert res.n_resumed == k
-    assert tree_bytes(run_dir / "run.zarr") == tree_bytes(run_dir / "ref.zarr")
-
-
-def slow_model_func(chunk, *, log_dir=None):
-    """model_func slowed down by an environment variable (not part of the identity)."""
-    time.sleep(float(os.environ.get("SWEEP_TEST_SLEEP", "0")))
-    return model_func(chunk, log_dir=log_dir)
-
-
-def _spawn(tmp_path, store, log, executor, workers, sleep):
-    mod = model_func.__module__
-    code = textwrap.dedent(f"""
-        import importlib, sys
-        sys.path[:0] = [{str(REPO)!r}, {str(Path(__file__).parent)!r}]
-        m = importlib.import_module({mod!r})
-        pts, _ = m.points_grid()
-        m.run_sweep(m.slow_model_func, pts, chunk_size=40, executor={executor!r}, max_workers={workers!r},
-                    store={str(store)!r}, func_kwargs={{"log_dir": {str(log)!r}}}, metadata={{"run": 1}})
-        """)
-    return subprocess.Popen(
-        [sys.executable, "-c", code],
-        cwd=str(tmp_path),
-        env={**os.environ, "SWEEP_TEST_SLEEP": str(sleep)},
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-    )
-
-
-@pytest.mark.parametrize(
-    "executor,workers,sig", [("serial", None, signal.SIGKILL), ("processes", 2, signal.SIGINT)]
-)
-def test_resume_after_kill(tmp_path, executor, workers, sig):
-    """Kill a real sweep process mid-run, resume, and get the very same file.
-
-    SIGKILL: a hard crash (no clean-up at all). SIGINT: Ctrl-C, which must
-    also stop the pool's worker processes promptly.
-    """
-    pts, _ = points_grid()
-    log = tmp_path / "log"
-    log.mkdir()
-    kw = {"chunk_size": 40, "func_kwargs": {"log_dir": str(log)}, "metadata": {"run": 1}}
-    ref = run_sweep(slow_model_func, pts, executor="serial", store=tmp_path / "ref.zarr", **kw)
-    clear_calls(log)
-
-    store = tmp_path / "run.zarr"
-    proc = _spawn(tmp_path, store, log, executor, workers, sleep=0.15)
-    try:
-        wait_until(
-            lambda: len(done_chunks(store)) >= 3 or proc.poll() is not None,
-            what="three chunks done",
-        )
-        assert proc.poll() is None, proc.communicate()
-        proc.send_signal(sig)
-        proc.wait(timeout=15)
-    finally:
-        if proc.poll() is None:  # pragma: no cover - only on failure
-            proc.kill()
-            proc.wait()
-    _, err = proc.communicate()
-    assert proc.returncode != 0
-    if sig == signal.SIGINT:
-        assert b"KeyboardInterrupt" in err
-        worker_pids = {int(p.name.split("-")[1]) for p in (log / "calls").iterdir()} - {proc.pid}
-        assert worker_pids
-        wait_until(
-            lambda: not any(pid_alive(p) for p in worker_pids), timeout=10, what="workers to exit"
-        )
-    saved = done_chunks(store)
-    assert 3 <= len(saved) < 11 and store_status(store) == "running"
-    clear_calls(log)
-
-    res = run_sweep(slow_model_func, pts, executor="serial", store=store, **kw)
-    assert res.n_resumed == len(saved)
-    assert calls_by_start(log) == sorted(40 * i for i in range(11) if i not in saved)
-    assert_same_outputs(ref, res)
-    assert tree_bytes(store) == tree_bytes(tmp_path / "ref.zarr")
-
-
-def test_resume_recovers_from_corrupt_chunk_and_stale_temp(tmp_path):
-    pts, _ = points_grid(5, 4)  # 60 points
-    log = tmp_path / "log"
-    log.mkdir()
-    kw = {"chunk_size": 10, "executor": "serial", "func_kwargs": {"log_dir": str(log)}}
-    ref = run_sweep(model_func, pts, store=tmp_path / "ref.zarr", **kw)
-    store = tmp_path / "s.zarr"
-    (log / "fail_at").write_text("30")
-    with pytest.raises(ChunkError):
-        run_sweep(model_func, pts, store=store, **kw)
-    (log / "fail_at").unlink()
-    chunk_file(store, "disc", 1).write_bytes(b"not a zarr chunk")  # e.g. disk trouble
-    stale = chunk_file(store, "eig", 3).with_suffix(".abcdef.partial")
-    stale.write_bytes(b"half")  # a write cut by a kill
-    clear_calls(log)
-    with pytest.warns(RuntimeWarning, match="unreadable chunk 1"):
-        res = run_sweep(model_func, pts, store=store, **kw)
-    assert res.n_resumed == 2  # chunks 0 and 2
-    assert calls_by_start(log) == [10, 30, 40, 50]
-    assert_same_outputs(ref, res)
-    assert tree_bytes(store) == tree_bytes(tmp_path / "ref.zarr")  # stale temporary gone too
-
-
-def test_resume_false_recomputes(tmp_path):
-    pts, _ = points_grid(5, 4)
-    log = tmp_path / "log"
-    log.mkdir()
-    kw = {"chunk_size": 16, "executor": "serial", "func_kwargs": {"log_dir": str(log)}}
-    first = run_sweep(model_func, pts, store=tmp_path / "s.zarr", **kw)
-    assert done_chunks(tmp_path / "s.zarr") == [0, 1, 2, 3]
-    before = tree_bytes(tmp_path / "s.zarr")
-    clear_calls(log)
-    res = run_sweep(model_func, pts, store=tmp_path / "s.zarr", resume=False, **kw)
-    assert res.n_resumed == 0 and len(calls_by_start(log)) == 4
-    assert_same_outputs(first, res)
-    assert tree_bytes(tmp_path / "s.zarr") == before
-
-
-# --------------------------------------------------------------------------
-# Identity
-# --------------------------------------------------------------------------
-
-
-def test_identity_mismatch_raises_and_never_mixes(tmp_path):
-    pts, _ = points_grid(5, 4)
-    log = tmp_path / "log"
-    log.mkdir()
-    base = {
-        "chunk_size": 10,
-        "executor": "serial",
-        "func_kwargs": {"log_dir": str(log)},
-        "metadata": {"e": 0.5},
-    }
-    # An interrupted store (manifest + some chunks) and a finished one.
-    (log / "fail_at").write_text("30")
-    with pytest.raises(ChunkError):
-        run_sweep(model_func, pts, store=tmp_path / "partial.zarr", **base)
-    (log / "fail_at").unlink()
-    run_sweep(model_func, pts, store=tmp_path / "done.zarr", **base)
-
-    changed_pts = {k: v.copy() for k, v in pts.items()}
-    changed_pts["kp"][7] += 1e-12
-    variants = {
-        "points": dict(base, points=changed_pts),
-        "func": dict(base, func=sum_func),
-        "func_kwargs": dict(base, func_kwargs={"log_dir": str(log), "sleep": 0.0}),
-        "metadata": dict(base, metadata={"e": 0.9}),
-        "chunk_size": dict(base, chunk_size=11),
-    }
-    for store in ("partial.zarr", "done.zarr"):
-        for what, kw in variants.items():
-            kw = dict(kw)
-            func = kw.pop("func", model_func)
-            p = kw.pop("points", pts)
-            with pytest.raises(ValueError, match=rf"different sweep.*{what}.*resume=False"):
-                run_sweep(func, p, store=tmp_path / store, **kw)
-    # Files untouched by the refused attempts: resuming the original still works.
-    res = run_sweep(model_func, pts, store=tmp_path / "partial.zarr", **base)
-    assert res.n_resumed == 3
-    # resume=False overwrites deliberately.
-    res = run_sweep(
-        model_func,
-        pts,
-        store=tmp_path / "done.zarr",
-        resume=False,
-        **dict(base, metadata={"e": 0.9}),
-    )
-    assert load_sweep(tmp_path / "done.zarr").metadata == {"e": 0.9}
-
-
-def test_identity_ignores_executor_and_workers_but_sees_array_kwargs():
-    pts = {"x0": np.arange(10.0), "x1": np.ones(10)}
-    a = run_sweep(sum_func, pts, executor="serial")
-    b = run_sweep(sum_func, pts, executor="processes", max_workers=2)
-    assert a.identity_hash == b.identity_hash
-    ida = store_mod.jsonable({"w": np.arange(3.0)}, "func_kwargs", arrays="digest")
-    idb = store_mod.jsonable({"w": np.arange(3.0) + 1e-15 + 1}, "func_kwargs", arrays="digest")
-    assert ida != idb
 
 
 # --------------------------------------------------------------------------
