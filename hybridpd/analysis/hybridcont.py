@@ -41,8 +41,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridpd._repr import compact_repr
+from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import Section, SectionMap
-from hybridpd.analysis.impactmap import stability
 from hybridpd.analysis.periodic import find_orbit
 
 __all__ = ["FAMILY_EVENTS", "FamilyBranch", "FamilyEvent", "FamilyPoint", "continue_family"]

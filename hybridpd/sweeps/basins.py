@@ -48,16 +48,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg import solve_discrete_lyapunov
 
+from hybridpd._deprecated import moved_names
 from hybridpd._repr import compact_repr
 from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.analysis.labels import LABELS, OFF_SECTION
 from hybridpd.model import check_array, check_axis, check_int, check_positive
 from hybridpd.pair.batch import impact_map, map_labels
 
 __all__ = ["LABELS", "BasinResult", "ImpactMapper", "basin_of_attraction", "load_basin",
            "section_grid"]
 
-LABELS = ("converged", "not_converged", "diverged", "zeno_sticking", "unresolved", "off_section")
-OFF_SECTION = 5
 
 
 class ImpactMapper:
@@ -467,3 +467,9 @@ def _tails(params, c, final, which, n, mapper: _MapperSpec) -> np.ndarray:
 # ----------------------------------------------------------------------------------------
 # Attractor-labelled basins with a measure
 # ----------------------------------------------------------------------------------------
+
+
+__getattr__ = moved_names(__name__, {
+    name: "hybridpd.sweeps.attractor_basins"
+    for name in ("AttractorBasin", "BasinMeasure", "attractor_basin", "format_percent",
+                 "load_attractor_basin")})
