@@ -33,6 +33,14 @@ class Stability:
         All multipliers inside the unit circle.
     hyperbolic : bool
         No multiplier within ``tol`` of the unit circle.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import hybridpd as hp
+    >>> st = hp.stability([[0.0, 1.0], [-0.5, 0.0]])
+    >>> st.multipliers.shape, round(st.spectral_radius, 6), st.stable
+    ((2,), 0.707107, True)
     """
 
     __repr__ = compact_repr

@@ -15,8 +15,26 @@
 
 Every open convention is a field of :class:`Settings`.
 """
+import sys
+import types
+
 from hybridpd.reproduce.pipeline import reproduce, run_convention
 from hybridpd.reproduce.settings import AUTO, PAPER, Settings
 from hybridpd.reproduce.summary import SCHEMA, validate
 
 __all__ = ["AUTO", "PAPER", "SCHEMA", "Settings", "reproduce", "run_convention", "validate"]
+
+
+class _ReproducePackage(types.ModuleType):
+    """This package, callable as :func:`reproduce`.
+
+    ``hybridpd.reproduce`` names both this package and the function that runs it; once the
+    package is imported, Python binds the package to that attribute of ``hybridpd``, so the
+    package itself answers the call and ``hp.reproduce(...)`` always runs the reproduction.
+    """
+
+    def __call__(self, *args, **kwargs):
+        return reproduce(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _ReproducePackage

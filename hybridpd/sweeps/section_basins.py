@@ -28,17 +28,38 @@ def section_basin(mapper: SectionMapper, axis_x, axis_y, x, y, *, executor="seri
     Parameters
     ----------
     mapper : SectionMapper
+        Labels one section point (fixed point, iterations, criterion).
     axis_x, axis_y : int or str
         Section coordinates (index or name, see ``Section.names``) spanned by the grid.
     x, y : (min, max, num)
-        Grid axes.
-    executor, chunk_size, max_workers, progress
-        ``"serial"`` (default) or passed to :func:`hybridpd.sweeps.sweep.run_sweep`.
+        Grid axes, in the units of those coordinates.
+    executor : str or executor, optional
+        ``"serial"`` (default), or an executor accepted by
+        :func:`hybridpd.sweeps.sweep.run_sweep` (``"processes"``, ``"dask"``, a Dask ``Client``).
+    chunk_size, max_workers, progress
+        Passed to :func:`~hybridpd.sweeps.sweep.run_sweep` when not serial.
 
     Returns
     -------
     BasinResult
-        ``x1``/``y1`` hold the ``x``/``y`` axes; ``metadata["axes"]`` names the coordinates.
+        ``x1``/``y1`` hold the ``x``/``y`` axes, ``labels`` has shape ``(ny, nx)``;
+        ``metadata["axes"]`` names the coordinates.
+
+    Raises
+    ------
+    ValueError
+        If an axis is unknown, both axes are the same, or a grid axis is malformed.
+
+    Examples
+    --------
+    >>> import hybridpd as hp
+    >>> from hybridpd.analysis.sections import impact_pair_section
+    >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
+    >>> P = hp.SectionMap(impact_pair_section(orb.system()))
+    >>> b = hp.section_basin(hp.SectionMapper(P, orb.fixed_point, n_iter=50), "z1", "z4",
+    ...                      (-0.5, 0.5, 3), (1.0, 2.0, 2))
+    >>> b.labels.shape
+    (2, 3)
     """
     names = mapper.map.section.names
     ix, iy = (_axis_index(a, names) for a in (axis_x, axis_y))
