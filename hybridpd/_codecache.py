@@ -10,56 +10,126 @@ file. Old entries of the same name are removed when a new one is written. When n
 directory is writable the code is generated in memory for this process only.
 
 Location: ``$HYBRIDPD_CACHE_DIR`` if set; else ``$XDG_CACHE_HOME/hybridpd`` or
-``~/.cache/hybridpd``; else a ``hybridpd-<user>`` folder in the temporary directory.
-Deleting the folder is always safe.
+``~/.cache/hybridpd``; if that cannot be created or written, a ``hybridpd-<uid>`` folder in
+the temporary directory. Deleting the folder is always safe.
+
+Safety: the checksum only detects damage, not tampering, since it is written in the same
+file. So, as ssh and pip do, the cache is trusted only if nobody else can write it: the
+directory and every entry must be owned by the current user and not writable by group or
+others (entries are opened without following symbolic links and checked on the open file).
+A directory is created with mode ``0700``; a temporary-directory folder that already exists
+must be a real directory owned by the user with no permissions for group or others. When a
+check fails the cache is not used: the code is generated in memory and a one-line
+:class:`UnsafeCacheWarning` says why. On systems without POSIX owners (Windows) the checks
+are skipped.
 """
 from __future__ import annotations
 
 import hashlib
 import os
 import re
+import stat
 import tempfile
+import warnings
 from pathlib import Path
 
-__all__ = ["cache_dir", "entry_path", "load", "make_key"]
+__all__ = ["UnsafeCacheWarning", "cache_dir", "entry_path", "load", "make_key"]
 
 _HEADER = "# hybridpd generated code, do not edit: {name}\n# key: {key}\n# sha256: {digest}\n"
 _HEADER_RE = re.compile(r"\A# hybridpd generated code, do not edit: (?P<name>[^\n]*)\n"
                         r"# key: (?P<key>[0-9a-f]+)\n# sha256: (?P<digest>[0-9a-f]+)\n")
 _NAME_RE = re.compile(r"\A[A-Za-z0-9_.]+\Z")
+_POSIX = hasattr(os, "getuid")
+
+
+class UnsafeCacheWarning(UserWarning):
+    """The code cache (or one entry) could be written by someone else and is not used."""
 
 
 class _Miss(Exception):
     """The cached entry is missing, stale or corrupt."""
 
 
-def _candidates() -> list[Path]:
+class _Unsafe(Exception):
+    """The cache directory or an entry is not safe to execute from; the message says why."""
+
+
+def _preferred() -> Path:
     env = os.environ.get("HYBRIDPD_CACHE_DIR")
-    out = []
     if env:
-        out.append(Path(env).expanduser())
-    else:
-        xdg = os.environ.get("XDG_CACHE_HOME")
-        base = Path(xdg).expanduser() if xdg else Path.home() / ".cache"
-        out.append(base / "hybridpd")
+        return Path(env).expanduser()
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    base = Path(xdg).expanduser() if xdg else Path.home() / ".cache"
+    return base / "hybridpd"
+
+
+def _fallback() -> Path:
+    user = str(os.getuid()) if _POSIX else os.environ.get("USERNAME", "user")
+    return Path(tempfile.gettempdir()) / f"hybridpd-{user}"
+
+
+def _check_owner(st: os.stat_result, what: str, forbidden: int) -> None:
+    """Raise :class:`_Unsafe` unless ``st`` is owned by us and has none of ``forbidden``."""
+    if not _POSIX:
+        return
+    if st.st_uid != os.getuid():
+        raise _Unsafe(f"{what} is owned by uid {st.st_uid}, not by the current user "
+                      f"(uid {os.getuid()})")
+    if st.st_mode & forbidden:
+        mode = f"{stat.S_IMODE(st.st_mode):04o}"
+        if forbidden == 0o022:
+            raise _Unsafe(f"{what} is writable by group or others (mode {mode})")
+        raise _Unsafe(f"{what} already exists with mode {mode}, not 0700")
+
+
+def _usable(d: Path, forbidden: int) -> bool:
+    """Whether the existing directory ``d`` is safe; raise :class:`_Unsafe` if it is not."""
+    st = os.lstat(d) if forbidden == 0o077 else os.stat(d)
+    if stat.S_ISLNK(st.st_mode):
+        raise _Unsafe(f"{d} is a symbolic link")
+    if not stat.S_ISDIR(st.st_mode):
+        raise _Unsafe(f"{d} is not a directory")
+    _check_owner(st, str(d), forbidden)
+    return os.access(d, os.W_OK | os.X_OK)
+
+
+def _locate() -> tuple[Path | None, str | None]:
+    """The cache directory, or ``None`` and why none is used (``None`` if merely unwritable)."""
+    d = _preferred()
     try:
-        user = str(os.getuid())
-    except AttributeError:  # not on POSIX
-        user = os.environ.get("USERNAME", "user")
-    out.append(Path(tempfile.gettempdir()) / f"hybridpd-{user}")
-    return out
+        d.mkdir(mode=0o700, parents=True, exist_ok=True)
+        if _usable(d, 0o022):
+            return d, None
+    except _Unsafe as exc:
+        return None, str(exc)
+    except OSError:
+        pass  # cannot be created (read-only home, a file in the way): try the fallback
+    d = _fallback()
+    try:
+        try:
+            os.mkdir(d, 0o700)
+        except FileExistsError:
+            pass
+        # someone else may have created it first: it must be ours and closed to everybody else
+        if _usable(d, 0o077):
+            return d, None
+    except _Unsafe as exc:
+        return None, str(exc)
+    except OSError:
+        pass
+    return None, None
 
 
 def cache_dir() -> Path | None:
-    """The first writable cache directory (created if needed), or ``None`` if there is none."""
-    for d in _candidates():
-        try:
-            d.mkdir(parents=True, exist_ok=True)
-        except OSError:
-            continue
-        if os.access(d, os.W_OK | os.X_OK):
-            return d
-    return None
+    """The cache directory (created if needed), or ``None`` if none is writable and safe.
+
+    Returns
+    -------
+    pathlib.Path or None
+        ``None`` when no location can be written, or when the location could be written by
+        someone else (see the module's notes on safety).
+    """
+    return _locate()[0]
 
 
 def make_key(*parts: str) -> str:
@@ -111,6 +181,28 @@ def _write_atomic(path: Path, text: str) -> None:
                 pass
 
 
+def _read_entry(path: Path) -> str:
+    """Text of the entry at ``path``, checked on the open file; :class:`_Miss` if absent."""
+    flags = os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0)
+    try:
+        fd = os.open(path, flags)
+    except FileNotFoundError:
+        raise _Miss("missing") from None
+    except OSError as exc:  # ELOOP: a symbolic link planted in place of an entry
+        raise _Unsafe(f"{path} cannot be opened safely ({exc.strerror})") from None
+    with os.fdopen(fd, "rb") as f:
+        st = os.fstat(f.fileno())
+        if not stat.S_ISREG(st.st_mode):
+            raise _Unsafe(f"{path} is not a regular file")
+        _check_owner(st, str(path), 0o022)
+        return f.read().decode("utf-8")
+
+
+def _warn(reason: str) -> None:
+    warnings.warn(f"hybridpd: code cache not used, generating in memory: {reason}",
+                  UnsafeCacheWarning, stacklevel=3)
+
+
 def load(name: str, key: str, generate) -> dict:
     """Namespace of the cached code ``name`` with ``key``; ``generate()`` makes the source.
 
@@ -127,13 +219,29 @@ def load(name: str, key: str, generate) -> dict:
     -------
     dict
         The globals after executing the code.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` has other characters.
+
+    Warns
+    -----
+    UnsafeCacheWarning
+        If the cache directory or the entry could be written by someone else; the code is
+        then generated in memory and the entry is never executed.
     """
     if not _NAME_RE.match(name):
         raise ValueError(f"name must contain only letters, digits, '_' and '.', got {name!r}")
-    path = entry_path(name, key)
+    d, reason = _locate()
+    if reason is not None:
+        _warn(reason)
+    path = None if d is None else d / f"{name}-{key}.py"
     if path is not None:
         try:
-            return _execute(path.read_text(encoding="utf-8"), name, key, str(path))
+            return _execute(_read_entry(path), name, key, str(path))
+        except _Unsafe as exc:
+            _warn(str(exc))  # the directory is ours: the planted entry is replaced below
         except Exception:  # noqa: BLE001, S110 - a corrupt entry may fail in any way: regenerate
             pass
     body = generate()

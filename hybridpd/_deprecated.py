@@ -16,10 +16,30 @@ from __future__ import annotations
 import importlib
 import warnings
 
-__all__ = ["REMOVAL", "moved_module", "moved_names"]
+__all__ = ["MOVED_MODULES", "REMOVAL", "moved_module", "moved_names"]
 
 #: The release that removes the shims.
 REMOVAL = "0.3.0"
+
+#: Each module path that moved (its old file is now a shim) and the module that replaced it.
+MOVED_MODULES = {
+    "hybridpd.automaton": "hybridpd.hybrid.automaton",
+    "hybridpd.basins": "hybridpd.sweeps.basins",
+    "hybridpd.batch": "hybridpd.pair.batch",
+    "hybridpd.continuation": "hybridpd.analysis.continuation",
+    "hybridpd.design": "hybridpd.analysis.design",
+    "hybridpd.events": "hybridpd.hybrid.events",
+    "hybridpd.impactmap": "hybridpd.analysis.impactmap",
+    "hybridpd.impactpair": "hybridpd.pair.impactpair",
+    "hybridpd.lti": "hybridpd.analysis.lti",
+    "hybridpd.naive": "hybridpd.pair.naive",
+    "hybridpd.orbits": "hybridpd.analysis.orbits",
+    "hybridpd.regions": "hybridpd.sweeps.regions",
+    "hybridpd.samples": "hybridpd.hybrid.samples",
+    "hybridpd.sweep": "hybridpd.sweeps.sweep",
+    "hybridpd.symbolic": "hybridpd.pair.symbolic",
+    "hybridpd.analysis.continuation.branchio": "hybridpd.analysis.continuation.events",
+}
 
 
 def _message(old: str, new: str) -> str:
@@ -27,19 +47,20 @@ def _message(old: str, new: str) -> str:
             f"import it from {new} instead")
 
 
-def moved_module(old: str, new: str):
-    """Warn that module ``old`` moved to ``new``; return ``(__getattr__, __dir__)`` for ``old``.
+def moved_module(old: str):
+    """Warn that module ``old`` moved; return ``(__getattr__, __dir__)`` for ``old``.
 
     Parameters
     ----------
-    old, new : str
-        Dotted module paths (the shim's ``__name__`` and the module that replaces it).
+    old : str
+        The shim's ``__name__``, a key of :data:`MOVED_MODULES` (which names the new module).
 
     Returns
     -------
     tuple of callable
         The shim module's ``__getattr__`` and ``__dir__``: every attribute comes from ``new``.
     """
+    new = MOVED_MODULES[old]
     warnings.warn(_message(f"the module {old}", new), DeprecationWarning, stacklevel=3)
     target = importlib.import_module(new)
 

@@ -5,4 +5,4 @@ Kept for one release so that code written for earlier versions runs; importing i
 """
 from hybridpd._deprecated import moved_module
 
-__getattr__, __dir__ = moved_module(__name__, "hybridpd.hybrid.automaton")
+__getattr__, __dir__ = moved_module(__name__)

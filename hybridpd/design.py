@@ -9,7 +9,7 @@ import types
 
 from hybridpd._deprecated import moved_module
 
-__getattr__, __dir__ = moved_module(__name__, "hybridpd.analysis.design")
+__getattr__, __dir__ = moved_module(__name__)
 
 
 class _DesignShim(types.ModuleType):

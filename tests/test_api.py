@@ -165,6 +165,15 @@ def test_old_design_module_keeps_the_flat_design_callable():
         design(case="sideways", mu=0.1, e=0.5, omega=5.0)
 
 
+def test_every_shim_is_listed():
+    from hybridpd._deprecated import MOVED_MODULES
+
+    assert set(OLD_MODULES) <= set(MOVED_MODULES)
+    for old in MOVED_MODULES:
+        path = ROOT / (old.replace(".", "/") + ".py")
+        assert "moved_module(__name__)" in path.read_text(), old
+
+
 @pytest.mark.parametrize("old", sorted(OLD_MODULES))
 def test_old_module_paths_import_with_a_warning(old):
     new, names = OLD_MODULES[old]

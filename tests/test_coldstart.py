@@ -2,13 +2,18 @@
 
 * The cached closed-form code equals a fresh SymPy derivation (same source, same numbers on
   random inputs); a stale key, a corrupt entry or an unwritable directory regenerate it.
+* A cache someone else could write is never executed: planted entries in a world-writable
+  directory, writable or foreign entries, symbolic links and a temporary-directory folder with
+  other permissions are refused with one warning line, and the code is generated in memory.
 * The PD closed loop written out directly equals python-control's interconnection.
 * Interpreted kernels (small calls before numba is loaded) give the compiled results.
 * PD paths (orbit, simulate, regions, basins, design) import neither python-control, scipy.signal nor
   matplotlib; the orbit and simulate paths load neither numba nor SymPy once the code is cached.
 """
+import hashlib
 import json
 import os
+import stat
 import subprocess
 import sys
 import zlib
@@ -126,6 +131,123 @@ def test_unwritable_location_falls_back(tmp_path, monkeypatch):
     assert d is not None and d.parent == tmp_path / "tmp"
     ns = _codecache.load("test.entry", "ab12", lambda: "VALUE = 42\n")
     assert ns["VALUE"] == 42 and (d / "test.entry-ab12.py").is_file()
+
+
+def _plant(directory, name, key, marker):
+    """A valid-looking entry (right header and checksum) that would leave ``marker`` if run."""
+    body = f"open({str(marker)!r}, 'w').close()\nVALUE = 'planted'\n"
+    digest = hashlib.sha256(body.encode()).hexdigest()
+    path = directory / f"{name}-{key}.py"
+    path.write_text(_codecache._HEADER.format(name=name, key=key, digest=digest) + body)
+    return path
+
+
+def _generated():
+    return "VALUE = 'generated'\n"
+
+
+def test_planted_entry_in_world_writable_directory_is_never_executed(tmp_path, monkeypatch):
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o777)
+    marker = tmp_path / "planted-code-ran"
+    planted = _plant(shared, "test.entry", "ab12", marker)
+    planted.chmod(0o600)  # the entry itself looks fine: the directory gives it away
+    text = planted.read_text()
+    monkeypatch.setenv("HYBRIDPD_CACHE_DIR", str(shared))
+    assert _codecache.cache_dir() is None
+    for _ in range(2):
+        with pytest.warns(_codecache.UnsafeCacheWarning,
+                          match=r"not used.*writable by group or others \(mode 0777\)") as rec:
+            ns = _codecache.load("test.entry", "ab12", _generated)
+        assert ns["VALUE"] == "generated" and not marker.exists()
+        assert len(rec) == 1 and "\n" not in str(rec[0].message)   # one line
+    assert sorted(p.name for p in shared.iterdir()) == [planted.name]  # nothing written there
+    assert planted.read_text() == text
+
+
+def test_planted_kernel_is_never_executed(tmp_path, monkeypatch):
+    """The same through the closed-form kernels that every orbit computation loads."""
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o777)
+    marker = tmp_path / "planted-code-ran"
+    _plant(shared, "closed_form.existence.collocated", _numeric.derivation_key(), marker)
+    monkeypatch.setenv("HYBRIDPD_CACHE_DIR", str(shared))
+    with pytest.warns(_codecache.UnsafeCacheWarning, match="writable by group or others"):
+        f = _numeric.load_kernel("existence", "collocated")
+    assert not marker.exists()
+    np.testing.assert_allclose(f(10, 20, 1, 0.1, 0.5, 0.75, 5, 1, 1),
+                               lambdify_kernel("existence", "collocated")(
+                                   10, 20, 1, 0.1, 0.5, 0.75, 5, 1, 1), rtol=1e-13, atol=1e-13)
+
+
+@pytest.mark.parametrize("attack", ["group_writable", "world_writable", "symlink", "other_owner"])
+def test_unsafe_entry_in_own_directory_is_replaced_not_run(cache, tmp_path, attack):
+    if attack == "other_owner" and os.geteuid() != 0:
+        pytest.skip("giving a file to another user needs root")
+    cache.mkdir(mode=0o700)
+    marker = tmp_path / "planted-code-ran"
+    path = _plant(cache if attack != "symlink" else tmp_path, "test.entry", "ab12", marker)
+    if attack == "symlink":
+        (cache / path.name).symlink_to(path)
+        path = cache / path.name
+    elif attack == "other_owner":
+        path.chmod(0o644)
+        os.chown(path, 65534, 65534)
+    else:
+        path.chmod(0o620 if attack == "group_writable" else 0o666)
+    with pytest.warns(_codecache.UnsafeCacheWarning, match=str(cache)):
+        ns = _codecache.load("test.entry", "ab12", _generated)
+    assert ns["VALUE"] == "generated" and not marker.exists()
+    st = os.lstat(path)   # our directory: the entry was replaced by our own, closed one
+    assert stat.S_ISREG(st.st_mode) and st.st_uid == os.getuid()
+    assert stat.S_IMODE(st.st_mode) & 0o077 == 0
+    ns = _codecache.load("test.entry", "ab12", lambda: pytest.fail("entry should be cached"))
+    assert ns["VALUE"] == "generated"
+
+
+def _fallback_only(tmp_path, monkeypatch):
+    """Make the preferred location impossible and the temporary directory ``tmp_path/tmp``."""
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    monkeypatch.setenv("HYBRIDPD_CACHE_DIR", str(blocker / "sub"))
+    (tmp_path / "tmp").mkdir()
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path / "tmp"))
+    return tmp_path / "tmp" / f"hybridpd-{os.getuid()}"
+
+
+def test_temporary_fallback_is_created_closed(tmp_path, monkeypatch):
+    d = _fallback_only(tmp_path, monkeypatch)
+    assert _codecache.cache_dir() == d
+    assert stat.S_IMODE(os.lstat(d).st_mode) == 0o700
+
+
+@pytest.mark.parametrize("attack", ["open_mode", "symlink", "other_owner"])
+def test_temporary_fallback_made_by_someone_else_is_refused(tmp_path, monkeypatch, attack):
+    if attack == "other_owner" and os.geteuid() != 0:
+        pytest.skip("giving a folder to another user needs root")
+    d = _fallback_only(tmp_path, monkeypatch)
+    marker = tmp_path / "planted-code-ran"
+    if attack == "symlink":
+        target = tmp_path / "elsewhere"
+        target.mkdir(mode=0o700)
+        d.symlink_to(target)
+        _plant(target, "test.entry", "ab12", marker)
+        why = "symbolic link"
+    else:
+        d.mkdir(mode=0o700)
+        _plant(d, "test.entry", "ab12", marker).chmod(0o600)
+        if attack == "open_mode":
+            d.chmod(0o755)
+            why = "mode 0755, not 0700"
+        else:
+            os.chown(d, 65534, 65534)
+            why = "owned by uid 65534"
+    assert _codecache.cache_dir() is None
+    with pytest.warns(_codecache.UnsafeCacheWarning, match=why):
+        ns = _codecache.load("test.entry", "ab12", _generated)
+    assert ns["VALUE"] == "generated" and not marker.exists()
 
 
 def test_default_location_follows_xdg(tmp_path, monkeypatch):

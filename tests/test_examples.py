@@ -1,4 +1,8 @@
-"""Every example and every symbolic derivation script runs (examples with ``--quick``)."""
+"""Every example and every symbolic derivation script runs (examples with ``--quick``).
+
+The examples are the documentation's gallery: ``examples/<topic>/plot_*.py``, each topic a
+folder with a ``README.txt`` header.
+"""
 import os
 import subprocess
 import sys
@@ -7,7 +11,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-EXAMPLES = sorted(p for p in (ROOT / "examples").glob("*.py") if not p.name.startswith("_"))
+EXAMPLES = sorted((ROOT / "examples").glob("*/plot_*.py"))
 SCRIPTS = sorted((ROOT / "symbolic").glob("*.py"))
 
 
@@ -19,7 +23,26 @@ def _run(args, cwd, timeout=600):
                           capture_output=True, text=True, timeout=timeout)
 
 
-@pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.name)
+def _id(p):
+    return f"{p.parent.name}/{p.name}"
+
+
+def test_every_example_is_in_a_gallery_topic():
+    assert len(EXAMPLES) >= 14
+    loose = [p.name for p in (ROOT / "examples").glob("*.py") if not p.name.startswith("_")]
+    assert loose == [], "examples belong in a topic folder as plot_*.py"
+    assert (ROOT / "examples" / "README.txt").is_file()
+    for topic in {p.parent for p in EXAMPLES}:
+        assert (topic / "README.txt").is_file(), f"{topic.name} has no gallery header"
+        stray = [q.name for q in topic.glob("*.py") if not q.name.startswith("plot_")]
+        assert stray == [], f"{topic.name}: only plot_*.py scripts are run by the gallery"
+    for p in EXAMPLES:  # the gallery takes each page's title from the docstring's first lines
+        lines = p.read_text().split("\n")
+        assert lines[0].startswith('"""') and set(lines[1]) == {"="}, p.name
+        assert len(lines[1]) >= len(lines[0]) - 3, f"{p.name}: title underline too short"
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=_id)
 def test_example_help_computes_nothing(path, tmp_path):
     r = _run([path, "--help"], cwd=tmp_path, timeout=120)
     assert r.returncode == 0, r.stderr
@@ -27,12 +50,12 @@ def test_example_help_computes_nothing(path, tmp_path):
     assert list(tmp_path.iterdir()) == []  # no folder named after the flag, no output
 
 
-@pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.name)
+@pytest.mark.parametrize("path", EXAMPLES, ids=_id)
 def test_example_runs_quick(path, tmp_path):
     out = tmp_path / "out"
     r = _run([path, "--quick", "--out", out], cwd=tmp_path)
     assert r.returncode == 0, r.stderr[-2000:]
-    assert any(out.iterdir()), "the example wrote no figure"
+    assert any(out.glob("*.png")), "the example wrote no figure"
 
 
 @pytest.mark.parametrize("path", SCRIPTS, ids=lambda p: p.name)

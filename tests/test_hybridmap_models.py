@@ -123,8 +123,8 @@ def test_pid_backlash_example_runs_and_writes_its_figure(tmp_path):
 
     root = Path(__file__).resolve().parents[1]
     env = dict(os.environ, PYTHONPATH=str(root), OPENBLAS_NUM_THREADS="1")
-    r = subprocess.run([sys.executable, str(root / "examples" /
-                                            "pid_backlash_describing_function.py"),
+    r = subprocess.run([sys.executable, str(root / "examples" / "mechanical" /
+                                            "plot_pid_backlash_describing_function.py"),
                         "--out", str(tmp_path), "--quick"], capture_output=True, text=True,
                        env=env, timeout=900, check=False)
     assert r.returncode == 0, r.stderr

@@ -18,6 +18,11 @@ xr = pytest.importorskip("xarray")
 DATA = Path(__file__).parent / "data"
 REPO = Path(__file__).resolve().parents[1]
 PAPER = dict(mu=0.1, omega=5.0, gamma=0.75)
+# Files of earlier versions were computed on another machine with other library versions: their
+# floating-point values agree with a fresh computation to rounding (amplified by up to ~1e3 where
+# a spectral radius is large), not bit for bit. Booleans, labels and counts must agree exactly.
+STORED_RTOL = 1e-9
+STORED_ATOL = 1e-12
 
 
 @pytest.fixture(scope="module")
@@ -33,13 +38,28 @@ def basin():
     return basin_of_attraction(m, (-3, 5, 6), (-2, 10, 5), progress=False)
 
 
-def assert_same_map(a, b):
+def assert_close_or_equal(actual, desired, err_msg):
+    """Floats to the stored tolerance (NaN where NaN), everything else exactly."""
+    actual, desired = np.asarray(actual), np.asarray(desired)
+    if np.issubdtype(desired.dtype, np.floating):
+        np.testing.assert_allclose(actual, desired, rtol=STORED_RTOL, atol=STORED_ATOL,
+                                   equal_nan=True, err_msg=err_msg)
+    else:
+        np.testing.assert_array_equal(actual, desired, err_msg=err_msg)
+
+
+def assert_same_map(a, b, exact=True):
+    """Same map; ``exact`` for a file round trip (the bits written are read back), else floats
+    to the stored tolerance."""
     assert (a.case, a.x_name, a.y_name, a.fixed, a.metadata) == (
         b.case, b.x_name, b.y_name, b.fixed, b.metadata)
     for f in ("x", "y", "e", "exists", "stable", "reason", "spectral_radius", "xm"):
         va, vb = getattr(a, f), getattr(b, f)
         assert va.dtype == vb.dtype, f
-        np.testing.assert_array_equal(va, vb, err_msg=f)
+        if exact:
+            np.testing.assert_array_equal(va, vb, err_msg=f)
+        else:
+            assert_close_or_equal(va, vb, err_msg=f)
 
 
 def assert_same_basin(a, b):
@@ -127,14 +147,16 @@ def test_files_of_earlier_versions_stay_readable():
     old = load_region_map(DATA / "regions_v0.npz")
     new = region_map("noncollocated", x=("kp", 0.5, 30, 5), y=("kv", 0.2, 20, 4),
                      e=(0.1, 0.5), progress=False, **PAPER)
-    assert_same_map(old, new)
+    assert_same_map(old, new, exact=False)
     orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     m = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
     new_b = basin_of_attraction(m, (-3, 5, 5), (-2, 10, 4), progress=False)
     old_b = load_basin(DATA / "basin_v0.npz")
     np.testing.assert_array_equal(old_b.labels, new_b.labels)
     np.testing.assert_array_equal(old_b.iterations, new_b.iterations)
-    assert old_b.metadata["kp"] == 10.0 and old_b.converged_fraction == new_b.converged_fraction
+    assert old_b.metadata["kp"] == 10.0
+    np.testing.assert_allclose(old_b.converged_fraction, new_b.converged_fraction,
+                               rtol=STORED_RTOL, atol=0.0)
     from hybridpd.sweeps.regions import _region_chunk
 
     s = load_sweep(DATA / "sweep_v0.npz")
@@ -144,7 +166,7 @@ def test_files_of_earlier_versions_stay_readable():
                       func_kwargs={"case": "collocated", "n": 1, "fixed": fixed})
     assert s.metadata == {"kind": "region_sweep"} and s.n_chunks == 2
     for k, v in fresh.outputs.items():
-        np.testing.assert_array_equal(s.outputs[k], v, err_msg=k)
+        assert_close_or_equal(s.outputs[k], v, err_msg=k)
 
 
 def test_sweep_store_and_result_as_datasets(tmp_path):

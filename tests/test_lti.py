@@ -363,7 +363,7 @@ def test_example_script(tmp_path):
 
     root = Path(__file__).resolve().parents[1]
     path = os.pathsep.join(filter(None, [str(root), os.environ.get("PYTHONPATH")]))
-    r = subprocess.run([sys.executable, str(root / "examples" / "filtered_pd.py"),
+    r = subprocess.run([sys.executable, str(root / "examples" / "design" / "plot_filtered_pd.py"),
                         "--out", str(tmp_path)], check=False, cwd=tmp_path, capture_output=True,
                        text=True, env=dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=path),
                        timeout=600)

@@ -317,7 +317,7 @@ def test_examples_run_and_write_their_figure(name, tmp_path):
     import os
 
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    r = subprocess.run([sys.executable, str(ROOT / "examples" / f"{name}.py"), "--out",
+    r = subprocess.run([sys.executable, str(ROOT / "examples" / "mechanical" / f"plot_{name}.py"), "--out",
                         str(tmp_path)], capture_output=True, text=True, env=env, check=False)
     assert r.returncode == 0, r.stderr
     png = tmp_path / f"{name}.png"

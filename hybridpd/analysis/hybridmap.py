@@ -480,6 +480,7 @@ class SectionMap:
 
     >>> from hybridpd import ImpactPair, PDGains
     >>> from hybridpd.analysis.orbits import symmetric_orbit
+    >>> from hybridpd.analysis.sections import impact_pair_section
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> P = SectionMap(impact_pair_section(orb.system()))
     >>> bool(np.allclose(P(orb.fixed_point), orb.fixed_point, atol=1e-10))

@@ -59,8 +59,7 @@ All arrays are C-contiguous ``float64`` unless stated; ``N1 = n + 1`` (homogeneo
 ``Kp1 = K + 1``, ``ng`` guards. The per-mode arrays are produced by :func:`prepare_lti_mode`
 (fields of :class:`LTIModeData`).
 
-``advance(w0, t0, t_end, h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, hot, hot_tol,
-max_steps, w_out) -> (code, t_event, guard, n_steps, err)``
+``advance(w0, t0, t_end, h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, hot, hot_tol, max_steps, w_out) -> (code, t_event, guard, n_steps, err)``
     Flow from the homogeneous state ``w0`` (shape ``(N1,)``, ``w0[-1] == 1``) at ``t0`` until the
     first event or ``t_end``. ``Phi, Ah``: ``(N1, N1)``; ``dinv``: ``(N1,)``; ``trunc``: float;
     ``G, gabs``: ``(>= ng, Kp1, N1)``; ``gsum``: ``(>= ng, N1)``; ``cnorm``: ``(>= ng,)``;
@@ -570,7 +569,7 @@ class CrossingResult:
 
 def first_crossing(A, c, d, z0, t_max, b=None, direction=-1, max_steps=10_000_000,
                    K=K_DEFAULT) -> CrossingResult:
-    """First time the flow ``z' = A z + b`` from ``z0`` reaches the guard ``c . z + d``.
+    """First time the flow ``z' = A z + b`` from ``z0`` reaches the guard ``c·z + d``.
 
     Parameters
     ----------

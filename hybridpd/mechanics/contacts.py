@@ -46,7 +46,7 @@ def _opt_float(name, v):
 
 @dataclass(frozen=True, eq=False)  # array field: identity semantics
 class Contact:
-    """One contact ``lo <= w . q <= hi``, rigid or compliant (see the module docstring).
+    """One contact ``lo <= w·q <= hi``, rigid or compliant (see the module docstring).
 
     Parameters
     ----------

@@ -4,4 +4,4 @@ this module goes in hybridpd 0.3.0. Use ``hybridpd.load_branch`` or :meth:`Branc
 """
 from hybridpd._deprecated import moved_module
 
-__getattr__, __dir__ = moved_module(__name__, "hybridpd.analysis.continuation.events")
+__getattr__, __dir__ = moved_module(__name__)

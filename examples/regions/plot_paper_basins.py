@@ -1,12 +1,15 @@
-"""Figs 6-7 of the paper with the API: basins of attraction at kp = 10, kv = 20.
+"""Figs 6-7 of the paper with the API: basins of attraction at kp = 10, kv = 20
+============================================================================
 
 The mapper (one section point -> a label) iterates the impact map 1500 times (3000 impacts)
 and applies the paper's criterion; basins are a thin layer that maps a grid of the slice
 (x1, y1) with y2 = y2*, phi = phi* through it.
 
-Run: ``python examples/paper_basins.py [--out DIR] [--quick]`` (about a minute on 2 cores).
+Run: ``python examples/regions/plot_paper_basins.py [--out DIR] [--quick]`` (about a minute on 2 cores).
 """
-from _out import example_args
+import sys
+from pathlib import Path
+
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains
@@ -14,6 +17,11 @@ from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.analysis.orbits import symmetric_orbit
 from hybridpd.plotting import plot_basin
 from hybridpd.sweeps.basins import ImpactMapper, basin_of_attraction
+
+# sphinx_gallery_start_ignore
+sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py
+# sphinx_gallery_end_ignore
+from _out import example_args
 
 ARGS = example_args(__doc__)
 NUM, N_ITER = (12, 100) if ARGS.quick else (60, 1500)

@@ -1,4 +1,5 @@
-"""The drivetrain with a digital PD: zero-order hold at several sampling periods.
+"""The drivetrain with a digital PD: zero-order hold at several sampling periods
+=============================================================================
 
 The drivetrain of ``examples/models/drivetrain.toml`` (motor, flexible shaft, gear, backlash,
 load; encoder on the motor, kp 20, kv 5, feed-forward) with the PD implemented as a
@@ -9,7 +10,7 @@ converges to the continuous-time loop's (first order in ``dt``); slow sampling a
 and makes the load hit the gear harder. An input delay of whole samples is one more option
 (``delay = 1`` shown dashed).
 
-Run: ``python examples/sampled_drivetrain.py [--out DIR] [--t-end T]``.
+Run: ``python examples/mechanical/plot_sampled_drivetrain.py [--out DIR] [--t-end T]``.
 """
 from __future__ import annotations
 
@@ -29,12 +30,13 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-MODEL = Path(__file__).resolve().parent / "models" / "drivetrain.toml"
+# the examples folder, from the script run (sphinx-gallery defines no __file__)
+MODEL = Path(sys.argv[0]).resolve().parents[1] / "models" / "drivetrain.toml"
 PERIODS = (0.002, 0.02, 0.05, 0.1)
 
 
 def parse(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(description=(__doc__ or "").strip().split("\n")[0])
     p.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "hybridpd-examples",
                    help="directory for the figure (default: %(default)s)")
     p.add_argument("--t-end", type=float, default=12.0, help="simulated time (s)")

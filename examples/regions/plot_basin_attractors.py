@@ -1,4 +1,5 @@
-"""Which motion does each initial condition reach? Attractor-labelled basins, measured.
+"""Which motion does each initial condition reach? Attractor-labelled basins, measured
+===================================================================================
 
 At the paper's collocated gains kp = 10, kv = 20 and e = 0.1 almost every point of the Fig. 6
 slice goes to a period-2 double-impact motion, not to the symmetric orbit. The attractor
@@ -6,15 +7,22 @@ basin finds that motion (a cycle of the impact map P, refined by Newton on P^2),
 section points and multipliers, and measures every basin; the window grows until the
 symmetric orbit's basin no longer touches its edge.
 
-Run: ``python examples/basin_attractors.py [--out DIR] [--quick]`` (about 10 s).
+Run: ``python examples/regions/plot_basin_attractors.py [--out DIR] [--quick]`` (about 10 s).
 """
-from _out import example_args
+
+import sys
+from pathlib import Path
 
 from hybridpd import ImpactPair, PDGains
 from hybridpd.analysis.orbits import symmetric_orbit
 from hybridpd.plotting import plot_basin
 from hybridpd.sweeps.attractor_basins import attractor_basin
 from hybridpd.sweeps.basins import ImpactMapper
+
+# sphinx_gallery_start_ignore
+sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py
+# sphinx_gallery_end_ignore
+from _out import example_args
 
 ARGS = example_args(__doc__)
 NUM = 12 if ARGS.quick else 60

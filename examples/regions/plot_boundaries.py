@@ -1,4 +1,5 @@
-"""Figs 4-5 with traced region boundaries and codimension-2 points.
+"""Figs 4-5 with traced region boundaries and codimension-2 points
+===============================================================
 
 The paper's existence/stability regions of the symmetric orbit (mu = 0.1, gamma = 0.75,
 n = 1, omega = 5; e = 0.1, 0.5, 0.9) in the gain plane (kp, kv), collocated (Fig. 4) and
@@ -10,7 +11,7 @@ Neimark-Sacker (a complex pair on the unit circle). Black markers are codimensio
 (where a boundary ends or two meet; 1:1 / 1:2 resonances on Neimark-Sacker curves).
 Colour: the restitution coefficient; line style: the kind of boundary.
 
-Run: ``python examples/boundaries.py [--out DIR]`` (writes ``boundaries.png``, ~30 s).
+Run: ``python examples/regions/plot_boundaries.py [--out DIR]`` (writes ``boundaries.png``, ~30 s).
 """
 import argparse
 import time
@@ -57,7 +58,7 @@ def panel(ax, case, xr, yr, title):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+    ap = argparse.ArgumentParser(description=(__doc__ or "").strip().split("\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default="boundaries-out",
                     help="output directory (created), default ./boundaries-out")

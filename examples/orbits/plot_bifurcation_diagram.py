@@ -1,4 +1,5 @@
-"""Bifurcation diagram in the velocity gain kv with the continued branches overlaid.
+"""Bifurcation diagram in the velocity gain kv with the continued branches overlaid
+================================================================================
 
 The paper's other parameters: collocated feedback, e = 0.1, mu = 0.1, gamma = L / x10 = 0.75
 (x10 = 1), omega = 5, kp = 10, m2 = 1; the reference amplitude xm follows the design (the
@@ -17,7 +18,7 @@ symmetric orbit realises x10 = 1 at every kv). The figure shows
 At kv = 20 (the paper's basin gains) the period-2 orbit coexists with the symmetric orbit:
 it is the double-impact motion that takes most of the basin slice there.
 
-Run: ``python examples/bifurcation_diagram.py --out DIR`` (about half a minute).
+Run: ``python examples/orbits/plot_bifurcation_diagram.py --out DIR`` (about half a minute).
 """
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""PD versus filtered PD (and a lead-lag) on the paper's impact pair.
+"""PD versus filtered PD (and a lead-lag) on the paper's impact pair
+=================================================================
 
 A pure PD ``kp + kv s`` needs the velocity error; in practice the derivative is filtered,
 ``C(s) = kp + kv s / (tf s + 1)``. This example computes, for the paper's parameters
@@ -14,23 +15,28 @@ A pure PD ``kp + kv s`` needs the velocity error; in practice the derivative is 
 
 Run::
 
-    python examples/filtered_pd.py [--out DIR]
+    python examples/design/plot_filtered_pd.py [--out DIR]
 
 The figure (matplotlib ``Figure``, no GUI) goes to ``DIR/filtered_pd.png``, by default
 ``examples/out/filtered_pd.png``.
 """
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
-from _out import example_args
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains
 from hybridpd.analysis.lti import filtered_pd, lead_lag, lti_symmetric_orbit
 from hybridpd.analysis.orbits import symmetric_orbit
 from hybridpd.loop import pd_controller
+
+# sphinx_gallery_start_ignore
+sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py
+# sphinx_gallery_end_ignore
+from _out import example_args
 
 # The paper's parameters (Figs. 4-7), with x10 = 1 so that gamma = L / x10 = 0.75.
 MU, E, GAMMA, N, OMEGA = 0.1, 0.5, 0.75, 1, 5.0

@@ -1,6 +1,7 @@
-"""Design walk-through: PD gains for a desired motion of the primary mass, verified and made robust.
+"""Design walk-through: PD gains for a desired motion of the primary mass, verified and made robust
+================================================================================================
 
-Run ``python examples/design_walkthrough.py [--out DIR]`` (default ``examples/out/``). It
+Run ``python examples/design/plot_design_walkthrough.py [--out DIR]`` (default ``examples/out/``). It
 
 1. states the desired motion (the paper's: ``x10 = 1``, ``gamma = L/x10 = 0.75``, ``n = 1``,
    ``omega = 5``) and plant (``mu = 0.1``, ``e = 0.5``, ``m2 = 1``) and designs collocated
@@ -19,16 +20,21 @@ Only :class:`matplotlib.figure.Figure` objects are used (no pyplot, no GUI).
 """
 from __future__ import annotations
 
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
-from _out import example_args
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, Reference
 from hybridpd.analysis.design import robustness_comparison, shifted_orbit
 from hybridpd.analysis.impactmap import ImpactMap
+
+# sphinx_gallery_start_ignore
+sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py
+# sphinx_gallery_end_ignore
+from _out import example_args
 
 PROBLEM = {"mu": 0.1, "e": 0.5, "gamma": 0.75, "x10": 1.0, "omega": 5.0, "n": 1}
 BOX = {"e_range": (0.3, 0.7), "mu_range": (0.08, 0.12)}

@@ -1,4 +1,5 @@
-"""A PID set-point loop hunting in the backlash: exact limit cycle versus describing function.
+"""A PID set-point loop hunting in the backlash: exact limit cycle versus describing function
+==========================================================================================
 
 A motor (inertia ``m_m = 1``, viscous friction ``c_m = 0.5``) drives a load through a gear with
 backlash ``b = 0.2`` (``|q_motor - q_load| <= b / 2``, plastic contact ``e = 0`` unless said
@@ -38,7 +39,7 @@ dynamics, cannot see.
 
 Run::
 
-    python examples/pid_backlash_describing_function.py [--out DIR] [--quick]
+    python examples/mechanical/plot_pid_backlash_describing_function.py [--out DIR] [--quick]
 
 The figure goes to ``DIR`` (default: a new temporary directory, printed), never into
 ``examples/``.
@@ -48,6 +49,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import sys
 import tempfile
 from pathlib import Path
 
@@ -188,13 +190,13 @@ def load_inertia_sweep(ratios, e):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(description=(__doc__ or "").strip().split("\n")[0])
     ap.add_argument("--out", default=None,
                     help="output directory (default: a new temporary directory)")
     ap.add_argument("--quick", action="store_true", help="fewer sweep points")
     args = ap.parse_args(argv)
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="hybridpd_pid_"))
-    here = Path(__file__).resolve().parent
+    here = Path(sys.argv[0]).resolve().parents[1]  # examples/ (no __file__ in the gallery)
     if out.resolve() == here or here in out.resolve().parents:
         ap.error("--out must not be inside examples/")
     out.mkdir(parents=True, exist_ok=True)

@@ -1,20 +1,27 @@
-"""Simulating the PD-controlled impact pair (collocated feedback).
-
+"""Simulating the PD-controlled impact pair (collocated feedback)
+==============================================================
 
 The secondary mass m2 is driven by the PD law (3) tracking ``xd = cos(5 t)``; the primary mass
 m1 moves freely in the slot of half-width L = 0.75 and is driven only through impacts (e = 0.5,
 mu = 0.1). The simulation is exact between impacts (closed-form LTI flow) and locates every
 impact with a guaranteed first-crossing search.
 
-Run: ``python examples/simulate_collocated.py [--out DIR]``.
+Run: ``python examples/orbits/plot_simulate_collocated.py [--out DIR]``.
 """
+import sys
+from pathlib import Path
+
 import numpy as np
-from _out import example_args
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains, Reference
 from hybridpd.pair.impactpair import ControlledImpactPair
 from hybridpd.plotting import plot_trajectory
+
+# sphinx_gallery_start_ignore
+sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py
+# sphinx_gallery_end_ignore
+from _out import example_args
 
 ARGS = example_args(__doc__)
 

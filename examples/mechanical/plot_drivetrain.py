@@ -1,4 +1,5 @@
-"""A motor-shaft-gear-load drivetrain with backlash under PD: encoder on the motor or on the load.
+"""A motor-shaft-gear-load drivetrain with backlash under PD: encoder on the motor or on the load
+==============================================================================================
 
 The drivetrain of ``examples/models/drivetrain.toml``: a motor (inertia 1) drives a gear (0.2)
 through a flexible shaft (stiffness 50, damping 0.2); the gear drives the load (2, bearing
@@ -11,7 +12,7 @@ With a small derivative gain both loops are stable and the load encoder tracks t
 better; raising ``kv`` from 2 to 5 keeps the motor-encoder loop bounded but destabilises the
 load-encoder loop: the load and the motor (banging into its stop) oscillate violently.
 
-Run: ``python examples/drivetrain.py [--out DIR] [--t-end T]``.
+Run: ``python examples/mechanical/plot_drivetrain.py [--out DIR] [--t-end T]``.
 """
 from __future__ import annotations
 
@@ -31,11 +32,12 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-MODEL = Path(__file__).resolve().parent / "models" / "drivetrain.toml"
+# the examples folder, from the script run (sphinx-gallery defines no __file__)
+MODEL = Path(sys.argv[0]).resolve().parents[1] / "models" / "drivetrain.toml"
 
 
 def parse(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(description=(__doc__ or "").strip().split("\n")[0])
     p.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "hybridpd-examples",
                    help="directory for the figure (default: %(default)s)")
     p.add_argument("--t-end", type=float, default=40.0, help="simulated time (s)")

@@ -1,5 +1,5 @@
-"""Finding a symmetric periodic orbit and checking its stability (paper sections 3-4).
-
+"""Finding a symmetric periodic orbit and checking its stability (paper sections 3-4)
+==================================================================================
 
 1. Solve the existence conditions (13)-(14) for the paper's parameters (mu = 0.1,
    gamma = 0.75, n = 1, omega = 5, e = 0.5, kp = 10, kv = 20, collocated): the reference
@@ -9,15 +9,22 @@
 3. Simulate from a perturbed start: the trajectory settles on the orbit, and the distance to
    the fixed point on the section shrinks at the predicted rate (the spectral radius).
 
-Run: ``python examples/orbit_walkthrough.py [--out DIR]``.
+Run: ``python examples/orbits/plot_orbit_walkthrough.py [--out DIR]``.
 """
+import sys
+from pathlib import Path
+
 import numpy as np
-from _out import example_args
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains
 from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.analysis.orbits import symmetric_orbit
+
+# sphinx_gallery_start_ignore
+sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py
+# sphinx_gallery_end_ignore
+from _out import example_args
 
 ARGS = example_args(__doc__)
 

@@ -1,4 +1,5 @@
-"""A rigid contact against compliant contacts of growing stiffness: convergence.
+"""A rigid contact against compliant contacts of growing stiffness: convergence
+============================================================================
 
 The impact pair of the paper (m1 = 0.1, m2 = 1, half clearance 0.75, PD on x1) with its
 clearance modelled as a Kelvin-Voigt contact: a spring k and damper c act while the gap is
@@ -8,7 +9,7 @@ the relative velocity times ``e = exp(-zeta pi / sqrt(1 - zeta^2))``. As k grows
 lasts ``~ pi sqrt(m* / k)`` and the compliant motion converges to the rigid one with that
 ``e``: the impact times and the apparent restitution both converge like ``k^-1/2``.
 
-Run: ``python examples/compliant_contact.py [--out DIR]``.
+Run: ``python examples/mechanical/plot_compliant_contact.py [--out DIR]``.
 """
 from __future__ import annotations
 
@@ -36,7 +37,7 @@ N_IMPACTS = 4
 
 
 def parse(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(description=(__doc__ or "").strip().split("\n")[0])
     p.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "hybridpd-examples",
                    help="directory for the figure (default: %(default)s)")
     p.add_argument("--zeta", type=float, default=0.2, help="contact damping ratio in (0, 1)")

@@ -1,5 +1,5 @@
-"""Continuation of the symmetric orbit in the velocity gain, with bifurcation events.
-
+"""Continuation of the symmetric orbit in the velocity gain, with bifurcation events
+=================================================================================
 
 Paper parameters (mu = 0.1, gamma = L / x10 = 0.75, n = 1, omega = 5, kp = 10): the
 symmetric period-1 orbit that puts the primary mass on a triangle wave of amplitude
@@ -15,12 +15,13 @@ multipliers crosses the unit circle), folds/branch points, period doublings, sta
 changes. Then the map continuation (Newton on P at fixed xm) follows the period-2 attractor
 that coexists with the collocated orbit at kv = 20 down to its fold.
 
-Run: ``python examples/continuation_e.py [--out DIR]`` (writes ``continuation_e.png``).
+Run: ``python examples/orbits/plot_continuation_e.py [--out DIR]`` (writes ``continuation_e.png``).
 """
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
-from _out import example_args
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains, Reference
@@ -32,6 +33,11 @@ from hybridpd.analysis.continuation import (
 )
 from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.analysis.orbits import symmetric_orbit
+
+# sphinx_gallery_start_ignore
+sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py
+# sphinx_gallery_end_ignore
+from _out import example_args
 
 ARGS = example_args(__doc__)
 

@@ -1,16 +1,24 @@
-"""Figs 4-5 of the paper with the API: existence and stability regions in the (kp, kv) plane.
+"""Figs 4-5 of the paper with the API: existence and stability regions in the (kp, kv) plane
+=========================================================================================
 
 mu = 0.1, gamma = 0.75, n = 1, omega = 5, e = 0.1, 0.5, 0.9, collocated and non-collocated.
 A grid point is shaded when the symmetric orbit exists (conditions (13)-(14) with xm > 0 and
 viability (18)) and is stable (all multipliers of DP inside the unit circle).
 
-Run: ``python examples/paper_regions.py [--out DIR] [--quick]`` (about 5 s).
+Run: ``python examples/regions/plot_paper_regions.py [--out DIR] [--quick]`` (about 5 s).
 """
-from _out import example_args
+import sys
+from pathlib import Path
+
 from matplotlib.figure import Figure
 
 from hybridpd.plotting import plot_regions
 from hybridpd.sweeps.regions import region_map
+
+# sphinx_gallery_start_ignore
+sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py
+# sphinx_gallery_end_ignore
+from _out import example_args
 
 ARGS = example_args(__doc__)
 NUM = 30 if ARGS.quick else 150
