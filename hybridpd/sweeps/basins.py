@@ -228,8 +228,33 @@ def section_grid(fixed_point, L, x1, y1) -> np.ndarray:
 
 
 def load_basin(path) -> BasinResult:
-    """Read a :class:`BasinResult` written by :meth:`BasinResult.save` (``.nc``, ``.zarr``,
-    ``.npz``)."""
+    """Read a :class:`BasinResult` written by :meth:`BasinResult.save`.
+
+    Parameters
+    ----------
+    path : str or path
+        A ``.nc``, ``.zarr`` or (earlier versions) ``.npz`` file.
+
+    Returns
+    -------
+    BasinResult
+
+    Raises
+    ------
+    ValueError
+        If the suffix is unknown or the file holds something else.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> import hybridpd as hp
+    >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
+    >>> b = hp.basin_of_attraction(hp.ImpactMapper.from_orbit(orb, n_iter=100),
+    ...                            (-1, 3, 3), (-1, 5, 2), progress=False)
+    >>> path = b.save(os.path.join(tempfile.mkdtemp(), "basin.nc"))
+    >>> bool((hp.load_basin(path).labels == b.labels).all())
+    True
+    """
     from hybridpd.sweeps.labelled import check_suffix, read_dataset
     from hybridpd.sweeps.npz import load_npz
 
@@ -357,6 +382,21 @@ def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chun
     Returns
     -------
     BasinResult
+        Labels of shape ``(len(y1), len(x1))``.
+
+    Raises
+    ------
+    ValueError
+        If ``mapper`` is not an :class:`ImpactMapper` or a grid axis is malformed.
+
+    Examples
+    --------
+    >>> import hybridpd as hp
+    >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
+    >>> mapper = hp.ImpactMapper.from_orbit(orb, n_iter=200)
+    >>> b = hp.basin_of_attraction(mapper, (-1, 3, 5), (-1, 5, 4), progress=False)
+    >>> b.labels.shape, b.converged_fraction
+    ((4, 5), 1.0)
     """
     if not isinstance(mapper, ImpactMapper):
         raise ValueError(f"mapper must be an ImpactMapper, got {type(mapper).__name__}")
