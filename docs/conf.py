@@ -87,3 +87,4 @@ def _skip_gallery_images(app, config):
 
 def setup(app):
     app.connect("config-inited", _skip_gallery_images, priority=900)
+    app.connect("build-finished", hybridpd_docs.check_gallery_figures)

@@ -158,6 +158,35 @@ def _doctests():
 DOCTESTS = _doctests()
 
 
+_IMPORT_EACH = """
+import importlib, sys
+failed = []
+for name in sys.argv[1:]:
+    for loaded in [m for m in sys.modules if m == "hybridpd" or m.startswith("hybridpd.")]:
+        del sys.modules[loaded]
+    try:
+        importlib.import_module(name)
+    except Exception as exc:  # noqa: BLE001 - reported below
+        failed.append(f"{name}: {type(exc).__name__}: {exc}")
+print("\\n".join(failed))
+sys.exit(1 if failed else 0)
+"""
+
+
+@pytest.mark.slow  # ~20 s; the documentation build (autosummary) also imports them this way
+def test_every_public_module_imports_first():
+    """Each module imports in a process where no other hybridpd module was loaded before it
+    (as the API reference imports them, in its own order): no import cycle hides behind the
+    usual import order."""
+    names = _public_modules()
+    assert len(names) > 50
+    path = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
+    r = subprocess.run([sys.executable, "-c", _IMPORT_EACH, *names], capture_output=True,
+                       text=True, timeout=300, check=False,
+                       env=dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=path))
+    assert r.returncode == 0, r.stdout + r.stderr[-2000:]
+
+
 def test_doctests_are_collected():
     # the modules with examples today; new examples are collected without a change here
     assert len(DOCTESTS) >= 40

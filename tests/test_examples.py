@@ -40,6 +40,8 @@ def test_every_example_is_in_a_gallery_topic():
         lines = p.read_text().split("\n")
         assert lines[0].startswith('"""') and set(lines[1]) == {"="}, p.name
         assert len(lines[1]) >= len(lines[0]) - 3, f"{p.name}: title underline too short"
+        # the gallery runs the scripts inside the Sphinx process: an exit would end the build
+        assert "SystemExit(main" not in p.read_text() and "sys.exit(" not in p.read_text()
 
 
 @pytest.mark.parametrize("path", EXAMPLES, ids=_id)

@@ -109,3 +109,18 @@ def scraper(block, block_vars, gallery_conf):
         seen.add(src)
         paths.append(str(dst))
     return figure_rst(paths, gallery_conf["src_dir"])
+
+
+def check_gallery_figures(app, exception):
+    """Warn (an error under ``-W``) for every example whose gallery page shows no figure."""
+    if exception is not None or str(app.config.plot_gallery).lower() in ("0", "false"):
+        return
+    from sphinx.util import logging
+
+    logger = logging.getLogger(__name__)
+    gallery = Path(app.srcdir) / "auto_examples"
+    for script in sorted((DOCS.parent / "examples").glob("*/plot_*.py")):
+        images = gallery / script.parent.name / "images"
+        if not list(images.glob(f"sphx_glr_{script.stem}_001.*")):
+            logger.warning(f"gallery: {script.parent.name}/{script.name} shows no figure "
+                           f"(it must save at least one image into its --out folder)")

@@ -307,4 +307,4 @@ def _figure(out, df, H, F, ma, orb, P, df_ki, fam, inert):
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    main()  # no SystemExit: the documentation's gallery runs this file in its own process

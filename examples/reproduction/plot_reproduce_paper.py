@@ -25,6 +25,6 @@ from _out import example_args
 ARGS = example_args(__doc__)
 status = hybridpd_command(["reproduce", "--quick" if ARGS.quick else "--full",
                            "--out", str(ARGS.out), "--quiet"])
-if status != 0:
-    raise SystemExit(status)
+if status != 0:  # an error, not an exit: the gallery must not stop silently
+    raise RuntimeError(f"hybridpd reproduce failed with status {status}")
 print((ARGS.out / "summary.md").read_text())
