@@ -19,7 +19,8 @@ __all__ = ["plot_m2_study", "plot_param_study", "plot_region_panels", "plot_regi
 FILL = "#56B4E9"
 FILL_EDGE = "#0072B2"
 EXIST = "#000000"
-VERDICT_COLORS = {"agrees": "#0072B2", "contradicted": "#E69F00", "not measured": "#BBBBBB"}
+VERDICT_COLORS = {"agrees": "#0072B2", "contradicted": "#E69F00", "depends": "#CC79A7",
+                  "unresolved": "#BBBBBB"}
 PAPER_GAINS = "paper's gains"
 _CASE = {"collocated": "collocated", "noncollocated": "non-collocated"}
 
@@ -332,7 +333,7 @@ def plot_m2_study(study, *, m2_range=None, runs=()):
         ax.set_ylabel("spectral radius of $DP$")
         ax.set_title(f"{_CASE[case]}, $k_p$ = 10, $k_v$ = 20 (no curve: no orbit)", fontsize=9)
     ax = fig.add_subplot(gs[1, :])
-    names = ("agrees", "contradicted", "not measured")
+    names = ("agrees", "contradicted", "depends", "unresolved")
     ids = sorted(study.verdicts)
     lo = np.log10(study.grid[0])
     hi = np.log10(study.grid[-1])
