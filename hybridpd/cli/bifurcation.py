@@ -5,7 +5,7 @@ import argparse
 import json
 import math
 
-from hybridpd.cli._common import check_image
+from hybridpd.cli._common import check_image, save_figure
 
 #: Parameters the command can sweep (``--param NAME``).
 SWEEPABLE = ("kp", "kv", "e", "mu", "gamma", "omega", "m2")
@@ -129,7 +129,7 @@ def run(args) -> int:
     if args.plot:
         from hybridpd.plotting.bifurcation import plot_bifurcation
 
-        plot_bifurcation(d, coordinate=args.coordinate).savefig(args.plot, dpi=130)
+        save_figure(plot_bifurcation(d, coordinate=args.coordinate), args.plot)
     if args.json:
         lya = [None if not np.isfinite(x) else float(x) for x in d.lyapunov]
         print(json.dumps({

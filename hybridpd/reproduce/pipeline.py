@@ -289,15 +289,19 @@ def _comparison(m2, settings, grid, n_starts, maxiter):
 
 
 def run_convention(m2, settings: Settings, out, *, executor="processes", max_workers=None,
-                   progress=False, log=None, tick=None, figure_hook=None) -> ConventionRun:
+                   progress=False, log=None, tick=None, figure_hook=None,
+                   study=None, cache=None) -> ConventionRun:
     """Figs 3-7, their data and the conclusions' checks under one ``m2`` (see module doc).
 
     Every check is computed on the run's grids and on the resolution-check grids
     (:meth:`Settings.check_num`); the convention's verdict is
     :func:`~hybridpd.reproduce.rules.resolution` of the two. ``figure_hook(path, fig)``, if
-    given, sees every figure before it is saved.
+    given, sees every figure before it is saved; ``study`` (an :class:`M2Study`) lets a basin
+    panel with no stable orbit show the orbit's spectral radius along ``m2``; ``cache`` (a
+    dict) lets conventions share work that depends on ``kp/m2, kv/m2`` only.
     """
     from hybridpd.analysis.orbits import symmetric_orbit
+    from hybridpd.reproduce.figures import convention_figures
     from hybridpd.reproduce.rules import resolution
 
     say = _say(log)
@@ -343,97 +347,10 @@ def run_convention(m2, settings: Settings, out, *, executor="processes", max_wor
     run.verdicts = {k: resolution(run.checks[k]["verdict"], run.check_grid_checks[k]["verdict"])
                     for k in run.checks}
     t0 = time.perf_counter()
-    _figures(run, settings, figure_hook)
+    convention_figures(run, settings, study=study, hook=figure_hook, cache=cache)
     run.timings["figures"] = time.perf_counter() - t0
     tick(f"m2 = {m2:g}: figures")
     return run
-
-
-def _params_text(run) -> dict:
-    return dict(mu=PAPER["mu"], gamma=run.gamma, omega=PAPER["omega"], n=PAPER["n"], m2=run.m2,
-                x10=run.x10)
-
-
-def _save(fig, path, hook, dpi=110):
-    if hook is not None:
-        hook(path, fig)
-    fig.savefig(path, dpi=dpi)
-
-
-def _figures(run: ConventionRun, settings: Settings, hook=None):
-    from hybridpd.plotting.basins import plot_basin
-    from hybridpd.plotting.orbit import plot_orbit_phase
-    from hybridpd.plotting.regions import plot_region_panels
-
-    d = run.directory
-    par = _params_text(run)
-    mark = (PAPER["kp"], PAPER["kv"])
-    fig = plot_region_panels(run.maps["collocated"], mark=mark, params=par,
-                             curves=_traced(run, "collocated", settings),
-                             title="Fig. 4, collocated PD")
-    _save(fig, d / "fig4_regions_collocated.png", hook)
-    fig = plot_region_panels(run.maps["noncollocated"], zoom=run.maps["zoom"], mark=mark,
-                             params=par, curves=_traced(run, "noncollocated", settings),
-                             title="Fig. 5, non-collocated PD")
-    _save(fig, d / "fig5_regions_noncollocated.png", hook)
-    fig = plot_orbit_phase([run.orbits[(c, e)] for c in CASES for e in PAPER["e"]], params=par)
-    _save(fig, d / "fig3_orbit.png", hook)
-    from matplotlib.figure import Figure
-
-    for case, name, label in (("collocated", "fig6_basins_collocated.png", "Fig. 6"),
-                              ("noncollocated", "fig7_basins_noncollocated.png", "Fig. 7")):
-        es = PAPER["e"]
-        fig = Figure(figsize=(5.4 * len(es), 5.2), layout="constrained")
-        for k, e in enumerate(es):
-            ax = fig.add_subplot(1, len(es), k + 1)
-            b, o = run.basins[(case, e)], run.orbits[(case, e)]
-            if b is None:
-                ax.set_axis_off()
-                why = (o.reason if not o.exists else
-                       f"orbit unstable (spectral radius {o.spectral_radius:.4g}):\n"
-                       "its basin is empty")
-                ax.text(0.5, 0.5, f"e = {e:g}\n{_wrap(why)}", ha="center", va="center",
-                        fontsize=9, transform=ax.transAxes)
-                continue
-            plot_basin(b, ax=ax, title=f"e = {e:g}: symmetric orbit {b.measure(0).percent}")
-        fig.suptitle(f"{label}, {case.replace('non', 'non-')} PD at $k_p$ = {PAPER['kp']:g}, $k_v$ = {PAPER['kv']:g}; "
-                     + _param_line(par), fontsize=10)
-        _save(fig, d / name, hook, dpi=100)
-
-
-def _traced(run: ConventionRun, case: str, settings: Settings):
-    """``{(row, e): curves}`` bounding the exists-and-stable region in each panel's box
-    (row 1: the zoom), or None (grid contours) if not wanted."""
-    if not settings.traced_boundaries:
-        return None
-    from hybridpd.analysis.boundaries import boundary_curves
-    from hybridpd.analysis.boundarymask import stable_region_edges
-
-    out = {}
-    for row, rm in enumerate((run.maps[case], run.maps["zoom"] if case == "noncollocated"
-                              else None)):
-        if rm is None:
-            continue
-        box = dict(x=("kp", float(rm.x[0]), float(rm.x[-1])),
-                   y=("kv", float(rm.y[0]), float(rm.y[-1])))
-        for e in rm.e:
-            res = boundary_curves(case, e=float(e), mu=PAPER["mu"], gamma=run.gamma,
-                                  omega=PAPER["omega"], m2=run.m2, x10=run.x10,
-                                  n=PAPER["n"], **box)
-            out[(row, float(e))] = stable_region_edges(res)
-    return out
-
-
-def _wrap(text, width=44):
-    import textwrap
-
-    return "\n".join(textwrap.wrap(text, width))
-
-
-def _param_line(par) -> str:
-    from hybridpd.plotting.regions import param_line
-
-    return param_line(par)
 
 
 def resolve_conventions(settings: Settings, study: M2Study | None) -> list:
@@ -529,16 +446,17 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
         timings[f"{name} study"] = time.perf_counter() - t0
         tick(f"{name} study")
     runs = []
+    cache = {}
     for m2 in conventions:
         runs.append(run_convention(m2, settings, out, executor=executor,
                                    max_workers=max_workers, progress=progress, log=say, tick=tick,
-                                   figure_hook=figure_hook))
-    from hybridpd.plotting.regions import plot_m2_study, plot_param_study
+                                   figure_hook=figure_hook, study=study, cache=cache))
+    from hybridpd.reproduce.figures import study_figures
 
-    _save(plot_m2_study(study, m2_range=settings.m2_range, runs=[r.m2 for r in runs]),
-          out / "m2_study.png", figure_hook)
-    for name, ps in studies.items():
-        _save(plot_param_study(ps), out / f"{name}_study.png", figure_hook)
+    t0 = time.perf_counter()
+    study_figures(out, study=study, studies=studies, settings=settings, runs=runs,
+                  hook=figure_hook)
+    timings["figures of the studies"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_start
     figures = sorted(p.relative_to(out).as_posix() for p in out.rglob("*.png"))
     path = write_summary(out, settings=settings, mode=mode, study=study, studies=studies,
