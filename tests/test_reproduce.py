@@ -139,6 +139,19 @@ def test_every_verdict_is_recomputed_from_the_data(run):
             assert con["by_convention"][m2] == R.resolution(chk["verdict"], other)
 
 
+def test_hybridpd_plot_draws_every_data_file_reproduce_writes(run, capsys):
+    from hybridpd.cli import main
+
+    path, _ = run
+    files = sorted(path.parent.rglob("*.nc"))
+    assert len(files) >= 2 * 3 + 3
+    for f in files:
+        out = f.parent / f"{f.stem}_plot.png"
+        assert main(["plot", str(f), "--out", str(out)]) == 0, f
+        assert out.stat().st_size > 0
+    capsys.readouterr()
+
+
 def test_gain_box_scaling_leaves_the_maps_unchanged(run):
     # only kp/m2 and kv/m2 matter: the map at m2 on the box scaled by m2 is the m2 = 1 map
     path, data = run

@@ -165,9 +165,22 @@ def plot_bifurcation(diagram, ax=None, coordinate: str = "z1", branches=(), *,
     if legend:
         bifurcation_legend(ax)
     counts = {c: n for c, n in diagram.counts().items() if n and c != "periodic"}
-    if note and counts:
-        ax.text(0.01, 0.01, ", ".join(f"{n} {c.replace('_', ' ')}" for c, n in counts.items()),
-                transform=ax.transAxes, fontsize=7, color="0.3", va="bottom")
+    per = {int(k): int(np.sum(diagram.period == k)) for k in np.unique(diagram.period) if k > 1}
+    lines = []
+    if counts:
+        lines.append(", ".join(f"{n} {c.replace('_', ' ')}" for c, n in counts.items()))
+    if per:
+        lines.append("period k (at " + ", ".join(f"{n} values: k = {k}" for k, n in per.items())
+                     + "): the section points repeat every k applications of $P$")
+    if note and lines:
+        ax.text(0.01, 0.01, "\n".join(lines), transform=ax.transAxes, fontsize=7, color="0.3",
+                va="bottom")
+    if ok.any():   # a flat diagram: a readable range instead of an offset of 1e-13
+        lo_, hi_ = float(np.min(y[ok])), float(np.max(y[ok]))
+        if hi_ - lo_ <= 1e-9 * max(1.0, abs(hi_)):
+            pad = max(1e-3, 0.05 * abs(hi_))
+            ax.set_ylim(lo_ - pad, hi_ + pad)
+    ax.ticklabel_format(axis="y", useOffset=False)
     return fig
 
 
@@ -215,6 +228,8 @@ def _draw_branch(ax, br, coordinate, style, name, events, seen):
         mk, col, text = _EVENT_MARKERS[ev.kind]
         if ev.kind == "fold" and "turns back" not in ev.detail:
             mk, text = "o", "branch point"
+        if not ev.located:   # a sign change between two points, not an event at this point
+            mk, col, text = "X", "0.45", f"{text}? (not located, uncertain)"
         s = np.asarray(ev.point, float)
         Lv = float(L[min(ev.index, len(L) - 1)])
         yv = float(section_coordinate(s, coordinate, Lv))
