@@ -141,6 +141,8 @@ def _run_model(args) -> int:
     from hybridpd.mechanics.modelfile import load_model
 
     model = load_model(args.model)
+    if not args.t_end > model.t0:
+        raise ValueError(f"--t-end must be > the model's t0 = {model.t0:g}, got {args.t_end:g}")
     traj = model.simulate(args.t_end, max_impacts=args.max_impacts)
     d = traj.to_dict()
     contacts = [{"name": c.name, "normal": [float(w) for w in c.normal],
@@ -167,6 +169,8 @@ def _run_pair(args) -> int:
     from hybridpd.model import ImpactPair, PDGains, Reference
     from hybridpd.pair.impactpair import ControlledImpactPair
 
+    if not args.t_end > 0:
+        raise ValueError(f"--t-end must be > 0 (the run starts at t = 0), got {args.t_end:g}")
     L, xm = geometry(args)
     sysm = ControlledImpactPair(ImpactPair(args.mu, args.e, L, args.m2),
                                 PDGains(args.kp, args.kv), Reference(xm, args.omega),

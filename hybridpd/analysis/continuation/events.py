@@ -42,7 +42,9 @@ class BifurcationEvent:
         Test function at the reported point (0 at an exact event; for grazing the margin or
         the smallest approach speed).
     located : bool
-        The location converged (bracket below the tolerance).
+        The location converged (bracket below the tolerance). When False the event is
+        uncertain: only a sign change between points ``index`` and ``index + 1`` is known,
+        and :attr:`detail` starts with ``"uncertain"``.
     viable : bool
         The orbit at the event is a genuine orbit (symmetric family: viability holds; a
         stability change of a non-viable, "virtual" orbit is reported with ``False``).
@@ -320,6 +322,13 @@ class _Tracker:
         else:
             pt, fv, ok = (pa if abs(fa) <= abs(fb) else pb), min(fa, fb, key=abs), False
         detail = detail_fn(pt)
+        if not ok:
+            # the bracket did not shrink (a failed corrector or no location asked for): what
+            # is known is a sign change between two points, not an event at this parameter
+            why = ("the corrector failed inside the bracket" if self.locate
+                   else "location was not asked for")
+            detail = (f"uncertain: not located ({why}); a sign change between branch points "
+                      f"{index} and {index + 1}, possibly {detail}")
         if critical is not None and ok:
             c = critical(pt)
             if np.isfinite(c) and c > _JUMP_TOL:
