@@ -132,7 +132,7 @@ def plot_bifurcation(diagram, ax=None, coordinate: str = "z1", branches=(), *,
     ...                         np.linspace(18, 20, 3), iterations=100, keep=10)
     >>> fig = plot_bifurcation(d, coordinate="x1")
     >>> fig.axes[0].get_xlabel()
-    '$k_v$ (force$\\cdot$time/length)'
+    '$k_v$ (force$\\\\cdot$time/length)'
     """
     if coordinate not in COORDINATES:
         raise ValueError(f"coordinate must be one of {COORDINATES}, got {coordinate!r}")

@@ -120,7 +120,7 @@ def plot_file(path: str | os.PathLike, **options):
     >>> file_kind(p)
     'branch'
     >>> plot_file(p, quantity="margin").axes[0].get_xlabel()
-    '$k_v$ (force$\\cdot$time/length)'
+    '$k_v$ (force$\\\\cdot$time/length)'
     """
     kind = file_kind(path)
     options = {k: v for k, v in options.items() if v is not None}
