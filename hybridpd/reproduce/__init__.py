@@ -13,7 +13,19 @@
   alone and both; **the mu and gamma studies** (:mod:`~hybridpd.reproduce.params`).
 * ``summary.json`` (schema :data:`~hybridpd.reproduce.summary.SCHEMA`) and ``summary.md``.
 
-Every open convention is a field of :class:`Settings`.
+Every open convention is a field of :class:`Settings`. The package itself is callable:
+``hp.reproduce(out, mode="quick")`` runs :func:`reproduce`.
+
+Examples
+--------
+>>> import hybridpd as hp
+>>> s = hp.reproduce.Settings.quick()
+>>> s.m2, s.basin
+((1.0, 'auto'), (41, 41))
+>>> summary = hp.reproduce("reproduce-out", mode="quick", log=None)  # doctest: +SKIP
+
+The last line takes about a minute on two cores and writes the figures, ``summary.md`` and
+``summary.json`` into ``reproduce-out/``.
 """
 import sys
 import types
