@@ -253,8 +253,20 @@ def test_every_termination_cause_is_reachable():
     assert 0.0 < tr.t_final < 100.0
     np.testing.assert_allclose(tr.x_final, [math.cos(100 * tr.t_final),
                                             -math.sin(100 * tr.t_final)], atol=1e-12)
+    grow = Guard("grow", [1.0], -2.0, direction=+1, reset=([[1e12]], [0.0]))
+    tr = HybridAutomaton([Mode("m", [[1.0]], guards=(grow,))]).simulate(
+        [1.0], "m", (0, 3), max_state=1e10)
+    assert tr.termination is TerminationCause.DIVERGED
+    assert tr.t_final == pytest.approx(math.log(2.0), rel=1e-14)
+    two = (Guard("a", [1.0, 0.0], -1.0, direction=+1, group=1),
+           Guard("b", [0.0, 1.0], -1.0, direction=+1, group=1))
+    ha = HybridAutomaton([Mode("m", np.zeros((2, 2)), b=[1.0, 1.0], guards=two)])
+    tr = ha.simulate([0.0, 0.0], "m", (0, 3), resolver=lambda *a: None)
+    assert tr.termination is TerminationCause.SIMULTANEOUS
+    assert tr.t_final == pytest.approx(1.0, rel=1e-14) and len(tr.jumps) == 0
     assert {c.name for c in TerminationCause} == {"END_TIME", "JUMP_LIMIT", "ZENO",
-                                                  "NONFINITE", "STEP_LIMIT"}
+                                                  "NONFINITE", "STEP_LIMIT", "SIMULTANEOUS",
+                                                  "DIVERGED"}
 
 
 def test_long_runs_resume_across_buffers():
