@@ -35,7 +35,10 @@ stops the run with code 8 (diverged) when a state component exceeds it in magnit
 start of a flow.
 
 ``run_hybrid_ex(..., zt_out, gkind, simtol)`` adds two returns to the same loop: code 6 when
-the current mode ``ic[0]`` is not built (``ng[mode] < 0``; build it and resume), and code 7
+the current mode ``ic[0]`` is not built: a target (or Zeno target) ``-2 - r`` names the
+mode reserved as number ``r`` (the jump is applied and recorded with that code as target,
+then the loop returns; build the mode, set ``ic[0]`` to its index, patch the tables and
+resume), and code 7
 when a guard of non-zero group ``gkind[mode, g]`` (shape ``(M, GM)``) fires while another
 guard of the same group is on its guard or closing onto it within ``simtol (1 + |t|)``: the
 joint jump is then the caller's (``w`` holds the pre-jump state, ``fc[0]`` its time and
@@ -139,7 +142,7 @@ def _zeno_switch(mode, g, t_k, t_inf, h, Phi, Ah, Rz, zt, max_jumps, Kp1, w, fc,
     zt_out[ic[11]] = t_inf
     ic[11] += 1
     target = zt[mode, g]
-    if target < 0:
+    if target == -1:
         _add_seg(st0, st1, smode, sj, sw, ic, t_k, t_k, mode, ic[1], w)
         return 2
     if ic[1] >= max_jumps:
@@ -197,7 +200,7 @@ def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, t
         if (ic[9] + 2 > jt.shape[0] or ic[10] + 3 > st0.shape[0]
                 or ic[11] + 2 > zt_out.shape[0]):
             return 5
-        if ng[ic[0]] < 0:
+        if ic[0] < 0 or ng[ic[0]] < 0:
             return _RC_NEED_MODE
         if max_state > 0.0:
             for i in range(N1 - 1):

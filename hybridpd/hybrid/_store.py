@@ -1,10 +1,12 @@
 """Growable packed tables of a hybrid automaton's modes (the inputs of the jump loop).
 
 A :class:`ModeStore` holds the stacked arrays of :class:`~hybridpd.hybrid._kernel.PackedAutomaton`
-for the modes known so far. A mode is *reserved* (it has an index, because a guard names it
-as a target) before it is *built* (its flow and guards prepared and packed): a reserved slot
-has ``ng = -1``, which the jump loop reports as "mode not built" (code 6) instead of entering
-it. Capacities grow by doubling, so building ``M`` modes costs ``O(M)`` copies of the tables.
+for the modes built so far, one row each. A mode that a guard names but that is not built yet
+is *reserved*: the guard's target is the code ``-2 - r`` (``r`` the reservation number),
+which the jump loop reports as "mode not built" (code 6) instead of entering it; building the
+mode gives it a row and :meth:`ModeStore.patch` replaces the code by the row everywhere. So
+only visited modes take table memory. Capacities grow by doubling, so building ``M`` modes
+costs ``O(M)`` copies of the tables.
 """
 from __future__ import annotations
 
@@ -64,7 +66,7 @@ class ModeStore:
 
     def __init__(self, n, K, theta):
         self.n, self.K, self.theta = int(n), int(K), float(theta)
-        self.count = 0                       # slots in use (built or reserved)
+        self.count = 0                       # rows in use (built modes)
         self._pk = _empty(4, 1, self.K + 1, self.n + 1)
 
     def _grow(self, cap, GM):
@@ -82,29 +84,20 @@ class ModeStore:
                 new[k][:c, :a.shape[1]] = a[:c]
         self._pk = new
 
-    def reserve(self) -> int:
-        """A new slot (``ng = -1`` until :meth:`build`); returns its index."""
-        cap = self._pk["h"].shape[0]
-        if self.count >= cap:
-            self._grow(2 * cap, 1)
-        i = self.count
-        self.count += 1
-        return i
-
-    def build(self, i, mode, index):
-        """Pack ``mode`` into slot ``i``; ``index(name) -> int`` resolves (reserves) targets."""
+    def add(self, mode, resolve) -> int:
+        """Pack ``mode`` into a new row and return it; ``resolve(name, where) -> int`` gives
+        the row (or reservation code) of each target."""
         n, N1 = self.n, self.n + 1
         ngi = len(mode.guards)
-        self._grow(self.count, max(1, ngi))
         targets, zts, Rhs, Rzs = [], [], [], []
         for g in mode.guards:
             where = f"mode {mode.name!r} guard {g.name!r}"
             if g.c.shape != (n,):
                 raise ValueError(f"{where}: c must have shape ({n},), got {g.c.shape}")
-            targets.append(index(mode.name if g.target is None else g.target, where))
+            targets.append(resolve(mode.name if g.target is None else g.target, where))
             Rhs.append(reset_matrix(f"{where} reset", g.reset, n))
             if g.zeno_target is not None:
-                zts.append(index(g.zeno_target, where + " zeno_target"))
+                zts.append(resolve(g.zeno_target, where + " zeno_target"))
                 Rzs.append(reset_matrix(f"{where} zeno_reset", g.zeno_reset, n))
             else:
                 zts.append(-1)
@@ -112,7 +105,10 @@ class ModeStore:
         md = prepare_lti_mode(mode.A, mode.b, [(g.c, g.d, g.direction) for g in mode.guards],
                               K=self.K, theta=self.theta,
                               priorities=[g.priority for g in mode.guards])
-        # targets may have reserved slots (and grown the tables): write after resolving them
+        i = self.count
+        cap = self._pk["h"].shape[0]
+        self._grow(2 * cap if i >= cap else cap, max(1, ngi))
+        self.count += 1
         pk = self._pk
         pk["h"][i] = md.h
         pk["Phi"][i] = md.Phi
@@ -133,12 +129,17 @@ class ModeStore:
             pk["Rz"][i, gi] = Rzs[gi]
             pk["gkind"][i, gi] = int(g.group)
         pk["ng"][i] = ngi
+        return i
 
-    def built(self, i) -> bool:
-        return bool(self._pk["ng"][i] >= 0)
+    def patch(self, code, row):
+        """Replace the reservation ``code`` by ``row`` in the target tables."""
+        c = self.count
+        for key in ("target", "zt"):
+            t = self._pk[key][:c]
+            t[t == code] = row
 
     def packed(self) -> PackedAutomaton:
-        """Views of the tables over the slots in use (reserved slots have ``ng = -1``)."""
+        """Views of the tables over the built rows (targets ``< -1``: reserved modes)."""
         c = self.count
         return PackedAutomaton(**{k: v[:c] for k, v in self._pk.items() if k != "gkind"})
 

@@ -217,68 +217,79 @@ class HybridAutomaton:
         self._builder = mode_builder
         self._max_modes = int(max_modes)
         self._store = ModeStore(n, K, theta)
-        self._index = {}
-        self._names = []
-        self._built = []
+        self._index = {}                 # name -> row of a built mode
+        self._names = []                 # row -> name
+        self._built = []                 # row -> Mode
+        self._reserved = {}              # name -> reservation number r (target code -2 - r)
+        self._res_names = []             # r -> name
+        self._code_rows = {}             # target code -> row, once built
         given = {m.name: m for m in modes}
         for m in modes:
             self._reserve(m.name)
         for m in modes:
-            self._build(self._index[m.name], given)
-        self._given = None
+            if m.name not in self._index:
+                self._build(m.name, given)
 
     # ---- modes on demand
     def _reserve(self, name, where=None) -> int:
+        """Row of the mode ``name`` if built, else its reservation code ``-2 - r``."""
         i = self._index.get(name)
         if i is not None:
             return i
-        if self._builder is None and where is not None:
-            raise ValueError(f"{where}: unknown target mode {name!r}")
-        i = self._store.reserve()
-        self._index[name] = i
-        self._names.append(name)
-        self._built.append(None)
-        return i
+        r = self._reserved.get(name)
+        if r is None:
+            if self._builder is None and where is not None:
+                raise ValueError(f"{where}: unknown target mode {name!r}")
+            r = len(self._res_names)
+            self._reserved[name] = r
+            self._res_names.append(name)
+        return -2 - r
 
-    def _build(self, i, given=None):
-        name = self._names[i]
+    def _build(self, name, given=None) -> int:
+        """Build the mode ``name`` into a new row (``ValueError`` if it is no mode)."""
         m = given.get(name) if given else None
         if m is None:
             if self._builder is None:
-                raise ValueError(f"unknown mode {name!r}")
+                raise ValueError(f"unknown mode {name!r}; modes are {tuple(self._names)}")
             m = self._builder(name)
             if not isinstance(m, Mode) or m.name != name:
                 raise ValueError(f"mode_builder({name!r}) must return a Mode named {name!r}")
             if m.A.shape != (self._n, self._n):
                 raise ValueError(f"mode {name!r}: A must have shape ({self._n}, {self._n})")
-        self._store.build(i, m, lambda nm, where: self._reserve(nm, where))
-        self._built[i] = m
-        return m
+        if self._builder is not None and given is None and len(self._names) >= self._max_modes:
+            raise ValueError(
+                f"max_modes: more than {self._max_modes} modes would be built; simulate builds "
+                "the modes it visits, an analysis of every mode needs them all")
+        row = self._store.add(m, self._reserve)
+        self._index[name] = row
+        self._names.append(name)
+        self._built.append(m)
+        r = self._reserved.get(name)
+        if r is not None:
+            self._store.patch(-2 - r, row)
+            self._code_rows[-2 - r] = row
+        return row
 
     def materialize(self) -> int:
-        """Build every mode reachable from the modes known so far; returns the mode count.
+        """Build every mode reachable from the modes built so far; returns the mode count.
 
         Raises
         ------
         ValueError
             If more than ``max_modes`` modes would be built.
         """
-        i = 0
-        while i < len(self._names):
-            if self._built[i] is None:
-                if i >= self._max_modes:
-                    raise ValueError(
-                        f"max_modes: the automaton has more than {self._max_modes} reachable "
-                        "modes; simulate builds the modes it visits, an analysis of every mode "
-                        "needs them all")
-                self._build(i)
-            i += 1
+        r = 0
+        while r < len(self._res_names):
+            name = self._res_names[r]
+            if name not in self._index:
+                self._build(name)
+            r += 1
         return len(self._names)
 
     @property
     def n_built(self) -> int:
         """Number of modes built so far."""
-        return sum(m is not None for m in self._built)
+        return len(self._built)
 
     @property
     def table_bytes(self) -> int:
@@ -313,26 +324,16 @@ class HybridAutomaton:
         return self._store.packed()
 
     def _packed_now(self) -> PackedAutomaton:
-        """The tables of the modes known so far (unbuilt slots have ``ng = -1``)."""
+        """The tables of the modes built so far (targets ``< -1``: reserved modes)."""
         return self._store.packed()
 
     def mode_index(self, name: str) -> int:
-        """Index of the mode called ``name`` (``ValueError`` if unknown)."""
+        """Index of the mode called ``name``, built on demand (``ValueError`` if unknown)."""
         i = self._index.get(name) if isinstance(name, str) else None
-        if i is None and self._builder is not None and isinstance(name, str):
-            i = self._reserve(name)
-            try:
-                self._build(i)
-            except ValueError:
-                self._index.pop(name)
-                self._names.pop()
-                self._built.pop()
-                self._store.count -= 1
-                raise
         if i is None:
-            raise ValueError(f"unknown mode {name!r}; modes are {tuple(self._names)}")
-        if self._built[i] is None:
-            self._build(i)
+            if self._builder is None or not isinstance(name, str):
+                raise ValueError(f"unknown mode {name!r}; modes are {tuple(self._names)}")
+            i = self._build(name)
         return i
 
     def mode(self, name: str) -> Mode:
@@ -412,7 +413,7 @@ class HybridAutomaton:
         chunks = []
         cap = min(max_jumps + 4, 2048)
         pk = self._store.packed()
-        hmin = float(np.min(pk.h[pk.ng >= 0]))
+        hmin = float(np.min(pk.h))
         small = (t1 - t0) <= _INTERP_MAX_STEPS * hmin or max_jumps <= _INTERP_JUMPS
         if resolver is None:
             simtol = -1.0
@@ -435,7 +436,8 @@ class HybridAutomaton:
             chunks.append({k: (v[:nj] if k.startswith("j") else v[:ns] if k.startswith("s")
                                else v[:nz]) for k, v in bufs.items()})
             if rc == _RC_NEED_MODE:
-                self._build(int(ic[0]))
+                code = int(ic[0])
+                ic[0] = self._build(self._res_names[-2 - code])
                 continue
             if rc == _RC_SIMULTANEOUS:
                 if int(ic[1]) >= max_jumps:
@@ -492,7 +494,10 @@ class HybridAutomaton:
     def _make_trajectory(self, t0, rc, cat, w, fc, ic) -> HybridTrajectory:
         n = self._n
         mn = self._names
-        gnames = [None if m is None else [g.name for g in m.guards] for m in self._built]
+        gnames = [[g.name for g in m.guards] for m in self._built]
+        for key in ("jdst", "smode"):
+            for code in np.unique(cat[key][cat[key] < 0]):
+                cat[key][cat[key] == code] = self._code_rows[int(code)]
         jsrc = cat["jsrc"]
         guard = tuple(nm if nm is not None else gnames[s][g]
                       for s, g, nm in zip(jsrc, cat["jg"], cat["jname"]))

@@ -329,9 +329,9 @@ class _Geometry:
         """The contacts of ``stick`` that stay held through an impact of ``k`` at ``wall``.
 
         The joint impact of ``k`` and the held contacts (zero normal velocity) is an LCP
-        whose ``q`` is ``-(1 + e) |u_k|`` times a unit vector, so its active set does not
-        depend on the closing speed: it is solved once here (:func:`solve_lcp`) and the
-        contacts with a positive impulse stay held.
+        whose ``q`` is ``-(1 + e) |u_k|`` times a unit vector, so its solution scales with the
+        closing speed: it is solved once here (:func:`solve_lcp`); the held contacts that
+        leave with a positive separating velocity are released, the others stay held.
         """
         if not stick:
             return ()
@@ -344,8 +344,10 @@ class _Geometry:
         lam = solve_lcp(A, q)
         if lam is None:
             return ()
-        scale = float(lam.max(initial=0.0))
-        return tuple(s for i, s in enumerate(stick) if lam[i] > 1e-12 * scale)
+        # released: only the held contacts that the impact sets moving apart (u+ > 0); one
+        # that neither pushes nor moves stays held, its force decides its release
+        u = A @ lam + q
+        return tuple(s for i, s in enumerate(stick) if u[i] <= 1e-12 * float(lam.max()))
 
     def impact(self, k, stick):
         """Newton's law of contact ``k`` with the contacts of ``stick`` held: ``(R, r)``."""
