@@ -236,12 +236,11 @@ def _resolve(model, time_tol, mode, guard, t, z):
     info = model.modes[mode]
     gi = model.guards[(mode, guard)]
     act = _active(model, z, t, time_tol, info.stick, (gi.contact, gi.wall))
-    sysm = model.loop.system
     iv = model.layout["v"]
     W = np.array([-wall * model.contacts[k].normal for k, wall, _ in act])
     e = np.array([model.contacts[k].restitution for k, _, _ in act])
     held = np.array([h for *_, h in act])
-    out = multi_impact(np.linalg.inv(sysm.M), W, z[iv], e, held)
+    out = multi_impact(model._geometry.Minv, W, z[iv], e, held)
     if out is None:
         return None
     scale = float(out.impulses.max(initial=0.0))
@@ -290,6 +289,8 @@ class _Geometry:
                                  f"{c.normal.shape}")
         self.n, self.N = sysm.n, N
         self.iq, self.iv = lay["q"], lay["v"]
+        self.Minv = np.linalg.inv(sysm.M)
+        self._held = {}
         self.gap = np.zeros((len(contacts), N))
         self.Mw = np.zeros((len(contacts), sysm.n))
         for k, c in enumerate(contacts):
@@ -302,6 +303,12 @@ class _Geometry:
 
     def held(self, stick):
         """``(W (n, s), M^-1 W, G^-1 = (W^T M^-1 W)^-1, beta)`` or None if dependent."""
+        key = tuple(stick)
+        if key not in self._held:
+            self._held[key] = self._held_uncached(key)
+        return self._held[key]
+
+    def _held_uncached(self, stick):
         ks = [k for k, _ in stick]
         W = np.array([self.contacts[k].normal for k in ks]).T
         MW = self.Mw[ks].T
@@ -483,13 +490,17 @@ class _ModeTable(Mapping):
 
     def __init__(self, ha, contacts, geo):
         self._ha, self._contacts, self._geo = ha, contacts, geo
+        self._cache = {}
 
     def __getitem__(self, name):
-        try:
-            config, stick = _parse_mode(name, self._contacts, self._geo)
-        except ValueError:
-            raise KeyError(name) from None
-        return ModeInfo(name, config, stick)
+        info = self._cache.get(name) if isinstance(name, str) else None
+        if info is None:
+            try:
+                config, stick = _parse_mode(name, self._contacts, self._geo)
+            except ValueError:
+                raise KeyError(name) from None
+            info = self._cache[name] = ModeInfo(name, config, stick)
+        return info
 
     def __iter__(self):
         return iter(list(self._ha._names))
@@ -499,8 +510,8 @@ class _ModeTable(Mapping):
 
     def __contains__(self, name):
         try:
-            _parse_mode(name, self._contacts, self._geo)
-        except ValueError:
+            self[name]
+        except KeyError:
             return False
         return True
 
