@@ -171,7 +171,10 @@ def _zeno_switch(mode, g, t_k, t_inf, h, Phi, Ah, Rz, zt, max_jumps, Kp1, w, fc,
     ic[3] = -1
     ic[5] = 0
     ic[6] = 0
-    ic[7] = 0
+    if t_inf > t_k:
+        ic[7] = 0           # an instant accumulation still counts towards an instant loop
+    else:
+        ic[7] += 1
     if not _finite(post):
         _add_seg(st0, st1, smode, sj, sw, ic, t_inf, t_inf, target, ic[1], w)
         return 3

@@ -38,9 +38,13 @@ Guards (``g > 0`` admissible, all with ``direction = -1`` except sampling):
   dependent: the run then ends with ``ZENO``). Impact guards form simultaneity group 1: when
   another rigid contact is on its bound or closing onto it at the same instant, the joint
   impact is solved by :func:`~hybridpd.mechanics.impact.multi_impact` at run time
-  (:func:`resolve_simultaneous`).
-* ``release{k}{+|-}`` (``k`` in ``S``): ``g = -wall * lambda_k``: the contact force would have
-  to pull; reset the plastic projection onto ``S`` (so that rounding accumulated while
+  (:meth:`MechanicalAutomaton.resolver`).
+* ``release{k}{+|-}`` (``k`` in ``S``): ``g = -wall * lambda_k + delta_k``: the contact force
+  pulls by the margin ``delta_k = RELEASE_MARGIN (|c_k|_1 max(1, |bounds|) + |d_k|)`` (``c_k,
+  d_k`` the affine force row), so that the free flow entered at the release separates
+  clearly; a force that only touches zero within rounding (and would be undone by a
+  re-impact at zero relative velocity, a sticking interval of zero length) releases nothing;
+  reset the plastic projection onto ``S`` (so that rounding accumulated while
   sticking cannot leave the flow outside a gap), target the mode sticking on ``S - {k}``.
 * ``enter{j}{+|-}`` / ``leave{j}{+|-}`` (compliant ``j``): the penetration changes sign;
   identity reset, target the configuration with ``j`` engaged / released.
@@ -77,6 +81,8 @@ __all__ = ["GuardInfo", "MechanicalAutomaton", "ModeInfo", "build_automaton"]
 _STICK_RE = re.compile(r"(\d+)([+-])")
 _GUARD_RE = re.compile(r"\A(contact|release|enter|leave)(\d+)([+-])\Z")
 _GUARD_KIND = {"contact": "impact", "release": "release", "enter": "enter", "leave": "leave"}
+#: relative margin by which a held contact's force must pull before it is released
+RELEASE_MARGIN = 1e-9
 
 
 @dataclass(frozen=True)
@@ -291,6 +297,7 @@ class _Geometry:
         self.iq, self.iv = lay["q"], lay["v"]
         self.Minv = np.linalg.inv(sysm.M)
         self._held = {}
+        self.scale = max([1.0] + [abs(b) for c in contacts for _, b in c.bounds])
         self.gap = np.zeros((len(contacts), N))
         self.Mw = np.zeros((len(contacts), sysm.n))
         for k, c in enumerate(contacts):
@@ -609,9 +616,11 @@ def _guards(geo, config, stick, lam_rows, lam_b):
     for i, (k, wall) in enumerate(stick):
         gname = f"release{k}{_sign(wall)}"
         rest = tuple(s for s in stick if s[0] != k)
-        out.append(Guard(gname, c=-wall * lam_rows[i], d=-wall * float(lam_b[i]), direction=-1,
-                         reset=geo.projection(stick), target=_mode_name(config, rest),
-                         priority=1))
+        margin = RELEASE_MARGIN * (float(np.abs(lam_rows[i]).sum()) * geo.scale
+                                   + abs(float(lam_b[i])))
+        out.append(Guard(gname, c=-wall * lam_rows[i], d=-wall * float(lam_b[i]) + margin,
+                         direction=-1, reset=geo.projection(stick),
+                         target=_mode_name(config, rest), priority=1))
     if loop.sampled:
         cl = np.zeros(loop.n_states)
         cl[loop.layout["clock"]] = 1.0
