@@ -94,3 +94,40 @@ def test_a_growing_motion_stops_as_diverged():
     tr = m.simulate(100.0, max_state=1e6)
     assert tr.termination == "diverged"
     assert np.abs(tr.hybrid.x_final).max() > 1e6 and tr.t_final < 100.0
+
+
+DIVERGING = """
+[system]
+dofs = ["a", "b"]
+masses = [0.2, 1.0]
+input = [0.0, 1.0]
+stiffness = [[5.0, -5.0], [-5.0, 5.0]]
+[[contact]]
+between = ["a", "b"]
+lo = -0.1
+hi = 0.1
+restitution = 0.9
+[controller]
+type = "pd"
+kp = 10.0
+kv = -5.0
+measure = "b"
+[initial]
+q = [0.05, 0.0]
+"""
+
+
+def test_cli_exit_status_and_summary(tmp_path, capsys):
+    from hybridpd.cli import main
+
+    f = tmp_path / "diverging.toml"
+    f.write_text(DIVERGING)
+    assert main(["simulate", "--model", str(f), "--t-end", "100"]) == 4
+    out, err = capsys.readouterr()
+    assert "stopped: diverged" in out and "diverged" in err
+    # long event lists are summarised, not printed one by one
+    assert "more (use --json for all)" in out and len(out.splitlines()) < 40
+    assert main(["simulate", "--model", str(MODELS / "robot_joint.toml"), "--t-end",
+                 "10"]) == 0
+    out, _ = capsys.readouterr()
+    assert "accumulation of impacts on contact 0" in out
