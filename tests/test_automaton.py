@@ -414,3 +414,47 @@ def test_materialize_builds_every_reachable_mode_in_reservation_order():
     # a fully given automaton refuses unknown targets as before
     with pytest.raises(ValueError, match="unknown target mode 'b'"):
         HybridAutomaton([built["a"]])
+
+
+# ---------------------------------------------------------------------------- compiled-code cache
+_TINY = '''
+import logging, sys
+logging.basicConfig(level=logging.INFO, stream=sys.stderr, format="%(message)s")
+from hybridpd._jit import njit
+
+@njit(cache=True)
+def twice(x):
+    return 2.0 * x
+
+print(twice(1.5), twice.dispatcher.stats.cache_hits.total(),
+      twice.dispatcher.stats.cache_misses.total())
+'''
+
+
+def test_compiled_kernels_are_cached_once_in_a_private_directory(tmp_path):
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).parents[1]
+    (tmp_path / "tinymod.py").write_text(_TINY)
+    cache = tmp_path / "nb"
+    env = dict(os.environ, PYTHONPATH=f"{root}{os.pathsep}{tmp_path}",
+               HYBRIDPD_NUMBA_CACHE_DIR=str(cache))
+    run = [sys.executable, "-c", "import tinymod"]
+    first = subprocess.run(run, env=env, capture_output=True, text=True, timeout=120,
+                           check=False)
+    second = subprocess.run(run, env=env, capture_output=True, text=True, timeout=120,
+                           check=False)
+    assert first.stdout.split() == ["3.0", "0", "1"], first.stderr
+    assert "compiling the numba kernels" in first.stderr
+    assert second.stdout.split() == ["3.0", "1", "0"], second.stderr   # loaded, not compiled
+    assert "compiling" not in second.stderr
+    assert cache.stat().st_mode & 0o777 == 0o700 and any(cache.rglob("*.nbi"))
+    # a directory that others can write is never used: compiled in memory, nothing loaded
+    os.chmod(cache, 0o777)
+    third = subprocess.run(run, env=env, capture_output=True, text=True, timeout=120,
+                           check=False)
+    assert third.stdout.split()[:2] == ["3.0", "0"], third.stderr      # nothing loaded
+    assert "not private" in third.stderr

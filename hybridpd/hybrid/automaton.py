@@ -419,19 +419,22 @@ class HybridAutomaton:
             simtol = -1.0
         while True:
             pk = self._store.packed()
-            gk = self._store.gkind()
+            gk = self._store.gkind() if simtol >= 0 else None
             dt_min = (pk.h * 1e-9 if zeno.dt_min is None
                       else np.full(pk.h.shape[0], float(zeno.dt_min)))
-            interp = small and run_hybrid_ex.prefer_interpreter()
+            # without groups the plain loop (the same code) is the kernel to compile
+            kern = run_hybrid if simtol < 0 else run_hybrid_ex
+            extra = {} if simtol < 0 else {"gkind": gk, "simtol": simtol}
+            interp = small and kern.prefer_interpreter()
             steps = min(max_steps, int(ic[8]) + _INTERP_MAX_STEPS) if interp else max_steps
             if interp:
                 cap = min(cap, _INTERP_JUMPS + 4)
             bufs = _buffers(cap, N1)
             ic[9:12] = 0
-            run = run_hybrid_ex.interpret if interp else run_hybrid_ex
+            run = kern.interpret if interp else kern
             rc = run(pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs, pk.gsum, pk.cnorm,
                      pk.prio, pk.ng, pk.Rh, pk.target, pk.zt, pk.Rz, dt_min, t1, max_jumps,
-                     steps, zf, zi, w, fc, ic, **bufs, gkind=gk, simtol=simtol)
+                     steps, zf, zi, w, fc, ic, **bufs, **extra)
             nj, ns, nz = int(ic[9]), int(ic[10]), int(ic[11])
             chunks.append({k: (v[:nj] if k.startswith("j") else v[:ns] if k.startswith("s")
                                else v[:nz]) for k, v in bufs.items()})
