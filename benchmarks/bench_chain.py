@@ -12,16 +12,20 @@ the memory of the kernel's tables, microseconds per impact, and the same cost of
 events, restarted at every impact; it has no sticking, so it runs until impacts pile up or
 ``--naive-impacts`` impacts) with the ratio. Then, in a fresh process for m = 30: start-up
 (imports, model, first run of 1000 impacts) wall time and peak memory (targets: model under
-1 s, everything under 10 s and 1 GB).
+1 s, everything under 10 s and 1 GB); and the first simulation of a first-ever run (empty
+compiled-code cache) against the next fresh process.
 
 Run: ``python benchmarks/bench_chain.py [--ms 1,2,...] [--naive-impacts 60]``.
 """
 from __future__ import annotations
 
 import argparse
+import os
 import subprocess
 import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -97,6 +101,15 @@ def main(argv=None):
         imp, model, run, rss, nimp, built = out
         print(f"fresh process, m = 30: imports {imp} s, model {model} s, first run of {nimp} "
               f"jumps {run} s ({built} modes built), peak RSS {rss} MB")
+        # the compiled-code cache: a first-ever run (empty cache) against the next process
+        with tempfile.TemporaryDirectory() as d:
+            env = dict(os.environ, HYBRIDPD_NUMBA_CACHE_DIR=str(Path(d) / "nb"))
+            for label in ("first run ever (compiles)", "next process (cache)"):
+                r = subprocess.run([sys.executable, "-c", _COLD], capture_output=True,
+                                   text=True, check=True, env=env)
+                run = r.stdout.split()[2]
+                said = "says it compiles" if "compiling" in r.stderr else "silent"
+                print(f"numba cache, {label}: first simulation {run} s ({said})")
 
 
 if __name__ == "__main__":

@@ -38,6 +38,21 @@ Conventions
   cause ``ZENO`` at ``t_k``, and ``t_inf`` is recorded in ``zeno_times``. An accumulation
   predicted after the end time is ignored (the jumps before the end are resolved). More than
   ``max_instant_jumps`` consecutive jumps at one instant also end the run with ``ZENO``.
+  With ``ZenoOptions.tail_tol`` an accumulation found by its ratios is accepted only once the
+  extrapolated tail ``t_inf - t_k`` is below ``tail_tol (1 + |t_k|)``; the jumps before are
+  resolved one by one. An immediate accumulation counts towards ``max_instant_jumps``.
+* **Modes on demand**: with a ``mode_builder`` a mode is built (flow prepared, guards
+  packed into the kernel's tables) the first time a run enters it or a caller names it; a
+  guard naming a mode not built yet carries a reservation code, and the jump loop hands
+  control back to build it. :meth:`HybridAutomaton.materialize` builds every reachable mode
+  (``modes`` and ``packed`` do so first, for analyses that need them all).
+* **Simultaneity groups**: a guard of a non-zero ``group`` that fires while another guard of
+  its group is on its guard (or closing onto it within ``simtol (1 + |t|)``) hands the joint
+  jump to the ``resolver`` of :meth:`HybridAutomaton.simulate` (jumps of kind
+  ``'simultaneous'``, one per guard the resolver names, all at one instant); a resolver that
+  finds no joint jump stops the run with ``SIMULTANEOUS``.
+* **Divergence**: with ``max_state`` the run stops with ``DIVERGED`` when a state component
+  exceeds it at a jump or the start of a flow.
 * **Bounds**: every loop is bounded (``max_jumps``, ``max_steps``, the bisection budget); the
   trajectory always says why it stopped (:class:`TerminationCause`). When the jump limit is
   reached the run stops at the event that would have been jump ``max_jumps + 1``, with the
