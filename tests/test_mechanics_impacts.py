@@ -144,3 +144,20 @@ def test_solve_lcp_degenerate_and_infeasible():
     assert solve_lcp([[-1.0]], [-1.0]) is None
     with pytest.raises(ValueError, match="A must have shape"):
         solve_lcp(np.eye(2), [1.0])
+
+
+def test_three_masses_model_file_through_the_cli(capsys):
+    """The same hand-solved case as a model file, through the command line: both contacts
+    recorded at t = 0.1 with the joint post-impact velocities, exit status 0."""
+    import json
+    from pathlib import Path
+
+    from hybridpd.cli import main
+
+    f = Path(__file__).parents[1] / "examples" / "models" / "three_masses.toml"
+    assert main(["simulate", "--model", str(f), "--t-end", "1", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["termination"] == "end_time" and len(d["impacts"]) == 2
+    for imp in d["impacts"]:
+        np.testing.assert_allclose(imp["t"], 0.1, atol=1e-14)
+        np.testing.assert_allclose(imp["post"][1::2], [0.5, 0.0, 0.5], atol=1e-13)
