@@ -22,8 +22,9 @@ may differ in the last bits where NumPy's and the C library's elementary functio
 
 Compiled code is cached once per installation: kernels declared with ``cache=True`` keep
 numba's machine code in a per-user directory keyed by the versions of hybridpd, numba and
-Python (:func:`numba_cache_dir`: ``$HYBRIDPD_NUMBA_CACHE_DIR`` if set, else
-``numba-<versions>`` under ``$XDG_CACHE_HOME/hybridpd`` or ``~/.cache/hybridpd``), so a fresh
+Python and a stamp of the package's source files (:func:`numba_cache_dir`:
+``$HYBRIDPD_NUMBA_CACHE_DIR`` if set, else ``numba-<versions>-<stamp>`` under
+``$XDG_CACHE_HOME/hybridpd`` or ``~/.cache/hybridpd``), so a fresh
 process on a machine that has run hybridpd before loads it instead of compiling. Compiled
 code is only ever loaded from a directory owned by the current user and writable by no one
 else (checked for the directory and its parent); otherwise the kernels compile in memory for
@@ -84,7 +85,7 @@ def numba_cache_dir() -> Path | None:
     from hybridpd._version import __version__
 
     key = (f"numba-{__version__}-nb{numba.__version__}-py{sys.version_info[0]}"
-           f"{sys.version_info[1]}")
+           f"{sys.version_info[1]}-{_source_stamp()}")
     env = os.environ.get("HYBRIDPD_NUMBA_CACHE_DIR")
     if env:
         d = Path(env).expanduser()
@@ -102,6 +103,33 @@ def numba_cache_dir() -> Path | None:
                      "memory, not cached", d)
         return None
     return d
+
+
+def _source_stamp() -> str:
+    """Short hash of the package's sources (paths, sizes, modification times).
+
+    numba checks only a kernel's own file when it loads cached code, not the files of the
+    kernels it calls; keying the directory by every source file means an edited or
+    upgraded installation never runs stale compiled callees.
+    """
+    import hashlib
+
+    root = str(Path(__file__).resolve().parent)
+    h = hashlib.sha256(root.encode())
+    entries = []
+    for d, subdirs, files in os.walk(root):
+        subdirs[:] = [s for s in subdirs if s != "__pycache__"]
+        for f in files:
+            if f.endswith(".py"):
+                try:
+                    st = os.stat(os.path.join(d, f))
+                except OSError:
+                    continue
+                entries.append(f"{os.path.relpath(os.path.join(d, f), root)}:{st.st_size}:"
+                               f"{st.st_mtime_ns};")
+    for e in sorted(entries):
+        h.update(e.encode())
+    return h.hexdigest()[:12]
 
 
 def _announce(dispatcher, name) -> None:
