@@ -82,7 +82,12 @@ def register(sub):
 _SHOWN = 10
 #: exit status of a model run stopped by an unresolved condition (not a user bound)
 EXIT_STOPPED = 4
-_FAILED = {"simultaneous_contact", "diverged", "nonfinite"}
+_FAILED = {
+    "simultaneous_contact": "contacts closing at one instant whose joint impact (the "
+                            "multi-contact LCP) has no solution or a degenerate one",
+    "diverged": "the state grew past the divergence bound (an unstable loop?)",
+    "nonfinite": "the state overflowed",
+}
 
 
 def _agree(a, b, rtol=1e-6):
@@ -158,7 +163,7 @@ def _run_model(args) -> int:
     status = EXIT_STOPPED if d["termination"] in _FAILED else 0
     if status:
         print(f"hybridpd simulate: the run stopped at t = {traj.t_final:.12g}: "
-              f"{d['termination']}", file=sys.stderr)
+              f"{d['termination']} ({_FAILED[d['termination']]})", file=sys.stderr)
     if args.json:
         print(json.dumps(d))
         return status
