@@ -22,7 +22,7 @@ may differ in the last bits where NumPy's and the C library's elementary functio
 
 Compiled code is cached once per installation: kernels declared with ``cache=True`` keep
 numba's machine code in a per-user directory keyed by the versions of hybridpd, numba and
-Python and a stamp of the package's source files (:func:`numba_cache_dir`:
+Python and a stamp of the package's kernel source files (:func:`numba_cache_dir`:
 ``$HYBRIDPD_NUMBA_CACHE_DIR`` if set, else ``numba-<versions>-<stamp>`` under
 ``$XDG_CACHE_HOME/hybridpd`` or ``~/.cache/hybridpd``), so a fresh
 process on a machine that has run hybridpd before loads it instead of compiling. Compiled
@@ -106,11 +106,11 @@ def numba_cache_dir() -> Path | None:
 
 
 def _source_stamp() -> str:
-    """Short hash of the package's sources (paths, sizes, modification times).
+    """Short hash of the package's kernel sources (paths, sizes, modification times).
 
     numba checks only a kernel's own file when it loads cached code, not the files of the
-    kernels it calls; keying the directory by every source file means an edited or
-    upgraded installation never runs stale compiled callees.
+    kernels it calls; keying the directory by every file that defines kernels means an
+    edited or upgraded installation never runs stale compiled callees.
     """
     import hashlib
 
@@ -121,8 +121,12 @@ def _source_stamp() -> str:
         subdirs[:] = [s for s in subdirs if s != "__pycache__"]
         for f in files:
             if f.endswith(".py"):
+                path = os.path.join(d, f)
                 try:
-                    st = os.stat(os.path.join(d, f))
+                    st = os.stat(path)
+                    with open(path, "rb") as fh:
+                        if b"njit" not in fh.read():
+                            continue         # no kernel: its edits cannot stale compiled code
                 except OSError:
                     continue
                 entries.append(f"{os.path.relpath(os.path.join(d, f), root)}:{st.st_size}:"
