@@ -161,3 +161,23 @@ def test_three_masses_model_file_through_the_cli(capsys):
     for imp in d["impacts"]:
         np.testing.assert_allclose(imp["t"], 0.1, atol=1e-14)
         np.testing.assert_allclose(imp["post"][1::2], [0.5, 0.0, 0.5], atol=1e-13)
+
+
+def test_held_contact_takes_part_in_the_impact():
+    """Masses 0 and 1 held together (contact 0 at its bound) move at 1 and hit mass 2
+    through contact 1 (e = 0.5). By hand: A = [[2, -1], [-1, 2]], q = [0, -1.5],
+    lambda = [0.5, 1.0] > 0 (the held contact pushes: it stays held), v+ = [0.5, 0.5, 1].
+    Both the law compiled into the sticking mode and the run-time resolver give it."""
+    from hybridpd.mechanics.simulate import simulate_state
+
+    ma = _free_chain(np.eye(3), [Contact([1, -1, 0], lo=-0.3, hi=0.0, restitution=0.0),
+                                 Contact([0, 1, -1], hi=0.1, restitution=0.5)])
+    z0 = ma.initial_state([0.0, 0.0, 0.0], [1.0, 1.0, 0.0])
+    tr = simulate_state(ma, z0, (0.0, 0.15), mode="stick0+")
+    np.testing.assert_allclose(tr.impact_times[0], 0.1, atol=1e-14)
+    np.testing.assert_allclose(tr.post[0][1::2], [0.5, 0.5, 1.0], atol=1e-13)
+    assert tr.hybrid.jumps.target[0] == "stick0+"
+    z = tr.hybrid.jumps.pre[0]
+    z_post, target, names = ma.resolver()("stick0+", "contact1+", 0.1, z)
+    np.testing.assert_allclose(z_post[ma.layout["v"]], [0.5, 0.5, 1.0], atol=1e-13)
+    assert target == "stick0+" and names == ["contact1+"]
