@@ -169,7 +169,7 @@ class ImpactMapper:
                 if np.any(pts[:, 3] <= 0):
                     ok = False
                     break
-                res = P.apply(pts)
+                res = P.apply_batch(pts)
                 if not np.all(res.ok):
                     ok = False
                     break

@@ -19,30 +19,13 @@ from hybridpd.analysis.continuation._common import (
 from hybridpd.analysis.continuation.trace import trace_map
 from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.pair import symbolic
-from hybridpd.pair.batch import impact_map
-
-
-def _power_many(P: ImpactMap, S: np.ndarray, k: int):
-    """``P^k`` of the rows of ``S`` (N, 4); returns ``(images, ok)``."""
-    cur = np.array(S, dtype=float, copy=True)
-    ok = np.all(np.isfinite(cur), axis=1) & (cur[:, 3] > 0)
-    for _ in range(k):
-        idx = np.flatnonzero(ok)
-        if idx.size == 0:
-            break
-        out, status, _ = impact_map(P.params, P._c, np.ascontiguousarray(cur[idx]), P.tol,
-                                    P.max_impacts)
-        cur[idx] = out
-        ok[idx] = status == 0
-    cur[~ok] = np.nan
-    return cur, ok
 
 
 def _residual(P: ImpactMap, s: np.ndarray, k: int):
     """``P^k(s) - s`` with the phase difference unwrapped, or None where undefined."""
     if not (np.all(np.isfinite(s)) and s[3] > 0):
         return None
-    img, ok = _power_many(P, s[None, :], k)
+    img, ok = P.apply_many(s[None, :], k)
     if not ok[0]:
         return None
     r = img[0] - s
@@ -116,24 +99,7 @@ def map_power_jacobian(impact_map_: ImpactMap, s, period: int = 1, *, method: st
 
 def _fd_jacobian(P: ImpactMap, s: np.ndarray, k: int, fd_step: float) -> np.ndarray:
     """Central differences of ``P^k`` (one-sided where a side is undefined)."""
-    T = P.period
-    H = fd_step * np.maximum(1.0, np.abs(s))
-    H[3] = min(H[3], 0.5 * s[3])          # stay on the section side z4 > 0
-    S = np.concatenate([s + np.diag(H), s - np.diag(H), s[None, :]])
-    img, ok = _power_many(P, S, k)
-    J = np.empty((4, 4))
-    for j in range(4):
-        if ok[j] and ok[4 + j]:
-            d, h = img[j] - img[4 + j], 2 * H[j]
-        elif ok[j] and ok[8]:
-            d, h = img[j] - img[8], H[j]
-        elif ok[4 + j] and ok[8]:
-            d, h = img[8] - img[4 + j], H[j]
-        else:
-            raise RuntimeError(f"P^{k} undefined around s in direction {j}")
-        d[0] = _wrap_diff(d[0], T)
-        J[:, j] = d / h
-    return J
+    return P.jacobian_fd(s, k=k, h=fd_step, scale=np.maximum(1.0, np.abs(s)), one_sided=True)
 
 
 def _param_derivative(P: ImpactMap, name: str, s: np.ndarray, k: int, fd_step: float,

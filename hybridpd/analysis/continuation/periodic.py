@@ -18,7 +18,6 @@ from hybridpd.analysis.continuation._common import (
 )
 from hybridpd.analysis.continuation.newton import (
     _newton,
-    _power_many,
     _residual,
     map_power_jacobian,
 )
@@ -157,7 +156,7 @@ def _minimal_period(P, s, k):
     for d in range(1, k):
         if k % d:
             continue
-        img, ok = _power_many(P, s[None, :], d)
+        img, ok = P.apply_many(s[None, :], d)
         if ok[0]:
             r = img[0] - s
             r[0] = _wrap_diff(r[0], T)
