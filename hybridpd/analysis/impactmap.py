@@ -144,14 +144,14 @@ class ImpactMap(PoincareMap):
     def apply(self, s, k: int = 1, jacobian: bool = False) -> MapResult:
         """Apply ``P^k`` to the section point ``s`` (shape ``(4,)``), optionally with ``DP^k``.
 
-        ``DP`` of a return with the simple pattern comes from the symbolic blocks, of any
-        other return from central differences of the engine.
+        ``DP^k`` is the chain of symbolic blocks when every return has the simple pattern,
+        else central differences of the engine's ``P^k``.
         """
         k = check_returns(k)
         cur = self._points(check_array("s", s, shape=(4,)))[0]
         L, T = self.pair.L, self.period
         jumps = [(float(cur[0]), "free", "wall+", "free", "crossing")]
-        DP = np.eye(4) if jacobian else None
+        s0, blocks = cur, []
         t_abs = float(cur[0])
         st = 0
         for i in range(k):
@@ -176,19 +176,25 @@ class ImpactMap(PoincareMap):
                 return MapResult(np.full(4, np.nan), False, STATUS_NAMES.get(int(st),
                                  str(int(st))), float(jumps[0][0]), float(out[0]), z, "free",
                                  tuple(jumps), any(j[4] == "grazing" for j in jumps))
-            if jacobian:
-                DP = self._dp_once(cur, rec) @ DP
+            blocks.append((cur, rec))
             cur = out
         z = np.array([cur[1] + L, cur[2] + cur[3], cur[1], cur[2],
                       *self.reference.exo_state(t_abs)])
         grazing = any(j[4] == "grazing" for j in jumps) or cur[3] <= 1e-12 * max(1.0, T)
+        DP = self._power_dp(s0, k, blocks) if jacobian else None
         return MapResult(cur.copy(), True, "returned", float(jumps[0][0]), t_abs, z, "free",
                          tuple(jumps), bool(grazing), DP)
 
-    def _dp_once(self, s, rec) -> np.ndarray:
-        if len(rec) == 2 and rec[0, 0] < 0 and rec[1, 0] > 0 and not np.any(rec[:, 3]):
-            return self._symbolic(s, rec[0, 1], rec[1, 1]).DP.reshape(4, 4)
-        return self.jacobian_fd(s, one_sided=True)
+    def _power_dp(self, s, k, blocks) -> np.ndarray:
+        """``DP^k``: the chain of symbolic blocks when every return is simple, else FD."""
+        simple = all(len(rec) == 2 and rec[0, 0] < 0 and rec[1, 0] > 0
+                     and not np.any(rec[:, 3]) for _s, rec in blocks)
+        if not simple:
+            return self.jacobian_fd(s, k=k, one_sided=True)
+        DP = np.eye(4)
+        for si, rec in blocks:
+            DP = self._symbolic(si, rec[0, 1], rec[1, 1]).DP.reshape(4, 4) @ DP
+        return DP
 
     def _symbolic(self, s, tau1, tau2) -> symbolic.JacobianResult:
         g, p = self.gains, self.pair

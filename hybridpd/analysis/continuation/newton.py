@@ -18,7 +18,6 @@ from hybridpd.analysis.continuation._common import (
 )
 from hybridpd.analysis.continuation.trace import trace_map
 from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.pair import symbolic
 
 
 def _residual(P: ImpactMap, s: np.ndarray, k: int):
@@ -86,14 +85,7 @@ def map_power_jacobian(impact_map_: ImpactMap, s, period: int = 1, *, method: st
         raise ValueError("method='symbolic' needs the simple pattern (+L, -L, +L) on every "
                          f"iterate; got {[tr.walls for tr in traces]}")
     if simple and method != "fd":
-        g, p, ref = P.gains, P.pair, P.reference
-        J = np.eye(4)
-        for i, tr in enumerate(traces):
-            jac = symbolic.map_jacobian(pts[i], tr.steps[0].tau, tr.steps[1].tau, xm=ref.xm,
-                                        kp=g.kp, kv=g.kv, m2=p.m2, mu=p.mu, e=p.e, L=p.L,
-                                        w=ref.omega, case=P.case.value)
-            J = np.asarray(jac.DP, float).reshape(4, 4) @ J
-        return J, "symbolic", traces
+        return P.apply(s, k, jacobian=True).DP, "symbolic", traces
     return _fd_jacobian(P, s, k, fd_step), "fd", traces
 
 
