@@ -28,6 +28,7 @@ import numpy as np
 from hybridpd._deprecated import moved_names
 from hybridpd._jit import njit
 from hybridpd._repr import compact_repr
+from hybridpd.analysis.certify import certify_ball
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import (
     ST_RETURNED,
@@ -482,46 +483,16 @@ class SectionMapper:
         return int(self.labels(np.asarray(s, float).reshape(1, -1))[0][0])
 
     def _certify(self, fp):
-        P, k = self.map, self.period
-        dim = P.dim
         try:
-            DP = P.jacobian(fp, k)
+            DP = self.map.jacobian(fp, self.period)
         except RuntimeError:
-            return np.eye(dim), 0.0
-        if not np.all(np.isfinite(DP)):
-            return np.eye(dim), 0.0
-        rho = float(np.max(np.abs(np.linalg.eigvals(DP))))
-        if not rho < 0.999:
-            return np.eye(dim), 0.0
-        from scipy.linalg import solve_discrete_lyapunov
+            return np.eye(self.map.dim), 0.0
 
-        rho_t = 0.5 * (1.0 + rho)
-        kappa = 0.5 * (1.0 + rho_t)
-        Q = solve_discrete_lyapunov((DP / rho_t).T, np.eye(dim))
-        Q = 0.5 * (Q + Q.T)
-        Li = np.linalg.cholesky(np.linalg.inv(Q))
-        lam = np.linalg.eigvalsh(Li.T @ Li).max()
-        r = math.sqrt(self.criterion / lam) * 0.5
-        Lq_inv_T = np.linalg.inv(np.linalg.cholesky(Q).T)
-        dirs = np.random.default_rng(12345).normal(size=(100 + 25 * dim, dim))
-        dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
-        for _ in range(30):
-            ok = True
-            for frac in (1.0, 0.5, 0.25, 0.1):
-                pts = fp + (r * frac) * dirs @ Lq_inv_T.T
-                lab, _, img = self._run(pts, 1, np.eye(dim)[None], np.zeros(1), fp[None])
-                if np.any(lab == OFF_SECTION) or not np.all(np.isfinite(img)):
-                    ok = False
-                    break
-                dd = P.section.wrap(img - fp)
-                qn = np.sqrt(np.einsum("ij,jk,ik->i", dd, Q, dd))
-                if np.any(qn >= kappa * r * frac):
-                    ok = False
-                    break
-            if ok:
-                return Q, (0.9 * r) ** 2
-            r *= 0.5
-        return np.eye(dim), 0.0
+        def images(pts):
+            lab, _, img = self._run(pts, 1, np.eye(self.map.dim)[None], np.zeros(1), fp[None])
+            return img, (lab != OFF_SECTION) & np.all(np.isfinite(img), axis=1)
+
+        return certify_ball(DP, fp, self.criterion, images, self.map.section.wrap)
 
 
 # ----------------------------------------------------------------------------------------

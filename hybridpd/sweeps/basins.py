@@ -46,10 +46,10 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.linalg import solve_discrete_lyapunov
 
 from hybridpd._deprecated import moved_names
 from hybridpd._repr import compact_repr
+from hybridpd.analysis.certify import certify_ball
 from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.analysis.labels import LABELS, OFF_SECTION
 from hybridpd.model import check_array, check_axis, check_int, check_positive
@@ -140,50 +140,15 @@ class ImpactMapper:
             DP = np.asarray(P.jacobian(self.fixed_point).DP, float).reshape(4, 4)
         except (ValueError, RuntimeError):
             return np.eye(4), 0.0
-        rho = np.max(np.abs(np.linalg.eigvals(DP))) if np.all(np.isfinite(DP)) else np.inf
-        if not rho < 0.999:
-            return np.eye(4), 0.0
-        # Lyapunov equation of DP / rho_t: in the Q-norm DP contracts by about rho_t < 1.
-        rho_t = 0.5 * (1.0 + rho)
-        kappa = 0.5 * (1.0 + rho_t)
-        A = DP / rho_t
-        Q = solve_discrete_lyapunov(A.T, np.eye(4))
-        Q = 0.5 * (Q + Q.T)
-        # largest r with {d: d^T Q d < r^2} inside {|C d|^2 < criterion}
-        C = self._criterion_matrix()
-        Li = np.linalg.cholesky(np.linalg.inv(Q))
-        lam = np.linalg.eigvalsh(Li.T @ C.T @ C @ Li).max()
-        r_max = math.sqrt(self.criterion / lam) * 0.5
-        Lq = np.linalg.cholesky(Q)            # Q = Lq Lq^T, so |Lq^T d| is the Q-norm
-        Lq_inv_T = np.linalg.inv(Lq.T)
-        rng = np.random.default_rng(12345)
-        dirs = rng.normal(size=(400, 4))
-        dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
-        T = P.period
-        r = r_max
-        for _ in range(30):
-            ok = True
-            for frac in (1.0, 0.5, 0.25, 0.1):
-                d = (r * frac) * dirs @ Lq_inv_T.T
-                pts = self.fixed_point + d
-                if np.any(pts[:, 3] <= 0):
-                    ok = False
-                    break
-                res = P.apply_batch(pts)
-                if not np.all(res.ok):
-                    ok = False
-                    break
-                dd = res.s - self.fixed_point
-                dd[:, 0] = (dd[:, 0] + 0.5 * T) % T - 0.5 * T
-                qn = np.sqrt(np.einsum("ij,jk,ik->i", dd, Q, dd))
-                # strict contraction with a safety factor: images in the kappa r frac ball
-                if np.any(qn >= kappa * r * frac):
-                    ok = False
-                    break
-            if ok:
-                return Q, (0.9 * r) ** 2
-            r *= 0.5
-        return np.eye(4), 0.0
+
+        def images(pts):
+            if np.any(pts[:, 3] <= 0):
+                return pts, np.zeros(len(pts), bool)
+            res = P.apply_batch(pts)
+            return res.s, res.ok
+
+        return certify_ball(DP, self.fixed_point, self.criterion, images, P.wrap,
+                            C=self._criterion_matrix(), n_dirs=400)
 
     @property
     def certified_radius(self) -> float:
