@@ -73,11 +73,14 @@ class ImpactMap(PoincareMap):
     ``(+L, -L, +L)`` (finite differences otherwise). It equals the general
     :class:`~hybridpd.analysis.hybridmap.SectionMap` on :func:`~hybridpd.analysis.sections.
     impact_pair_section` to about ``1e-12`` (``tests/test_specialisations.py``). Measured
-    (``benchmarks/bench_hybridmap.py``, README parameters): ``P`` about 50 times faster per
-    point in batch (:meth:`apply_batch`) and 4 times faster per call than the general path;
-    ``DP`` about 2 times faster. Limits: PD controllers only (any LTI controller:
-    :class:`~hybridpd.analysis.lti.LTIImpactMap`); a sticking phase is one ``"zeno"`` jump
-    and its release, not the accumulating impacts the general path resolves one by one.
+    (``benchmarks/bench_specialisations.py``, README parameters, loaded 2-core machine): ``P``
+    5 times faster per call and 57-130 times faster in batch (:meth:`apply_batch`) than the
+    general path; the symbolic ``DP`` per point is 0.3-0.6 times as fast as the general
+    saltation ``DP`` (it is kept for its named blocks and the vectorised orbit grids of
+    :mod:`hybridpd.pair.symbolic`, not for speed). Limits: PD controllers only (any LTI
+    controller: :class:`~hybridpd.analysis.lti.LTIImpactMap`); a sticking phase is one
+    ``"zeno"`` jump and its release, not the accumulating impacts the general path resolves
+    one by one.
 
     Parameters
     ----------

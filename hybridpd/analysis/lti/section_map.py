@@ -114,10 +114,10 @@ class LTIImpactMap(PoincareMap):
     It equals the general :class:`~hybridpd.analysis.hybridmap.SectionMap` on
     :func:`~hybridpd.analysis.sections.impact_pair_section` to about ``1e-14``
     (``tests/test_specialisations.py``). Measured on a filtered PD (README parameters,
-    ``benchmarks/bench_hybridmap.py``): ``P`` about 1.6 times faster per call than the
-    general path, ``DP`` about 2 times slower (the general saltation ``DP`` is preferred for
-    ``DP`` alone; this one gives the blocks). Limits: the pair's rigid walls without
-    sticking (a sticking contact ends the map with status ``"sticking"``).
+    ``benchmarks/bench_specialisations.py``, loaded 2-core machine): ``P`` 1.3-2.5 times
+    faster per call than the general path, ``DP`` 0.5-1.3 times as fast (it gives the named
+    blocks). Limits: the pair's rigid walls without sticking (a sticking contact ends the map
+    with status ``"sticking"``).
 
     Parameters
     ----------
