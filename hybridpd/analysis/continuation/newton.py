@@ -2,8 +2,6 @@
 Newton method shared by the orbit search and the correctors."""
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from hybridpd.analysis.continuation._common import (
@@ -18,6 +16,8 @@ from hybridpd.analysis.continuation._common import (
 )
 from hybridpd.analysis.continuation.trace import trace_map
 from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.analysis.pathfollow import NewtonResult as _NewtonOut  # noqa: F401
+from hybridpd.analysis.pathfollow import newton as _newton  # noqa: F401
 
 
 def _residual(P: ImpactMap, s: np.ndarray, k: int):
@@ -117,70 +117,3 @@ def _param_derivative(P: ImpactMap, name: str, s: np.ndarray, k: int, fd_step: f
             raise RuntimeError(f"P^k undefined on both sides of {name} = {p:g}")
     d[0] = _wrap_diff(d[0], P.period)
     return d / hh
-
-
-# ----------------------------------------------------------------------------------------
-# Damped Newton
-# ----------------------------------------------------------------------------------------
-
-
-@dataclass
-class _NewtonOut:
-    x: np.ndarray
-    converged: bool
-    reason: str
-    history: list
-    iterations: int
-    step: float
-
-
-def _newton(resid, jac, x0, *, tol, max_iter, scale, min_lambda=2.0 ** -12):
-    """Damped Newton with backtracking on ``||F||_inf``.
-
-    ``resid(x)`` returns the residual or None where undefined; ``jac(x)`` the Jacobian (may
-    raise). Converged when ``||F|| <= tol * scale(x)``, or when a full Newton step is itself
-    below ``tol * scale(x)`` (the residual then sits at its rounding floor, which exceeds
-    ``tol`` for strongly unstable orbits whose multipliers amplify rounding).
-    """
-    x = np.array(x0, dtype=float)
-    r = resid(x)
-    if r is None:
-        return _NewtonOut(x, False, "map undefined at the initial point", [], 0, np.nan)
-    nr = float(np.max(np.abs(r)))
-    hist = [nr]
-    last = np.nan
-    for it in range(1, max_iter + 1):
-        if nr <= tol * scale(x):
-            return _NewtonOut(x, True, "residual below tol", hist, it - 1, last)
-        try:
-            J = jac(x)
-            dx = np.linalg.solve(J, -r)
-        except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:
-            return _NewtonOut(x, False, f"Jacobian failed: {exc}", hist, it - 1, last)
-        if not np.all(np.isfinite(dx)):
-            return _NewtonOut(x, False, "singular Jacobian", hist, it - 1, last)
-        last = float(np.max(np.abs(dx)))
-        lam = 1.0
-        accepted = False
-        while lam >= min_lambda:
-            xn = x + lam * dx
-            rn = resid(xn)
-            if rn is not None:
-                nrn = float(np.max(np.abs(rn)))
-                if nrn <= (1.0 - 1e-4 * lam) * nr:
-                    accepted = True
-                    break
-            lam *= 0.5
-        if not accepted:
-            if last <= tol * scale(x):
-                return _NewtonOut(x, True, "Newton step below tol (residual at rounding floor)",
-                                  hist, it, last)
-            return _NewtonOut(x, False, "line search failed (no decrease of the residual)",
-                              hist, it, last)
-        x, r, nr = xn, rn, nrn
-        hist.append(nr)
-        if lam == 1.0 and last <= tol * scale(x):
-            return _NewtonOut(x, True, "Newton step below tol", hist, it, last)
-    if nr <= tol * scale(x):
-        return _NewtonOut(x, True, "residual below tol", hist, max_iter, last)
-    return _NewtonOut(x, False, f"max_iter = {max_iter} reached", hist, max_iter, last)

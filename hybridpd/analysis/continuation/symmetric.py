@@ -6,7 +6,6 @@ import math
 import numpy as np
 
 from hybridpd.analysis.continuation._common import (
-    _MAX_HALVINGS,
     EVENT_KINDS,
     SYMMETRIC_PARAMETERS,
     _check_parameter,
@@ -27,6 +26,7 @@ from hybridpd.analysis.continuation.events import (
 )
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.orbits import REASONS, symmetric_orbits
+from hybridpd.analysis.pathfollow import _MAX_HALVINGS
 from hybridpd.model import Case, ImpactPair, PDGains, as_gains, check_finite, check_odd_order
 from hybridpd.pair import symbolic
 
