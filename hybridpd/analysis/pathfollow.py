@@ -24,13 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["NewtonResult", "follow_path", "newton"]
+__all__ = ["NewtonResult", "bisect_predicate", "corrector", "follow_path", "illinois", "newton"]
 
 _MAX_HALVINGS = 60         # bound on step halvings in one continuation step
-
-
-def _scale(x):
-    return max(1.0, float(np.max(np.abs(x))))
 
 
 @dataclass
@@ -98,17 +94,17 @@ def newton(resid, jac, x0, *, tol, max_iter, scale, min_lambda=2.0 ** -12):
     return NewtonResult(x, False, f"max_iter = {max_iter} reached", hist, max_iter, last)
 
 
-def corrector(F, Fs, Fp, *, tol, max_iter):
+def corrector(F, Fs, Fp, *, tol, max_iter, scale):
     """``correct(u_pred, normal)``: Newton on ``[F(u); normal . (u - u_pred)] = 0``.
 
-    ``normal=None`` keeps ``p = u_pred[-1]`` fixed (Newton on ``s`` alone). Returns
-    ``(u, NewtonResult)``.
+    ``normal=None`` keeps ``p = u_pred[-1]`` fixed (Newton on ``s`` alone). ``scale(x)``
+    scales the tolerance (:func:`newton`). Returns ``(u, NewtonResult)``.
     """
     def correct(u_pred, normal):
         if normal is None:
             p = u_pred[-1]
             res = newton(lambda x: F(np.append(x, p)), lambda x: Fs(np.append(x, p)),
-                         u_pred[:-1], tol=tol, max_iter=max_iter, scale=_scale)
+                         u_pred[:-1], tol=tol, max_iter=max_iter, scale=scale)
             return np.append(res.x, p), res
 
         def G(u):
@@ -118,7 +114,7 @@ def corrector(F, Fs, Fp, *, tol, max_iter):
         def JG(u):
             return np.vstack([np.column_stack([Fs(u), Fp(u)]), normal])
 
-        res = newton(G, JG, u_pred, tol=tol, max_iter=max_iter, scale=_scale)
+        res = newton(G, JG, u_pred, tol=tol, max_iter=max_iter, scale=scale)
         return res.x, res
     return correct
 
@@ -130,7 +126,7 @@ def _tangent(DP, fp):
 
 def follow_path(first, stop, *, F, Fs, Fp, make_point, correct, method="arclength", step,
                 min_step, max_step, max_steps, k=1, lower_period=None, unwrap=None,
-                detect=None, out_of_range=None, tol=1e-10, name="p"):
+                detect=None, out_of_range=None, tol=1e-10, name="p", grow=1.5):
     """Continue from the accepted point ``first`` (its ``u``) towards ``p = stop``.
 
     Parameters
@@ -166,6 +162,8 @@ def follow_path(first, stop, *, F, Fs, Fp, make_point, correct, method="arclengt
         Corrector tolerance (for the distance test of the natural corrector).
     name : str
         Parameter name in messages.
+    grow : float
+        Step growth factor after an easy correction (at most 3 Newton iterations).
 
     Returns
     -------
@@ -245,7 +243,7 @@ def follow_path(first, stop, *, F, Fs, Fp, make_point, correct, method="arclengt
                 break
         # step control: easy corrections lengthen the step, hard ones shorten it
         if its <= 3:
-            h = min(1.5 * h, max_step)
+            h = min(grow * h, max_step)
         elif its >= 7:
             h = max(0.6 * h, min_step)
     return pts, evs, termination, rejected, why if termination.startswith("step below") else ""
@@ -319,3 +317,65 @@ def _step(cur, prev_u, h, tangent, stop, direction, method, correct, make_point,
         if h < min_step:
             break
     return (None, rejected, h, tangent), res, why
+
+
+def illinois(evaluate, ftest, fa, fb, pa, pb, *, size, tol, max_iter):
+    """Root of ``ftest(evaluate(theta))`` on ``[0, 1]`` with ``f(0) = fa``, ``f(1) = fb``:
+    the package's one bracketing root step (Illinois, a safeguarded regula falsi).
+
+    ``evaluate(theta)`` returns a point or None (then the bracket is bisected instead).
+    ``size`` converts a ``theta`` interval to a length (stop below ``tol``). Returns
+    ``(point, f, located)`` with the best bracket end; ``pa``, ``pb`` are the end points.
+    """
+    a, b = 0.0, 1.0
+    side = 0
+    best = (pa, fa) if abs(fa) <= abs(fb) else (pb, fb)
+    for it in range(max_iter):
+        if (b - a) * size <= tol:
+            return best[0], best[1], True
+        theta = b - fb * (b - a) / (fb - fa) if fb != fa else 0.5 * (a + b)
+        # keep the regula-falsi point inside the bracket and bisect every third iteration so
+        # that the bracket shrinks geometrically even when the test function is not smooth
+        if not (a < theta < b) or it % 3 == 2:
+            theta = 0.5 * (a + b)
+        pt = evaluate(theta)
+        fc = ftest(pt) if pt is not None else np.nan
+        if not np.isfinite(fc):
+            theta = 0.5 * (a + b)
+            pt = evaluate(theta)
+            fc = ftest(pt) if pt is not None else np.nan
+            if not np.isfinite(fc):
+                return best[0], best[1], False
+        if abs(fc) < abs(best[1]):
+            best = (pt, fc)
+        if fc == 0.0:
+            return pt, fc, True
+        if (fc > 0) == (fb > 0):
+            b, fb = theta, fc
+            if side == 1:
+                fa *= 0.5
+            side = 1
+        else:
+            a, fa = theta, fc
+            if side == -1:
+                fb *= 0.5
+            side = -1
+    return best[0], best[1], (b - a) * size <= tol
+
+
+def bisect_predicate(evaluate, same_as_a, pa, pb, *, size, tol, max_iter):
+    """Bisection on a discrete change: returns the last point on each side and ``located``."""
+    a, b = 0.0, 1.0
+    last_a, last_b = pa, pb
+    for _ in range(max_iter):
+        if (b - a) * size <= tol:
+            return last_a, last_b, True
+        theta = 0.5 * (a + b)
+        pt = evaluate(theta)
+        if pt is None:
+            return last_a, last_b, False
+        if same_as_a(pt):
+            a, last_a = theta, pt
+        else:
+            b, last_b = theta, pt
+    return last_a, last_b, (b - a) * size <= tol

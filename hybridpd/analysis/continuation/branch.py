@@ -20,13 +20,13 @@ from hybridpd.analysis.continuation._common import (
     _path_steps,
     _positive_float,
     _positive_int,
+    _scale,
     _section_point,
     _wrap_diff,
 )
 from hybridpd.analysis.continuation.events import (
     BifurcationEvent,
     Branch,
-    _bisect_predicate,
     _branch_from_points,
     _empty_branch,
     _Point,
@@ -48,7 +48,7 @@ from hybridpd.analysis.continuation.periodic import (
 )
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.pathfollow import corrector, follow_path
+from hybridpd.analysis.pathfollow import bisect_predicate, corrector, follow_path
 from hybridpd.model import check_finite
 
 
@@ -200,7 +200,7 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
             raise RuntimeError(f"no design amplitude at {name} = {u[4]:g}")
         return _param_derivative(map_at(u[4]), name, u[:4], k, fd_step, design)
 
-    correct = corrector(F, Fs, Fp, tol=tol, max_iter=max_newton)
+    correct = corrector(F, Fs, Fp, tol=tol, max_iter=max_newton, scale=_scale)
 
     def make_point(u, its):
         P = map_at(u[4])
@@ -253,7 +253,7 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
         if "grazing" not in events or pa.signature == pb.signature:
             return []
         if locate:
-            la, lb, ok = _bisect_predicate(lambda th: evaluate_between(pa, pb, th),
+            la, lb, ok = bisect_predicate(lambda th: evaluate_between(pa, pb, th),
                                            lambda pt: pt.signature == pa.signature, pa, pb,
                                            size=float(np.linalg.norm(pb.u - pa.u)),
                                            tol=event_tol, max_iter=60)
