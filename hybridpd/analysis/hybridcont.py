@@ -43,6 +43,7 @@ import numpy as np
 from hybridpd._repr import compact_repr
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import Section, SectionMap
+from hybridpd.analysis.maps import minimal_period
 from hybridpd.analysis.pathfollow import corrector, follow_path, illinois
 from hybridpd.analysis.periodic import find_orbit
 
@@ -261,7 +262,7 @@ def continue_family(builder, s0, p0: float, p_end: float, *, period: int = 1, se
     pts, _evs, termination, _rej, _why = follow_path(
         path.point(np.append(first.s, p0)), p_end, F=path.F, Fs=path.Fs, Fp=path.Fp,
         make_point=path.point, correct=correct, method=method, step=step, min_step=min_step,
-        max_step=max_step, max_steps=int(max_steps) - 1, k=k, lower_period=path.lower_period,
+        max_step=max_step, max_steps=int(max_steps) - 1, k=k, lower_period=lambda u: minimal_period(make(u[-1]), u[:-1], k) < k,
         unwrap=path.unwrap, tol=tol, grow=1.3,
         out_of_range=lambda p: None if lo - 1e-9 * span <= p <= hi + 1e-9 * span
         else "turned back: left the parameter range")
@@ -330,16 +331,6 @@ class _Path:
         except RuntimeError:
             fp = None
         return _PathPoint(u.copy(), r.DP, fp, _point(r, s, u[-1]))
-
-    def lower_period(self, u):
-        P, s = self.make(u[-1]), u[:-1]
-        for d in range(1, self.k):
-            if self.k % d == 0:
-                img, ok = P.apply_many(s[None, :], d)
-                if ok[0] and np.max(np.abs(P.wrap(img[0] - s))) <= 1e-7 * max(
-                        1.0, np.max(np.abs(s))):
-                    return True
-        return False
 
     def unwrap(self, cur, new):
         if self.make(new.u[-1]).section.has_phase:

@@ -26,7 +26,7 @@ import numpy as np
 
 from hybridpd._repr import compact_repr
 
-__all__ = ["MapResult", "PoincareMap", "check_returns"]
+__all__ = ["MapResult", "PoincareMap", "check_returns", "minimal_period"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -226,3 +226,18 @@ class PoincareMap(abc.ABC):
                 break
             out[i + 1] = r.s
         return out
+
+
+def minimal_period(P: PoincareMap, s, k: int, rtol: float = 1e-7) -> int:
+    """Smallest ``d`` dividing ``k`` with ``P^d(s) = s`` to ``rtol`` (relative to ``max(1, |s|)``).
+
+    The one period detector of a fixed point of ``P^k`` (e.g. 1 when a period-2 search landed
+    on a fixed point of ``P``).
+    """
+    s = np.asarray(s, float)
+    for d in range(1, k):
+        if k % d == 0:
+            img, ok = P.apply_many(s[None, :], d)
+            if ok[0] and np.max(np.abs(P.wrap(img[0] - s))) <= rtol * max(1.0, np.max(np.abs(s))):
+                return d
+    return k

@@ -42,12 +42,12 @@ from hybridpd.analysis.continuation.newton import (
 )
 from hybridpd.analysis.continuation.periodic import (
     PeriodicOrbit,
-    _minimal_period,
     _orbit_diagnostics,
     find_periodic_orbit,
 )
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.analysis.maps import minimal_period
 from hybridpd.analysis.pathfollow import bisect_predicate, corrector, follow_path
 from hybridpd.model import check_finite
 
@@ -291,7 +291,7 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
     pts, evs, termination, rejected, why = follow_path(
         first, stop, F=F, Fs=Fs, Fp=Fp, make_point=make_point, correct=correct, method=method,
         step=step, min_step=min_step, max_step=max_step, max_steps=max_steps, k=k,
-        lower_period=lambda u: _minimal_period(map_at(u[4]), u[:4], k) < k, unwrap=unwrap,
+        lower_period=lambda u: minimal_period(map_at(u[4]), u[:4], k) < k, unwrap=unwrap,
         detect=lambda a, b, i: tracker.detect(a, b, i, grazing_events(a, b, i)),
         out_of_range=out_of_range, tol=tol, name=name)
     if why:

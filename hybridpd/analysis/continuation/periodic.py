@@ -14,7 +14,6 @@ from hybridpd.analysis.continuation._common import (
     _positive_int,
     _scale,
     _section_point,
-    _wrap_diff,
 )
 from hybridpd.analysis.continuation.newton import (
     _newton,
@@ -24,6 +23,7 @@ from hybridpd.analysis.continuation.newton import (
 from hybridpd.analysis.continuation.trace import trace_map
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.analysis.maps import minimal_period
 
 
 @dataclass(frozen=True)
@@ -151,20 +151,6 @@ def _orbit_diagnostics(P: ImpactMap, s: np.ndarray, k: int, jacobian: str, fd_st
     return traces, DP, method, margin, vmin, grazing, sticking
 
 
-def _minimal_period(P, s, k):
-    T = P.period
-    for d in range(1, k):
-        if k % d:
-            continue
-        img, ok = P.apply_many(s[None, :], d)
-        if ok[0]:
-            r = img[0] - s
-            r[0] = _wrap_diff(r[0], T)
-            if np.max(np.abs(r)) <= 1e-7 * _scale(s):
-                return d
-    return k
-
-
 def find_periodic_orbit(impact_map_: ImpactMap, s0, period: int = 1, *, tol: float = 1e-12,
                         max_iter: int = 50, jacobian: str = "auto", fd_step: float = 1e-6,
                         graze_tol: float = 1e-6, margin_samples: int = 256) -> PeriodicOrbit:
@@ -252,7 +238,7 @@ def _make_orbit(P, res, k, jacobian, fd_step, margin_samples, graze_tol) -> Peri
         stab = stability(DP)
         mult, rho, stable, hyper = stab.multipliers, stab.spectral_radius, stab.stable, \
             stab.hyperbolic
-    minimal = _minimal_period(P, s, k) if res.converged else k
+    minimal = minimal_period(P, s, k) if res.converged else k
     pattern = tuple(tr.steps for tr in traces)
     return PeriodicOrbit(
         converged=bool(res.converged), reason=res.reason, s=s, orbit=orbit, period=k,
