@@ -1,22 +1,12 @@
 """Path following of fixed points of ``P^k`` in one parameter: the package's one engine.
 
-Unknowns ``u = (s, p)``: a section point and the parameter. :func:`follow_path` continues a
-solution of ``F(u) = P^k(s; p) - s = 0`` from an accepted first point to ``p = stop``:
-
-* ``method="natural"``: ``p`` steps by ``h`` (secant predictor through the last two points),
-  Newton on ``s`` at fixed ``p``;
-* ``method="arclength"`` (pseudo-arclength): predictor along the tangent (the kernel of
-  ``[F_s, F_p]`` at the start, then the secant), Newton on ``[F(u); t . (u - u_pred)] = 0``;
-  passes folds. A corrected point whose secant turns by more than 37 degrees from the
-  predictor is rejected (most likely another branch); next to a fold the exact tangent is
-  tried once before the step is halved.
-
-Steps halve on a failed correction (a bounded number of times, down to ``min_step``) and
-grow after easy ones; an overshoot of ``stop`` lands on it by a fixed-parameter correction.
-The callers (:func:`hybridpd.analysis.hybridcont.continue_family` for any automaton,
+Unknowns ``u = (s, p)``: a section point and the parameter; :func:`follow_path` continues a
+solution of ``F(u) = P^k(s; p) - s = 0`` by natural or pseudo-arclength steps (passing
+folds). Its callers (:func:`hybridpd.analysis.hybridcont.continue_family` for any automaton,
 :func:`hybridpd.analysis.continuation.continue_orbit` for the impact pair) give the map
-through ``F``, ``Fs``, ``Fp`` and ``make_point``, and their events through ``detect``.
-:func:`newton` is the damped Newton method of the correctors and of the pair's orbit search.
+through ``F``, ``Fs``, ``Fp`` and ``make_point`` and their events through ``detect``.
+:func:`newton` (damped) is the Newton method of the correctors and of the pair's orbit
+search; :func:`illinois` the bracketing root step of event location.
 """
 from __future__ import annotations
 
@@ -81,10 +71,10 @@ def newton(resid, jac, x0, *, tol, max_iter, scale, min_lambda=2.0 ** -12):
             lam *= 0.5
         if not accepted:
             if last <= tol * scale(x):
-                return NewtonResult(x, True, "Newton step below tol (residual at rounding floor)",
-                                  hist, it, last)
+                return NewtonResult(x, True, "Newton step below tol (residual at rounding "
+                                    "floor)", hist, it, last)
             return NewtonResult(x, False, "line search failed (no decrease of the residual)",
-                              hist, it, last)
+                                hist, it, last)
         x, r, nr = xn, rn, nrn
         hist.append(nr)
         if lam == 1.0 and last <= tol * scale(x):
@@ -128,6 +118,15 @@ def follow_path(first, stop, *, F, Fs, Fp, make_point, correct, method="arclengt
                 min_step, max_step, max_steps, k=1, lower_period=None, unwrap=None,
                 detect=None, out_of_range=None, tol=1e-10, name="p", grow=1.5):
     """Continue from the accepted point ``first`` (its ``u``) towards ``p = stop``.
+
+    ``method="natural"``: ``p`` steps by ``h`` (secant predictor through the last two
+    points), Newton on ``s`` at fixed ``p``. ``method="arclength"``: predictor along the
+    tangent (the kernel of ``[F_s, F_p]`` at the start, then the secant), Newton on
+    ``[F(u); t . (u - u_pred)] = 0``; a corrected point whose secant turns by more than 37
+    degrees is rejected (most likely another branch), and next to a fold the exact tangent is
+    tried once before the step is halved. Steps halve on a failed correction (down to
+    ``min_step``) and grow after easy ones; an overshoot of ``stop`` lands on it by a
+    fixed-parameter correction.
 
     Parameters
     ----------
