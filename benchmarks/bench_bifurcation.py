@@ -33,7 +33,7 @@ def main():
     imps = []
     for i in range(0, kv.size, 20):
         P = ImpactMap(pair, PDGains(10, kv[i]), _ref(d, i))
-        imps.append(float(np.mean(P.apply(d.points[i]).n_impacts)))
+        imps.append(float(np.mean(P.apply_batch(d.points[i]).n_impacts)))
     m_imp = float(np.mean(imps))
     naive, _ = naive_per_impact("collocated", e=0.1, kp=10.0, kv=20.0, xm=float(d.xm[40]),
                                 n_impacts=200)

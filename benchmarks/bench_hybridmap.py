@@ -49,7 +49,7 @@ def pair_rates():
     S[:, 3] = np.abs(S[:, 3])
     P(S[0])
     P.apply(S[0], jacobian=True)
-    Q.apply(S[:10])
+    Q.apply_batch(S[:10])
     Q.jacobian(S[0])
     n1 = 300
     t_gen, _ = best_of(lambda: [P(s) for s in S[:n1]])
@@ -60,7 +60,7 @@ def pair_rates():
     mi = SectionMapper(P, orb.fixed_point, n_iter=200, early_exit=False)
     mi.labels(S[:2])
     t_it, (_, its) = best_of(lambda: mi.labels(S[:50]))
-    t_cf, _ = best_of(lambda: Q.apply(S))
+    t_cf, _ = best_of(lambda: Q.apply_batch(S))
     t_cf_dp, _ = best_of(lambda: [Q.jacobian(s) for s in S[:n1]])
     per_imp, _ = naive_per_impact(n_impacts=100)
     r = {

@@ -96,7 +96,7 @@ def test_trace_map_reproduces_the_compiled_map(period2):
     pts[:, 3] = np.abs(pts[:, 3]) + 0.1
     for s in pts:
         tr = trace_map(P, s)
-        r = P.apply(s)
+        r = P.apply_batch(s)
         assert tr.ok == bool(r.ok[0])
         if tr.ok:
             assert np.array_equal(tr.s, r.s[0])

@@ -306,7 +306,7 @@ def test_reprs_are_one_line_with_shapes():
     jac = symbolic.orbit_jacobian(cand)
     P = ImpactMap(PAIR, GAINS, orb.reference())
     objects = [orb, grid, cand, jac, traj, traj.hybrid, traj.hybrid.jumps,
-               traj.hybrid.segments, P.apply(np.tile(orb.fixed_point, (5, 1))),
+               traj.hybrid.segments, P.apply_batch(np.tile(orb.fixed_point, (5, 1))),
                P.stability(orb.fixed_point), closed_loop(PAIR, GAINS, REF)]
     for obj in objects:
         r = repr(obj)

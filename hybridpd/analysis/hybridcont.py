@@ -43,6 +43,8 @@ import numpy as np
 from hybridpd._repr import compact_repr
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import Section, SectionMap
+from hybridpd.analysis.maps import minimal_period
+from hybridpd.analysis.pathfollow import corrector, follow_path, illinois
 from hybridpd.analysis.periodic import find_orbit
 
 __all__ = ["FAMILY_EVENTS", "FamilyBranch", "FamilyEvent", "FamilyPoint", "continue_family"]
@@ -150,14 +152,10 @@ def _map_factory(builder, section, map_options):
     return make
 
 
-def _point(P: SectionMap, s, p, k) -> FamilyPoint:
-    r = P.apply(s, k, jacobian=True)
-    st = stability(r.DP) if np.all(np.isfinite(r.DP)) else None
-    if st is None:
-        nan = np.full(P.dim, np.nan + 0j)
-        return FamilyPoint(float(p), s.copy(), r.DP, nan, math.nan, False, r.signature,
-                           r.t_hit - r.t_start)
-    return FamilyPoint(float(p), s.copy(), r.DP, st.multipliers, st.spectral_radius,
+def _point(r, s, p) -> FamilyPoint:
+    """The family point of an application ``r`` of ``P^k`` (with ``DP``) at ``(s, p)``."""
+    st = stability(r.DP)
+    return FamilyPoint(float(p), s, r.DP, st.multipliers, st.spectral_radius,
                        bool(st.stable), r.signature, r.t_hit - r.t_start)
 
 
@@ -278,18 +276,86 @@ def continue_family(builder, s0, p0: float, p_end: float, *, period: int = 1, se
     first = find_orbit(P, s0, k, tol=tol)
     if not first.converged:
         return FamilyBranch([], [], f"start failed: {first.reason}", method, k)
-    pts = [_point(P, first.s, p0, k)]
-    sgn = 1.0 if p_end > p0 else -1.0
-    run = _natural if method == "natural" else _arclength
-    termination = run(make, pts, sgn, p_end, k, step, max_step, min_step, int(max_steps), tol,
-                      fd_step * max(1.0, abs(p0)))
+    path = _Path(make, k, fd_step * max(1.0, abs(p0)), P.dim)
+    correct = corrector(path.F, path.Fs, path.Fp, tol=tol, max_iter=15,
+                        scale=lambda x: max(1.0, float(np.max(np.abs(x[:path.dim])))))
+    lo, hi = sorted((p0, p_end))
+    pts, _evs, termination, _rej, _why = follow_path(
+        path.point(np.append(first.s, p0)), p_end, F=path.F, Fs=path.Fs, Fp=path.Fp,
+        make_point=path.point, correct=correct, method=method, step=step, min_step=min_step,
+        max_step=max_step, max_steps=int(max_steps) - 1, k=k, lower_period=lambda u: minimal_period(make(u[-1]), u[:-1], k) < k,
+        unwrap=path.unwrap, tol=tol, grow=1.3,
+        out_of_range=lambda p: None if lo - 1e-9 * span <= p <= hi + 1e-9 * span
+        else "turned back: left the parameter range")
     events = []
     for i in range(len(pts) - 1):
-        for ev in _events(pts[i], pts[i + 1], i):
+        for ev in _events(pts[i].fam, pts[i + 1].fam, i):
             if locate and ev.kind in _TESTS:
-                ev = _locate(make, pts[i], pts[i + 1], ev, k, tol, fd_step * max(1.0, abs(p0)))
+                ev = _locate(path, correct, pts[i], pts[i + 1], ev)
             events.append(ev)
-    return FamilyBranch(pts, events, termination, method, k)
+    for key, short in (("reached", "reached"), ("max_steps", "max_steps"),
+                       ("step below", "min_step")):
+        termination = short if termination.startswith(key) else termination
+    return FamilyBranch([q.fam for q in pts], events, termination, method, k)
+
+
+@dataclass(eq=False)
+class _PathPoint:
+    """A point of the path as the engine sees it: ``u = (s, p)``, ``DP``, ``dF/dp``."""
+
+    u: np.ndarray
+    DP: np.ndarray
+    Fp: np.ndarray | None
+    fam: FamilyPoint
+
+
+class _Path:
+    """``F(u) = P^k(s; p) - s`` (phase wrapped), its Jacobians and points, for the engine."""
+
+    def __init__(self, make, k, hp, dim):
+        self.make, self.k, self.hp, self.dim = make, k, hp, dim
+        self._last = (None, None)
+
+    def _run(self, u):
+        key = u.tobytes()
+        if self._last[0] != key:      # F and Fs ask for the same point in turn
+            P = self.make(u[-1])
+            self._last = (key, (P, P.apply(u[:-1], self.k, jacobian=True)))
+        return self._last[1]
+
+    def F(self, u):
+        try:
+            P, r = self._run(u)
+        except ValueError:            # not a section point
+            return None
+        return P.wrap(r.s - u[:-1]) if r.ok and np.all(np.isfinite(r.DP)) else None
+
+    def Fs(self, u):
+        P, r = self._run(u)
+        if not r.ok:
+            raise RuntimeError(f"P^k undefined: {r.status}")
+        return r.DP - np.eye(P.dim)
+
+    def Fp(self, u):
+        m, s, hp = self.make, u[:-1], self.hp
+        return m(u[-1]).wrap(m(u[-1] + hp)(s, self.k) - m(u[-1] - hp)(s, self.k)) / (2 * hp)
+
+    def point(self, u, _its=0):
+        P, r = self._run(u)
+        if not r.ok or not np.all(np.isfinite(r.DP)):
+            return None
+        s = u[:-1].copy()
+        if P.section.has_phase:
+            s[0] %= P.section.period
+        try:
+            fp = self.Fp(u)
+        except RuntimeError:
+            fp = None
+        return _PathPoint(u.copy(), r.DP, fp, _point(r, s, u[-1]))
+
+    def unwrap(self, cur, new):
+        if self.make(new.u[-1]).section.has_phase:
+            new.u[0] = cur.u[0] + self.make(new.u[-1]).wrap(new.u[:-1] - cur.u[:-1])[0]
 
 
 def _ns_test(pt):
@@ -303,147 +369,25 @@ _TESTS = {"fold": lambda pt: float(np.linalg.det(pt.DP - np.eye(pt.DP.shape[0]))
           "neimark_sacker": _ns_test}
 
 
-def _locate(make, a, b, ev, k, tol, hp, max_iter=40) -> FamilyEvent:
-    """Illinois iterations on the test function along the branch between ``a`` and ``b``.
+def _locate(path, correct, a, b, ev, max_iter=40) -> FamilyEvent:
+    """Illinois on the test function along the branch between ``a`` and ``b``.
 
     A point at chord fraction ``theta`` is the branch point on the hyperplane through
     ``ua + theta (ub - ua)`` normal to the chord (the arclength corrector).
     """
-    f = _TESTS[ev.kind]
-    ua, ub = np.append(a.s, a.p), np.append(b.s, b.p)
-    chord = ub - ua
-    chord[:-1] = make(a.p).section.wrap(chord[:-1])
-    n = chord / np.linalg.norm(chord)
-    t0, t1, f0, f1 = 0.0, 1.0, f(a), f(b)
-    if not (np.isfinite(f0) and np.isfinite(f1) and f0 * f1 < 0):
+    f = lambda q: _TESTS[ev.kind](q.fam)
+    fa, fb = f(a), f(b)
+    if not (np.isfinite(fa) and np.isfinite(fb) and fa * fb < 0):
         return ev
-    side = 0
-    best = None
-    for _ in range(max_iter):
-        th = t0 - f0 * (t1 - t0) / (f1 - f0)
-        u, _its, ok = _correct(make, ua + th * chord, n, k, tol, hp)
-        if not ok:
-            break
-        pt = _point(make(u[-1]), u[:-1], u[-1], k)
-        fv = f(pt)
-        best = pt
-        if not np.isfinite(fv) or abs(t1 - t0) < 1e-12 or fv == 0.0:
-            break
-        if fv * f1 < 0:
-            t0, f0 = t1, f1
-            t1, f1 = th, fv
-            side = 0
-        else:
-            t1, f1 = th, fv
-            if side == 1:
-                f0 *= 0.5
-            side = 1
-        if abs(fv) < 1e-13:
-            break
-    if best is None:
+    chord = b.u - a.u
+
+    def evaluate(th):
+        u, res = correct(a.u + th * chord, chord / np.linalg.norm(chord))
+        return path.point(u) if res.converged else None
+
+    best, fv, _ok = illinois(evaluate, f, fa, fb, a, b, size=1.0, tol=1e-12,
+                             max_iter=max_iter)
+    if best is a or best is b:
         return ev
-    return FamilyEvent(ev.kind, ev.index, best.p, (ev.detail + "; " if ev.detail else "")
-                       + f"located: test {f(best):.3g}")
-
-
-def _natural(make, pts, sgn, p_end, k, step, max_step, min_step, max_steps, tol, _h):
-    h = step
-    while len(pts) < max_steps:
-        a = pts[-1]
-        if sgn * (p_end - a.p) <= 0:
-            return "reached"
-        h = min(h, abs(p_end - a.p))
-        p = a.p + sgn * h
-        P = make(p)
-        guess = a.s.copy()
-        if len(pts) > 1:   # secant predictor
-            b = pts[-2]
-            guess = a.s + (p - a.p) / (a.p - b.p) * P.section.wrap(a.s - b.s)
-        orb = find_orbit(P, guess, k, tol=tol, max_iter=12)
-        if not orb.converged or orb.signature[:1] != a.signature[:1]:
-            h *= 0.5
-            if h < min_step:
-                return "min_step"
-            continue
-        pts.append(_point(P, orb.s, p, k))
-        h = min(1.3 * h, max_step) if orb.iterations <= 4 else h
-    return "max_steps"
-
-
-def _arclength(make, pts, sgn, p_end, k, step, max_step, min_step, max_steps, tol, hp):
-    d = pts[0].s.size
-    tan = None
-    h = step
-    while len(pts) < max_steps:
-        a = pts[-1]
-        if sgn * (p_end - a.p) <= 0:
-            return "reached"
-        P = make(a.p)
-        Fp = P.section.wrap(make(a.p + hp)(a.s, k) - make(a.p - hp)(a.s, k)) / (2 * hp)
-        Jm = np.hstack([a.DP - np.eye(d), Fp[:, None]])
-        t = np.linalg.svd(Jm)[2][-1]
-        if tan is None:
-            if t[-1] * sgn < 0:
-                t = -t
-        elif t @ tan < 0:
-            t = -t
-        ua = np.append(a.s, a.p)
-        ok = False
-        while h >= min_step:
-            up = ua + h * t
-            u, its, ok = _correct(make, up, t, k, tol, hp)
-            if ok:
-                new = _point(make(u[-1]), u[:-1], u[-1], k)
-                # a changed impact sequence is accepted only at a small step (it is real)
-                if new.signature == a.signature or h < 16 * min_step:
-                    break
-            ok = False
-            h *= 0.5
-        if not ok:
-            return "min_step"
-        if sgn * (u[-1] - p_end) > 0 and sgn * (p_end - a.p) > 0 and \
-                sgn * (u[-1] - a.p) > 0:
-            # overshoot the end: finish with one natural step onto p_end
-            P = make(p_end)
-            orb = find_orbit(P, u[:-1], k, tol=tol, max_iter=12)
-            if orb.converged:
-                pts.append(_point(P, orb.s, p_end, k))
-                return "reached"
-        pts.append(new)
-        tan = t
-        lo, hi = sorted((pts[0].p, p_end))
-        if not lo - 1e-9 * (hi - lo) <= new.p <= hi + 1e-9 * (hi - lo):
-            return "turned back: left the parameter range"   # after a fold
-        h = min(1.3 * h, max_step) if its <= 4 else h
-    return "max_steps"
-
-
-def _correct(make, up, t, k, tol, hp):
-    """Newton on ``[P^k(s; p) - s; t . (u - up)] = 0``; returns ``(u, iterations, ok)``."""
-    u = up.copy()
-    d = u.size - 1
-    for it in range(1, 16):
-        P = make(u[-1])
-        r = P.apply(u[:-1], k, jacobian=True)
-        if not r.ok or not np.all(np.isfinite(r.DP)):
-            return u, it, False
-        F = P.section.wrap(r.s - u[:-1])
-        du0 = u - up
-        du0[:-1] = P.section.wrap(du0[:-1])
-        g = float(t @ du0)
-        if np.max(np.abs(F)) <= tol * max(1.0, np.max(np.abs(u[:-1]))) and abs(g) < 1e-12:
-            return u, it, True
-        try:
-            Fp = P.section.wrap(make(u[-1] + hp)(u[:-1], k) - make(u[-1] - hp)(u[:-1], k)) / (
-                2 * hp)
-        except RuntimeError:
-            return u, it, False
-        J = np.vstack([np.hstack([r.DP - np.eye(d), Fp[:, None]]), t[None, :]])
-        try:
-            du = -np.linalg.solve(J, np.append(F, g))
-        except np.linalg.LinAlgError:
-            return u, it, False
-        u = u + du
-        if P.section.has_phase:
-            u[0] %= P.section.period
-    return u, 16, False
+    return FamilyEvent(ev.kind, ev.index, best.fam.p, (ev.detail + "; " if ev.detail else "")
+                       + f"located: test {fv:.3g}")

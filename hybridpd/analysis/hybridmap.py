@@ -44,14 +44,13 @@ accumulation time drops out. A grazing jump (``c . f- ~ 0``) has no saltation ma
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.linalg import expm
 
 from hybridpd._deprecated import moved_names
 from hybridpd._jit import njit
-from hybridpd._repr import compact_repr
+from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
 from hybridpd.hybrid.automaton import HybridAutomaton, ZenoOptions, run_hybrid
 
 __all__ = [
@@ -412,55 +411,15 @@ def _to_return(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, targ
         J = min(2 * J, J_max)
 
 
-@dataclass(frozen=True, eq=False)
-class MapResult:
-    """One application of ``P^k`` (see :meth:`SectionMap.apply`).
-
-    Attributes
-    ----------
-    s : ndarray, shape (dim,)
-        The image (NaN unless ``ok``).
-    ok : bool
-        The run returned to the section.
-    status : str
-        One of :data:`MAP_STATUS` values.
-    t_start, t_hit : float
-        Start time (``phi``, or 0) and time of the return (time units).
-    z_hit : ndarray, shape (n,)
-        Full pre-jump state at the return (or where the run stopped).
-    mode_final : str
-        Mode where the run stopped.
-    jumps : tuple of (float, str, str, str, str)
-        ``(t, source mode, guard, target mode, kind)`` of every jump before the return.
-    grazing : bool
-        A grazing jump (no saltation matrix) occurred, or the return is tangential.
-    DP : ndarray, shape (dim, dim) or None
-        Jacobian, when requested and ``ok``.
-    """
-
-    s: np.ndarray
-    ok: bool
-    status: str
-    t_start: float
-    t_hit: float
-    z_hit: np.ndarray
-    mode_final: str
-    jumps: tuple
-    grazing: bool
-    DP: np.ndarray | None = field(default=None, repr=False)
-    __repr__ = compact_repr
-
-    @property
-    def signature(self) -> tuple:
-        """``(guard, kind)`` of the jumps: the impact sequence of this return."""
-        return tuple((j[2], j[4]) for j in self.jumps)
-
-
 # ----------------------------------------------------------------------------------------
 # the map
 # ----------------------------------------------------------------------------------------
-class SectionMap:
+class SectionMap(PoincareMap):
     """The impact map ``P`` of a :class:`Section` (module docstring), its powers and ``DP``.
+
+    The reference implementation of the map protocol (:class:`~hybridpd.analysis.maps.
+    PoincareMap`): any automaton, any section, ``DP`` from saltation matrices. The impact
+    pair's specialisations are checked against it.
 
     Parameters
     ----------
@@ -528,6 +487,14 @@ class SectionMap:
     def dim(self) -> int:
         return self.section.dim
 
+    @property
+    def names(self) -> tuple:
+        return self.section.names
+
+    @property
+    def period(self) -> float | None:
+        return self.section.period
+
     def _t_max(self, k):
         if self.t_max is not None:
             return self.t_max
@@ -574,7 +541,7 @@ class SectionMap:
         -------
         MapResult
         """
-        k = _check_k(k)
+        k = check_returns(k)
         sec = self.section
         st, nb, z0, t0, bufs = self._run(sec.check_point(s), k)
         w, fc, ic = bufs[0], bufs[1], bufs[2]
@@ -608,45 +575,6 @@ class SectionMap:
             grazing = grazing or tangent
         return MapResult(img, True, "returned", t0, t_hit, z_hit, mode_final, jumps, grazing,
                          DP)
-
-    def __call__(self, s, k: int = 1) -> np.ndarray:
-        """``P^k(s)``; ``RuntimeError`` (with the status) if the run does not return."""
-        r = self.apply(s, k)
-        if not r.ok:
-            raise RuntimeError(f"P^{k} undefined at s = {np.asarray(s).tolist()}: {r.status}")
-        return r.s
-
-    def jacobian(self, s, k: int = 1) -> np.ndarray:
-        """``DP^k(s)`` from exact flows and saltation matrices (shape ``(dim, dim)``)."""
-        r = self.apply(s, k, jacobian=True)
-        if not r.ok:
-            raise RuntimeError(f"P^{k} undefined at s = {np.asarray(s).tolist()}: {r.status}")
-        return r.DP
-
-    def jacobian_fd(self, s, k: int = 1, h: float | None = None) -> np.ndarray:
-        """Central finite differences of the simulated ``P^k`` (phase differences wrapped).
-
-        ``h`` defaults to ``1e-6`` times ``max(1, |s_j|)`` per coordinate.
-        """
-        s = self.section.check_point(s)
-        J = np.empty((self.dim, self.dim))
-        for j in range(self.dim):
-            hj = 1e-6 * max(1.0, abs(s[j])) if h is None else float(h)
-            d = np.zeros(self.dim)
-            d[j] = hj
-            J[:, j] = self.section.wrap(self(s + d, k) - self(s - d, k)) / (2 * hj)
-        return J
-
-    def iterate(self, s0, n: int, k: int = 1) -> np.ndarray:
-        """``s0, P^k(s0), ..., P^{nk}(s0)``, shape ``(n + 1, dim)``; NaN rows after a failure."""
-        out = np.full((int(n) + 1, self.dim), np.nan)
-        out[0] = self.section.check_point(s0)
-        for i in range(int(n)):
-            r = self.apply(out[i], k)
-            if not r.ok:
-                break
-            out[i + 1] = r.s
-        return out
 
     def _jacobian(self, s, z0, bufs, nb, z_hit) -> np.ndarray:
         sec = self.section
@@ -729,12 +657,6 @@ class SectionMap:
         dD = tgrad[k] - tgrad[k1]
         dr = (dD - r * (tgrad[k1] - tgrad[k2])) / D1
         return tgrad[k] + (dD * r + D * dr / (1 - r)) / (1 - r)
-
-
-def _check_k(k) -> int:
-    if isinstance(k, bool) or int(k) != k or k < 1:
-        raise ValueError(f"k (the number of returns) must be an int >= 1, got {k!r}")
-    return int(k)
 
 
 # the sections of the project's models (they need Section, defined above)

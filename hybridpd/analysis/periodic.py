@@ -28,13 +28,14 @@ import numpy as np
 from hybridpd._deprecated import moved_names
 from hybridpd._jit import njit
 from hybridpd._repr import compact_repr
+from hybridpd.analysis.certify import BasinMapper, certify_ball
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import (
     ST_RETURNED,
     SectionMap,
     _to_return,
 )
-from hybridpd.analysis.labels import LABELS, OFF_SECTION
+from hybridpd.analysis.labels import OFF_SECTION
 
 __all__ = [
     "PeriodicOrbit",
@@ -358,7 +359,7 @@ def _label_kernel(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, t
     return lab, its
 
 
-class SectionMapper:
+class SectionMapper(BasinMapper):
     """Map a section point to a label by iterating ``P^k`` (an "initial condition -> label" mapper).
 
     Labels are those of :data:`hybridpd.analysis.labels.LABELS`: ``converged`` when, after
@@ -409,13 +410,7 @@ class SectionMapper:
         if isinstance(period, bool) or int(period) != period or period < 1:
             raise ValueError(f"period must be an int >= 1, got {period!r}")
         self.period = int(period)
-        if int(n_iter) < 1:
-            raise ValueError(f"n_iter must be >= 1, got {n_iter!r}")
-        if not (criterion > 0 and math.isfinite(criterion)):
-            raise ValueError(f"criterion must be > 0, got {criterion!r}")
-        if not (escape > 0 and math.isfinite(escape)):
-            raise ValueError(f"escape must be > 0, got {escape!r}")
-        self.n_iter, self.criterion, self.escape = int(n_iter), float(criterion), float(escape)
+        self._limits(n_iter, criterion, escape)
         # the cycle's points on the section: P^k fixes each of them (k returns per period)
         cyc = [self.fixed_point]
         for _ in range(self.period - 1):
@@ -430,16 +425,6 @@ class SectionMapper:
         if early_exit:
             for c in range(K):
                 self.cert_Q[c], self.cert_r2[c] = self._certify(self.cycle[c])
-
-    @staticmethod
-    def label_name(label: int) -> str:
-        """Name of an integer label."""
-        return LABELS[int(label)]
-
-    @property
-    def certified_radius(self) -> float:
-        """Radius (``Q``-norm) of the early-exit ball at ``fixed_point`` (0 without)."""
-        return math.sqrt(float(self.cert_r2[0]))
 
     def _run(self, S, n_iter, Qs, r2s, targets=None):
         P = self.map
@@ -477,51 +462,17 @@ class SectionMapper:
         lab, its, _ = self._run(S, self.n_iter, self.cert_Q, self.cert_r2)
         return lab, its
 
-    def __call__(self, s) -> int:
-        """Label of one section point."""
-        return int(self.labels(np.asarray(s, float).reshape(1, -1))[0][0])
-
     def _certify(self, fp):
-        P, k = self.map, self.period
-        dim = P.dim
         try:
-            DP = P.jacobian(fp, k)
+            DP = self.map.jacobian(fp, self.period)
         except RuntimeError:
-            return np.eye(dim), 0.0
-        if not np.all(np.isfinite(DP)):
-            return np.eye(dim), 0.0
-        rho = float(np.max(np.abs(np.linalg.eigvals(DP))))
-        if not rho < 0.999:
-            return np.eye(dim), 0.0
-        from scipy.linalg import solve_discrete_lyapunov
+            return np.eye(self.map.dim), 0.0
 
-        rho_t = 0.5 * (1.0 + rho)
-        kappa = 0.5 * (1.0 + rho_t)
-        Q = solve_discrete_lyapunov((DP / rho_t).T, np.eye(dim))
-        Q = 0.5 * (Q + Q.T)
-        Li = np.linalg.cholesky(np.linalg.inv(Q))
-        lam = np.linalg.eigvalsh(Li.T @ Li).max()
-        r = math.sqrt(self.criterion / lam) * 0.5
-        Lq_inv_T = np.linalg.inv(np.linalg.cholesky(Q).T)
-        dirs = np.random.default_rng(12345).normal(size=(100 + 25 * dim, dim))
-        dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
-        for _ in range(30):
-            ok = True
-            for frac in (1.0, 0.5, 0.25, 0.1):
-                pts = fp + (r * frac) * dirs @ Lq_inv_T.T
-                lab, _, img = self._run(pts, 1, np.eye(dim)[None], np.zeros(1), fp[None])
-                if np.any(lab == OFF_SECTION) or not np.all(np.isfinite(img)):
-                    ok = False
-                    break
-                dd = P.section.wrap(img - fp)
-                qn = np.sqrt(np.einsum("ij,jk,ik->i", dd, Q, dd))
-                if np.any(qn >= kappa * r * frac):
-                    ok = False
-                    break
-            if ok:
-                return Q, (0.9 * r) ** 2
-            r *= 0.5
-        return np.eye(dim), 0.0
+        def images(pts):
+            lab, _, img = self._run(pts, 1, np.eye(self.map.dim)[None], np.zeros(1), fp[None])
+            return img, (lab != OFF_SECTION) & np.all(np.isfinite(img), axis=1)
+
+        return certify_ball(DP, fp, self.criterion, images, self.map.section.wrap)
 
 
 # ----------------------------------------------------------------------------------------

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridpd._repr import compact_repr
+from hybridpd.analysis.pathfollow import illinois
 from hybridpd.analysis.testfunctions import Plane, TestValues
 
 __all__ = ["Codim2Point", "Tracer"]
@@ -182,41 +183,18 @@ class Tracer:
         """
         chord = ub - ua
         L = float(np.linalg.norm(chord))
-        t = chord / L
-        a, b = 0.0, 1.0
-        best = (ua, tva) if abs(fa) < abs(fb) else (ub, tvb)
-        side = 0
-        for _ in range(_MAX_ILLINOIS):
-            if b - a < 1e-13:
-                break
-            th = b - fb * (b - a) / (fb - fa) if np.isfinite(fa - fb) and fa != fb else 0.5 * (a + b)
-            if not (a < th < b):
-                th = 0.5 * (a + b)
-            ok, u, _, tv = self.correct_on_line(ua + th * chord, t, max_dist=L)
-            if not ok and th != 0.5 * (a + b):
-                th = 0.5 * (a + b)
-                ok, u, _, tv = self.correct_on_line(ua + th * chord, t, max_dist=L)
+        failed = []
+
+        def evaluate(th):
+            ok, u, _, tv = self.correct_on_line(ua + th * chord, chord / L, max_dist=L)
             if not ok:
-                return None
-            fm = float(mfun(tv)[0])
-            best = (u, tv)
-            if not np.isfinite(fm):
-                return best
-            if fm == 0.0:
-                break
-            if (fm > 0) == (fb > 0):
-                b, fb = th, fm
-                if side == 1:
-                    fa *= 0.5
-                side = 1
-            else:
-                a, fa = th, fm
-                if side == -1:
-                    fb *= 0.5
-                side = -1
-            if abs(fm) < 1e-13:
-                break
-        return best
+                failed.append(th)
+            return (u, tv) if ok else None
+
+        a, b = (ua, tva), (ub, tvb)
+        best, _f, _ok = illinois(evaluate, lambda q: float(mfun(q[1])[0]), fa, fb, a, b,
+                                 size=1.0, tol=1e-13, max_iter=_MAX_ILLINOIS)
+        return None if failed and (best is a or best is b) else best
 
     def edge_point(self, ua, ub):
         """Where the curve between ``ua`` (inside) and ``ub`` (outside) meets the box edge."""

@@ -58,6 +58,7 @@ __all__ = [
     "map_labels",
     "next_impact",
     "pack_params",
+    "trace_once",
 ]
 
 LABELS = ("converged", "not_converged", "diverged", "zeno_sticking", "unresolved")
@@ -433,13 +434,46 @@ def _impact_velocities(mu, e, y1, y2):
 
 
 @njit(cache=True)
-def _map_once(params, case, s, out, tol, max_impacts, stick):
+def _record(row, st, tau, wall, rel, graze, stick):
+    """Fill the record row of one flight (see :func:`_map_once`)."""
+    if st == STATUS_IMPACT or (st == STATUS_STICK and stick):
+        row[0] = wall
+        row[1] = tau
+        row[2] = abs(rel) if st == STATUS_STICK else max(wall * rel, 0.0)
+        row[3] = 2.0 if st == STATUS_STICK else (1.0 if graze else 0.0)
+        row[4] = 0.0
+    else:
+        row[0] = np.nan
+
+
+@njit(cache=True)
+def trace_once(params, case, s, tol=1e-13, max_impacts=1000, stick=True):
+    """One application of P from ``s`` with its record (:func:`_map_once`).
+
+    Returns ``(image[4], status, impacts, record[rows, 10])``.
+    """
+    out = np.full(4, np.nan)
+    rec = np.full((max_impacts, 10), np.nan)
+    st, k = _map_once(params, case, s, out, tol, max_impacts, stick, rec)
+    n = 0
+    while n < max_impacts and not np.isnan(rec[n, 0]):
+        n += 1
+    return out, st, k, rec[:n].copy()
+
+
+@njit(cache=True)
+def _map_once(params, case, s, out, tol, max_impacts, stick, rec):
     """One application of P from section point ``s`` into ``out``; returns (status, impacts).
 
     ``s = (phi, z1, z2, z4)``; the trajectory may hit the walls in any order; P returns the
     first pre-impact state at the right wall after the initial impact. With ``stick`` the
     trajectory continues through sticking phases (Zeno accumulation); otherwise an
     accumulation ends the map with status ``10 + STATUS_STICK``.
+
+    Row ``k`` of ``rec`` (when it has one; shape ``(rows, 10)``) records contact ``k``:
+    ``(wall, tau, approach speed, kind, stick time, t, x1, y1, x2, y2)`` with kind 0 impact,
+    1 grazing touch, 2 sticking, and the state ``t, x1 .. y2`` where its flight started;
+    ``wall`` is NaN for a flight that ended without a contact.
     """
     mu, e, L, w = params[3], params[4], params[5], params[6]
     T = 2.0 * math.pi / w
@@ -451,8 +485,16 @@ def _map_once(params, case, s, out, tol, max_impacts, stick):
     y1, y2 = _impact_velocities(mu, e, y1, y2)
     t = phi
     for k in range(max_impacts):
+        if k < rec.shape[0]:
+            rec[k, 5] = t
+            rec[k, 6] = x1
+            rec[k, 7] = y1
+            rec[k, 8] = x2
+            rec[k, 9] = y2
         st, tau, wall, x1, y1, x2, y2, graze = next_impact(
             params, case, t, x1, y1, x2, y2, 50.0 * T, tol)
+        if k < rec.shape[0]:
+            _record(rec[k], st, tau, wall, y1 - y2, graze, stick)
         if st == STATUS_STICK and stick:
             # impacts accumulated (or a plastic contact under a pressing force): the masses
             # move together from the momentum-conserving contact state until the contact
@@ -460,6 +502,8 @@ def _map_once(params, case, s, out, tol, max_impacts, stick):
             t += tau
             yc = (mu * y1 + y2) / (1.0 + mu)
             st2, ts, x2, yc = stick_release(params, case, t, x2, yc, wall, 50.0 * T, tol)
+            if k < rec.shape[0]:
+                rec[k, 4] = ts
             if st2 != STATUS_IMPACT:
                 out[0] = t
                 out[1] = x2
@@ -516,8 +560,9 @@ def impact_map(params, case, S, tol=1e-13, max_impacts=1000, stick=True):
     out = np.empty((N, 4))
     status = np.empty(N, dtype=np.int64)
     nimp = np.empty(N, dtype=np.int64)
+    norec = np.empty((0, 10))
     for i in range(N):
-        st, k = _map_once(params, case, S[i], out[i], tol, max_impacts, stick)
+        st, k = _map_once(params, case, S[i], out[i], tol, max_impacts, stick, norec)
         status[i] = st
         nimp[i] = k
     return out, status, nimp
@@ -538,8 +583,9 @@ def iterate_map(params, case, s0, n_iter, tol=1e-13, max_impacts=1000, stick=Tru
     orbit[0] = s0
     cur = s0.copy()
     nxt = np.empty(4)
+    norec = np.empty((0, 10))
     for i in range(n_iter):
-        st, _k = _map_once(params, case, cur, nxt, tol, max_impacts, stick)
+        st, _k = _map_once(params, case, cur, nxt, tol, max_impacts, stick, norec)
         if st != 0:
             return orbit, i, st
         orbit[i + 1] = nxt
@@ -591,12 +637,13 @@ def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
     nxt = np.empty(4)
     d = np.empty(4)
     ring = np.empty((_CYCLE_MAX, 4))
+    norec = np.empty((0, 10))
     for i in range(N):
         cur[:] = S[i]
         lab = -1
         it = 0
         for it in range(1, n_iter + 1):
-            st, _k = _map_once(params, case, cur, nxt, tol, max_impacts, stick)
+            st, _k = _map_once(params, case, cur, nxt, tol, max_impacts, stick, norec)
             if st != 0:
                 if st == STATUS_STICK + 10:
                     lab = 3

@@ -42,17 +42,16 @@ times); the result says whether it still does. :func:`format_percent` never roun
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.linalg import solve_discrete_lyapunov
 
 from hybridpd._deprecated import moved_names
 from hybridpd._repr import compact_repr
+from hybridpd.analysis.certify import BasinMapper, certify_ball
 from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.analysis.labels import LABELS, OFF_SECTION
-from hybridpd.model import check_array, check_axis, check_int, check_positive
+from hybridpd.model import check_array, check_axis
 from hybridpd.pair.batch import impact_map, map_labels
 
 __all__ = ["LABELS", "BasinResult", "ImpactMapper", "basin_of_attraction", "load_basin",
@@ -60,7 +59,7 @@ __all__ = ["LABELS", "BasinResult", "ImpactMapper", "basin_of_attraction", "load
 
 
 
-class ImpactMapper:
+class ImpactMapper(BasinMapper):
     """Map a section point to a label by iterating the impact map (Attractors.jl's mapper).
 
     Parameters
@@ -91,15 +90,9 @@ class ImpactMapper:
                  criterion: float = 1e-3, early_exit: bool = True, escape: float = 1e3):
         if not isinstance(impact_map, ImpactMap):
             raise ValueError(f"impact_map must be an ImpactMap, got {type(impact_map).__name__}")
-        fp = check_array("fixed_point", fixed_point, shape=(4,))
-        n_iter = check_int("n_iter", n_iter, 1)
-        criterion = check_positive("criterion", criterion)
-        escape = check_positive("escape", escape)
+        self.fixed_point = check_array("fixed_point", fixed_point, shape=(4,))
+        self._limits(n_iter, criterion, escape)
         self.map = impact_map
-        self.fixed_point = fp
-        self.n_iter = int(n_iter)
-        self.criterion = float(criterion)
-        self.escape = float(escape)
         self.cert_Q = np.eye(4)
         self.cert_r2 = 0.0
         self.cycle_tol = 1e-12 if early_exit else 0.0
@@ -124,11 +117,6 @@ class ImpactMapper:
                          "gamma": float(orbit.pair.L / orbit.x10)}
         return m
 
-    @staticmethod
-    def label_name(label: int) -> str:
-        """Name of an integer label."""
-        return LABELS[int(label)]
-
     def _criterion_matrix(self) -> np.ndarray:
         # (dx1, dy1, dy2, dphi) = C (dphi, dz1, dz2, dz4)
         return np.array([[0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 1, 0], [1, 0, 0, 0]], float)
@@ -140,55 +128,15 @@ class ImpactMapper:
             DP = np.asarray(P.jacobian(self.fixed_point).DP, float).reshape(4, 4)
         except (ValueError, RuntimeError):
             return np.eye(4), 0.0
-        rho = np.max(np.abs(np.linalg.eigvals(DP))) if np.all(np.isfinite(DP)) else np.inf
-        if not rho < 0.999:
-            return np.eye(4), 0.0
-        # Lyapunov equation of DP / rho_t: in the Q-norm DP contracts by about rho_t < 1.
-        rho_t = 0.5 * (1.0 + rho)
-        kappa = 0.5 * (1.0 + rho_t)
-        A = DP / rho_t
-        Q = solve_discrete_lyapunov(A.T, np.eye(4))
-        Q = 0.5 * (Q + Q.T)
-        # largest r with {d: d^T Q d < r^2} inside {|C d|^2 < criterion}
-        C = self._criterion_matrix()
-        Li = np.linalg.cholesky(np.linalg.inv(Q))
-        lam = np.linalg.eigvalsh(Li.T @ C.T @ C @ Li).max()
-        r_max = math.sqrt(self.criterion / lam) * 0.5
-        Lq = np.linalg.cholesky(Q)            # Q = Lq Lq^T, so |Lq^T d| is the Q-norm
-        Lq_inv_T = np.linalg.inv(Lq.T)
-        rng = np.random.default_rng(12345)
-        dirs = rng.normal(size=(400, 4))
-        dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
-        T = P.period
-        r = r_max
-        for _ in range(30):
-            ok = True
-            for frac in (1.0, 0.5, 0.25, 0.1):
-                d = (r * frac) * dirs @ Lq_inv_T.T
-                pts = self.fixed_point + d
-                if np.any(pts[:, 3] <= 0):
-                    ok = False
-                    break
-                res = P.apply(pts)
-                if not np.all(res.ok):
-                    ok = False
-                    break
-                dd = res.s - self.fixed_point
-                dd[:, 0] = (dd[:, 0] + 0.5 * T) % T - 0.5 * T
-                qn = np.sqrt(np.einsum("ij,jk,ik->i", dd, Q, dd))
-                # strict contraction with a safety factor: images in the kappa r frac ball
-                if np.any(qn >= kappa * r * frac):
-                    ok = False
-                    break
-            if ok:
-                return Q, (0.9 * r) ** 2
-            r *= 0.5
-        return np.eye(4), 0.0
 
-    @property
-    def certified_radius(self) -> float:
-        """Radius (in the ``Q``-norm) of the certified ball; 0 if early exit is off."""
-        return math.sqrt(self.cert_r2)
+        def images(pts):
+            if np.any(pts[:, 3] <= 0):
+                return pts, np.zeros(len(pts), bool)
+            res = P.apply_batch(pts)
+            return res.s, res.ok
+
+        return certify_ball(DP, self.fixed_point, self.criterion, images, P.wrap,
+                            C=self._criterion_matrix(), n_dirs=400)
 
     def labels(self, S) -> tuple[np.ndarray, np.ndarray]:
         """Labels and iterations used for section points ``S`` of shape ``(N, 4)``.
@@ -208,11 +156,6 @@ class ImpactMapper:
             lab[valid] = lv
             its[valid] = iv
         return lab, its
-
-    def __call__(self, s) -> int:
-        """Label of one section point ``s = (phi, z1, z2, z4)``."""
-        lab, _ = self.labels(np.asarray(s, float).reshape(1, 4))
-        return int(lab[0])
 
 
 def section_grid(fixed_point, L, x1, y1) -> np.ndarray:

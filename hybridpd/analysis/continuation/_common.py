@@ -25,7 +25,6 @@ EVENT_KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing", "stabilit
                "existence")
 
 _NONREAL_TOL = 1e-9        # |Im lambda| above this (relative) counts as a complex pair
-_MAX_HALVINGS = 60         # bound on step halvings in one continuation step
 _END_GRAZE = 1e-4          # a branch whose corrector fails this close to grazing ends there
 _JUMP_TOL = 1e-3           # a located crossing this far from the critical value is a jump
 _NEAR_BRANCH = 5e-2        # a stuck continuation this close to a +1 multiplier: branch point

@@ -8,7 +8,6 @@ import numpy as np
 
 from hybridpd.analysis.continuation._common import (
     _END_GRAZE,
-    _MAX_HALVINGS,
     _NEAR_BRANCH,
     DESIGN_PARAMETERS,
     EVENT_KINDS,
@@ -28,7 +27,6 @@ from hybridpd.analysis.continuation._common import (
 from hybridpd.analysis.continuation.events import (
     BifurcationEvent,
     Branch,
-    _bisect_predicate,
     _branch_from_points,
     _empty_branch,
     _Point,
@@ -38,19 +36,19 @@ from hybridpd.analysis.continuation.events import (
     _Tracker,
 )
 from hybridpd.analysis.continuation.newton import (
-    _newton,
     _param_derivative,
     _residual,
     map_power_jacobian,
 )
 from hybridpd.analysis.continuation.periodic import (
     PeriodicOrbit,
-    _minimal_period,
     _orbit_diagnostics,
     find_periodic_orbit,
 )
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.analysis.maps import minimal_period
+from hybridpd.analysis.pathfollow import bisect_predicate, corrector, follow_path
 from hybridpd.model import check_finite
 
 
@@ -172,7 +170,6 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
     bad = [kd for kd in events if kd not in EVENT_KINDS]
     if bad:
         raise ValueError(f"events must be a subset of {EVENT_KINDS}, got {bad}")
-    direction = 1.0 if stop > p0 else -1.0
     lo_p, hi_p = min(p0, stop), max(p0, stop)
 
     cache = {}
@@ -203,23 +200,7 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
             raise RuntimeError(f"no design amplitude at {name} = {u[4]:g}")
         return _param_derivative(map_at(u[4]), name, u[:4], k, fd_step, design)
 
-    def correct(u_pred, normal):
-        """Newton on [F(u); normal . (u - u_pred)] = 0 (normal None: fixed p)."""
-        if normal is None:
-            p = u_pred[4]
-            res = _newton(lambda x: F(np.append(x, p)), lambda x: Fs(np.append(x, p)),
-                          u_pred[:4], tol=tol, max_iter=max_newton, scale=_scale)
-            return np.append(res.x, p), res
-
-        def G(u):
-            r = F(u)
-            return None if r is None else np.append(r, normal @ (u - u_pred))
-
-        def JG(u):
-            return np.vstack([np.column_stack([Fs(u), Fp(u)]), normal])
-
-        res = _newton(G, JG, u_pred, tol=tol, max_iter=max_newton, scale=_scale)
-        return res.x, res
+    correct = corrector(F, Fs, Fp, tol=tol, max_iter=max_newton, scale=_scale)
 
     def make_point(u, its):
         P = map_at(u[4])
@@ -272,7 +253,7 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
         if "grazing" not in events or pa.signature == pb.signature:
             return []
         if locate:
-            la, lb, ok = _bisect_predicate(lambda th: evaluate_between(pa, pb, th),
+            la, lb, ok = bisect_predicate(lambda th: evaluate_between(pa, pb, th),
                                            lambda pt: pt.signature == pa.signature, pa, pb,
                                            size=float(np.linalg.norm(pb.u - pa.u)),
                                            tol=event_tol, max_iter=60)
@@ -297,156 +278,48 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
     first = make_point(u0, start.iterations)
     if first is None:
         return _empty_branch(name, P0, k, method, "Jacobian undefined at the initial point")
-    pts = [first]
-    evs = []
-    rejected = 0
-    termination = f"max_steps = {max_steps} reached"
-    h = min(step, max_step)
-    # initial tangent: kernel of [F_s, F_p], oriented towards stop
-    if method == "arclength":
-        try:
-            A = np.column_stack([Fs(u0), Fp(u0)])
-            tangent = np.linalg.svd(A)[2][-1]
-        except (RuntimeError, np.linalg.LinAlgError):
-            tangent = np.append(np.zeros(4), 1.0)
-        if tangent[4] * direction < 0:
-            tangent = -tangent
-        if abs(tangent[4]) < 1e-12:
-            tangent = np.append(np.zeros(4), direction)
-    prev_u = None
-    for _ in range(max_steps):
-        cur = pts[-1]
-        T = 2 * math.pi / (cur.u[4] if name == "omega" else P0.reference.omega)
-        accepted = None
-        why = ""
-        exact = False
-        for _h in range(_MAX_HALVINGS):
-            if method == "natural":
-                p_new = cur.u[4] + direction * h
-                if (p_new - stop) * direction > 0:
-                    p_new = stop
-                if prev_u is not None:
-                    # secant predictor through the last two points
-                    dp_prev = cur.u[4] - prev_u[4]
-                    u_pred = cur.u + (cur.u - prev_u) * ((p_new - cur.u[4]) / dp_prev)
-                else:
-                    u_pred = cur.u.copy()
-                u_pred[4] = p_new
-                u, res = correct(u_pred, None)
-            else:
-                u_pred = cur.u + h * tangent
-                if (u_pred[4] - stop) * direction > 0 and tangent[4] * direction > 0:
-                    # the predictor passes stop (maybe beyond the parameter's domain, e.g.
-                    # e > 1): correct at stop itself, along the tangent
-                    u_pred = cur.u + ((stop - cur.u[4]) / tangent[4]) * tangent
-                    u_pred[4] = stop
-                    u, res = correct(u_pred, None)
-                else:
-                    u, res = correct(u_pred, tangent)
-            pt = None
-            if not res.converged:
-                why = f"corrector: {res.reason}"
-            else:
-                sec = u - cur.u
-                ns = float(np.linalg.norm(sec))
-                if method == "arclength" and not (ns > 0 and (sec @ tangent) / ns > 0.8):
-                    # the corrected point lies far off the predicted direction: most likely
-                    # another branch
-                    why = "the step turned by more than 37 degrees"
-                elif method == "natural" and not (
-                        np.linalg.norm(u[:4] - u_pred[:4]) <= 0.5 * max(ns, h) + 10 * tol):
-                    why = "the corrector moved far from the predictor"
-                elif k > 1 and _minimal_period(map_at(u[4]), u[:4], k) < k:
-                    # the corrector slid onto an orbit of lower period (e.g. the parent of a
-                    # period-doubled branch, a fixed point of P^k too): another branch
-                    why = "the corrector landed on an orbit of lower period"
-                else:
-                    pt = make_point(u, res.iterations)
-                    if pt is None:
-                        why = "Jacobian undefined at the corrected point"
-            if pt is not None:
-                accepted = pt
-                break
-            rejected += 1
-            if method == "arclength" and not exact and why.startswith("the step turned") \
-                    and cur.Fp is not None:
-                # Next to a fold the secant of the last (long) step is a poor tangent and
-                # the branch turns away from it whatever the step: retry with the exact
-                # tangent, the kernel of [DP^k - I, dF/dp] at the current point.
-                v = np.linalg.svd(np.column_stack([cur.DP - np.eye(4), cur.Fp]))[2][-1]
-                tangent = v if v @ tangent >= 0 else -v
-                exact = True
-                continue
-            h *= 0.5
-            if h < min_step:
-                break
-        if accepted is None:
-            termination = (f"step below min_step = {min_step:g} at {name} = {cur.u[4]:.10g} "
-                           f"({why})")
-            g = min(cur.margin, _rel_speed(cur))
-            m1 = float(np.min(np.abs(cur.mult - 1.0)))
-            if m1 < _NEAR_BRANCH and not (np.isfinite(g) and g < _END_GRAZE):
-                # Next to a branch point another family crosses this one; the corrector
-                # lands on it (rejected as a sharp turn) whatever the step. Passing needs
-                # branch switching, which is not attempted: say so.
-                termination += (f"; stopped next to a branch point (a multiplier within "
-                                f"{m1:.2g} of +1): another family of fixed points crosses here")
-                if "fold" in events:
-                    evs.append(to_event(
-                        "fold", cur, len(pts) - 1,
-                        f"branch point not passed (closest |lambda - 1| = {m1:.2g}); restart "
-                        "from the other family to continue", float(_test_fold(cur)), False))
-            if np.isfinite(g) and g < _END_GRAZE:
-                # The fixed point runs into grazing and no fixed point continues it: at a
-                # grazing contact P has a square-root singularity (the branch ends, as in a
-                # nonsmooth fold). The last point is within the margin of the grazing point.
-                termination += "; the branch ends at grazing"
-                if "grazing" in events:
-                    evs.append(to_event(
-                        "grazing", cur, len(pts) - 1,
-                        f"the branch ends at grazing (margin {cur.margin:.3g}, relative "
-                        f"approach speed {_rel_speed(cur):.3g}): no fixed point of P^{k} "
-                        "continues beyond it", g, g < graze_tol))
-            break
-        new = accepted
-        its = res.iterations
+    def unwrap(cur, new):
         # keep the phase continuous along the branch
+        T = 2 * math.pi / (cur.u[4] if name == "omega" else P0.reference.omega)
         new.u[0] = cur.u[0] + _wrap_diff(new.u[0] - cur.u[0], T)
-        p_new = new.u[4]
-        done = False
-        if method == "natural" and p_new == stop:
-            done = True
-        elif method == "arclength" and (p_new - stop) * direction >= 0:
-            # overshot: land exactly on stop by a fixed-parameter correction
-            w = (stop - cur.u[4]) / (p_new - cur.u[4])
-            u_pred = cur.u + w * (new.u - cur.u)
-            u_pred[4] = stop
-            u, res2 = correct(u_pred, None)
-            if res2.converged:
-                pt = make_point(u, res2.iterations)
-                if pt is not None:
-                    pt.u[0] = cur.u[0] + _wrap_diff(pt.u[0] - cur.u[0], T)
-                    new = pt
-            done = True
-        idx = len(pts) - 1
-        evs.extend(tracker.detect(cur, new, idx, grazing_events(cur, new, idx)))
-        prev_u = cur.u.copy()
-        pts.append(new)
-        if done:
-            termination = "reached stop"
-            break
-        if method == "arclength":
-            sec = new.u - cur.u
-            tangent = sec / np.linalg.norm(sec)       # secant predictor
-            if not (lo_p - 1e-12 * span <= p_new <= hi_p + 1e-12 * span):
-                termination = (f"parameter left [{lo_p:g}, {hi_p:g}] at {name} = {p_new:.10g} "
-                               "(the branch turned back)")
-                break
-        # step control: easy corrections lengthen the step, hard ones shorten it
-        if its <= 3:
-            h = min(1.5 * h, max_step)
-        elif its >= 7:
-            h = max(0.6 * h, min_step)
+
+    def out_of_range(p):
+        if lo_p - 1e-12 * span <= p <= hi_p + 1e-12 * span:
+            return None
+        return f"parameter left [{lo_p:g}, {hi_p:g}] at {name} = {p:.10g} (the branch turned back)"
+
+    pts, evs, termination, rejected, why = follow_path(
+        first, stop, F=F, Fs=Fs, Fp=Fp, make_point=make_point, correct=correct, method=method,
+        step=step, min_step=min_step, max_step=max_step, max_steps=max_steps, k=k,
+        lower_period=lambda u: minimal_period(map_at(u[4]), u[:4], k) < k, unwrap=unwrap,
+        detect=lambda a, b, i: tracker.detect(a, b, i, grazing_events(a, b, i)),
+        out_of_range=out_of_range, tol=tol, name=name)
+    if why:
+        cur = pts[-1]
+        g = min(cur.margin, _rel_speed(cur))
+        m1 = float(np.min(np.abs(cur.mult - 1.0)))
+        if m1 < _NEAR_BRANCH and not (np.isfinite(g) and g < _END_GRAZE):
+            # Next to a branch point another family crosses this one; the corrector lands on
+            # it (rejected as a sharp turn) whatever the step. Passing needs branch
+            # switching, which is not attempted: say so.
+            termination += (f"; stopped next to a branch point (a multiplier within "
+                            f"{m1:.2g} of +1): another family of fixed points crosses here")
+            if "fold" in events:
+                evs.append(to_event(
+                    "fold", cur, len(pts) - 1,
+                    f"branch point not passed (closest |lambda - 1| = {m1:.2g}); restart "
+                    "from the other family to continue", float(_test_fold(cur)), False))
+        if np.isfinite(g) and g < _END_GRAZE:
+            # The fixed point runs into grazing and no fixed point continues it: at a grazing
+            # contact P has a square-root singularity (the branch ends, as in a nonsmooth
+            # fold). The last point is within the margin of the grazing point.
+            termination += "; the branch ends at grazing"
+            if "grazing" in events:
+                evs.append(to_event(
+                    "grazing", cur, len(pts) - 1,
+                    f"the branch ends at grazing (margin {cur.margin:.3g}, relative approach "
+                    f"speed {_rel_speed(cur):.3g}): no fixed point of P^{k} continues beyond it",
+                    g, g < graze_tol))
     br = _branch_from_points(pts, evs, name, P0, k, method, termination, rejected)
     if design is not None:
         fixed = {kk: v for kk, v in br.fixed.items() if kk not in ("xm", name)}

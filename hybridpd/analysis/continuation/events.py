@@ -16,6 +16,7 @@ from hybridpd.analysis.continuation._common import (
     _f,
     _fixed_parameters,
 )
+from hybridpd.analysis.pathfollow import illinois as _illinois
 from hybridpd.model import Case
 
 
@@ -228,67 +229,6 @@ def _test_stability(pt):
 def _changes(fa, fb):
     return bool(np.isfinite(fa) and np.isfinite(fb) and (fa > 0) != (fb > 0)
                 and not (fa == 0 and fb == 0))
-
-
-def _illinois(evaluate, ftest, fa, fb, pa, pb, *, size, tol, max_iter):
-    """Root of ``ftest(evaluate(theta))`` on ``[0, 1]`` with ``f(0) = fa``, ``f(1) = fb``.
-
-    ``evaluate(theta)`` returns a point or None (then the bracket is bisected instead).
-    ``size`` converts a ``theta`` interval to a length (stop below ``tol``). Returns
-    ``(point, f, located)`` with the best bracket end; ``pa``, ``pb`` are the end points.
-    """
-    a, b = 0.0, 1.0
-    side = 0
-    best = (pa, fa) if abs(fa) <= abs(fb) else (pb, fb)
-    for it in range(max_iter):
-        if (b - a) * size <= tol:
-            return best[0], best[1], True
-        theta = b - fb * (b - a) / (fb - fa) if fb != fa else 0.5 * (a + b)
-        # keep the regula-falsi point inside the bracket and bisect every third iteration so
-        # that the bracket shrinks geometrically even when the test function is not smooth
-        if not (a < theta < b) or it % 3 == 2:
-            theta = 0.5 * (a + b)
-        pt = evaluate(theta)
-        fc = ftest(pt) if pt is not None else np.nan
-        if not np.isfinite(fc):
-            theta = 0.5 * (a + b)
-            pt = evaluate(theta)
-            fc = ftest(pt) if pt is not None else np.nan
-            if not np.isfinite(fc):
-                return best[0], best[1], False
-        if abs(fc) < abs(best[1]):
-            best = (pt, fc)
-        if fc == 0.0:
-            return pt, fc, True
-        if (fc > 0) == (fb > 0):
-            b, fb = theta, fc
-            if side == 1:
-                fa *= 0.5
-            side = 1
-        else:
-            a, fa = theta, fc
-            if side == -1:
-                fb *= 0.5
-            side = -1
-    return best[0], best[1], (b - a) * size <= tol
-
-
-def _bisect_predicate(evaluate, same_as_a, pa, pb, *, size, tol, max_iter):
-    """Bisection on a discrete change: returns the last point on each side and ``located``."""
-    a, b = 0.0, 1.0
-    last_a, last_b = pa, pb
-    for _ in range(max_iter):
-        if (b - a) * size <= tol:
-            return last_a, last_b, True
-        theta = 0.5 * (a + b)
-        pt = evaluate(theta)
-        if pt is None:
-            return last_a, last_b, False
-        if same_as_a(pt):
-            a, last_a = theta, pt
-        else:
-            b, last_b = theta, pt
-    return last_a, last_b, (b - a) * size <= tol
 
 
 class _Tracker:

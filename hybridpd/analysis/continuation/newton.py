@@ -2,8 +2,6 @@
 Newton method shared by the orbit search and the correctors."""
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from hybridpd.analysis.continuation._common import (
@@ -18,31 +16,15 @@ from hybridpd.analysis.continuation._common import (
 )
 from hybridpd.analysis.continuation.trace import trace_map
 from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.pair import symbolic
-from hybridpd.pair.batch import impact_map
-
-
-def _power_many(P: ImpactMap, S: np.ndarray, k: int):
-    """``P^k`` of the rows of ``S`` (N, 4); returns ``(images, ok)``."""
-    cur = np.array(S, dtype=float, copy=True)
-    ok = np.all(np.isfinite(cur), axis=1) & (cur[:, 3] > 0)
-    for _ in range(k):
-        idx = np.flatnonzero(ok)
-        if idx.size == 0:
-            break
-        out, status, _ = impact_map(P.params, P._c, np.ascontiguousarray(cur[idx]), P.tol,
-                                    P.max_impacts)
-        cur[idx] = out
-        ok[idx] = status == 0
-    cur[~ok] = np.nan
-    return cur, ok
+from hybridpd.analysis.pathfollow import NewtonResult as _NewtonOut  # noqa: F401
+from hybridpd.analysis.pathfollow import newton as _newton  # noqa: F401
 
 
 def _residual(P: ImpactMap, s: np.ndarray, k: int):
     """``P^k(s) - s`` with the phase difference unwrapped, or None where undefined."""
     if not (np.all(np.isfinite(s)) and s[3] > 0):
         return None
-    img, ok = _power_many(P, s[None, :], k)
+    img, ok = P.apply_many(s[None, :], k)
     if not ok[0]:
         return None
     r = img[0] - s
@@ -103,37 +85,13 @@ def map_power_jacobian(impact_map_: ImpactMap, s, period: int = 1, *, method: st
         raise ValueError("method='symbolic' needs the simple pattern (+L, -L, +L) on every "
                          f"iterate; got {[tr.walls for tr in traces]}")
     if simple and method != "fd":
-        g, p, ref = P.gains, P.pair, P.reference
-        J = np.eye(4)
-        for i, tr in enumerate(traces):
-            jac = symbolic.map_jacobian(pts[i], tr.steps[0].tau, tr.steps[1].tau, xm=ref.xm,
-                                        kp=g.kp, kv=g.kv, m2=p.m2, mu=p.mu, e=p.e, L=p.L,
-                                        w=ref.omega, case=P.case.value)
-            J = np.asarray(jac.DP, float).reshape(4, 4) @ J
-        return J, "symbolic", traces
+        return P.apply(s, k, jacobian=True).DP, "symbolic", traces
     return _fd_jacobian(P, s, k, fd_step), "fd", traces
 
 
 def _fd_jacobian(P: ImpactMap, s: np.ndarray, k: int, fd_step: float) -> np.ndarray:
     """Central differences of ``P^k`` (one-sided where a side is undefined)."""
-    T = P.period
-    H = fd_step * np.maximum(1.0, np.abs(s))
-    H[3] = min(H[3], 0.5 * s[3])          # stay on the section side z4 > 0
-    S = np.concatenate([s + np.diag(H), s - np.diag(H), s[None, :]])
-    img, ok = _power_many(P, S, k)
-    J = np.empty((4, 4))
-    for j in range(4):
-        if ok[j] and ok[4 + j]:
-            d, h = img[j] - img[4 + j], 2 * H[j]
-        elif ok[j] and ok[8]:
-            d, h = img[j] - img[8], H[j]
-        elif ok[4 + j] and ok[8]:
-            d, h = img[8] - img[4 + j], H[j]
-        else:
-            raise RuntimeError(f"P^{k} undefined around s in direction {j}")
-        d[0] = _wrap_diff(d[0], T)
-        J[:, j] = d / h
-    return J
+    return P.jacobian_fd(s, k=k, h=fd_step, scale=np.maximum(1.0, np.abs(s)), one_sided=True)
 
 
 def _param_derivative(P: ImpactMap, name: str, s: np.ndarray, k: int, fd_step: float,
@@ -159,70 +117,3 @@ def _param_derivative(P: ImpactMap, name: str, s: np.ndarray, k: int, fd_step: f
             raise RuntimeError(f"P^k undefined on both sides of {name} = {p:g}")
     d[0] = _wrap_diff(d[0], P.period)
     return d / hh
-
-
-# ----------------------------------------------------------------------------------------
-# Damped Newton
-# ----------------------------------------------------------------------------------------
-
-
-@dataclass
-class _NewtonOut:
-    x: np.ndarray
-    converged: bool
-    reason: str
-    history: list
-    iterations: int
-    step: float
-
-
-def _newton(resid, jac, x0, *, tol, max_iter, scale, min_lambda=2.0 ** -12):
-    """Damped Newton with backtracking on ``||F||_inf``.
-
-    ``resid(x)`` returns the residual or None where undefined; ``jac(x)`` the Jacobian (may
-    raise). Converged when ``||F|| <= tol * scale(x)``, or when a full Newton step is itself
-    below ``tol * scale(x)`` (the residual then sits at its rounding floor, which exceeds
-    ``tol`` for strongly unstable orbits whose multipliers amplify rounding).
-    """
-    x = np.array(x0, dtype=float)
-    r = resid(x)
-    if r is None:
-        return _NewtonOut(x, False, "map undefined at the initial point", [], 0, np.nan)
-    nr = float(np.max(np.abs(r)))
-    hist = [nr]
-    last = np.nan
-    for it in range(1, max_iter + 1):
-        if nr <= tol * scale(x):
-            return _NewtonOut(x, True, "residual below tol", hist, it - 1, last)
-        try:
-            J = jac(x)
-            dx = np.linalg.solve(J, -r)
-        except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:
-            return _NewtonOut(x, False, f"Jacobian failed: {exc}", hist, it - 1, last)
-        if not np.all(np.isfinite(dx)):
-            return _NewtonOut(x, False, "singular Jacobian", hist, it - 1, last)
-        last = float(np.max(np.abs(dx)))
-        lam = 1.0
-        accepted = False
-        while lam >= min_lambda:
-            xn = x + lam * dx
-            rn = resid(xn)
-            if rn is not None:
-                nrn = float(np.max(np.abs(rn)))
-                if nrn <= (1.0 - 1e-4 * lam) * nr:
-                    accepted = True
-                    break
-            lam *= 0.5
-        if not accepted:
-            if last <= tol * scale(x):
-                return _NewtonOut(x, True, "Newton step below tol (residual at rounding floor)",
-                                  hist, it, last)
-            return _NewtonOut(x, False, "line search failed (no decrease of the residual)",
-                              hist, it, last)
-        x, r, nr = xn, rn, nrn
-        hist.append(nr)
-        if lam == 1.0 and last <= tol * scale(x):
-            return _NewtonOut(x, True, "Newton step below tol", hist, it, last)
-    if nr <= tol * scale(x):
-        return _NewtonOut(x, True, "residual below tol", hist, max_iter, last)
-    return _NewtonOut(x, False, f"max_iter = {max_iter} reached", hist, max_iter, last)

@@ -2,7 +2,7 @@
 :class:`PeriodicOrbit`."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -14,50 +14,43 @@ from hybridpd.analysis.continuation._common import (
     _positive_int,
     _scale,
     _section_point,
-    _wrap_diff,
 )
 from hybridpd.analysis.continuation.newton import (
     _newton,
-    _power_many,
     _residual,
     map_power_jacobian,
 )
 from hybridpd.analysis.continuation.trace import trace_map
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.analysis.maps import minimal_period
+from hybridpd.analysis.periodic import PeriodicOrbit as _Orbit
 
 
-@dataclass(frozen=True)
-class PeriodicOrbit:
-    """A fixed point of ``P^k`` found by Newton's method.
+@dataclass(frozen=True, eq=False)
+class PeriodicOrbit(_Orbit):
+    """A fixed point of ``P^k`` of the impact pair found by Newton's method.
+
+    The package's :class:`~hybridpd.analysis.periodic.PeriodicOrbit` (``s``, ``period``,
+    ``converged``, ``reason``, ``iterations``, ``residual``, ``t_period``, ``signature``,
+    ``DP``, ``multipliers``, ``spectral_radius``, ``stable``, ``hyperbolic``, ``grazing``,
+    ``z``, ``names``) with the pair's contact pattern and diagnostics. Here ``s`` is
+    ``(phi, z1, z2, z4)`` (``phi`` in ``[0, T)``) or the last iterate, ``DP``,
+    ``multipliers``, ``stable`` and ``hyperbolic`` may be None (no Jacobian), and
+    ``grazing`` is ``margin < graze_tol``, an approach speed below ``graze_tol`` times the
+    largest one, or a grazing touch in the pattern.
 
     Attributes
     ----------
-    converged : bool
-    reason : str
-        Why Newton stopped.
-    s : ndarray, shape (4,)
-        The fixed point ``(phi, z1, z2, z4)`` (``phi`` in ``[0, T)``), or the last iterate.
     orbit : ndarray, shape (k, 4)
         ``s, P(s), ..., P^{k-1}(s)`` (phases in ``[0, T)``).
-    period : int
-        ``k`` (number of applications of ``P`` per period).
     minimal_period : int
         Smallest ``d`` dividing ``k`` with ``P^d(s) = s`` (to ``1e-7`` relative); e.g. 1 when a
         period-2 search landed on a fixed point of ``P``.
-    residual : float
-        ``||P^k(s) - s||_inf`` at ``s`` (phase unwrapped).
     residual_history : ndarray
         Residual norm at every Newton iterate.
-    iterations : int
-    DP : ndarray, shape (4, 4)
-        Jacobian of ``P^k`` at ``s``.
     jacobian_method : str
         ``"symbolic"`` (chain of symbolic blocks) or ``"fd"`` (finite differences).
-    multipliers : ndarray, shape (4,), complex
-        Eigenvalues of ``DP`` by decreasing modulus (Floquet multipliers of ``P^k``).
-    spectral_radius : float
-    stable, hyperbolic : bool
     pattern : tuple of tuple of ImpactStep
         The contacts of each of the ``k`` applications of ``P`` (walls, flight times, speeds).
     walls : tuple of tuple of int
@@ -69,38 +62,23 @@ class PeriodicOrbit:
         (see :class:`MapTrace`).
     min_impact_speed : float
         Smallest approach speed over the period (length/time).
-    grazing : bool
-        ``margin < graze_tol``, or an approach speed below ``graze_tol`` times the largest one,
-        or a grazing touch in the pattern.
     sticking : bool
         A sticking phase occurs on the orbit.
     parameters : dict
         The map's parameters (``kp, kv, e, mu, L, m2, xm, omega, case``).
     """
 
-    converged: bool
-    reason: str
-    s: np.ndarray
-    orbit: np.ndarray
-    period: int
-    minimal_period: int
-    residual: float
-    residual_history: np.ndarray
-    iterations: int
-    DP: np.ndarray | None
-    jacobian_method: str | None
-    multipliers: np.ndarray | None
-    spectral_radius: float
-    stable: bool | None
-    hyperbolic: bool | None
-    pattern: tuple
-    walls: tuple
-    n_impacts: int
-    margin: float
-    min_impact_speed: float
-    grazing: bool
-    sticking: bool
-    parameters: dict
+    orbit: np.ndarray = field(default=None, repr=False)
+    minimal_period: int = 1
+    residual_history: np.ndarray = field(default=None, repr=False)
+    jacobian_method: str | None = None
+    pattern: tuple = field(default=(), repr=False)
+    walls: tuple = ()
+    n_impacts: int = 0
+    margin: float = np.nan
+    min_impact_speed: float = np.nan
+    sticking: bool = False
+    parameters: dict = field(default_factory=dict)
     __repr__ = compact_repr
 
     def to_dict(self) -> dict:
@@ -150,20 +128,6 @@ def _orbit_diagnostics(P: ImpactMap, s: np.ndarray, k: int, jacobian: str, fd_st
                    or (vmax > 0 and vmin < graze_tol * vmax))
     sticking = any(st.kind == "stick" for tr in traces for st in tr.steps)
     return traces, DP, method, margin, vmin, grazing, sticking
-
-
-def _minimal_period(P, s, k):
-    T = P.period
-    for d in range(1, k):
-        if k % d:
-            continue
-        img, ok = _power_many(P, s[None, :], d)
-        if ok[0]:
-            r = img[0] - s
-            r[0] = _wrap_diff(r[0], T)
-            if np.max(np.abs(r)) <= 1e-7 * _scale(s):
-                return d
-    return k
 
 
 def find_periodic_orbit(impact_map_: ImpactMap, s0, period: int = 1, *, tol: float = 1e-12,
@@ -253,9 +217,14 @@ def _make_orbit(P, res, k, jacobian, fd_step, margin_samples, graze_tol) -> Peri
         stab = stability(DP)
         mult, rho, stable, hyper = stab.multipliers, stab.spectral_radius, stab.stable, \
             stab.hyperbolic
-    minimal = _minimal_period(P, s, k) if res.converged else k
+    minimal = minimal_period(P, s, k) if res.converged else k
     pattern = tuple(tr.steps for tr in traces)
+    L = P.pair.L
+    sig = P.apply(s, k).signature if res.converged else ()
     return PeriodicOrbit(
+        t_period=float(sum(st.tau + st.stick_time for p in pattern for st in p)),
+        signature=sig, names=P.names, z=np.array([s[1] + L, s[2] + s[3], s[1], s[2],
+                                                 *P.reference.exo_state(s[0])]),
         converged=bool(res.converged), reason=res.reason, s=s, orbit=orbit, period=k,
         minimal_period=minimal, residual=resid, residual_history=np.asarray(res.history),
         iterations=res.iterations, DP=DP, jacobian_method=method, multipliers=mult,

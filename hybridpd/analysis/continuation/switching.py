@@ -55,7 +55,6 @@ from hybridpd.analysis.continuation.events import BifurcationEvent, Branch
 from hybridpd.analysis.continuation.newton import (
     _newton,
     _param_derivative,
-    _power_many,
     _residual,
     map_power_jacobian,
 )
@@ -225,7 +224,7 @@ def _augmented_start(branch, Pc, sc, pc, v, K, a, tol, max_iter, fd_step):
 
 def _fixed_of_power(P, s, k, scale_tol=1e-7):
     """``s`` is a fixed point of ``P^k`` (relative ``scale_tol``)."""
-    img, ok = _power_many(P, s[None, :], k)
+    img, ok = P.apply_many(s[None, :], k)
     if not ok[0]:
         return False
     r = img[0] - s

@@ -6,7 +6,6 @@ import math
 import numpy as np
 
 from hybridpd.analysis.continuation._common import (
-    _MAX_HALVINGS,
     EVENT_KINDS,
     SYMMETRIC_PARAMETERS,
     _check_parameter,
@@ -19,7 +18,6 @@ from hybridpd.analysis.continuation._common import (
 from hybridpd.analysis.continuation.events import (
     BifurcationEvent,
     Branch,
-    _bisect_predicate,
     _branch_from_points,
     _changes,
     _Point,
@@ -27,6 +25,7 @@ from hybridpd.analysis.continuation.events import (
 )
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.orbits import REASONS, symmetric_orbits
+from hybridpd.analysis.pathfollow import _MAX_HALVINGS, bisect_predicate
 from hybridpd.model import Case, ImpactPair, PDGains, as_gains, check_finite, check_odd_order
 from hybridpd.pair import symbolic
 
@@ -193,7 +192,7 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
             def same(pt):
                 return (pt.formal, pt.viable) == (pa.formal, pa.viable)
             if locate:
-                la, lb, ok = _bisect_predicate(lambda th: evaluate_between(pa, pb, th), same,
+                la, lb, ok = bisect_predicate(lambda th: evaluate_between(pa, pb, th), same,
                                                pa, pb, size=size(pa, pb), tol=event_tol,
                                                max_iter=80)
             else:

@@ -2,7 +2,6 @@
 touches, sticking) and the flight margins."""
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,14 +10,7 @@ from hybridpd._repr import compact_repr
 from hybridpd.analysis.continuation._common import _impact_map, _min, _section_point
 from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.model import check_int
-from hybridpd.pair.batch import (
-    STATUS_IMPACT,
-    STATUS_STICK,
-    _impact_velocities,
-    next_impact,
-    stick_release,
-    turning_margins,
-)
+from hybridpd.pair.batch import STATUS_IMPACT, trace_once, turning_margins
 
 
 @dataclass(frozen=True)
@@ -112,9 +104,9 @@ def trace_map(impact_map_: ImpactMap, s, *, margin: bool = True,
               margin_samples: int = 256) -> MapTrace:
     """Apply ``P`` once from ``s`` and record every contact (the impact pattern).
 
-    This follows the compiled engine step by step (the same kernels, the same tolerances),
-    so ``trace_map(P, s).s`` equals ``P(s)``; it additionally records walls, flight times,
-    approach speeds, grazing touches and sticking phases, and measures how close every
+    This is the compiled engine's own run with its record
+    (:func:`hybridpd.pair.batch.trace_once`), so ``trace_map(P, s).s`` equals ``P(s)``; it
+    additionally gives walls, flight times, approach speeds, grazing touches and sticking phases, and measures how close every
     flight comes to a wall in its interior.
 
     Parameters
@@ -146,48 +138,16 @@ def trace_map(impact_map_: ImpactMap, s, *, margin: bool = True,
     # tangential touch of the right wall
     P = _impact_map(impact_map_)
     s = _section_point(s, "s", closure=True)
-    params, case, tol = P.params, P._c, P.tol
-    mu, e, L, w = params[3], params[4], params[5], params[6]
-    T = 2.0 * math.pi / w
-    x2, y2 = float(s[1]), float(s[2])
-    x1, y1 = x2 + L, y2 + float(s[3])
-    y1, y2 = _impact_velocities(mu, e, y1, y2)
-    t = float(s[0])
-    steps = []
-    marg = 1.0 if margin else np.nan
-    speeds = []
-    nan4 = np.full(4, np.nan)
-    for _ in range(P.max_impacts):
-        st, tau, wall, _X1, Y1, X2, Y2, graze = next_impact(params, case, t, x1, y1, x2, y2,
-                                                            50.0 * T, tol)
-        if margin and st in (STATUS_IMPACT, STATUS_STICK):
-            marg = min(marg, _flight_margin(params, case, t, x1, y1, x2, y2, tau,
-                                            check_int("margin_samples", margin_samples, 2)))
-        if st == STATUS_STICK:
-            t += tau
-            yc = (mu * Y1 + Y2) / (1.0 + mu)
-            st2, ts, X2, yc = stick_release(params, case, t, X2, yc, wall, 50.0 * T, tol)
-            steps.append(ImpactStep(int(wall), float(tau), float(abs(Y1 - Y2)), "stick",
-                                    float(ts)))
-            if st2 != STATUS_IMPACT:
-                return MapTrace(nan4, False, int(STATUS_STICK if st2 == 1 else st2) + 10,
-                                tuple(steps), marg, _min(speeds))
-            t += ts
-            x2 = X2
-            x1 = x2 + wall * L
-            y1 = y2 = yc
-            continue
-        if st != STATUS_IMPACT:
-            return MapTrace(nan4, False, int(st) + 10, tuple(steps), marg, _min(speeds))
-        t += tau
-        speed = max(wall * (Y1 - Y2), 0.0)
-        speeds.append(speed)
-        steps.append(ImpactStep(int(wall), float(tau), float(speed),
-                                "graze" if graze else "impact"))
-        x1, y1, x2, y2 = X2 + wall * L, Y1, X2, Y2
-        if wall == 1:
-            out = np.array([t - T * math.floor(t / T), x2, y2, max(y1 - y2, 0.0)])
-            return MapTrace(out, True, 0, tuple(steps), marg, _min(speeds))
-        if not graze:
-            y1, y2 = _impact_velocities(mu, e, y1, y2)
-    return MapTrace(nan4, False, 13, tuple(steps), marg, _min(speeds))
+    nsamp = check_int("margin_samples", margin_samples, 2)
+    out, st, _n, rec = trace_once(P.params, P._c, s, P.tol, P.max_impacts)
+    kinds = ("impact", "graze", "stick")
+    steps = tuple(ImpactStep(int(r[0]), float(r[1]), float(r[2]), kinds[int(r[3])],
+                             float(r[4])) for r in rec)
+    marg = np.nan
+    if margin:
+        marg = min([1.0] + [_flight_margin(P.params, P._c, *r[5:10], r[1], nsamp)
+                            for r in rec])
+    speeds = [float(r[2]) for r in rec if r[3] != 2]
+    ok = st == STATUS_IMPACT
+    return MapTrace(out if ok else np.full(4, np.nan), bool(ok), int(st), steps, marg,
+                    _min(speeds))

@@ -1,7 +1,7 @@
 """The impact map ``P = P43 o P32 o P21 o P10`` and its Jacobian blocks (paper section 4).
 
 Impacts act on the section coordinates ``(phi, z1, z2, z4)`` linearly; flights use the
-closed-form flow, with the flight time from a bracketing root finder on the closed-form gap
+closed-form flow, with the flight time from the compiled engine's contact location
 (:func:`flight_time`) and the flight blocks from implicit differentiation (generated code of
 the SymPy derivation, see :mod:`hybridpd.pair.symbolic.derive`).
 """
@@ -15,7 +15,6 @@ import numpy as np
 from hybridpd._repr import compact_repr
 from hybridpd.pair.symbolic._numeric import _as_float_arrays, _case, _stack, kernel
 from hybridpd.pair.symbolic.existence import SymmetricOrbit
-from hybridpd.pair.symbolic.flows import gap_derivatives, state_from_section
 
 __all__ = ["ImpactMapResult", "JacobianResult", "flight_block", "flight_section_map",
            "flight_time", "impact_block", "impact_map", "impact_section_map", "map_jacobian",
@@ -130,14 +129,11 @@ def _flight_block_and_map(s, tau, xm, kp, kv, m2, w, L, wall, case):
 
 def flight_time(s, *, xm, kp, kv, m2=1.0, w, L, wall=1, case="collocated",
                 tmax=None, return_wall=False):
-    """First time a flight from wall ``wall`` hits a wall (closed-form gap + root finding).
+    """First time a flight from wall ``wall`` hits a wall.
 
-    Scalar (one section point). The gap ``z3(t)`` and ``z3'(t)`` are sampled on a grid
-    whose step resolves the fastest time scale (``T/64``, ``1/(8 omega_n)``, ``1/(8 alpha)``);
-    a root is bracketed by a sign change, and on intervals where ``z3'`` changes sign the
-    extremum is located first so that a pair of crossings within one step (near grazing) is
-    not missed (assumes at most one extremum of ``z3`` per step). Roots are refined by
-    ``brentq`` to full precision.
+    Scalar (one section point). The contact is located by the compiled engine's guaranteed
+    safe-step root finder on the closed-form gap (:func:`hybridpd.pair.batch.next_impact`,
+    gap tolerance ``1e-13``): the package's one contact location for the pair.
 
     Parameters
     ----------
@@ -158,79 +154,21 @@ def flight_time(s, *, xm, kp, kv, m2=1.0, w, L, wall=1, case="collocated",
     hit : int
         Only with ``return_wall``: the wall hit (0 if none).
     """
-    case = _case(case)
+    from hybridpd.pair.batch import STATUS_IMPACT, STATUS_STICK, next_impact, pack_params
+
+    collocated = _case(case) == "collocated"
     s = np.asarray(s, dtype=float)
-    kp, kv, m2, w, L, xm = (float(q) for q in (kp, kv, m2, w, L, xm))
     wall = int(wall)
-    X0 = state_from_section(s, xm=xm, L=L, w=w, wall=wall)
-    T = 2 * np.pi / w
-
-    def zz(t):
-        return gap_derivatives(t, X0, kp=kp, kv=kv, m2=m2, w=w, case=case, order=1)
-
     res = (np.nan, 0)
-    if not wall * s[3] < 0:
-        return res if return_wall else res[0]
-    if tmax is None:
-        tmax = 50 * T
-    rate = max(math.sqrt(abs(kp / m2)), abs(kv / (2 * m2)), 1e-300)
-    h = min(T / 64, 1 / (8 * rate))
-    nchunk = 256
-    t0 = 0.0
-    while t0 < tmax:
-        tt = t0 + h * np.arange(nchunk + 1)
-        zd = zz(tt)
-        events = []
-        for target in (-wall, wall):
-            tr = _first_root(lambda t, tg=target: float(zz(t)[0]) - tg * L,
-                             lambda t: float(zz(t)[1]), tt, zd[:, 0] - target * L, zd[:, 1],
-                             departing=(target == wall and t0 == 0.0))
-            if tr is not None:
-                events.append((tr, target))
-        if events:
-            res = min(events)
-            break
-        t0 = tt[-1]
+    if wall * s[3] < 0:
+        tmax = 100 * math.pi / w if tmax is None else float(tmax)
+        params = pack_params(kp, kv, m2, 0.0, 0.0, L, w, xm)
+        st, tau, hit, *_ = next_impact(params, 0 if collocated else 1, float(s[0]),
+                                       s[1] + wall * L, s[2] + s[3], float(s[1]), float(s[2]),
+                                       tmax, 1e-13)
+        if st in (STATUS_IMPACT, STATUS_STICK):
+            res = (float(tau), int(hit))
     return res if return_wall else res[0]
-
-
-def _first_root(g, gd, tt, gv, gdv, departing=False):
-    """First root of ``g`` on the grid ``tt`` (values ``gv``, slopes ``gdv``).
-
-    ``departing``: ``g(tt[0]) = 0`` is the departure itself and is not a root; in the first
-    interval only a return after an extremum counts.
-    """
-    from scipy.optimize import brentq
-
-    def root(a, b):
-        ga, gb = g(a), g(b)
-        if ga * gb > 0:  # grid and scalar evaluations differ in the last bit at an endpoint
-            return a if abs(ga) < abs(gb) else b
-        return brentq(g, a, b, xtol=1e-15, rtol=1e-15, maxiter=200)
-
-    for k in range(len(tt) - 1):
-        a, b = tt[k], tt[k + 1]
-        ga, gb = gv[k], gv[k + 1]
-        da, db = gdv[k], gdv[k + 1]
-        first = departing and k == 0
-        if ga == 0.0 and not first:
-            return a
-        if da * db < 0:  # an extremum inside: split there
-            dA, dB = gd(a), gd(b)
-            tm = (brentq(gd, a, b, xtol=1e-15, rtol=1e-15, maxiter=200) if dA * dB < 0
-                  else (a if abs(dA) < abs(dB) else b))
-            gm = g(tm)
-            if not first and ga * gm < 0:
-                return root(a, tm)
-            if gm == 0.0:
-                return tm
-            if gm * gb < 0:
-                return root(tm, b)
-        elif not first and ga * gb < 0:
-            return root(a, b)
-        if gb == 0.0:
-            return b
-    return None
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,116 @@
+"""Basin mappers' common part: validation, labels and the one early-exit certification.
+
+:class:`BasinMapper` is the base of the two mappers (an initial condition on the section ->
+a label of :data:`hybridpd.analysis.labels.LABELS`):
+:class:`hybridpd.analysis.periodic.SectionMapper` (any automaton, the reference) and the
+pair's :class:`hybridpd.sweeps.basins.ImpactMapper` (the compiled closed-form engine).
+
+For a stable fixed point ``s*`` of a map with Jacobian ``DP`` (spectral radius ``rho < 1``),
+``Q`` solving the Lyapunov equation of ``DP / rho_t`` (``rho_t = (1 + rho) / 2``) defines a
+norm in which the map contracts by about ``rho_t``. :func:`certify_ball` searches the largest
+``Q``-ball (starting from the one whose image under the criterion's coordinates ``C`` lies in
+half the criterion ball) whose sampled images, on nested spheres, fall inside
+``kappa = (1 + rho_t) / 2`` of its radius, and returns 0.9 of that radius: an iterate inside
+it stays inside and satisfies the criterion. The certification is numerical (sampled), not
+interval-rigorous.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from hybridpd.analysis.labels import LABELS
+from hybridpd.model import check_int, check_positive
+
+__all__ = ["BasinMapper", "certify_ball"]
+
+
+class BasinMapper:
+    """Base of the basin mappers: ``labels(S)`` (subclasses), one point's label, names."""
+
+    def _limits(self, n_iter, criterion, escape):
+        self.n_iter = check_int("n_iter", n_iter, 1)
+        self.criterion = check_positive("criterion", criterion)
+        self.escape = check_positive("escape", escape)
+
+    @staticmethod
+    def label_name(label: int) -> str:
+        """Name of an integer label."""
+        return LABELS[int(label)]
+
+    @property
+    def certified_radius(self) -> float:
+        """Radius (``Q``-norm) of the early-exit ball at the fixed point (0 without)."""
+        return math.sqrt(float(np.ravel(self.cert_r2)[0]))
+
+    def __call__(self, s) -> int:
+        """Label of one section point."""
+        return int(self.labels(np.asarray(s, float).reshape(1, -1))[0][0])
+
+
+def certify_ball(DP, fixed_point, criterion: float, images, wrap, *, C=None,
+                 n_dirs: int | None = None, seed: int = 12345) -> tuple:
+    """``(Q, r2)`` of the certified ball ``{d : d^T Q d < r2}`` around ``fixed_point``.
+
+    Parameters
+    ----------
+    DP : ndarray, shape (dim, dim) or None
+        Jacobian of the map at the fixed point (None or non-finite: no ball).
+    fixed_point : ndarray, shape (dim,)
+    criterion : float
+        Bound on ``|C d|^2`` (squared distance in the criterion's coordinates).
+    images : callable
+        ``images(points) -> (images, ok)`` for points of shape ``(N, dim)``.
+    wrap : callable
+        Differences of section points with the phase wrapped.
+    C : ndarray, shape (m, dim), optional
+        Criterion coordinates of a deviation (default: the identity).
+    n_dirs : int, optional
+        Sampled directions (default ``100 + 25 dim``).
+    seed : int
+        Seed of the directions (the certification is reproducible).
+
+    Returns
+    -------
+    Q : ndarray, shape (dim, dim)
+    r2 : float
+        Squared radius; 0 (with ``Q = I``) when nothing is certified.
+    """
+    fp = np.asarray(fixed_point, float)
+    dim = fp.size
+    none = (np.eye(dim), 0.0)
+    if DP is None or not np.all(np.isfinite(DP)):
+        return none
+    rho = float(np.max(np.abs(np.linalg.eigvals(DP))))
+    if not rho < 0.999:
+        return none
+    from scipy.linalg import solve_discrete_lyapunov
+
+    rho_t = 0.5 * (1.0 + rho)
+    kappa = 0.5 * (1.0 + rho_t)
+    Q = solve_discrete_lyapunov((DP / rho_t).T, np.eye(dim))
+    Q = 0.5 * (Q + Q.T)
+    C = np.eye(dim) if C is None else np.asarray(C, float)
+    Li = np.linalg.cholesky(np.linalg.inv(Q))
+    lam = np.linalg.eigvalsh(Li.T @ C.T @ C @ Li).max()
+    r = math.sqrt(criterion / lam) * 0.5
+    Lq_inv_T = np.linalg.inv(np.linalg.cholesky(Q).T)   # |Lq^T d| is the Q-norm
+    dirs = np.random.default_rng(seed).normal(size=(n_dirs or 100 + 25 * dim, dim))
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    for _ in range(30):
+        ok = True
+        for frac in (1.0, 0.5, 0.25, 0.1):
+            img, good = images(fp + (r * frac) * dirs @ Lq_inv_T.T)
+            if not np.all(good):
+                ok = False
+                break
+            dd = wrap(img - fp)
+            # strict contraction with a safety factor: images in the kappa r frac ball
+            if np.any(np.sqrt(np.einsum("ij,jk,ik->i", dd, Q, dd)) >= kappa * r * frac):
+                ok = False
+                break
+        if ok:
+            return Q, (0.9 * r) ** 2
+        r *= 0.5
+    return none

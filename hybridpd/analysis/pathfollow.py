@@ -1,0 +1,380 @@
+"""Path following of fixed points of ``P^k`` in one parameter: the package's one engine.
+
+Unknowns ``u = (s, p)``: a section point and the parameter; :func:`follow_path` continues a
+solution of ``F(u) = P^k(s; p) - s = 0`` by natural or pseudo-arclength steps (passing
+folds). Its callers (:func:`hybridpd.analysis.hybridcont.continue_family` for any automaton,
+:func:`hybridpd.analysis.continuation.continue_orbit` for the impact pair) give the map
+through ``F``, ``Fs``, ``Fp`` and ``make_point`` and their events through ``detect``.
+:func:`newton` (damped) is the Newton method of the correctors and of the pair's orbit
+search; :func:`illinois` the bracketing root step of event location.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["NewtonResult", "bisect_predicate", "corrector", "follow_path", "illinois", "newton"]
+
+_MAX_HALVINGS = 60         # bound on step halvings in one continuation step
+
+
+@dataclass
+class NewtonResult:
+    """Outcome of :func:`newton`: the last iterate, whether and why it stopped, the residual
+    history, the iterations and the last full step's size."""
+
+    x: np.ndarray
+    converged: bool
+    reason: str
+    history: list
+    iterations: int
+    step: float
+
+
+def newton(resid, jac, x0, *, tol, max_iter, scale, min_lambda=2.0 ** -12):
+    """Damped Newton with backtracking on ``||F||_inf``.
+
+    ``resid(x)`` returns the residual or None where undefined; ``jac(x)`` the Jacobian (may
+    raise). Converged when ``||F|| <= tol * scale(x)``, or when a full Newton step is itself
+    below ``tol * scale(x)`` (the residual then sits at its rounding floor, which exceeds
+    ``tol`` for strongly unstable orbits whose multipliers amplify rounding).
+    """
+    x = np.array(x0, dtype=float)
+    r = resid(x)
+    if r is None:
+        return NewtonResult(x, False, "map undefined at the initial point", [], 0, np.nan)
+    nr = float(np.max(np.abs(r)))
+    hist = [nr]
+    last = np.nan
+    for it in range(1, max_iter + 1):
+        if nr <= tol * scale(x):
+            return NewtonResult(x, True, "residual below tol", hist, it - 1, last)
+        try:
+            J = jac(x)
+            dx = np.linalg.solve(J, -r)
+        except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:
+            return NewtonResult(x, False, f"Jacobian failed: {exc}", hist, it - 1, last)
+        if not np.all(np.isfinite(dx)):
+            return NewtonResult(x, False, "singular Jacobian", hist, it - 1, last)
+        last = float(np.max(np.abs(dx)))
+        lam = 1.0
+        accepted = False
+        while lam >= min_lambda:
+            xn = x + lam * dx
+            rn = resid(xn)
+            if rn is not None:
+                nrn = float(np.max(np.abs(rn)))
+                if nrn <= (1.0 - 1e-4 * lam) * nr:
+                    accepted = True
+                    break
+            lam *= 0.5
+        if not accepted:
+            if last <= tol * scale(x):
+                return NewtonResult(x, True, "Newton step below tol (residual at rounding "
+                                    "floor)", hist, it, last)
+            return NewtonResult(x, False, "line search failed (no decrease of the residual)",
+                                hist, it, last)
+        x, r, nr = xn, rn, nrn
+        hist.append(nr)
+        if lam == 1.0 and last <= tol * scale(x):
+            return NewtonResult(x, True, "Newton step below tol", hist, it, last)
+    if nr <= tol * scale(x):
+        return NewtonResult(x, True, "residual below tol", hist, max_iter, last)
+    return NewtonResult(x, False, f"max_iter = {max_iter} reached", hist, max_iter, last)
+
+
+def corrector(F, Fs, Fp, *, tol, max_iter, scale):
+    """``correct(u_pred, normal)``: Newton on ``[F(u); normal . (u - u_pred)] = 0``.
+
+    ``normal=None`` keeps ``p = u_pred[-1]`` fixed (Newton on ``s`` alone). ``scale(x)``
+    scales the tolerance (:func:`newton`). Returns ``(u, NewtonResult)``.
+    """
+    def correct(u_pred, normal):
+        if normal is None:
+            p = u_pred[-1]
+            res = newton(lambda x: F(np.append(x, p)), lambda x: Fs(np.append(x, p)),
+                         u_pred[:-1], tol=tol, max_iter=max_iter, scale=scale)
+            return np.append(res.x, p), res
+
+        def G(u):
+            r = F(u)
+            return None if r is None else np.append(r, normal @ (u - u_pred))
+
+        def JG(u):
+            return np.vstack([np.column_stack([Fs(u), Fp(u)]), normal])
+
+        res = newton(G, JG, u_pred, tol=tol, max_iter=max_iter, scale=scale)
+        return res.x, res
+    return correct
+
+
+def _tangent(DP, fp):
+    """Unit null vector of ``[DP - I, dF/dp]`` (the branch tangent, unoriented)."""
+    return np.linalg.svd(np.column_stack([DP - np.eye(DP.shape[0]), fp]))[2][-1]
+
+
+def follow_path(first, stop, *, F, Fs, Fp, make_point, correct, method="arclength", step,
+                min_step, max_step, max_steps, k=1, lower_period=None, unwrap=None,
+                detect=None, out_of_range=None, tol=1e-10, name="p", grow=1.5):
+    """Continue from the accepted point ``first`` (its ``u``) towards ``p = stop``.
+
+    ``method="natural"``: ``p`` steps by ``h`` (secant predictor through the last two
+    points), Newton on ``s`` at fixed ``p``. ``method="arclength"``: predictor along the
+    tangent (the kernel of ``[F_s, F_p]`` at the start, then the secant), Newton on
+    ``[F(u); t . (u - u_pred)] = 0``; a corrected point whose secant turns by more than 37
+    degrees is rejected (most likely another branch), and next to a fold the exact tangent is
+    tried once before the step is halved. Steps halve on a failed correction (down to
+    ``min_step``) and grow after easy ones; an overshoot of ``stop`` lands on it by a
+    fixed-parameter correction.
+
+    Parameters
+    ----------
+    first : point
+        An object with ``u`` (ndarray ``(d + 1,)``), ``DP`` (``(d, d)``, of ``P^k``) and
+        ``Fp`` (``dF/dp`` at ``u`` or None); ``make_point(u, newton_iterations)`` returns
+        such objects (None: the point is not usable).
+    stop : float
+        End value of the parameter.
+    F, Fs, Fp : callable
+        ``F(u)`` (residual, None where undefined), its Jacobians in ``s`` and ``p``.
+    correct : callable
+        ``correct(u_pred, normal)`` (:func:`corrector`).
+    method : {"arclength", "natural"}
+    step, min_step, max_step : float
+        Initial, smallest and largest step (``p`` units for ``natural``, arclength in ``u``).
+    max_steps : int
+        Bound on accepted steps.
+    k : int
+        Period (returns to the section).
+    lower_period : callable, optional
+        ``lower_period(u)``: True when ``u`` is a fixed point of a lower power of ``P`` (the
+        corrector slid onto a parent branch); checked for ``k > 1``.
+    unwrap : callable, optional
+        ``unwrap(cur, new)``: make the phase of ``new.u`` continuous with ``cur.u`` (in place).
+    detect : callable, optional
+        ``detect(a, b, index)``: events between accepted points.
+    out_of_range : callable, optional
+        ``out_of_range(p)``: None inside the range, else the termination message (the
+        arclength branch has turned back out of it).
+    tol : float
+        Corrector tolerance (for the distance test of the natural corrector).
+    name : str
+        Parameter name in messages.
+    grow : float
+        Step growth factor after an easy correction (at most 3 Newton iterations).
+
+    Returns
+    -------
+    points : list
+    events : list
+    termination : str
+        ``"reached stop"``, ``"max_steps = N reached"``, ``"step below min_step = ... (why)"``
+        or the message of ``out_of_range``.
+    rejected : int
+        Rejected corrector attempts.
+    stuck : str
+        Why the last step failed (``""`` unless the step fell below ``min_step``).
+    """
+    pts = [first]
+    evs = []
+    rejected = 0
+    termination = f"max_steps = {max_steps} reached"
+    direction = 1.0 if stop > first.u[-1] else -1.0
+    h = min(step, max_step)
+    d = first.u.size - 1
+    tangent = None
+    if method == "arclength":
+        try:
+            tangent = _tangent(first.DP, Fp(first.u))
+        except (RuntimeError, np.linalg.LinAlgError):
+            tangent = np.append(np.zeros(d), 1.0)
+        if tangent[-1] * direction < 0:
+            tangent = -tangent
+        if abs(tangent[-1]) < 1e-12:
+            tangent = np.append(np.zeros(d), direction)
+    prev_u = None
+    why = ""
+    for _ in range(max_steps):
+        cur = pts[-1]
+        accepted, res, why = _step(cur, prev_u, h, tangent, stop, direction, method, correct,
+                                   make_point, k, lower_period, tol, min_step)
+        rejected += accepted[1]
+        accepted, h, tangent = accepted[0], accepted[2], accepted[3]
+        if accepted is None:
+            termination = (f"step below min_step = {min_step:g} at {name} = "
+                           f"{cur.u[-1]:.10g} ({why})")
+            break
+        new = accepted
+        its = res.iterations
+        if unwrap is not None:
+            unwrap(cur, new)
+        p_new = new.u[-1]
+        done = False
+        if method == "natural" and p_new == stop:
+            done = True
+        elif method == "arclength" and (p_new - stop) * direction >= 0:
+            # overshot: land exactly on stop by a fixed-parameter correction
+            w = (stop - cur.u[-1]) / (p_new - cur.u[-1])
+            u_pred = cur.u + w * (new.u - cur.u)
+            u_pred[-1] = stop
+            u, res2 = correct(u_pred, None)
+            if res2.converged:
+                pt = make_point(u, res2.iterations)
+                if pt is not None:
+                    if unwrap is not None:
+                        unwrap(cur, pt)
+                    new = pt
+            done = True
+        if detect is not None:
+            evs.extend(detect(cur, new, len(pts) - 1))
+        prev_u = cur.u.copy()
+        pts.append(new)
+        if done:
+            termination = "reached stop"
+            break
+        if method == "arclength":
+            sec = new.u - cur.u
+            tangent = sec / np.linalg.norm(sec)       # secant predictor
+            left = None if out_of_range is None else out_of_range(p_new)
+            if left is not None:
+                termination = left
+                break
+        # step control: easy corrections lengthen the step, hard ones shorten it
+        if its <= 3:
+            h = min(grow * h, max_step)
+        elif its >= 7:
+            h = max(0.6 * h, min_step)
+    return pts, evs, termination, rejected, why if termination.startswith("step below") else ""
+
+
+def _step(cur, prev_u, h, tangent, stop, direction, method, correct, make_point, k,
+          lower_period, tol, min_step):
+    """One accepted step from ``cur`` (halving ``h`` on failure): ``((point or None,
+    rejected, h, tangent), NewtonResult, why)``."""
+    rejected = 0
+    exact = False
+    why = ""
+    res = None
+    d = cur.u.size - 1
+    for _h in range(_MAX_HALVINGS):
+        if method == "natural":
+            p_new = cur.u[-1] + direction * h
+            if (p_new - stop) * direction > 0:
+                p_new = stop
+            if prev_u is not None:
+                # secant predictor through the last two points
+                dp_prev = cur.u[-1] - prev_u[-1]
+                u_pred = cur.u + (cur.u - prev_u) * ((p_new - cur.u[-1]) / dp_prev)
+            else:
+                u_pred = cur.u.copy()
+            u_pred[-1] = p_new
+            u, res = correct(u_pred, None)
+        else:
+            u_pred = cur.u + h * tangent
+            if (u_pred[-1] - stop) * direction > 0 and tangent[-1] * direction > 0:
+                # the predictor passes stop (maybe beyond the parameter's domain): correct at
+                # stop itself, along the tangent
+                u_pred = cur.u + ((stop - cur.u[-1]) / tangent[-1]) * tangent
+                u_pred[-1] = stop
+                u, res = correct(u_pred, None)
+            else:
+                u, res = correct(u_pred, tangent)
+        pt = None
+        if not res.converged:
+            why = f"corrector: {res.reason}"
+        else:
+            sec = u - cur.u
+            ns = float(np.linalg.norm(sec))
+            if method == "arclength" and not (ns > 0 and (sec @ tangent) / ns > 0.8):
+                # the corrected point lies far off the predicted direction: most likely
+                # another branch
+                why = "the step turned by more than 37 degrees"
+            elif method == "natural" and not (
+                    np.linalg.norm(u[:d] - u_pred[:d]) <= 0.5 * max(ns, h) + 10 * tol):
+                why = "the corrector moved far from the predictor"
+            elif k > 1 and lower_period is not None and lower_period(u):
+                # the corrector slid onto an orbit of lower period (e.g. the parent of a
+                # period-doubled branch, a fixed point of P^k too): another branch
+                why = "the corrector landed on an orbit of lower period"
+            else:
+                pt = make_point(u, res.iterations)
+                if pt is None:
+                    why = "Jacobian undefined at the corrected point"
+        if pt is not None:
+            return (pt, rejected, h, tangent), res, why
+        rejected += 1
+        if method == "arclength" and not exact and why.startswith("the step turned") \
+                and cur.Fp is not None:
+            # Next to a fold the secant of the last (long) step is a poor tangent and the
+            # branch turns away from it whatever the step: retry with the exact tangent.
+            v = _tangent(cur.DP, cur.Fp)
+            tangent = v if v @ tangent >= 0 else -v
+            exact = True
+            continue
+        h *= 0.5
+        if h < min_step:
+            break
+    return (None, rejected, h, tangent), res, why
+
+
+def illinois(evaluate, ftest, fa, fb, pa, pb, *, size, tol, max_iter):
+    """Root of ``ftest(evaluate(theta))`` on ``[0, 1]`` with ``f(0) = fa``, ``f(1) = fb``:
+    the package's one bracketing root step (Illinois, a safeguarded regula falsi).
+
+    ``evaluate(theta)`` returns a point or None (then the bracket is bisected instead).
+    ``size`` converts a ``theta`` interval to a length (stop below ``tol``). Returns
+    ``(point, f, located)`` with the best bracket end; ``pa``, ``pb`` are the end points.
+    """
+    a, b = 0.0, 1.0
+    side = 0
+    best = (pa, fa) if abs(fa) <= abs(fb) else (pb, fb)
+    for it in range(max_iter):
+        if (b - a) * size <= tol:
+            return best[0], best[1], True
+        theta = b - fb * (b - a) / (fb - fa) if fb != fa else 0.5 * (a + b)
+        # keep the regula-falsi point inside the bracket and bisect every third iteration so
+        # that the bracket shrinks geometrically even when the test function is not smooth
+        if not (a < theta < b) or it % 3 == 2:
+            theta = 0.5 * (a + b)
+        pt = evaluate(theta)
+        fc = ftest(pt) if pt is not None else np.nan
+        if not np.isfinite(fc):
+            theta = 0.5 * (a + b)
+            pt = evaluate(theta)
+            fc = ftest(pt) if pt is not None else np.nan
+            if not np.isfinite(fc):
+                return best[0], best[1], False
+        if abs(fc) < abs(best[1]):
+            best = (pt, fc)
+        if fc == 0.0:
+            return pt, fc, True
+        if (fc > 0) == (fb > 0):
+            b, fb = theta, fc
+            if side == 1:
+                fa *= 0.5
+            side = 1
+        else:
+            a, fa = theta, fc
+            if side == -1:
+                fb *= 0.5
+            side = -1
+    return best[0], best[1], (b - a) * size <= tol
+
+
+def bisect_predicate(evaluate, same_as_a, pa, pb, *, size, tol, max_iter):
+    """Bisection on a discrete change: returns the last point on each side and ``located``."""
+    a, b = 0.0, 1.0
+    last_a, last_b = pa, pb
+    for _ in range(max_iter):
+        if (b - a) * size <= tol:
+            return last_a, last_b, True
+        theta = 0.5 * (a + b)
+        pt = evaluate(theta)
+        if pt is None:
+            return last_a, last_b, False
+        if same_as_a(pt):
+            a, last_a = theta, pt
+        else:
+            b, last_b = theta, pt
+    return last_a, last_b, (b - a) * size <= tol
