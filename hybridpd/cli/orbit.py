@@ -117,6 +117,8 @@ def _run_model(args) -> int:
     print("  section point: " + ", ".join(f"{k} = {v:.10g}" for k, v in zip(orb.names, orb.s)))
     print(f"  period {orb.t_period:.10g}; impact sequence: "
           + " ".join(f"{g}({k})" for g, k in orb.signature))
+    if orb.detail:
+        print(f"  no orbit: {orb.detail}")
     if orb.converged:
         mods = ", ".join(f"{abs(m):.6g}" for m in orb.multipliers)
         print(f"  multipliers |lambda| = {mods}")
