@@ -10,6 +10,7 @@ from hybridpd.cli._common import (
     check_out,
     clearance,
     command,
+    executor_of,
     progress_wanted,
     save_figure,
 )
@@ -48,7 +49,7 @@ def register(sub):
     p.add_argument("--max-extensions", type=int, default=3,
                    help="window extensions while the symmetric orbit's basin touches the edge "
                         "(0: keep the window)")
-    add_sweep(p, out=(".npz",), what="the basin (coloured by attractor)")
+    add_sweep(p, out=(".npz",), what="the basin (coloured by attractor)", store=False)
     p.set_defaults(func=run)
 
 
@@ -86,7 +87,7 @@ def run(args) -> int:
                                      early_exit=not args.no_early_exit)
     ab = attractor_basin(mapper, args.x1, args.y1, max_period=args.max_period,
                          extend=args.max_extensions > 0, max_extensions=args.max_extensions,
-                         executor=args.executor, max_workers=args.workers,
+                         executor=executor_of(args), max_workers=args.workers,
                          progress=progress_wanted(args))
     b = ab.basin
     if args.out:

@@ -10,6 +10,7 @@ from hybridpd.cli._common import (
     check_out,
     clearance,
     command,
+    executor_of,
     progress_wanted,
     save_figure,
 )
@@ -50,8 +51,8 @@ def run(args) -> int:
             raise ValueError(f"--{nm} NUM must be an integer, got {num:g}")
     rm = region_map(args.case, x=("kp", *args.kp), y=("kv", *args.kv), e=args.e, mu=args.mu,
                     omega=args.omega, L=L, x10=x10, m2=args.m2, n=args.n,
-                    executor=args.executor, max_workers=args.workers,
-                    progress=progress_wanted(args))
+                    executor=executor_of(args), max_workers=args.workers,
+                    store=args.store, progress=progress_wanted(args))
     if args.out:
         rm.save(args.out)
     if args.plot:
