@@ -224,7 +224,8 @@ def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_it
     max_iter : int
         Bound on Newton iterations.
     jacobian : {"exact", "fd"}
-        ``DP`` from the saltation chain, or central finite differences of the simulated map.
+        ``DP`` from the saltation chain, or central finite differences of the simulated map
+        (for Newton and for the multipliers; much cheaper for orbits with many jumps).
     periods : int, optional
         Required number of reference periods of the orbit (default: any ``m >= 1``).
     min_return : float, optional
@@ -294,13 +295,20 @@ def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_it
                          f"(< min_return = {min_return:.3g}): {_FAST_RETURN_HINT}")
     (reason, s, F, r), it = _newton(P, s, k, jacobian, tol, int(max_iter), F, J, r)
     return _make_orbit(P, s, k, reason, it, F, r, periods=periods, min_return=min_return,
-                       verify=verify)
+                       verify=verify, jacobian=jacobian)
 
 
 def _newton(P, s, k, jacobian, tol, max_iter, F, J, r):
-    """Damped Newton; ``((reason, s, F, r), iterations)``. Never raises."""
+    """Damped Newton with Broyden updates; ``((reason, s, F, r), iterations)``. Never raises.
+
+    The Jacobian (exact or finite differences, ``jacobian``) is evaluated at the start and
+    again only where a step along the Broyden-updated one fails: for orbits with many jumps
+    one evaluation costs tens of map applications, and near a solution the rank-one updates
+    keep the convergence superlinear.
+    """
     reason = "max_iter"
     it = 0
+    fresh = True
     for it in range(1, max_iter + 1):
         if F is None:
             reason = f"map undefined: {r.status if isinstance(r, MapResult) else r}"
@@ -309,28 +317,49 @@ def _newton(P, s, k, jacobian, tol, max_iter, F, J, r):
         if nF <= tol:
             reason = "converged"
             break
-        try:
-            ds = -np.linalg.solve(J, F)
-        except np.linalg.LinAlgError:
-            reason = "singular"
+        step = _damped_step(P, s, k, J, F, nF)
+        if step is None and not fresh:
+            F, J, r = _resid(P, s, k, jacobian)
+            fresh = True
+            if F is None:
+                continue
+            step = _damped_step(P, s, k, J, F, nF)
+        if step is None:
+            reason = "singular" if _solve(J, F) is None else "line search failed"
             break
-        if not np.all(np.isfinite(ds)):
-            reason = "singular"
-            break
-        lam = 1.0
-        for _ in range(30):
-            s_new = s + lam * ds
-            F_new, J_new, r_new = _resid(P, s_new, k, jacobian)
-            if F_new is not None and _residual_norm(P, s_new, F_new) < (1 - 1e-4 * lam) * nF:
-                break
-            lam *= 0.5
-        else:
-            reason = "line search failed"
-            break
-        s, F, J, r = s_new, F_new, J_new, r_new
+        s_new, F_new, r_new = step
+        d = P.section.wrap(s_new - s)
+        dd = float(d @ d)
+        if dd > 0:
+            J = J + np.outer((F_new - F) - J @ d, d) / dd
+        fresh = False
+        s, F, r = s_new, F_new, r_new
         if P.section.has_phase:
             s[0] %= P.section.period
     return (reason, s, F, r), it
+
+
+def _solve(J, F):
+    try:
+        ds = -np.linalg.solve(J, F)
+    except np.linalg.LinAlgError:
+        return None
+    return ds if np.all(np.isfinite(ds)) else None
+
+
+def _damped_step(P, s, k, J, F, nF):
+    """``(s_new, F_new, r_new)`` of a backtracking step along Newton's direction, or None."""
+    ds = _solve(J, F)
+    if ds is None:
+        return None
+    lam = 1.0
+    for _ in range(30):
+        s_new = s + lam * ds
+        F_new, _, r_new = _resid(P, s_new, k, "none")
+        if F_new is not None and _residual_norm(P, s_new, F_new) < (1 - 1e-4 * lam) * nF:
+            return s_new, F_new, r_new
+        lam *= 0.5
+    return None
 
 
 def _no_orbit(P, s, k, reason, it, F, detail="") -> PeriodicOrbit:
@@ -342,19 +371,20 @@ def _no_orbit(P, s, k, reason, it, F, detail="") -> PeriodicOrbit:
 
 
 def _make_orbit(P, s, k, reason, it, F, r, *, periods=None, min_return=0.0,
-                verify=True) -> PeriodicOrbit:
+                verify=True, jacobian="exact") -> PeriodicOrbit:
     ok = reason == "converged"
     if not isinstance(r, MapResult) or not r.ok:
         return _no_orbit(P, s, k, reason, it, F)
     res = float(np.max(np.abs(F))) if F is not None else math.nan
     dim = P.dim
+    exact = jacobian == "exact"
     try:
-        rr = P.apply(s, k, jacobian=True)
+        rr = P.apply(s, k, jacobian=exact)
+        DP = rr.DP if exact or not rr.ok else P.jacobian_fd(s, k)
     except (ValueError, RuntimeError, FloatingPointError, np.linalg.LinAlgError) as exc:
         return _no_orbit(P, s, k, "map undefined", it, F, f"{type(exc).__name__}: {exc}")
     if not rr.ok:
         return _no_orbit(P, s, k, f"map undefined: {rr.status}", it, F)
-    DP = rr.DP
     if np.all(np.isfinite(DP)):
         st = stability(DP)
         mult, rho, stab, hyp = st.multipliers, st.spectral_radius, st.stable, st.hyperbolic
