@@ -160,7 +160,9 @@ def _resid(P: SectionMap, s, k, jac):
         J = None
         if jac == "exact":
             J = r.DP - np.eye(P.dim)
-        elif jac == "fd":
+        if jac == "fd" or (J is not None and not np.all(np.isfinite(J))):
+            # no saltation matrix somewhere on the way (a tangential jump): the simulated
+            # map's differences still give Newton a direction
             J = P.jacobian_fd(s, k) - np.eye(P.dim)
     except (ValueError, RuntimeError, FloatingPointError, np.linalg.LinAlgError) as exc:
         return None, None, f"{type(exc).__name__}: {exc}"

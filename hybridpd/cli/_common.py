@@ -100,6 +100,23 @@ def add_plant(p, *, xm=True, gamma=False, required=True, L_required=True):
         p.add_argument("--xm", type=float, required=True, help="reference amplitude (>= 0)")
 
 
+def add_model_section(p, *, period_help="returns to the section per orbit (k of P^k)"):
+    """``--model`` and the options choosing a model file's section and orbits."""
+    p.add_argument("--model", default=None, metavar="FILE.toml",
+                   help="mechanical model file (then the impact-pair options are not used)")
+    p.add_argument("--contact", type=int, default=0,
+                   help="--model: 0-based contact whose impacts (or releases) define the "
+                        "section")
+    p.add_argument("--wall", type=int, choices=[-1, 1], default=None,
+                   help="--model: +1 (hi) or -1 (lo) bound of the contact (default hi)")
+    p.add_argument("--event", default="impact", choices=["impact", "release"],
+                   help="--model: section on the contact's impacts, or on the ends of its "
+                        "sticking phases (once per burst of impacts)")
+    p.add_argument("--period", type=int, default=1, help=f"--model: {period_help}")
+    p.add_argument("--periods", type=int, default=None,
+                   help="--model: reference periods per orbit (default: any whole number)")
+
+
 def clearance(args):
     from hybridpd.model import check_positive
 
