@@ -17,10 +17,10 @@ import pytest
 
 pytest.importorskip("distributed")
 
-from _sweepfuncs import model_func  # noqa: E402
+from _sweepfuncs import model_func
 
-from hybridpd.cli import main  # noqa: E402
-from hybridpd.sweeps.sweep import ChunkError, grid_points, run_sweep  # noqa: E402
+from hybridpd.cli import main
+from hybridpd.sweeps.sweep import ChunkError, grid_points, run_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 DASK = shutil.which("dask", path=os.path.dirname(sys.executable)) or shutil.which("dask")
@@ -154,3 +154,25 @@ def test_cli_regions_on_the_cluster_match_serial(cluster, tmp_path, capsys, monk
     assert main([*base, "--scheduler", cluster["address"], "--executor", "processes"]) == 2
     assert "--scheduler" in capsys.readouterr().err
     assert main([*base, "--scheduler", "tcp://127.0.0.1:notaport"]) == 2
+
+
+@pytest.mark.slow      # the workers load the model code and compile: ~20 s on 2 cores
+def test_model_region_map_on_the_cluster_is_the_serial_one(cluster, tmp_path):
+    from hybridpd.sweeps.model_regions import model_region_map
+
+    pair = {
+        "system": {"dofs": ["x1", "x2"], "masses": [0.1, 1.0], "input": [0.0, 1.0]},
+        "contact": [{"between": ["x1", "x2"], "lo": -0.75, "hi": 0.75, "restitution": 0.5}],
+        "controller": {"type": "pd", "kp": 10.0, "kv": 20.0, "measure": "x2"},
+        "reference": {"type": "sine", "amplitude": 0.4, "omega": 5.0,
+                      "feedforward_mass": 1.0}}
+    kw = {"x": ("controller.kp", 6.0, 14.0, 4), "y": ("controller.kv", 15.0, 25.0, 3),
+          "tile": 2, "progress": False}
+    ser = model_region_map(pair, executor="serial", **kw)
+    clu = model_region_map(pair, executor=cluster["address"], store=tmp_path / "m.zarr", **kw)
+    for k in ("status", "spectral_radius", "section_point", "signature", "n_orbits"):
+        np.testing.assert_allclose(getattr(clu, k), getattr(ser, k), rtol=0, atol=0,
+                                   err_msg=f"{k}: the cluster's map is not the serial one")
+    again = model_region_map(pair, executor=cluster["address"], store=tmp_path / "m.zarr", **kw)
+    np.testing.assert_allclose(again.spectral_radius, ser.spectral_radius, rtol=0, atol=0,
+                               err_msg="resumed from the complete store")
