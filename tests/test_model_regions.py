@@ -162,3 +162,35 @@ def test_two_orbits_in_a_cell_are_both_kept():
     assert cells.signature_of(0, "sig", table) == sig_b
     assert cells.signature_of(0, "sig2", table) == sig_a
     assert a["attempts"][0] == 3
+
+
+def _returns(model, spec, s):
+    """Relative distance of the section state to where a mechanics simulation of one period
+    crosses the section again (independent of the map's kernel driver)."""
+    sec = spec.section_map(model).section
+    z, t0 = sec.to_state(s)
+    T = sec.period
+    tr = simulate_state(model.automaton, z, (t0, t0 + T * (1 + 1e-6)), mode=sec.mode)
+    J = tr.hybrid.jumps
+    hits = [i for i in range(len(J)) if J.guard[i] == sec.guard
+            and abs(J.t[i] - t0 - T) < 1e-6 * T]
+    assert hits, "no crossing one period later"
+    return float(np.max(np.abs(J.pre[hits[0]] - z)) / max(1.0, np.max(np.abs(z))))
+
+
+def test_two_orbits_of_the_undamped_drivetrain_both_reported_and_both_periodic():
+    """Without damping in the PD (kv = 0) the drivetrain has mirror pairs of asymmetric
+    orbits: the map reports every orbit found in a cell, and each returns after a period."""
+    f = MODELS / "drivetrain.toml"
+    rm = model_region_map(f, ("controller.kp", 0.5, 7.055, 2), ("controller.kv", 0.0, 0.4444, 2),
+                          event="release", tile=1, progress=False)
+    assert rm.n_orbits.max() >= 2, rm.summary()
+    assert "two or more orbits" in rm.summary()
+    tpl = ModelTemplate.load(f)
+    spec = SectionSpec(**rm.spec)
+    for iy, ix in np.argwhere(rm.n_orbits >= 2):
+        model = tpl.model({"controller.kp": rm.x[ix], "controller.kv": rm.y[iy]})
+        a, b = rm.section_point[iy, ix], rm.section_point2[iy, ix]
+        assert np.max(np.abs(a - b)) > 1e-3, "the two orbits are one"
+        for s in (a, b):
+            assert _returns(model, spec, s) < 1e-7
