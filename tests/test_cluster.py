@@ -154,6 +154,15 @@ def test_cli_regions_on_the_cluster_match_serial(cluster, tmp_path, capsys, monk
     assert main([*base, "--scheduler", cluster["address"], "--executor", "processes"]) == 2
     assert "--scheduler" in capsys.readouterr().err
     assert main([*base, "--scheduler", "tcp://127.0.0.1:notaport"]) == 2
+    monkeypatch.delenv("DASK_SCHEDULER_ADDRESS")
+    capsys.readouterr()
+    bif = ["bifurcation", "--case", "collocated", "--mu", "0.1", "--e", "0.1", "--gamma",
+           "0.75", "--omega", "5", "--kp", "10", "--param", "kv", "10", "35", "7",
+           "--iterations", "120", "--keep", "24", "--out", str(tmp_path / "d.npz"), "--json"]
+    assert main(bif) == 0
+    ser = json.loads(capsys.readouterr().out)
+    assert main([*bif, "--scheduler", cluster["address"]]) == 0
+    assert json.loads(capsys.readouterr().out) == ser
 
 
 @pytest.mark.slow      # the workers load the model code and compile: ~20 s on 2 cores

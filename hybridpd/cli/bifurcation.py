@@ -136,10 +136,20 @@ def run(args) -> int:
     if not (v0["gamma"] > 0 and args.x10 > 0):
         raise ValueError(f"gamma and x10 must be > 0, got {v0['gamma']!r}, {args.x10!r}")
     pair = ImpactPair(v0["mu"], v0["e"], v0["gamma"] * args.x10, v0["m2"])
-    d = bifurcation_diagram(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name, values,
-                            case=args.case, x10=args.x10, n=args.n,
-                            iterations=args.iterations, keep=args.keep, follow=args.follow,
-                            initial=args.initial, max_period=args.max_period)
+    opts = dict(case=args.case, x10=args.x10, n=args.n, iterations=args.iterations,
+                keep=args.keep, initial=args.initial, max_period=args.max_period)
+    executor = executor_of(args)
+    if executor == "serial":
+        d = bifurcation_diagram(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name, values,
+                                follow=args.follow, **opts)
+    elif args.follow:
+        raise UsageError("--follow runs the values one after another: it cannot be spread "
+                         "over --executor/--scheduler workers")
+    else:
+        from hybridpd.sweeps.diagram_sweep import pair_diagram
+
+        d = pair_diagram(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name, values,
+                         executor=executor, max_workers=args.workers, **opts)
     d.save(args.out)
     if args.plot:
         from hybridpd.plotting.bifurcation import plot_bifurcation
