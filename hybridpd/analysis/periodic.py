@@ -295,18 +295,22 @@ def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_it
         return _no_orbit(P, s, k, "fast_return", 0, F,
                          f"P^{k} returns {r.t_hit - r.t_start:.3g} after the start "
                          f"(< min_return = {min_return:.3g}): {_FAST_RETURN_HINT}")
-    (reason, s, F, r), it = _newton(P, s, k, jacobian, tol, int(max_iter), F, J, r)
+    (reason, s, F, r), it = _newton(P, s, k, jacobian, tol, int(max_iter), F, J, r,
+                                    min_return)
     return _make_orbit(P, s, k, reason, it, F, r, periods=periods, min_return=min_return,
                        verify=verify, jacobian=jacobian)
 
 
-def _newton(P, s, k, jacobian, tol, max_iter, F, J, r):
+def _newton(P, s, k, jacobian, tol, max_iter, F, J, r, min_return=0.0):
     """Damped Newton with Broyden updates; ``((reason, s, F, r), iterations)``. Never raises.
 
     The Jacobian (exact or finite differences, ``jacobian``) is evaluated at the start and
     again only where a step along the Broyden-updated one fails: for orbits with many jumps
     one evaluation costs tens of map applications, and near a solution the rank-one updates
-    keep the convergence superlinear.
+    keep the convergence superlinear. A trial point whose return comes sooner than
+    ``min_return`` is rejected like one where the map is undefined: the points that return to
+    themselves at once (a tangential reopening) are zeros of ``P(s) - s`` that attract Newton
+    but are no orbits.
     """
     reason = "max_iter"
     it = 0
@@ -319,13 +323,13 @@ def _newton(P, s, k, jacobian, tol, max_iter, F, J, r):
         if nF <= tol:
             reason = "converged"
             break
-        step = _damped_step(P, s, k, J, F, nF)
+        step = _damped_step(P, s, k, J, F, nF, min_return)
         if step is None and not fresh:
             F, J, r = _resid(P, s, k, jacobian)
             fresh = True
             if F is None:
                 continue
-            step = _damped_step(P, s, k, J, F, nF)
+            step = _damped_step(P, s, k, J, F, nF, min_return)
         if step is None:
             reason = "singular" if _solve(J, F) is None else "line search failed"
             break
@@ -349,7 +353,7 @@ def _solve(J, F):
     return ds if np.all(np.isfinite(ds)) else None
 
 
-def _damped_step(P, s, k, J, F, nF):
+def _damped_step(P, s, k, J, F, nF, min_return=0.0):
     """``(s_new, F_new, r_new)`` of a backtracking step along Newton's direction, or None."""
     ds = _solve(J, F)
     if ds is None:
@@ -358,7 +362,8 @@ def _damped_step(P, s, k, J, F, nF):
     for _ in range(30):
         s_new = s + lam * ds
         F_new, _, r_new = _resid(P, s_new, k, "none")
-        if F_new is not None and _residual_norm(P, s_new, F_new) < (1 - 1e-4 * lam) * nF:
+        if F_new is not None and r_new.t_hit - r_new.t_start >= min_return and \
+                _residual_norm(P, s_new, F_new) < (1 - 1e-4 * lam) * nF:
             return s_new, F_new, r_new
         lam *= 0.5
     return None
