@@ -62,6 +62,12 @@ def test_cli_refuses_bad_paths_before_running(capsys):
     assert main(["regions", "--model", f, "--x", "controller.kp", "1", "2", "3", "--y",
                  "controller.kv", "1", "2", "3", "--mu", "0.1"]) == 2
     assert "--mu" in capsys.readouterr().err
+    assert main(["orbit", "--model", f, "--set", "controller.kq", "3"]) == 2
+    assert "controller.kq" in capsys.readouterr().err
+    assert main(["orbit", "--model", f, "--event", "release", "--set", "controller.kp", "30",
+                 "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["exists"] and d["n_periods"] == 1
 
 
 def _naive_return(model, kp, kv, z, t0, T, wall):
