@@ -32,12 +32,14 @@ from hybridpd.analysis.certify import BasinMapper, certify_ball
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import (
     ST_RETURNED,
+    MapResult,
     SectionMap,
     _to_return,
 )
 from hybridpd.analysis.labels import OFF_SECTION
 
 __all__ = [
+    "ORBIT_REFUSALS",
     "PeriodicOrbit",
     "SectionMapper",
     "find_orbit",
@@ -60,7 +62,9 @@ class PeriodicOrbit:
         The wrapped residual ``|P^k(s) - s|_inf`` is below ``tol`` (relative to ``max(1, |s|)``).
     reason : str
         Why Newton stopped (``"converged"``, ``"max_iter"``, ``"map undefined: <status>"``,
-        ``"singular"``, ``"line search failed"``).
+        ``"singular"``, ``"line search failed"``), or why its solution is no orbit (one of
+        :data:`ORBIT_REFUSALS`: ``"degenerate_return"``, ``"grazing"``, ``"not_periodic"``,
+        ``"fast_return"``, ``"sampling_incommensurate"``).
     iterations : int
     residual : float
         Final ``|P^k(s) - s|_inf`` (phase wrapped).
@@ -80,6 +84,15 @@ class PeriodicOrbit:
         Full state at the section point.
     names : tuple of str
         Names of the section coordinates.
+    n_periods : int
+        ``m``: the return time in reference periods, ``t_period = m T`` (1 without a
+        reference phase; 0 where no orbit was accepted).
+    detail : str
+        Why a Newton solution was not accepted as an orbit (or a refusal's hint); empty for
+        an orbit.
+    return_error : float
+        Relative distance between the section point and where an independent simulation of
+        one period returns (NaN where not checked).
     """
 
     s: np.ndarray
@@ -98,6 +111,9 @@ class PeriodicOrbit:
     grazing: bool
     z: np.ndarray = field(repr=False)
     names: tuple = ()
+    n_periods: int = 0
+    detail: str = ""
+    return_error: float = math.nan
     __repr__ = compact_repr
 
     def to_dict(self) -> dict:
@@ -112,6 +128,8 @@ class PeriodicOrbit:
             "multipliers": [[float(z.real), float(z.imag)] for z in self.multipliers],
             "spectral_radius": f(self.spectral_radius), "stable": bool(self.stable),
             "hyperbolic": bool(self.hyperbolic), "grazing": bool(self.grazing),
+            "n_periods": int(self.n_periods), "detail": self.detail,
+            "return_error": f(self.return_error),
         }
 
 
@@ -119,22 +137,82 @@ def _scale(s):
     return max(1.0, float(np.max(np.abs(s))))
 
 
+#: Reasons for which :func:`find_orbit` reports no orbit although Newton's residual vanished.
+ORBIT_REFUSALS = ("degenerate_return", "grazing", "not_periodic", "fast_return",
+                  "sampling_incommensurate")
+_FAST_RETURN_HINT = ("the section's guard fires again within one burst of impacts (rebounds); "
+                     "section on the ends of the sticking phases instead (event='release', "
+                     "command line --event release) or raise the period")
+
+
 def _resid(P: SectionMap, s, k, jac):
-    r = P.apply(s, k, jacobian=jac == "exact")
-    if not r.ok:
-        return None, None, r
-    F = P.section.wrap(r.s - s)
-    J = None
-    if jac == "exact":
-        J = r.DP - np.eye(P.dim)
-    elif jac == "fd":
-        J = P.jacobian_fd(s, k) - np.eye(P.dim)
+    """``(F, J, MapResult)`` of ``P^k(s) - s``; ``(None, None, r_or_status)`` where undefined.
+
+    Never raises for a finite ``s``: a run the map cannot complete, or a Jacobian that is not
+    finite, is a result (the caller reports why Newton stopped).
+    """
+    if not np.all(np.isfinite(s)):
+        return None, None, "nonfinite_point"
+    try:
+        r = P.apply(s, k, jacobian=jac == "exact")
+        if not r.ok:
+            return None, None, r
+        F = P.section.wrap(r.s - s)
+        J = None
+        if jac == "exact":
+            J = r.DP - np.eye(P.dim)
+        if jac == "fd" or (J is not None and not np.all(np.isfinite(J))):
+            # no saltation matrix somewhere on the way (a tangential jump): the simulated
+            # map's differences still give Newton a direction
+            J = P.jacobian_fd(s, k) - np.eye(P.dim)
+    except (ValueError, RuntimeError, FloatingPointError, np.linalg.LinAlgError) as exc:
+        return None, None, f"{type(exc).__name__}: {exc}"
+    if not np.all(np.isfinite(F)) or (J is not None and not np.all(np.isfinite(J))):
+        return None, None, "nonfinite_jacobian" if np.all(np.isfinite(F)) else "nonfinite"
     return F, J, r
 
 
+def _residual_norm(P, s, F):
+    """``|F|`` relative to the solver's scales: the phase against ``max(1, T)``, the other
+    coordinates against ``max(1, |s|_inf)`` of those coordinates."""
+    if P.section.has_phase:
+        rest = _scale(s[1:]) if s.size > 1 else 1.0
+        tail = float(np.max(np.abs(F[1:]))) / rest if F.size > 1 else 0.0
+        return max(abs(float(F[0])) / max(1.0, P.section.period), tail)
+    return float(np.max(np.abs(F))) / _scale(s)
+
+
+def _commensurate(T, dt, m_max=64):
+    """Smallest ``m <= m_max`` with ``m T / dt`` a whole number (relative 1e-9), or 0."""
+    for m in range(1, int(m_max) + 1):
+        q = m * T / dt
+        if abs(q - round(q)) <= 1e-9 * max(1.0, q):
+            return m
+    return 0
+
+
 def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_iter: int = 50,
-               jacobian: str = "exact") -> PeriodicOrbit:
-    """Solve ``P^k(s) = s`` by damped Newton from the guess ``s0``.
+               jacobian: str = "exact", periods: int | None = None,
+               min_return: float | None = None, sampling_period: float | None = None,
+               verify: bool = True) -> PeriodicOrbit:
+    """Solve ``P^k(s) = s`` by damped Newton from the guess ``s0``, and check the answer.
+
+    A vanishing residual is a periodic orbit only if (in this order; otherwise the result
+    has ``converged = False`` and the reason):
+
+    * ``degenerate_return``: the return time is not zero: a grazing "crossing" can return to
+      its own start at once, which every point satisfies;
+    * ``grazing``: no return on the way is tangential (no saltation matrix, no multipliers);
+    * ``fast_return``: the return takes at least ``min_return`` (rebounds of one burst);
+    * ``not_periodic``: with a reference phase, the return time is a whole number ``m >= 1``
+      of reference periods ``T`` (``periods`` if given) within ``1e-7 m T``, and simulating
+      the automaton from the section point for that time returns to it (``verify``).
+
+    Before Newton runs, a guess whose ``P^k`` returns faster than ``min_return`` is refused
+    (``fast_return``, with the hint to section on releases) and a sampled-data loop whose
+    sampling period ``dt`` has no common multiple with ``T`` (``m T = j dt``, ``m <= 64``) is
+    refused (``sampling_incommensurate``): its section coordinates include the sampling
+    clock, which then never returns together with the phase.
 
     Parameters
     ----------
@@ -142,18 +220,36 @@ def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_it
     s0 : array_like, shape (dim,)
         Guess (a section point where the flow fires the guard).
     period : int
-        ``k >= 1``.
+        ``k >= 1``: the number of returns to the section per period of the orbit.
     tol : float
-        Bound on the wrapped residual, relative to ``max(1, |s|_inf)``.
+        Bound on the wrapped residual, relative to ``max(1, T)`` for the phase and to
+        ``max(1, |s|_inf)`` for the other coordinates.
     max_iter : int
         Bound on Newton iterations.
     jacobian : {"exact", "fd"}
-        ``DP`` from the saltation chain, or central finite differences of the simulated map.
+        ``DP`` from the saltation chain, or central finite differences of the simulated map
+        (for Newton and for the multipliers; much cheaper for orbits with many jumps).
+    periods : int, optional
+        Required number of reference periods of the orbit (default: any ``m >= 1``).
+    min_return : float, optional
+        Shortest acceptable time of ``P^k`` (time units; default ``T / 20`` with a reference
+        phase, else 0).
+    sampling_period : float, optional
+        ``dt`` of a sampled-data controller (checked against ``T``).
+    verify : bool
+        Simulate one period from the orbit's section point with the automaton's own
+        simulator (an independent driver of the same flows) and require the return.
 
     Returns
     -------
     PeriodicOrbit
-        Always returned; ``converged`` and ``reason`` say whether and why.
+        Always returned for valid arguments (non-convergence and refusals included);
+        ``converged`` and ``reason`` (and ``detail``) say whether and why.
+
+    Raises
+    ------
+    ValueError
+        Bad arguments (not a ``SectionMap``, a non-finite or wrongly sized ``s0``, ...).
 
     Examples
     --------
@@ -165,6 +261,8 @@ def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_it
     >>> po = find_orbit(P, orb.fixed_point + [0.01, 0.01, -0.02, 0.05])
     >>> po.converged, bool(np.allclose(po.s, orb.fixed_point, atol=1e-9)), po.stable
     (True, True, True)
+    >>> po.n_periods
+    1
     """
     if not isinstance(P, SectionMap):
         raise ValueError(f"P must be a SectionMap, got {type(P).__name__}")
@@ -174,58 +272,196 @@ def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_it
         raise ValueError(f"period must be an int >= 1, got {period!r}")
     if not (tol > 0):
         raise ValueError(f"tol must be > 0, got {tol!r}")
+    if periods is not None and (isinstance(periods, bool) or int(periods) != periods
+                                or periods < 1):
+        raise ValueError(f"periods must be None or an int >= 1, got {periods!r}")
+    sec = P.section
+    T = sec.period if sec.has_phase else None
+    if min_return is None:
+        min_return = T / 20.0 if T else 0.0
+    elif not (float(min_return) >= 0 and math.isfinite(float(min_return))):
+        raise ValueError(f"min_return must be finite and >= 0, got {min_return!r}")
     k = int(period)
-    s = P.section.check_point(s0).copy()
+    s = sec.check_point(s0).copy()
+    if sampling_period is not None and T:
+        if not (float(sampling_period) > 0 and math.isfinite(float(sampling_period))):
+            raise ValueError(f"sampling_period must be finite and > 0, got {sampling_period!r}")
+        if not _commensurate(T, float(sampling_period)):
+            return _no_orbit(P, s, k, "sampling_incommensurate", 0, None,
+                             f"the sampling period {float(sampling_period):g} and the reference "
+                             f"period {T:g} have no common multiple m T (m <= 64): the "
+                             "sampling clock never returns with the phase")
+    F, J, r = _resid(P, s, k, jacobian)
+    if F is not None and r.t_hit - r.t_start < min_return:
+        return _no_orbit(P, s, k, "fast_return", 0, F,
+                         f"P^{k} returns {r.t_hit - r.t_start:.3g} after the start "
+                         f"(< min_return = {min_return:.3g}): {_FAST_RETURN_HINT}")
+    (reason, s, F, r), it = _newton(P, s, k, jacobian, tol, int(max_iter), F, J, r,
+                                    min_return)
+    return _make_orbit(P, s, k, reason, it, F, r, periods=periods, min_return=min_return,
+                       verify=verify, jacobian=jacobian)
+
+
+def _newton(P, s, k, jacobian, tol, max_iter, F, J, r, min_return=0.0):
+    """Damped Newton with Broyden updates; ``((reason, s, F, r), iterations)``. Never raises.
+
+    The Jacobian (exact or finite differences, ``jacobian``) is evaluated at the start and
+    again only where a step along the Broyden-updated one fails: for orbits with many jumps
+    one evaluation costs tens of map applications, and near a solution the rank-one updates
+    keep the convergence superlinear. A trial point whose return comes sooner than
+    ``min_return`` is rejected like one where the map is undefined: the points that return to
+    themselves at once (a tangential reopening) are zeros of ``P(s) - s`` that attract Newton
+    but are no orbits.
+    """
     reason = "max_iter"
     it = 0
-    F, J, r = _resid(P, s, k, jacobian)
-    for it in range(1, int(max_iter) + 1):
+    fresh = True
+    for it in range(1, max_iter + 1):
         if F is None:
-            reason = f"map undefined: {r.status}"
+            reason = f"map undefined: {r.status if isinstance(r, MapResult) else r}"
             break
-        nF = np.max(np.abs(F))
-        if nF <= tol * _scale(s):
+        nF = _residual_norm(P, s, F)
+        if nF <= tol:
             reason = "converged"
             break
-        try:
-            ds = -np.linalg.solve(J, F)
-        except np.linalg.LinAlgError:
-            reason = "singular"
+        step = _damped_step(P, s, k, J, F, nF, min_return)
+        if step is None and not fresh:
+            F, J, r = _resid(P, s, k, jacobian)
+            fresh = True
+            if F is None:
+                continue
+            step = _damped_step(P, s, k, J, F, nF, min_return)
+        if step is None:
+            reason = "singular" if _solve(J, F) is None else "line search failed"
             break
-        lam = 1.0
-        for _ in range(30):
-            s_new = s + lam * ds
-            F_new, J_new, r_new = _resid(P, s_new, k, jacobian)
-            if F_new is not None and np.max(np.abs(F_new)) < (1 - 1e-4 * lam) * nF:
-                break
-            lam *= 0.5
-        else:
-            reason = "line search failed"
-            break
-        s, F, J, r = s_new, F_new, J_new, r_new
+        s_new, F_new, r_new = step
+        d = P.section.wrap(s_new - s)
+        dd = float(d @ d)
+        if dd > 0:
+            J = J + np.outer((F_new - F) - J @ d, d) / dd
+        fresh = False
+        s, F, r = s_new, F_new, r_new
         if P.section.has_phase:
             s[0] %= P.section.period
-    return _make_orbit(P, s, k, reason, it, F, r)
+    return (reason, s, F, r), it
 
 
-def _make_orbit(P, s, k, reason, it, F, r) -> PeriodicOrbit:
-    ok = reason == "converged"
-    res = float(np.max(np.abs(F))) if F is not None else math.nan
+def _solve(J, F):
+    try:
+        ds = -np.linalg.solve(J, F)
+    except np.linalg.LinAlgError:
+        return None
+    return ds if np.all(np.isfinite(ds)) else None
+
+
+def _damped_step(P, s, k, J, F, nF, min_return=0.0):
+    """``(s_new, F_new, r_new)`` of a backtracking step along Newton's direction, or None."""
+    ds = _solve(J, F)
+    if ds is None:
+        return None
+    lam = 1.0
+    for _ in range(30):
+        s_new = s + lam * ds
+        F_new, _, r_new = _resid(P, s_new, k, "none")
+        if F_new is not None and r_new.t_hit - r_new.t_start >= min_return and \
+                _residual_norm(P, s_new, F_new) < (1 - 1e-4 * lam) * nF:
+            return s_new, F_new, r_new
+        lam *= 0.5
+    return None
+
+
+def _no_orbit(P, s, k, reason, it, F, detail="") -> PeriodicOrbit:
     dim = P.dim
-    if r is not None and r.ok:
-        rr = P.apply(s, k, jacobian=True)
-        DP = rr.DP
-        if np.all(np.isfinite(DP)):
-            st = stability(DP)
-            mult, rho, stab, hyp = st.multipliers, st.spectral_radius, st.stable, st.hyperbolic
-        else:
-            mult, rho, stab, hyp = np.full(dim, np.nan + 0j), math.nan, False, False
-        return PeriodicOrbit(s, k, ok, reason, it, res, rr.t_hit - rr.t_start, rr.signature,
-                             DP, mult, rho, bool(stab and ok), bool(hyp), rr.grazing,
-                             P.section.to_state(s)[0], P.section.names)
+    res = float(np.max(np.abs(F))) if F is not None else math.nan
     return PeriodicOrbit(s, k, False, reason, it, res, math.nan, (), np.full((dim, dim), np.nan),
                          np.full(dim, np.nan + 0j), math.nan, False, False, False,
-                         P.section.to_state(s)[0], P.section.names)
+                         P.section.to_state(s)[0], P.section.names, detail=detail)
+
+
+def _make_orbit(P, s, k, reason, it, F, r, *, periods=None, min_return=0.0,
+                verify=True, jacobian="exact") -> PeriodicOrbit:
+    ok = reason == "converged"
+    if not isinstance(r, MapResult) or not r.ok:
+        return _no_orbit(P, s, k, reason, it, F)
+    res = float(np.max(np.abs(F))) if F is not None else math.nan
+    dim = P.dim
+    exact = jacobian == "exact"
+    try:
+        rr = P.apply(s, k, jacobian=exact)
+        DP = rr.DP if exact or not rr.ok else P.jacobian_fd(s, k)
+    except (ValueError, RuntimeError, FloatingPointError, np.linalg.LinAlgError) as exc:
+        return _no_orbit(P, s, k, "map undefined", it, F, f"{type(exc).__name__}: {exc}")
+    if not rr.ok:
+        return _no_orbit(P, s, k, f"map undefined: {rr.status}", it, F)
+    if np.all(np.isfinite(DP)):
+        st = stability(DP)
+        mult, rho, stab, hyp = st.multipliers, st.spectral_radius, st.stable, st.hyperbolic
+    else:
+        mult, rho, stab, hyp = np.full(dim, np.nan + 0j), math.nan, False, False
+    t_per = rr.t_hit - rr.t_start
+    m, detail, err = 0, "", math.nan
+    if ok:
+        reason, m, detail, err = _validate(P, s, k, rr, t_per, periods, min_return, verify)
+        ok = reason == "converged"
+    return PeriodicOrbit(s, k, ok, reason, it, res, t_per, rr.signature, DP, mult, rho,
+                         bool(stab and ok), bool(hyp), rr.grazing, P.section.to_state(s)[0],
+                         P.section.names, n_periods=m, detail=detail, return_error=err)
+
+
+def _validate(P, s, k, rr, t_per, periods, min_return, verify):
+    """``(reason, m, detail, return_error)`` for a Newton solution (module rules)."""
+    sec = P.section
+    T = sec.period if sec.has_phase else None
+    scale_t = T if T else max(1.0, abs(rr.t_start))
+    if not t_per > 1e-9 * scale_t:
+        return "degenerate_return", 0, (f"P^{k} returns {t_per:.3g} after the start: the "
+                                        "point returns to itself at once, not after a period"), \
+            math.nan
+    if rr.grazing:
+        return "grazing", 0, "a contact on the orbit is tangential (no saltation matrix)", \
+            math.nan
+    if t_per < min_return:
+        return "fast_return", 0, (f"the orbit's return takes {t_per:.3g} (< min_return = "
+                                  f"{min_return:.3g}): {_FAST_RETURN_HINT}"), math.nan
+    m = 1
+    if T:
+        m = round(t_per / T)
+        if m < 1 or abs(t_per - m * T) > 1e-7 * max(m, 1) * T:
+            return "not_periodic", 0, (f"return time {t_per:.12g} is not a whole number of "
+                                       f"reference periods T = {T:.12g}"), math.nan
+        if periods is not None and m != int(periods):
+            return "not_periodic", m, (f"return time {t_per:.12g} = {m} T, not the requested "
+                                       f"{int(periods)} T"), math.nan
+    if not verify:
+        return "converged", m, "", math.nan
+    err = _return_error(P, s, k, t_per)
+    if not err <= 1e-6:
+        return "not_periodic", m, (f"simulating {t_per:.6g} from the section point does not "
+                                   f"return to it (relative error {err:.3g})"), err
+    return "converged", m, "", err
+
+
+def _return_error(P, s, k, t_per) -> float:
+    """Relative distance between the section state and the state where an independent run
+    of the automaton's simulator fires the section's guard for the ``(k+1)``-th time."""
+    sec = P.section
+    ha = sec.automaton
+    z0, t0 = sec.to_state(s)
+    try:
+        tr = ha.simulate(z0, sec.mode, (t0, t0 + t_per * (1 + 1e-9) + 1e-12),
+                         max_jumps=P.max_jumps, max_steps=P.max_steps)
+    except (ValueError, RuntimeError, FloatingPointError) as exc:
+        del exc
+        return math.inf
+    J = tr.jumps
+    hits = [i for i in range(len(J)) if J.source[i] == sec.mode and J.guard[i] == sec.guard
+            and J.kind[i] != "zeno"]
+    if len(hits) < k + 1:
+        return math.inf
+    i = hits[k]
+    dz = J.pre[i] - z0
+    scale = max(1.0, float(np.max(np.abs(z0))))
+    return float(max(np.max(np.abs(dz)) / scale, abs(J.t[i] - t0 - t_per) / max(1.0, t_per)))
 
 
 def measured_contraction(P: SectionMap, s, period: int = 1, *, n_iter: int = 40,
@@ -480,7 +716,8 @@ class SectionMapper(BasinMapper):
 # ----------------------------------------------------------------------------------------
 def orbit_from_model(model, contact: int = 0, wall: int | None = None, period: int = 1, *,
                      guess=None, transient: float | None = None, tol: float = 1e-11,
-                     event: str = "impact", map_options: dict | None = None) -> tuple:
+                     event: str = "impact", map_options: dict | None = None,
+                     periods: int | None = None, min_return: float | None = None) -> tuple:
     """A periodic orbit of a mechanical model on the section of one of its contacts.
 
     Parameters
@@ -506,10 +743,14 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period: i
         however many impacts precede the sticking).
     map_options : dict, optional
         Keyword arguments of :class:`~hybridpd.analysis.hybridmap.SectionMap`.
+    periods, min_return : optional
+        As in :func:`find_orbit`. A sampled-data controller's ``dt`` is checked against the
+        reference period (``sampling_incommensurate``).
 
     Returns
     -------
     (PeriodicOrbit, SectionMap)
+        The orbit (``converged = False`` with the reason where there is none) and the map.
     """
     from hybridpd.analysis.sections import mechanical_section
 
@@ -531,7 +772,9 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period: i
     s0 = np.asarray(guess, float)
     if s0.shape != (sec.dim,):
         raise ValueError(f"guess must have {sec.dim} numbers {sec.names}, got {s0.size}")
-    return find_orbit(P, s0, period, tol=tol), P
+    dt = float(getattr(ma.loop, "dt", 0.0) or 0.0)
+    return find_orbit(P, s0, period, tol=tol, periods=periods, min_return=min_return,
+                      sampling_period=dt if dt > 0 else None), P
 
 
 def _guess_from_simulation(model, sec, transient):

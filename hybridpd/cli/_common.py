@@ -100,6 +100,23 @@ def add_plant(p, *, xm=True, gamma=False, required=True, L_required=True):
         p.add_argument("--xm", type=float, required=True, help="reference amplitude (>= 0)")
 
 
+def add_model_section(p, *, period_help="returns to the section per orbit (k of P^k)"):
+    """``--model`` and the options choosing a model file's section and orbits."""
+    p.add_argument("--model", default=None, metavar="FILE.toml",
+                   help="mechanical model file (then the impact-pair options are not used)")
+    p.add_argument("--contact", type=int, default=0,
+                   help="--model: 0-based contact whose impacts (or releases) define the "
+                        "section")
+    p.add_argument("--wall", type=int, choices=[-1, 1], default=None,
+                   help="--model: +1 (hi) or -1 (lo) bound of the contact (default hi)")
+    p.add_argument("--event", default="impact", choices=["impact", "release"],
+                   help="--model: section on the contact's impacts, or on the ends of its "
+                        "sticking phases (once per burst of impacts)")
+    p.add_argument("--period", type=int, default=1, help=f"--model: {period_help}")
+    p.add_argument("--periods", type=int, default=None,
+                   help="--model: reference periods per orbit (default: any whole number)")
+
+
 def clearance(args):
     from hybridpd.model import check_positive
 
@@ -120,12 +137,12 @@ def command(sub, name: str, *, help: str, description: str, example: str):
 JSON_HELP = "print one JSON object on stdout instead of the summary"
 
 
-def add_sweep(p, out=(".nc", ".zarr", ".npz"), what="the result"):
-    p.add_argument("--executor", default="serial", choices=["serial", "processes", "dask"],
-                   help="where the grid points run: in this process, a process pool, or a "
-                        "Dask cluster (dask.distributed)")
-    p.add_argument("--workers", type=int, default=None,
-                   help="worker count (default: all cores)")
+def add_sweep(p, out=(".nc", ".zarr", ".npz"), what="the result", store=True):
+    add_executor(p, default="serial")
+    if store:
+        p.add_argument("--store", default=None, metavar="DIR.zarr",
+                       help="write the sweep to this Zarr store as chunks finish; a rerun "
+                            "with the same arguments resumes from it")
     p.add_argument("--out", default=None, metavar="FILE",
                    help=f"write the result to this file ({', '.join(out)}, by suffix; "
                         "draw it later with 'hybridpd plot FILE')")
@@ -133,6 +150,41 @@ def add_sweep(p, out=(".nc", ".zarr", ".npz"), what="the result"):
                    help=f"draw {what} to this .png, .pdf or .svg")
     p.add_argument("--json", action="store_true", help=JSON_HELP)
     add_quiet(p)
+
+
+def add_executor(p, default="serial"):
+    """``--executor``, ``--workers`` and ``--scheduler`` (see :func:`executor_of`)."""
+    p.add_argument("--executor", default=None, choices=["serial", "processes", "dask"],
+                   help="where the grid points run: in this process, a process pool, or a "
+                        f"Dask cluster (dask.distributed) (default: {default}, or the "
+                        "cluster of --scheduler / $DASK_SCHEDULER_ADDRESS)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="worker count (default: all cores)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on the existing dask.distributed cluster of this scheduler "
+                        "(tcp://host:8786; default $DASK_SCHEDULER_ADDRESS if set)")
+    p.set_defaults(_executor_default=default)
+
+
+def executor_of(args):
+    """The executor of a sweeping command: ``--scheduler``, else ``$DASK_SCHEDULER_ADDRESS``
+    (unless ``--executor`` chose another), else ``--executor`` or the command's default.
+
+    A scheduler address is what :func:`hybridpd.sweeps.sweep.run_sweep` takes as executor.
+    """
+    from hybridpd.sweeps.executors import check_scheduler_address, scheduler_from_env
+
+    chosen = getattr(args, "executor", None)
+    if args.scheduler is not None:
+        if chosen not in (None, "dask"):
+            raise UsageError(f"--scheduler runs on a Dask cluster: it cannot be combined with "
+                             f"--executor {chosen}")
+        return check_scheduler_address(args.scheduler)
+    if chosen in (None, "dask"):
+        env = scheduler_from_env()
+        if env is not None:
+            return env
+    return chosen or getattr(args, "_executor_default", "serial")
 
 
 def add_quiet(p):

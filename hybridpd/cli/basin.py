@@ -4,15 +4,21 @@ from __future__ import annotations
 import json
 
 from hybridpd.cli._common import (
+    UsageError,
+    add_model_section,
     add_plant,
     add_sweep,
     check_image,
     check_out,
     clearance,
     command,
+    executor_of,
     progress_wanted,
     save_figure,
 )
+
+# the pair options: required without --model, not used with it
+_PAIR = ("case", "mu", "omega", "e", "kp", "kv")
 
 DESCRIPTION = ("Iterates the impact map from every point of a section slice in the "
                "(x1, y1) plane (the other section coordinates at their fixed-point "
@@ -25,22 +31,31 @@ def register(sub):
                 example=("hybridpd basin --case collocated --mu 0.1 --e 0.5 --gamma "
                          "0.75 --omega 5 --kp 10 --kv 20 --x1 -3 5 100 --y1 -2 10 100"
                          " --executor processes --out basin.npz --plot basin.png"))
-    add_plant(p, xm=False, gamma=True)
-    p.add_argument("--e", type=float, required=True,
+    add_plant(p, xm=False, gamma=True, required=False)
+    p.add_argument("--e", type=float, default=None,
                    help="restitution coefficient in [0, 1]")
     p.add_argument("--n", type=int, default=1,
                    help="odd order of the symmetric orbit (period n T)")
-    p.add_argument("--kp", type=float, required=True,
+    p.add_argument("--kp", type=float, default=None,
                    help="proportional gain kp (> 0)")
-    p.add_argument("--kv", type=float, required=True,
+    p.add_argument("--kv", type=float, default=None,
                    help="derivative gain kv (> 0)")
+    add_model_section(p, period_help="returns to the section per orbit (k of P^k)")
+    p.add_argument("--x", nargs=4, default=None, metavar=("COORD", "MIN", "MAX", "NUM"),
+                   help="--model: grid over this section coordinate (e.g. motor, motor_dot)")
+    p.add_argument("--y", nargs=4, default=None, metavar=("COORD", "MIN", "MAX", "NUM"),
+                   help="--model: second grid axis (as --x)")
+    p.add_argument("--set", nargs=2, action="append", default=None, metavar=("KEY", "VALUE"),
+                   help="--model: set a numeric entry of the file (dotted path) first; "
+                        "repeatable")
     p.add_argument("--x1", type=float, nargs=3, default=None, metavar=("MIN", "MAX", "NUM"),
                    help="slice window in x1 (default: the reproduction's, -3 x10 .. 5 x10, "
                         "41 points)")
     p.add_argument("--y1", type=float, nargs=3, default=None, metavar=("MIN", "MAX", "NUM"),
                    help="slice window in y1 (default -2 x10 .. 10 x10, 41 points)")
-    p.add_argument("--iterations", type=int, default=1500,
-                   help="iterations of the impact map (two impacts each)")
+    p.add_argument("--iterations", type=int, default=None,
+                   help="iterations of the impact map (default 1500, two impacts each; "
+                        "--model: 300 of P^k)")
     p.add_argument("--no-early-exit", action="store_true",
                    help="run every trajectory for all iterations")
     p.add_argument("--max-period", type=int, default=8,
@@ -48,7 +63,8 @@ def register(sub):
     p.add_argument("--max-extensions", type=int, default=3,
                    help="window extensions while the symmetric orbit's basin touches the edge "
                         "(0: keep the window)")
-    add_sweep(p, out=(".npz",), what="the basin (coloured by attractor)")
+    add_sweep(p, out=(".npz", ".nc", ".zarr"), what="the basin (coloured by attractor)",
+              store=False)
     p.set_defaults(func=run)
 
 
@@ -58,6 +74,18 @@ def run(args) -> int:
     from hybridpd.sweeps.attractor_basins import attractor_basin
     from hybridpd.sweeps.basins import LABELS, ImpactMapper
 
+    if args.model is not None:
+        return _run_model(args)
+    if args.x is not None or args.y is not None or args.set:
+        raise UsageError("--x, --y and --set need --model FILE.toml")
+    missing = [f"--{k}" for k in _PAIR if getattr(args, k) is None]
+    if args.L is None and args.gamma is None:
+        missing.append("--L or --gamma")
+    if missing:
+        raise UsageError(f"the following arguments are required: {', '.join(missing)} "
+                         "(or give --model FILE.toml)")
+    if args.iterations is None:
+        args.iterations = 1500
     check_out(args.out)
     check_image(args.plot)
     L, x10 = clearance(args)
@@ -86,7 +114,7 @@ def run(args) -> int:
                                      early_exit=not args.no_early_exit)
     ab = attractor_basin(mapper, args.x1, args.y1, max_period=args.max_period,
                          extend=args.max_extensions > 0, max_extensions=args.max_extensions,
-                         executor=args.executor, max_workers=args.workers,
+                         executor=executor_of(args), max_workers=args.workers,
                          progress=progress_wanted(args))
     b = ab.basin
     if args.out:
@@ -117,4 +145,45 @@ def run(args) -> int:
             pts = "; ".join(f"({p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g}, {p[3]:.6g})" for p in a.points)
             print(f"  {a.name}: section points (phi, z1, z2, z4) {pts}; multipliers "
                   + ", ".join(f"{abs(z):.4g}" for z in a.multipliers) + " (moduli)")
+    return 0
+
+
+def _run_model(args) -> int:
+    from hybridpd.sweeps.model_basins import model_basin
+
+    given = [f"--{k}" for k in _PAIR if getattr(args, k) is not None]
+    if given:
+        raise UsageError(f"{', '.join(given)}: impact-pair options, not used with --model "
+                         "(set the file's entries with --set KEY VALUE)")
+    if args.x is None or args.y is None:
+        raise UsageError("--model needs --x COORD MIN MAX NUM and --y COORD MIN MAX NUM")
+    check_out(args.out, allowed=(".nc", ".zarr"))
+    check_image(args.plot)
+    values = {}
+    for key, val in args.set or ():
+        try:
+            values[key] = float(val)
+        except ValueError:
+            raise ValueError(f"--set {key}: VALUE must be a number, got {val!r}") from None
+    if values:
+        from hybridpd.sweeps.model_regions import template_of
+
+        template_of(args.model).check(*values)
+    mb = model_basin(args.model, tuple(args.x), tuple(args.y), values=values,
+                     contact=args.contact, wall=args.wall, event=args.event,
+                     period=args.period, periods=args.periods,
+                     n_iter=300 if args.iterations is None else args.iterations,
+                     max_period=args.max_period, executor=executor_of(args),
+                     max_workers=args.workers, progress=progress_wanted(args))
+    if args.out:
+        mb.save(args.out)
+    if args.plot:
+        from hybridpd.plotting.model_basins import plot_model_basin
+
+        save_figure(plot_model_basin(mb), args.plot)
+    if args.json:
+        print(json.dumps(mb.to_dict()))
+        return 0
+    for line in mb.summary():
+        print(line)
     return 0

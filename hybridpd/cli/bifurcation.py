@@ -5,7 +5,15 @@ import argparse
 import json
 import math
 
-from hybridpd.cli._common import check_image, save_figure
+from hybridpd.cli._common import (
+    UsageError,
+    add_executor,
+    add_model_section,
+    check_image,
+    check_out,
+    executor_of,
+    save_figure,
+)
 
 #: Parameters the command can sweep (``--param NAME``).
 SWEEPABLE = ("kp", "kv", "e", "mu", "gamma", "omega", "m2")
@@ -39,8 +47,8 @@ def register(sub):
     p = sub.add_parser("bifurcation", help="brute-force bifurcation diagram of the impact map",
                        description=_DESCRIPTION, epilog=_EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--case", required=True, choices=["collocated", "noncollocated"],
-                   help="feedback case")
+    p.add_argument("--case", default=None, choices=["collocated", "noncollocated"],
+                   help="feedback case (required without --model)")
     p.add_argument("--mu", type=float, help="mass ratio m1/m2 (> 0)")
     p.add_argument("--e", type=float, help="restitution coefficient in [0, 1]")
     p.add_argument("--gamma", type=float, help="clearance ratio L / x10 (> 0)")
@@ -73,6 +81,8 @@ def register(sub):
                    help="section coordinate on the plot's y axis (default z1)")
     p.add_argument("--json", action="store_true",
                    help="print a JSON summary (classes, periods, exponents, cycles) on stdout")
+    add_model_section(p, period_help="the diagram iterates P^k")
+    add_executor(p, default="serial")
     p.set_defaults(func=run)
 
 
@@ -100,6 +110,11 @@ def _sweep(args):
 
 
 def run(args) -> int:
+    if args.model is not None:
+        return _run_model(args)
+    if args.case is None:
+        raise UsageError("the following arguments are required: --case (or give --model "
+                         "FILE.toml)")
     import numpy as np
 
     from hybridpd.analysis.bifdiagram import bifurcation_diagram
@@ -121,10 +136,20 @@ def run(args) -> int:
     if not (v0["gamma"] > 0 and args.x10 > 0):
         raise ValueError(f"gamma and x10 must be > 0, got {v0['gamma']!r}, {args.x10!r}")
     pair = ImpactPair(v0["mu"], v0["e"], v0["gamma"] * args.x10, v0["m2"])
-    d = bifurcation_diagram(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name, values,
-                            case=args.case, x10=args.x10, n=args.n,
-                            iterations=args.iterations, keep=args.keep, follow=args.follow,
-                            initial=args.initial, max_period=args.max_period)
+    opts = dict(case=args.case, x10=args.x10, n=args.n, iterations=args.iterations,
+                keep=args.keep, initial=args.initial, max_period=args.max_period)
+    executor = executor_of(args)
+    if executor == "serial":
+        d = bifurcation_diagram(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name, values,
+                                follow=args.follow, **opts)
+    elif args.follow:
+        raise UsageError("--follow runs the values one after another: it cannot be spread "
+                         "over --executor/--scheduler workers")
+    else:
+        from hybridpd.sweeps.diagram_sweep import pair_diagram
+
+        d = pair_diagram(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name, values,
+                         executor=executor, max_workers=args.workers, **opts)
     d.save(args.out)
     branch_note = None
     if args.plot:
@@ -173,3 +198,29 @@ def _symmetric_branch(pair, v0, name, stop, args):
         return (), f"no continued branch drawn: {exc}"
     return [br], (f"continued symmetric branch drawn ({len(br)} points, stopped: "
                   f"{br.termination})")
+
+
+def _run_model(args) -> int:
+    from hybridpd.sweeps.model_diagrams import model_diagram
+
+    given = [f"--{k}" for k in ("case", *_REQUIRED, "m2") if getattr(args, k) is not None]
+    if given:
+        raise UsageError(f"{', '.join(given)}: impact-pair options, not used with --model "
+                         "(sweep the file's entry with --param KEY MIN MAX NUM)")
+    check_out(args.out, allowed=(".nc", ".zarr"))
+    check_image(args.plot)
+    d = model_diagram(args.model, tuple(args.param), contact=args.contact, wall=args.wall,
+                      event=args.event, period=args.period, iterations=args.iterations,
+                      keep=args.keep, max_period=min(args.max_period, args.keep - 1),
+                      executor=executor_of(args), max_workers=args.workers, progress=False)
+    d.save(args.out)
+    if args.plot:
+        from hybridpd.plotting.model_diagrams import plot_model_diagram
+
+        save_figure(plot_model_diagram(d), args.plot)
+    if args.json:
+        print(json.dumps(dict(d.to_dict(), out=str(args.out), plot=args.plot)))
+        return 0
+    print(d.summary())
+    print(f"  wrote {args.out}" + (f" and {args.plot}" if args.plot else ""))
+    return 0

@@ -47,6 +47,9 @@ def register(sub):
                    "simulation from the file's initial state)")
     p.add_argument("--transient", type=float, default=None,
                    help="--model: time of that simulation (default 50 periods)")
+    p.add_argument("--set", nargs=2, action="append", default=None, metavar=("KEY", "VALUE"),
+                   help="--model: set a numeric entry of the file by its dotted path "
+                        "(controller.kp, contact.0.restitution, ...) first; repeatable")
     p.add_argument("--json", action="store_true", help=JSON_HELP)
     p.set_defaults(func=run)
 
@@ -88,7 +91,18 @@ def _run_model(args) -> int:
 
     if args.period < 1:
         raise UsageError(f"--period must be >= 1, got {args.period}")
-    model = load_model(args.model)
+    if args.set:
+        from hybridpd.mechanics.params import ModelTemplate
+
+        values = {}
+        for key, val in args.set:
+            try:
+                values[key] = float(val)
+            except ValueError:
+                raise ValueError(f"--set {key}: VALUE must be a number, got {val!r}") from None
+        model = ModelTemplate.load(args.model).model(values)
+    else:
+        model = load_model(args.model)
     orb, P = orbit_from_model(model, args.contact, args.wall, args.period, guess=args.guess,
                               transient=args.transient, event=args.event)
     sec = P.section
@@ -117,6 +131,8 @@ def _run_model(args) -> int:
     print("  section point: " + ", ".join(f"{k} = {v:.10g}" for k, v in zip(orb.names, orb.s)))
     print(f"  period {orb.t_period:.10g}; impact sequence: "
           + " ".join(f"{g}({k})" for g, k in orb.signature))
+    if orb.detail:
+        print(f"  no orbit: {orb.detail}")
     if orb.converged:
         mods = ", ".join(f"{abs(m):.6g}" for m in orb.multipliers)
         print(f"  multipliers |lambda| = {mods}")

@@ -4,19 +4,28 @@ from __future__ import annotations
 import json
 
 from hybridpd.cli._common import (
+    UsageError,
+    add_model_section,
     add_plant,
     add_sweep,
     check_image,
     check_out,
     clearance,
     command,
+    executor_of,
     progress_wanted,
     save_figure,
 )
 
 DESCRIPTION = ("Maps, on a grid of PD gains (kp, kv) and for each restitution "
                "coefficient e, where the symmetric orbit exists (with viability) and "
-               "where it is also stable: the paper's Figs 4-5.")
+               "where it is also stable: the paper's Figs 4-5. With --model FILE.toml it "
+               "maps, over two numeric entries of the file (dotted paths such as "
+               "controller.kp), where a periodic orbit of one contact's section exists and "
+               "is stable, following each family of orbits from cell to cell.")
+
+# the pair options: required without --model, not used with it
+_PAIR = ("case", "mu", "omega", "e", "kp", "kv")
 
 
 def register(sub):
@@ -24,21 +33,41 @@ def register(sub):
                 description=DESCRIPTION,
                 example=("hybridpd regions --case collocated --mu 0.1 --e 0.1 0.5 0.9"
                          " --gamma 0.75 --omega 5 --kp 0.1 50 200 --kv 0.1 50 200 "
-                         "--out regions.nc --plot regions.png"))
-    add_plant(p, xm=False, gamma=True)
-    p.add_argument("--e", type=float, nargs="+", required=True,
+                         "--out regions.nc --plot regions.png\n  hybridpd regions --model "
+                         "examples/models/drivetrain.toml --x controller.kp 5 60 40 --y "
+                         "controller.kv 1 20 40 --event release --out dt.nc --plot dt.png"))
+    add_plant(p, xm=False, gamma=True, required=False)
+    p.add_argument("--e", type=float, nargs="+", default=None,
                    help="one or more restitution coefficients in [0, 1]")
     p.add_argument("--n", type=int, default=1,
                    help="odd order of the symmetric orbit (period n T)")
-    p.add_argument("--kp", type=float, nargs=3, required=True, metavar=("MIN", "MAX", "NUM"),
+    p.add_argument("--kp", type=float, nargs=3, default=None, metavar=("MIN", "MAX", "NUM"),
                    help="grid axis: NUM points from MIN to MAX")
-    p.add_argument("--kv", type=float, nargs=3, required=True, metavar=("MIN", "MAX", "NUM"),
+    p.add_argument("--kv", type=float, nargs=3, default=None, metavar=("MIN", "MAX", "NUM"),
                    help="grid axis: NUM points from MIN to MAX")
+    add_model_section(p)
+    p.add_argument("--x", nargs=4, default=None, metavar=("KEY", "MIN", "MAX", "NUM"),
+                   help="--model: grid axis over the file's entry KEY (a dotted path such as "
+                        "controller.kp, contact.0.restitution, system.masses.2)")
+    p.add_argument("--y", nargs=4, default=None, metavar=("KEY", "MIN", "MAX", "NUM"),
+                   help="--model: second grid axis (as --x)")
+    p.add_argument("--tile", type=int, default=8,
+                   help="--model: side of the square tiles of cells (one task each)")
     add_sweep(p, what="the region map (one panel per e)")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    if args.model is not None:
+        return _run_model(args)
+    if args.x is not None or args.y is not None:
+        raise UsageError("--x and --y need --model FILE.toml (the pair's axes are --kp, --kv)")
+    missing = [f"--{k}" for k in _PAIR if getattr(args, k) is None]
+    if args.L is None and args.gamma is None:
+        missing.append("--L or --gamma")
+    if missing:
+        raise UsageError(f"the following arguments are required: {', '.join(missing)} "
+                         "(or give --model FILE.toml)")
     from hybridpd.sweeps.regions import region_map
 
     check_out(args.out)
@@ -50,8 +79,8 @@ def run(args) -> int:
             raise ValueError(f"--{nm} NUM must be an integer, got {num:g}")
     rm = region_map(args.case, x=("kp", *args.kp), y=("kv", *args.kv), e=args.e, mu=args.mu,
                     omega=args.omega, L=L, x10=x10, m2=args.m2, n=args.n,
-                    executor=args.executor, max_workers=args.workers,
-                    progress=progress_wanted(args))
+                    executor=executor_of(args), max_workers=args.workers,
+                    store=args.store, progress=progress_wanted(args))
     if args.out:
         rm.save(args.out)
     if args.plot:
@@ -65,4 +94,34 @@ def run(args) -> int:
     for k, e in enumerate(rm.e):
         print(f"  e = {e:g}: exists {100 * rm.fraction('exists')[k]:.2f}%, exists & stable "
               f"{100 * rm.fraction('stable')[k]:.2f}% (area {rm.area('stable')[k]:.4g})")
+    return 0
+
+
+def _run_model(args) -> int:
+    from hybridpd.sweeps.model_regions import model_region_map
+
+    given = [f"--{k}" for k in _PAIR if getattr(args, k) is not None]
+    if given:
+        raise UsageError(f"{', '.join(given)}: impact-pair options, not used with --model "
+                         "(sweep the file's entries with --x KEY and --y KEY)")
+    if args.x is None or args.y is None:
+        raise UsageError("--model needs --x KEY MIN MAX NUM and --y KEY MIN MAX NUM")
+    check_out(args.out, allowed=(".nc", ".zarr"))
+    check_image(args.plot)
+    rm = model_region_map(args.model, tuple(args.x), tuple(args.y), contact=args.contact,
+                          wall=args.wall, event=args.event, period=args.period,
+                          periods=args.periods, tile=args.tile, executor=executor_of(args),
+                          max_workers=args.workers, store=args.store,
+                          progress=progress_wanted(args))
+    if args.out:
+        rm.save(args.out)
+    if args.plot:
+        from hybridpd.plotting.regions import plot_region_panels
+        from hybridpd.sweeps.regions import RegionMap
+
+        save_figure(plot_region_panels(RegionMap.from_dataset(rm.to_dataset())), args.plot)
+    if args.json:
+        print(json.dumps(rm.to_dict()))
+        return 0
+    print(rm.summary())
     return 0

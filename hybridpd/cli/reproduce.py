@@ -4,7 +4,7 @@ from __future__ import annotations
 import json
 import sys
 
-from hybridpd.cli._common import add_quiet, command
+from hybridpd.cli._common import add_executor, add_quiet, command, executor_of
 
 DESCRIPTION = ("Reproduces the paper's figures (Fig. 3 phase plane, Figs 4-5 region "
                "maps, Figs 6-7 basins) under two conventions for the unstated secondary "
@@ -32,10 +32,7 @@ def register(sub):
                    help="basin slice window in units of x10 (default -3 5 -2 10)")
     p.add_argument("--m2-range", type=float, nargs=2, default=None, metavar=("LO", "HI"),
                    help="range of the convention study (default 0.1 1000)")
-    p.add_argument("--executor", default="processes", choices=["serial", "processes", "dask"],
-                   help="where the grid points run")
-    p.add_argument("--workers", type=int, default=None,
-                   help="worker count (default: all cores)")
+    add_executor(p, default="processes")
     p.add_argument("--json", action="store_true", help="print summary.json on stdout")
     add_quiet(p)
     p.set_defaults(func=run)
@@ -69,7 +66,7 @@ def run(args) -> int:
     if args.m2_range is not None:
         kw["m2_range"] = tuple(args.m2_range)
     settings = Settings.full(**kw) if args.full else Settings.quick(**kw)
-    path = reproduce(args.out, mode="full" if args.full else "quick", executor=args.executor,
+    path = reproduce(args.out, mode="full" if args.full else "quick", executor=executor_of(args),
                      max_workers=args.workers, progress=not args.quiet,
                      log=_log(args.quiet),
                      settings=settings)

@@ -23,7 +23,7 @@ __all__ = ["KINDS", "OPTIONS", "file_kind", "plot_file"]
 
 #: The kinds of result file :func:`plot_file` draws.
 KINDS = ("region_map", "basin", "attractor_basin", "bifurcation_diagram", "branch",
-         "trajectory")
+         "trajectory", "model_basin", "model_diagram")
 
 #: The drawing options and the kinds that take them.
 OPTIONS = {"title": KINDS, "coordinate": ("bifurcation_diagram",),
@@ -203,5 +203,20 @@ def _trajectory(path, title=None):
         raise _unreadable(path, f"trajectory without {exc}") from None
 
 
+def _model_basin(path, title=None):
+    from hybridpd.plotting.model_basins import plot_model_basin
+    from hybridpd.sweeps.model_basins import load_model_basin
+
+    return plot_model_basin(load_model_basin(path), title=title)
+
+
+def _model_diagram(path, title=None):
+    from hybridpd.plotting.model_diagrams import plot_model_diagram
+    from hybridpd.sweeps.model_diagrams import load_model_diagram
+
+    return plot_model_diagram(load_model_diagram(path), title=title)
+
+
 _DRAW = {"region_map": _region_map, "basin": _basin, "attractor_basin": _attractor_basin,
-         "bifurcation_diagram": _diagram, "branch": _branch, "trajectory": _trajectory}
+         "bifurcation_diagram": _diagram, "branch": _branch, "trajectory": _trajectory,
+         "model_basin": _model_basin, "model_diagram": _model_diagram}

@@ -2,8 +2,13 @@
 
 A sweep's chunks are independent tasks. ``"serial"`` runs them in the calling process;
 ``"processes"`` hands them to a :class:`concurrent.futures.ProcessPoolExecutor`; ``"dask"`` (or a
-``distributed.Client``) to Dask, imported only when asked for (``pip install 'hybridpd[dask]'``).
-The executor never changes the results: every chunk result is placed by its index.
+``distributed.Client``) to Dask, imported only when asked for (``pip install 'hybridpd[dask]'``);
+a scheduler address (``"tcp://host:8786"``) to an existing ``dask.distributed`` cluster, whose
+workers must import this package. The executor never changes the results: every chunk result
+is placed by its index.
+
+On a cluster each task carries its own chunk of points (nothing is scattered), so a worker
+lost mid-run costs only the chunks it was running: the scheduler runs them again elsewhere.
 
 Finished chunks are handed to a callback in the calling thread as they arrive (that is where
 they are checked and written), the first failure is re-raised as :class:`ChunkError` after the
@@ -30,10 +35,64 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["EXECUTORS", "ChunkError", "ExecutorSpec", "compute", "resolve_executor"]
+__all__ = ["EXECUTORS", "ChunkError", "ExecutorSpec", "check_scheduler_address", "compute",
+           "resolve_executor", "scheduler_from_env"]
 
 #: Executor names accepted by :func:`hybridpd.sweeps.sweep.run_sweep` (besides instances).
 EXECUTORS = ("serial", "processes", "dask")
+
+
+#: Schemes of a ``dask.distributed`` scheduler address.
+SCHEDULER_SCHEMES = ("tcp://", "tls://", "ws://", "wss://", "inproc://", "ucx://")
+#: Environment variable naming the scheduler of an existing cluster (Dask's own name).
+SCHEDULER_ENV = "DASK_SCHEDULER_ADDRESS"
+
+
+def check_scheduler_address(address: Any) -> str:
+    """A scheduler address as Dask takes it (``host:port`` gets ``tcp://``).
+
+    Parameters
+    ----------
+    address : str
+        ``"tcp://10.0.0.5:8786"``, ``"127.0.0.1:8786"``, ...
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    ValueError
+        Not a string of the form ``[scheme://]host:port`` with a scheme of
+        :data:`SCHEDULER_SCHEMES` and an integer port.
+
+    Examples
+    --------
+    >>> check_scheduler_address("127.0.0.1:8786")
+    'tcp://127.0.0.1:8786'
+    """
+    if not isinstance(address, str) or not address.strip():
+        raise ValueError(f"scheduler must be an address such as tcp://host:8786, got {address!r}")
+    a = address.strip()
+    if "://" not in a:
+        a = "tcp://" + a
+    scheme = a[: a.index("://") + 3]
+    rest = a[len(scheme):]
+    if scheme not in SCHEDULER_SCHEMES:
+        raise ValueError(f"scheduler address must start with one of {', '.join(SCHEDULER_SCHEMES)}"
+                         f", got {address!r}")
+    if scheme != "inproc://":
+        host, _, port = rest.rpartition(":")
+        if not host or not port.isdigit() or not 0 < int(port) < 65536:
+            raise ValueError(f"scheduler address must be [scheme://]host:port with a port in "
+                             f"[1, 65535], got {address!r}")
+    return a
+
+
+def scheduler_from_env(explicit: str | None = None) -> str | None:
+    """The scheduler to use: `explicit`, else ``$DASK_SCHEDULER_ADDRESS``, else None."""
+    value = explicit if explicit else os.environ.get(SCHEDULER_ENV, "").strip() or None
+    return None if value is None else check_scheduler_address(value)
 
 
 class ChunkError(RuntimeError):
@@ -91,11 +150,14 @@ class ExecutorSpec:
 
     Attributes
     ----------
-    kind : {"serial", "processes", "dask", "executor", "client"}
+    kind : {"serial", "processes", "dask", "executor", "client", "scheduler"}
         ``"executor"`` is a user-supplied :class:`concurrent.futures.Executor`,
-        ``"client"`` a user-supplied ``distributed.Client``.
+        ``"client"`` a user-supplied ``distributed.Client``, ``"scheduler"`` the
+        address of an existing cluster (the sweep connects a client and closes it,
+        never the cluster).
     instance : object or None
-        The user-supplied executor or client (never closed by the sweep).
+        The user-supplied executor or client (never closed by the sweep), or the
+        scheduler address.
     max_workers : int
         Workers of a pool the sweep creates (all usable cores by default);
         1 for ``"serial"``; informational for supplied instances.
@@ -110,6 +172,8 @@ class ExecutorSpec:
         """Short description, e.g. ``"processes[4]"``."""
         if self.kind in ("executor", "client"):
             return type(self.instance).__qualname__
+        if self.kind == "scheduler":
+            return f"dask[{self.instance}]"
         return self.kind if self.kind == "serial" else f"{self.kind}[{self.max_workers}]"
 
 
@@ -124,12 +188,14 @@ def resolve_executor(executor: Any = "processes", max_workers: int | None = None
 
     Parameters
     ----------
-    executor : {"processes", "serial", "dask"}, concurrent.futures.Executor or distributed.Client
+    executor : {"processes", "serial", "dask"}, scheduler address, Executor or distributed.Client
         ``"processes"`` (default; ``None`` means the same): a
         ``ProcessPoolExecutor`` created and closed by the sweep.
-        ``"serial"``: in the calling process, no pickling. ``"dask"``: a
+        ``"serial"``: in the calling process, no pickling. ``"dask"``: the
+        cluster of ``$DASK_SCHEDULER_ADDRESS`` if set, else a
         ``distributed.LocalCluster`` (processes, one thread each) created and
-        closed by the sweep. An ``Executor`` or ``Client`` instance is used
+        closed by the sweep. A scheduler address (``"tcp://host:8786"``): an
+        existing cluster. An ``Executor`` or ``Client`` instance is used
         as is and left open.
     max_workers : int, optional
         Worker count for pools the sweep creates; default: all usable cores.
@@ -153,7 +219,7 @@ def resolve_executor(executor: Any = "processes", max_workers: int | None = None
     >>> resolve_executor("threads")
     Traceback (most recent call last):
     ...
-    ValueError: executor must be one of 'serial', 'processes', 'dask', a concurrent.futures.Executor or a distributed.Client; got 'threads'
+    ValueError: executor must be one of 'serial', 'processes', 'dask', a scheduler address, a concurrent.futures.Executor or a distributed.Client; got 'threads'
     """
     workers = (
         _cpu_count() if max_workers is None else _check_positive_int(max_workers, "max_workers")
@@ -165,21 +231,28 @@ def resolve_executor(executor: Any = "processes", max_workers: int | None = None
             return ExecutorSpec("serial", None, 1)
         if executor == "processes":
             return ExecutorSpec("processes", None, workers)
-        if executor == "dask":
+        scheduler = None
+        if "://" in executor:
+            scheduler = check_scheduler_address(executor)
+        elif executor == "dask":
+            scheduler = scheduler_from_env()
+        if executor == "dask" or scheduler is not None:
             import importlib.util
 
             if importlib.util.find_spec("distributed") is None:
                 raise ImportError(
                     "executor='dask' needs the optional dependency: pip install 'hybridpd[dask]'"
                 )
+            if scheduler is not None:
+                return ExecutorSpec("scheduler", scheduler, workers)
             return ExecutorSpec("dask", None, workers)
     elif isinstance(executor, cf.Executor):
         return ExecutorSpec("executor", executor, getattr(executor, "_max_workers", workers))
     elif _is_dask_client(executor):
         return ExecutorSpec("client", executor, workers)
     raise ValueError(
-        "executor must be one of 'serial', 'processes', 'dask', a concurrent.futures.Executor "
-        f"or a distributed.Client; got {executor!r}"
+        "executor must be one of 'serial', 'processes', 'dask', a scheduler address, a "
+        f"concurrent.futures.Executor or a distributed.Client; got {executor!r}"
     )
 
 
@@ -307,6 +380,50 @@ class _DaskBackend:
                 self.cluster.close()
 
 
+class _ClusterBackend(_DaskBackend):
+    """An existing cluster: a client of our own, each task carries its chunk of points.
+
+    Nothing is scattered, so no task depends on data held by one worker: when a worker is
+    lost, the scheduler reruns its chunks on the others from the task alone.
+    """
+
+    def __init__(self, client: Any, func: Callable, cols: dict, kwargs: dict):
+        self.client, self.cluster = client, None
+        self.func, self.kwargs, self.cols = func, kwargs, cols
+        self.token = uuid.uuid4().hex[:12]
+
+    def submit(self, tasks: Sequence[tuple[int, int, int]]) -> list:
+        if not tasks:
+            return []
+        n = len(tasks)
+        return self.client.map(
+            _run_chunk,
+            [self.func] * n,
+            [_slice(self.cols, start, stop) for _, start, stop in tasks],
+            [self.kwargs] * n,
+            key=[f"hybridpd-sweep-{self.token}-{i}" for i, _, _ in tasks],
+            pure=False,
+            retries=0,
+        )
+
+    def close(self, abort: bool, futures=()) -> None:
+        if abort:
+            self.cancel(futures)
+        with contextlib.suppress(Exception):
+            self.client.close()
+
+
+def _connect(address: str):
+    from distributed import Client
+
+    try:
+        return Client(address, timeout="30s", set_as_default=False)
+    except (OSError, TimeoutError) as exc:
+        raise ConnectionError(f"no Dask scheduler answers at {address} ({exc}); start one "
+                              "with 'dask scheduler' and workers with 'dask worker ADDRESS'"
+                              ) from None
+
+
 def _open_backend(spec: ExecutorSpec, n_tasks: int, func: Callable, cols: dict, kwargs: dict):
     # Never start more workers than there are chunks left (saves start-up
     # time on short or mostly-resumed sweeps; results are unaffected).
@@ -317,6 +434,13 @@ def _open_backend(spec: ExecutorSpec, n_tasks: int, func: Callable, cols: dict, 
         return _PoolBackend(spec.instance, False, func, cols, kwargs)
     if spec.kind == "client":
         return _DaskBackend(spec.instance, None, func, cols, kwargs)
+    if spec.kind == "scheduler":
+        client = _connect(spec.instance)
+        try:
+            return _ClusterBackend(client, func, cols, kwargs)
+        except BaseException:
+            client.close()
+            raise
     if spec.kind == "dask":
         try:
             from distributed import Client, LocalCluster

@@ -130,7 +130,7 @@ class RegionMap:
         a = decode_attrs(ds.attrs)
         if a.get("kind") != "region_map":
             raise ValueError("the dataset does not hold a region map (attribute kind)")
-        ds = ds.transpose("e", a["y_name"], a["x_name"])
+        ds = ds.transpose("e", a["y_name"], a["x_name"], ...)
         names = a["fixed_names"].split()
         return cls(a["case"], a["x_name"], a["y_name"], ds[a["x_name"]].values,
                    ds[a["y_name"]].values, ds["e"].values, {k: a[k] for k in names},

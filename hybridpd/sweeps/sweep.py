@@ -536,8 +536,9 @@ def run_sweep(
     chunk_size : int, optional
         Points per chunk; default :func:`default_chunk_size` (a function of
         N only). Part of the identity: it fixes the chunk layout.
-    executor : {"processes", "serial", "dask"}, Executor or distributed.Client
-        See :func:`resolve_executor`. Never changes the results.
+    executor : {"processes", "serial", "dask"}, scheduler address, Executor or distributed.Client
+        See :func:`resolve_executor` (``"tcp://host:8786"``: an existing Dask
+        cluster). Never changes the results.
     max_workers : int, optional
         Workers for pools created here (default: all usable cores, capped at
         the number of chunks left).
@@ -658,7 +659,8 @@ def run_sweep(
     if metadata is not None and not isinstance(metadata, Mapping):
         raise ValueError(f"metadata must be None or a dict, got {type(metadata).__qualname__}")
     spec = resolve_executor(executor, max_workers)
-    if spec.kind == "processes" or isinstance(spec.instance, cf.ProcessPoolExecutor):
+    if spec.kind in ("processes", "scheduler") or isinstance(spec.instance,
+                                                             cf.ProcessPoolExecutor):
         _check_picklable(func, func_kwargs)
     identity, identity_hash = sweep_identity(func, func_kwargs, metadata, cols, cs)
 

@@ -1,0 +1,84 @@
+"""Basins of model files: labelled by attractor, checked by iterating the map, drawn by
+``hybridpd plot``."""
+import json
+
+import numpy as np
+
+from hybridpd.analysis.model_orbits import SectionSpec
+from hybridpd.cli import main
+from hybridpd.mechanics.params import ModelTemplate
+from hybridpd.sweeps.model_basins import load_model_basin, model_basin
+
+PAIR = {
+    "system": {"dofs": ["x1", "x2"], "masses": [0.1, 1.0], "input": [0.0, 1.0]},
+    "contact": [{"between": ["x1", "x2"], "lo": -0.75, "hi": 0.75, "restitution": 0.5}],
+    "controller": {"type": "pd", "kp": 10.0, "kv": 20.0, "measure": "x2"},
+    "reference": {"type": "sine", "amplitude": 0.4, "omega": 5.0, "feedforward_mass": 1.0},
+    "initial": {"q": [0.3, 0.0], "v": [0.5, 0.0]}}
+
+
+def test_pair_file_basin_labels_confirmed_by_iterating_the_map(tmp_path, capsys):
+    b = model_basin(PAIR, ("x2", -1.0, 1.0, 5), ("x1_dot", -1.0, 3.0, 5), n_iter=150)
+    assert b.labels.shape == (5, 5) and b.attractors[0]["label"] == 0
+    assert b.attractors[0]["stable"]
+    assert (b.labels == 0).sum() >= 1
+    # independently: iterate the simulated map from every point labelled 0
+    P = SectionSpec().section_map(ModelTemplate(PAIR).model())
+    names = P.section.names
+    ix, iy = names.index("x2"), names.index("x1_dot")
+    for r, c in np.argwhere(b.labels == 0):
+        s = b.fixed_point.copy()
+        s[ix], s[iy] = b.x[c], b.y[r]
+        it = P.iterate(s, 300)
+        d = P.section.wrap(it[-1] - b.fixed_point)
+        np.testing.assert_allclose(d, 0.0, atol=1e-6, err_msg=f"cell {r, c} labelled 0")
+    for r, c in np.argwhere(b.labels == -5):        # off the section: the flow does not fire
+        s = b.fixed_point.copy()
+        s[ix], s[iy] = b.x[c], b.y[r]
+        assert not P.apply(s).ok
+    out = tmp_path / "b.nc"
+    assert main(["basin", "--model", "-", "--x", "x2", "-1", "1", "3"]) == 2   # no --y
+    capsys.readouterr()
+    path = b.save(out)
+    back = load_model_basin(path)
+    np.testing.assert_allclose(back.labels, b.labels, rtol=0, atol=0)
+    assert back.summary() == b.summary()
+    assert main(["plot", str(out), "--out", str(tmp_path / "b.png")]) == 0
+    assert (tmp_path / "b.png").stat().st_size > 10_000
+
+
+def test_basin_cli_with_a_model_file(tmp_path, capsys):
+    f = tmp_path / "pair.toml"
+    f.write_text("""
+[system]
+dofs = ["x1", "x2"]
+masses = [0.1, 1.0]
+input = [0.0, 1.0]
+[[contact]]
+between = ["x1", "x2"]
+lo = -0.75
+hi = 0.75
+restitution = 0.5
+[controller]
+type = "pd"
+kp = 10.0
+kv = 20.0
+measure = "x2"
+[reference]
+type = "sine"
+amplitude = 0.4
+omega = 5.0
+feedforward_mass = 1.0
+[initial]
+q = [0.3, 0.0]
+v = [0.5, 0.0]
+""")
+    assert main(["basin", "--model", str(f), "--x", "x2", "-0.5", "0.5", "3", "--y",
+                 "x1_dot", "0", "2", "3", "--set", "controller.kp", "12", "--iterations",
+                 "100", "--json", "--quiet"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["metadata"]["values"] == {"controller.kp": 12.0}
+    assert np.array(d["labels"]).shape == (3, 3)
+    assert main(["basin", "--model", str(f), "--x", "x2", "-0.5", "0.5", "3", "--y",
+                 "x1_dot", "0", "2", "3", "--set", "controller.kq", "12"]) == 2
+    assert "controller.kq" in capsys.readouterr().err

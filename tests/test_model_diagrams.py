@@ -1,0 +1,76 @@
+"""Brute-force diagrams of model files: the detected periods confirmed by iterating the map."""
+import json
+
+import numpy as np
+
+from hybridpd.analysis.model_orbits import SectionSpec
+from hybridpd.cli import main
+from hybridpd.mechanics.params import ModelTemplate
+from hybridpd.sweeps.model_diagrams import load_model_diagram, model_diagram
+
+PAIR = {
+    "system": {"dofs": ["x1", "x2"], "masses": [0.1, 1.0], "input": [0.0, 1.0]},
+    "contact": [{"between": ["x1", "x2"], "lo": -0.75, "hi": 0.75, "restitution": 0.5}],
+    "controller": {"type": "pd", "kp": 10.0, "kv": 20.0, "measure": "x2"},
+    "reference": {"type": "sine", "amplitude": 0.4, "omega": 5.0, "feedforward_mass": 1.0},
+    "initial": {"q": [0.3, 0.0], "v": [0.5, 0.0]}}
+
+
+def test_pair_file_diagram_periods_confirmed(tmp_path, capsys):
+    d = model_diagram(PAIR, ("controller.kv", 2.0, 30.0, 5), iterations=150, keep=30,
+                      progress=False)
+    assert d.points.shape == (5, 30, 4) and d.coords == ("phi", "x1_dot", "x2", "x2_dot")
+    tpl = ModelTemplate(PAIR)
+    for i, v in enumerate(d.values):
+        if d.period[i] == 0:
+            continue
+        P = SectionSpec().section_map(tpl.model({"controller.kv": v}))
+        s = d.points[i, -1]
+        img = P.iterate(s, int(d.period[i]))[-1]
+        np.testing.assert_allclose(P.section.wrap(img - s), 0.0, atol=1e-5,
+                                   err_msg=f"kv = {v}: not periodic with period "
+                                           f"{d.period[i]}")
+    assert d.counts()["periodic"] >= 1
+    out = tmp_path / "d.nc"
+    assert main(["bifurcation", "--model", "-", "--param", "controller.kv", "2", "30",
+                 "5", "--out", str(out), "--case", "collocated"]) == 2
+    assert "--case" in capsys.readouterr().err
+    d.save(out)
+    back = load_model_diagram(out)
+    np.testing.assert_allclose(back.points, d.points, rtol=0, atol=0)
+    assert main(["plot", str(out), "--out", str(tmp_path / "d.png")]) == 0
+
+
+def test_bifurcation_cli_with_a_model_file(tmp_path, capsys):
+    f = tmp_path / "pair.toml"
+    f.write_text("""
+[system]
+dofs = ["x1", "x2"]
+masses = [0.1, 1.0]
+input = [0.0, 1.0]
+[[contact]]
+between = ["x1", "x2"]
+lo = -0.75
+hi = 0.75
+restitution = 0.5
+[controller]
+type = "pd"
+kp = 10.0
+kv = 20.0
+measure = "x2"
+[reference]
+type = "sine"
+amplitude = 0.4
+omega = 5.0
+feedforward_mass = 1.0
+[initial]
+q = [0.3, 0.0]
+v = [0.5, 0.0]
+""")
+    out = tmp_path / "d.zarr"
+    assert main(["bifurcation", "--model", str(f), "--param", "contact.0.restitution", "0.3",
+                 "0.7", "3", "--iterations", "100", "--keep", "20", "--out", str(out),
+                 "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["parameter"] == "contact.0.restitution" and len(d["classification"]) == 3
+    np.testing.assert_allclose(d["values"], [0.3, 0.5, 0.7], rtol=1e-15)
