@@ -34,10 +34,11 @@ from _common import best_of, naive_per_impact
 
 def pair_rates():
     from hybridpd import ImpactPair, PDGains
-    from hybridpd.analysis.hybridmap import SectionMap, impact_pair_section
+    from hybridpd.analysis.hybridmap import SectionMap
     from hybridpd.analysis.impactmap import ImpactMap
     from hybridpd.analysis.orbits import symmetric_orbit
     from hybridpd.analysis.periodic import SectionMapper
+    from hybridpd.analysis.sections import impact_pair_section
 
     orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     P = SectionMap(impact_pair_section(orb.system()))
@@ -82,8 +83,9 @@ def pair_rates():
 
 
 def drivetrain_basin(grid, iterations, workers):
-    from hybridpd.analysis.periodic import SectionMapper, orbit_from_model, section_basin
+    from hybridpd.analysis.periodic import SectionMapper, orbit_from_model
     from hybridpd.mechanics.modelfile import load_model
+    from hybridpd.sweeps.section_basins import section_basin
 
     f = Path(__file__).resolve().parents[1] / "examples" / "models" / "drivetrain.toml"
     model = load_model(f)

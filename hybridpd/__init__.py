@@ -6,27 +6,157 @@ backlash" (Mata-Jimenez, Brogliato, Goswami) with the conventions of CONVENTIONS
 ``xd = xm cos(w t)``, Poincare section ``z3 = x1 - x2 = +L`` (pre-impact) with coordinates
 ``(phi, z1, z2, z4)``.
 
-Starting is cheap: importing the package loads NumPy only. The SymPy derivations of the
-closed forms run once per installation and version; their generated code is cached on disk
-(``$HYBRIDPD_CACHE_DIR``, else ``$XDG_CACHE_HOME/hybridpd`` or ``~/.cache/hybridpd``; see
-:mod:`hybridpd._codecache`). numba compiles a kernel on its first large call; a small call
-(one orbit, a short simulation) runs the same kernel as plain Python while numba is not
-loaded (see :mod:`hybridpd._jit`). The PD closed loop is written out directly; python-control
-is imported only for general LTI controllers (its interconnection stays the reference the
-tests check the PD matrices against).
+Everything a workflow needs is one attribute away, ``import hybridpd as hp``:
+
+====================  =====================================================================
+the impact pair       :class:`ImpactPair`, :class:`PDGains`, :class:`Reference`,
+                      :class:`ControlledImpactPair`, :func:`symmetric_orbit`,
+                      :func:`symmetric_orbits`, :class:`ImpactMap`
+any hybrid automaton  :class:`HybridAutomaton`, :class:`Section`, :class:`SectionMap`,
+                      :func:`find_orbit`, :class:`PeriodicOrbit`, :func:`stability`
+mechanical systems    :class:`MechanicalSystem`, :class:`Contact`, :func:`load_model`,
+                      :func:`simulate`
+continuation          :func:`continue_orbit`, :func:`switch_branch`, :func:`continue_family`,
+                      :func:`boundary_curves`, :func:`bifurcation_diagram`
+sweeps                :func:`region_map`, :func:`basin_of_attraction`,
+                      :func:`attractor_basin`, :func:`section_basin`, :func:`run_sweep`
+design, figures       :func:`design`, :func:`reproduce`, :func:`plot_file`
+====================  =====================================================================
+
+The names load lazily (PEP 562): ``import hybridpd`` imports NumPy only, and each name brings
+in just the modules it needs (SymPy, numba, python-control, matplotlib and xarray only where
+they are used). The subpackages (``hybridpd.hybrid``, ``pair``, ``mechanics``, ``analysis``,
+``sweeps``, ``plotting``, ``reproduce``) stay importable for everything else. Module paths of
+earlier versions still import, with a ``DeprecationWarning`` naming the new place.
+
+Starting is cheap: the SymPy derivations of the closed forms run once per installation and
+version; their generated code is cached on disk (see :mod:`hybridpd._codecache`). numba
+compiles a kernel on its first large call; a small call (one orbit, a short simulation) runs
+the same kernel as plain Python while numba is not loaded (see :mod:`hybridpd._jit`).
 
 Every public function validates its input: a wrong type, shape or value raises
-``ValueError`` naming the parameter and its allowed range (see the ``check_*`` helpers of
-:mod:`hybridpd.model`). Result objects print on one line, with array shapes.
-"""
-from hybridpd._version import __version__
-from hybridpd.model import Case, ImpactPair, PDGains, Reference, virtual_restitution
+``ValueError`` naming the parameter and its allowed range. Result objects print on one line,
+with array shapes.
 
+Examples
+--------
+>>> import hybridpd as hp
+>>> orb = hp.symmetric_orbit(hp.ImpactPair(mu=0.1, e=0.5, L=0.75), hp.PDGains(10, 20),
+...                          omega=5.0, case="collocated")
+>>> bool(orb.exists), bool(orb.stable)
+(True, True)
+"""
+import importlib as _importlib
+
+from hybridpd._version import __version__
+
+# Each public name and the module that defines it. Nothing below is imported until used.
+_NAMES = {
+    # parameters and the impact pair
+    "Case": "hybridpd.model",
+    "ImpactPair": "hybridpd.model",
+    "PDGains": "hybridpd.model",
+    "Reference": "hybridpd.model",
+    "virtual_restitution": "hybridpd.model",
+    "ControlledImpactPair": "hybridpd.pair.impactpair",
+    "symmetric_orbit": "hybridpd.analysis.orbits",
+    "symmetric_orbits": "hybridpd.analysis.orbits",
+    "ImpactMap": "hybridpd.analysis.impactmap",
+    # any hybrid automaton: sections, maps, orbits, stability
+    "HybridAutomaton": "hybridpd.hybrid.automaton",
+    "Section": "hybridpd.analysis.hybridmap",
+    "SectionMap": "hybridpd.analysis.hybridmap",
+    "find_orbit": "hybridpd.analysis.periodic",
+    "PeriodicOrbit": "hybridpd.analysis.periodic",
+    "SectionMapper": "hybridpd.analysis.periodic",
+    "stability": "hybridpd.analysis.floquet",
+    "Stability": "hybridpd.analysis.floquet",
+    # general mechanical systems
+    "MechanicalSystem": "hybridpd.mechanics.system",
+    "Contact": "hybridpd.mechanics.contacts",
+    "load_model": "hybridpd.mechanics.modelfile",
+    "simulate": "hybridpd.mechanics.simulate",
+    # continuation, boundaries, diagrams
+    "continue_orbit": "hybridpd.analysis.continuation",
+    "switch_branch": "hybridpd.analysis.continuation",
+    "load_branch": "hybridpd.analysis.continuation",
+    "continue_family": "hybridpd.analysis.hybridcont",
+    "boundary_curves": "hybridpd.analysis.boundaries",
+    "bifurcation_diagram": "hybridpd.analysis.bifdiagram",
+    # sweeps and result files
+    "run_sweep": "hybridpd.sweeps.sweep",
+    "region_map": "hybridpd.sweeps.regions",
+    "load_region_map": "hybridpd.sweeps.regions",
+    "basin_of_attraction": "hybridpd.sweeps.basins",
+    "ImpactMapper": "hybridpd.sweeps.basins",
+    "load_basin": "hybridpd.sweeps.basins",
+    "attractor_basin": "hybridpd.sweeps.attractor_basins",
+    "load_attractor_basin": "hybridpd.sweeps.attractor_basins",
+    "section_basin": "hybridpd.sweeps.section_basins",
+    # design, figures, the paper
+    "design": "hybridpd.analysis.design",
+    "plot_file": "hybridpd.plotting.files",
+}
+
+# ``reproduce`` is both a subpackage and its main function: the package is callable (it runs
+# :func:`hybridpd.reproduce.reproduce`), so ``hp.reproduce(...)`` works whichever Python binds.
+_SUBPACKAGES = ("analysis", "hybrid", "mechanics", "pair", "plotting", "reproduce", "sweeps")
+
+# the flat namespace: every name of _NAMES, the version and ``reproduce``
 __all__ = [
     "Case",
+    "Contact",
+    "ControlledImpactPair",
+    "HybridAutomaton",
+    "ImpactMap",
+    "ImpactMapper",
     "ImpactPair",
+    "MechanicalSystem",
     "PDGains",
+    "PeriodicOrbit",
     "Reference",
+    "Section",
+    "SectionMap",
+    "SectionMapper",
+    "Stability",
     "__version__",
+    "attractor_basin",
+    "basin_of_attraction",
+    "bifurcation_diagram",
+    "boundary_curves",
+    "continue_family",
+    "continue_orbit",
+    "design",
+    "find_orbit",
+    "load_attractor_basin",
+    "load_basin",
+    "load_branch",
+    "load_model",
+    "load_region_map",
+    "plot_file",
+    "region_map",
+    "reproduce",
+    "run_sweep",
+    "section_basin",
+    "simulate",
+    "stability",
+    "switch_branch",
+    "symmetric_orbit",
+    "symmetric_orbits",
     "virtual_restitution",
 ]
+
+
+def __getattr__(name):
+    module = _NAMES.get(name)
+    if module is not None:
+        value = getattr(_importlib.import_module(module), name)
+        globals()[name] = value  # later look-ups skip __getattr__
+        return value
+    if name in _SUBPACKAGES:
+        return _importlib.import_module(f"hybridpd.{name}")
+    raise AttributeError(f"module 'hybridpd' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted([*__all__, *_SUBPACKAGES])

@@ -19,15 +19,31 @@ Callers with a known small amount of work use ``kernel.interpret`` when
 The budget is ``HYBRIDPD_INTERPRET_SECONDS`` (default 0.5 s per kernel; ``0`` always
 compiles). Interpreted and compiled kernels run the same code in IEEE double precision; they
 may differ in the last bits where NumPy's and the C library's elementary functions differ.
+
+Compiled code is cached once per installation: kernels declared with ``cache=True`` keep
+numba's machine code in a per-user directory keyed by the versions of hybridpd, numba and
+Python and a stamp of the package's kernel source files (:func:`numba_cache_dir`:
+``$HYBRIDPD_NUMBA_CACHE_DIR`` if set, else ``numba-<versions>-<stamp>`` under
+``$XDG_CACHE_HOME/hybridpd`` or ``~/.cache/hybridpd``), so a fresh
+process on a machine that has run hybridpd before loads it instead of compiling. Compiled
+code is only ever loaded from a directory owned by the current user and writable by no one
+else (checked for the directory and its parent); otherwise the kernels compile in memory for
+the process. A kernel whose cache entry is missing logs once (logger ``hybridpd``, level
+INFO, and a WARNING the very first time, when the cache directory is new) that it compiles.
 """
 from __future__ import annotations
 
 import contextvars
 import functools
+import logging
 import os
+import sys
 import time
+from pathlib import Path
 
-__all__ = ["Kernel", "njit"]
+__all__ = ["Kernel", "njit", "numba_cache_dir"]
+
+_LOG = logging.getLogger("hybridpd")
 
 #: True while an interpreted kernel runs: nested kernel calls then interpret as well.
 _INTERPRETING = contextvars.ContextVar("hybridpd_interpreting", default=False)
@@ -43,6 +59,98 @@ def _interpret_budget() -> float:
             f"HYBRIDPD_INTERPRET_SECONDS must be a number of seconds >= 0, got {raw!r}"
         ) from None
     return max(0.0, v)  # nan and negatives: always compile
+
+
+def _private(d: Path) -> bool:
+    """``d`` is a directory owned by this user and writable by no one else."""
+    try:
+        st = d.stat()
+    except OSError:
+        return False
+    if not hasattr(os, "getuid"):  # pragma: no cover (not POSIX: rely on the user profile)
+        return d.is_dir()
+    return d.is_dir() and st.st_uid == os.getuid() and not st.st_mode & 0o022
+
+
+@functools.cache
+def numba_cache_dir() -> Path | None:
+    """The private directory of numba's compiled code for this version, or ``None``.
+
+    Created (mode 0700) if needed; ``None`` when it cannot be created or is not private
+    (owned by this user and writable by no one else, in a parent that is private too or
+    sticky): the kernels then compile in memory.
+    """
+    import numba
+
+    from hybridpd._version import __version__
+
+    key = (f"numba-{__version__}-nb{numba.__version__}-py{sys.version_info[0]}"
+           f"{sys.version_info[1]}-{_source_stamp()}")
+    env = os.environ.get("HYBRIDPD_NUMBA_CACHE_DIR")
+    if env:
+        d = Path(env).expanduser()
+    else:
+        xdg = os.environ.get("XDG_CACHE_HOME")
+        d = (Path(xdg).expanduser() if xdg else Path.home() / ".cache") / "hybridpd" / key
+    try:
+        d.mkdir(mode=0o700, parents=True, exist_ok=True)
+    except OSError:
+        return None
+    # in a shared parent only its sticky bit stops others from replacing our directory
+    parent_ok = _private(d.parent) or bool(d.parent.stat().st_mode & 0o1000)
+    if not (_private(d) and parent_ok):
+        _LOG.warning("hybridpd: %s is not private to this user; numba kernels are compiled in "
+                     "memory, not cached", d)
+        return None
+    return d
+
+
+def _source_stamp() -> str:
+    """Short hash of the package's kernel sources (paths, sizes, modification times).
+
+    numba checks only a kernel's own file when it loads cached code, not the files of the
+    kernels it calls; keying the directory by every file that defines kernels means an
+    edited or upgraded installation never runs stale compiled callees.
+    """
+    import hashlib
+
+    root = str(Path(__file__).resolve().parent)
+    h = hashlib.sha256(root.encode())
+    entries = []
+    for d, subdirs, files in os.walk(root):
+        subdirs[:] = [s for s in subdirs if s != "__pycache__"]
+        for f in files:
+            if f.endswith(".py"):
+                path = os.path.join(d, f)
+                try:
+                    st = os.stat(path)
+                    with open(path, "rb") as fh:
+                        if b"njit" not in fh.read():
+                            continue         # no kernel: its edits cannot stale compiled code
+                except OSError:
+                    continue
+                entries.append(f"{os.path.relpath(os.path.join(d, f), root)}:{st.st_size}:"
+                               f"{st.st_mtime_ns};")
+    for e in sorted(entries):
+        h.update(e.encode())
+    return h.hexdigest()[:12]
+
+
+def _announce(dispatcher, name) -> None:
+    """Log that ``name`` compiles when its cache index is missing (the first run ever)."""
+    cache_file = getattr(getattr(dispatcher, "_cache", None), "_cache_file", None)
+    index = getattr(cache_file, "_index_path", None)
+    if index is None or os.path.exists(index):
+        return
+    if not _announce.done:
+        _announce.done = True
+        _LOG.warning("hybridpd: compiling the numba kernels (once per installation; cached "
+                     "in %s)", numba_cache_dir())
+    else:
+        _LOG.info("hybridpd: compiling %s", name)
+
+
+_announce.done = False
 
 
 @functools.cache
@@ -92,7 +200,21 @@ class Kernel:
             import numba
 
             _register_numba_type()
-            self._dispatcher = numba.njit(**self.options)(self.py_func)
+            opts = dict(self.options)
+            where = numba_cache_dir() if opts.get("cache") else None
+            if where is None:
+                opts.pop("cache", None)
+                self._dispatcher = numba.njit(**opts)(self.py_func)
+            else:
+                # numba reads its cache location when the dispatcher is made: point it at
+                # the private directory for this one call only
+                saved = numba.config.CACHE_DIR
+                numba.config.CACHE_DIR = str(where)
+                try:
+                    self._dispatcher = numba.njit(**opts)(self.py_func)
+                finally:
+                    numba.config.CACHE_DIR = saved
+                _announce(self._dispatcher, self.__qualname__)
         return self._dispatcher
 
     def __call__(self, *args, **kwargs):

@@ -253,8 +253,20 @@ def test_every_termination_cause_is_reachable():
     assert 0.0 < tr.t_final < 100.0
     np.testing.assert_allclose(tr.x_final, [math.cos(100 * tr.t_final),
                                             -math.sin(100 * tr.t_final)], atol=1e-12)
+    grow = Guard("grow", [1.0], -2.0, direction=+1, reset=([[1e12]], [0.0]))
+    tr = HybridAutomaton([Mode("m", [[1.0]], guards=(grow,))]).simulate(
+        [1.0], "m", (0, 3), max_state=1e10)
+    assert tr.termination is TerminationCause.DIVERGED
+    assert tr.t_final == pytest.approx(math.log(2.0), rel=1e-14)
+    two = (Guard("a", [1.0, 0.0], -1.0, direction=+1, group=1),
+           Guard("b", [0.0, 1.0], -1.0, direction=+1, group=1))
+    ha = HybridAutomaton([Mode("m", np.zeros((2, 2)), b=[1.0, 1.0], guards=two)])
+    tr = ha.simulate([0.0, 0.0], "m", (0, 3), resolver=lambda *a: None)
+    assert tr.termination is TerminationCause.SIMULTANEOUS
+    assert tr.t_final == pytest.approx(1.0, rel=1e-14) and len(tr.jumps) == 0
     assert {c.name for c in TerminationCause} == {"END_TIME", "JUMP_LIMIT", "ZENO",
-                                                  "NONFINITE", "STEP_LIMIT"}
+                                                  "NONFINITE", "STEP_LIMIT", "SIMULTANEOUS",
+                                                  "DIVERGED"}
 
 
 def test_long_runs_resume_across_buffers():
@@ -350,3 +362,99 @@ def test_random_automata_never_hang_or_crash(seed):
         assert tr.t_final == tr.segments.t_end[-1]
     if np.all(np.isfinite(tr.x_final)):
         np.testing.assert_array_equal(tr(tr.t_final), tr.x_final)
+
+
+# ---------------------------------------------------------------------------- modes on demand
+def _ladder_builder(calls):
+    """Modes ``L0, L1, ...``: in ``Lk`` the state grows at rate ``k + 1`` and a guard at
+    ``x = 1`` resets it to 0 and enters ``L{k+1}`` (an unbounded family of modes)."""
+    def build(name):
+        if not (name.startswith("L") and name[1:].isdigit()):
+            raise ValueError(f"unknown mode {name!r}")
+        k = int(name[1:])
+        calls.append(k)
+        g = Guard("top", [1.0], -1.0, direction=+1, reset=([[0.0]], [0.0]), target=f"L{k + 1}")
+        return Mode(name, [[0.0]], b=[k + 1.0], guards=(g,))
+    return build
+
+
+def test_modes_are_built_when_a_run_enters_them():
+    calls = []
+    build = _ladder_builder(calls)
+    ha = HybridAutomaton([build("L0")], mode_builder=build, max_modes=50)
+    assert ha.n_built == 1 and calls == [0]
+    tr = ha.simulate([0.0], "L0", (0.0, 1.0 + 1 / 2 + 1 / 3 + 0.01))
+    # three jumps at t = 1, 1.5, 1.8333...: modes L1..L3 built on entry, nothing more
+    assert ha.n_built == 4 and calls == [0, 1, 2, 3]
+    np.testing.assert_allclose(tr.jumps.t, np.cumsum([1, 1 / 2, 1 / 3]), rtol=1e-14)
+    assert tr.jumps.target == ("L1", "L2", "L3") and tr.mode_final == "L3"
+    np.testing.assert_allclose(tr(1.6), [0.1 * 3], rtol=1e-13)   # dense output in L2
+    assert ha.mode_index("L7") == 4 and ha.n_built == 5          # looked up: built
+    with pytest.raises(ValueError, match="unknown mode"):
+        ha.mode_index("X")
+    with pytest.raises(ValueError, match="max_modes"):
+        ha.materialize()                                          # the family is unbounded
+
+
+def test_materialize_builds_every_reachable_mode_in_reservation_order():
+    ga = Guard("ga", [1.0], -1.0, direction=+1, target="b", zeno_target="c")
+    gb = Guard("gb", [1.0], -2.0, direction=+1, target="a")
+    built = {"a": Mode("a", [[0.0]], b=[1.0], guards=(ga,)),
+             "b": Mode("b", [[0.0]], b=[1.0], guards=(gb,)), "c": Mode("c", [[0.0]])}
+
+    def build(name):
+        if name not in built:
+            raise ValueError(f"unknown mode {name!r}")
+        return built[name]
+    ha = HybridAutomaton([built["a"]], mode_builder=build)
+    assert ha.n_built == 1
+    assert ha.mode_names == ("a", "b", "c") and ha.packed.ng.tolist() == [1, 1, 0]
+    np.testing.assert_array_equal(ha.packed.target[:2, 0], [1, 0])
+    assert ha.packed.zt[0, 0] == 2
+    # a fully given automaton refuses unknown targets as before
+    with pytest.raises(ValueError, match="unknown target mode 'b'"):
+        HybridAutomaton([built["a"]])
+
+
+# ---------------------------------------------------------------------------- compiled-code cache
+_TINY = '''
+import logging, sys
+logging.basicConfig(level=logging.INFO, stream=sys.stderr, format="%(message)s")
+from hybridpd._jit import njit
+
+@njit(cache=True)
+def twice(x):
+    return 2.0 * x
+
+print(twice(1.5), twice.dispatcher.stats.cache_hits.total(),
+      twice.dispatcher.stats.cache_misses.total())
+'''
+
+
+def test_compiled_kernels_are_cached_once_in_a_private_directory(tmp_path):
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).parents[1]
+    (tmp_path / "tinymod.py").write_text(_TINY)
+    cache = tmp_path / "nb"
+    env = dict(os.environ, PYTHONPATH=f"{root}{os.pathsep}{tmp_path}",
+               HYBRIDPD_NUMBA_CACHE_DIR=str(cache))
+    run = [sys.executable, "-c", "import tinymod"]
+    first = subprocess.run(run, env=env, capture_output=True, text=True, timeout=120,
+                           check=False)
+    second = subprocess.run(run, env=env, capture_output=True, text=True, timeout=120,
+                           check=False)
+    assert first.stdout.split() == ["3.0", "0", "1"], first.stderr
+    assert "compiling the numba kernels" in first.stderr
+    assert second.stdout.split() == ["3.0", "1", "0"], second.stderr   # loaded, not compiled
+    assert "compiling" not in second.stderr
+    assert cache.stat().st_mode & 0o777 == 0o700 and any(cache.rglob("*.nbi"))
+    # a directory that others can write is never used: compiled in memory, nothing loaded
+    os.chmod(cache, 0o777)
+    third = subprocess.run(run, env=env, capture_output=True, text=True, timeout=120,
+                           check=False)
+    assert third.stdout.split()[:2] == ["3.0", "0"], third.stderr      # nothing loaded
+    assert "not private" in third.stderr

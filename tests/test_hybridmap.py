@@ -12,7 +12,6 @@ from hybridpd.analysis.hybridmap import (
     Section,
     SectionMap,
     exosystem,
-    impact_pair_section,
 )
 from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.analysis.orbits import symmetric_orbit
@@ -20,8 +19,8 @@ from hybridpd.analysis.periodic import (
     SectionMapper,
     find_orbit,
     measured_contraction,
-    section_basin,
 )
+from hybridpd.analysis.sections import impact_pair_section
 from hybridpd.hybrid.samples import (
     ball_initial_state,
     bouncing_ball,
@@ -29,6 +28,7 @@ from hybridpd.hybrid.samples import (
     oscillator_initial_state,
 )
 from hybridpd.sweeps.basins import ImpactMapper, section_grid
+from hybridpd.sweeps.section_basins import section_basin
 
 PAIR = ImpactPair(0.1, 0.5, 0.75)
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.hybridmap import mechanical_section
 from hybridpd.analysis.orbits import symmetric_orbit
 from hybridpd.analysis.periodic import measured_contraction, orbit_from_model
+from hybridpd.analysis.sections import mechanical_section
 from hybridpd.cli import main
 from hybridpd.mechanics.modelfile import load_model, model_from_dict
 
@@ -134,7 +134,8 @@ def test_pid_backlash_example_runs_and_writes_its_figure(tmp_path):
 
 @pytest.mark.slow
 def test_drivetrain_basin_early_exit_does_not_change_labels():
-    from hybridpd.analysis.periodic import SectionMapper, section_basin
+    from hybridpd.analysis.periodic import SectionMapper
+    from hybridpd.sweeps.section_basins import section_basin
 
     model = load_model(MODELS / "drivetrain.toml")
     po, P = orbit_from_model(model, 0, 1, 8)

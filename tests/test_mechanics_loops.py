@@ -211,7 +211,8 @@ def build(spec):
     return build_automaton(loop, contacts), x0
 
 
-ALLOWED = {"end_time", "jump_limit", "zeno", "nonfinite", "step_limit", "simultaneous_contact"}
+ALLOWED = {"end_time", "jump_limit", "zeno", "nonfinite", "step_limit", "simultaneous_contact",
+           "diverged"}
 
 
 # HYBRIDPD_SWEEP_EXAMPLES=400 for a longer sweep

@@ -1,6 +1,4 @@
 """The convention study: m2 intervals, their end points, the rule for the second m2, verdicts."""
-import math
-
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -9,9 +7,7 @@ from hypothesis import strategies as st
 from hybridpd._format import pct as _pct
 from hybridpd.analysis.orbits import symmetric_orbit, symmetric_orbits
 from hybridpd.model import ImpactPair, PDGains
-from hybridpd.reproduce import PAPER, Settings
-from hybridpd.reproduce import conclusions as C
-from hybridpd.reproduce.pipeline import _basin_step
+from hybridpd.reproduce import PAPER
 from hybridpd.reproduce.study import candidate_stability, choose_m2, intersect, stable_intervals
 
 COMMON = dict(kp=10.0, kv=20.0, mu=0.1, L=0.75, omega=5.0)
@@ -59,27 +55,34 @@ def test_interval_ends_do_not_depend_on_the_bracketing_grid(intervals):
         assert [i.lo.m2 for i in fine] == pytest.approx([i.lo.m2 for i in coarse], rel=1e-9)
 
 
+def _all(intervals):
+    return {(c, e): iv for c, d in intervals.items() for e, iv in d.items()}
+
+
 def test_the_chosen_m2_follows_the_documented_rule(intervals):
-    m2 = choose_m2(intervals["noncollocated"])
-    (lo, hi), = intersect(intervals["noncollocated"].values())
-    assert lo == pytest.approx(max(i[0].lo.m2 for i in intervals["noncollocated"].values()))
-    assert m2 == float(f"{math.sqrt(lo * hi):.3g}") and lo < m2 < hi
+    m2 = choose_m2(_all(intervals), (0.1, 1000.0))
+    threshold = max(iv[0].lo.m2 for d in intervals.values() for iv in d.values())
+    assert threshold == pytest.approx(53.786, rel=1e-4)
+    assert m2 == 100.0 and m2 >= threshold and 0.5 * m2 < threshold
     r = symmetric_orbits(10.0, 20.0, mu=0.1, e=np.array(PAPER["e"]), L=0.75, omega=5.0, m2=m2,
                          case="noncollocated")
     assert r.stable.all()
     assert choose_m2({0.5: []}) is None
 
 
-@pytest.mark.parametrize("e", PAPER["e"])
-def test_chosen_m2_gives_every_fig7_panel_a_nonempty_basin(intervals, e):
-    m2 = choose_m2(intervals["noncollocated"])
-    orb = _orbit("noncollocated", e, m2)
-    s = Settings.quick(basin=(9, 9))
-    b = _basin_step(orb, s, executor="serial", max_workers=None, progress=False)
-    assert b is not None and b.basin.converged_fraction > 0 and b.measure(0).count > 0
-    # and the paper's m2 = 1 has none (unstable or no orbit)
-    assert _basin_step(_orbit("noncollocated", e, 1.0), s, executor="serial",
-                       max_workers=None, progress=False) is None
+def test_chosen_m2_gives_every_fig6_fig7_panel_a_nonempty_basin(intervals):
+    from hybridpd.reproduce.basins import shared_window_basins
+
+    m2 = choose_m2(_all(intervals), (0.1, 1000.0))
+    orbits = {(c, e): _orbit(c, e, m2) for c in ("collocated", "noncollocated")
+              for e in PAPER["e"]}
+    res = shared_window_basins(orbits, (-3, 5, -2, 10), (7, 7), n_iter=300, max_growths=1)
+    for b in res.basins.values():
+        assert b is not None and b.measure(0).count > 0 and tuple(b.window) == res.window
+    # and the paper's m2 = 1 has none for the non-collocated loop (unstable or no orbit)
+    res = shared_window_basins({e: _orbit("noncollocated", e, 1.0) for e in PAPER["e"]},
+                               (-3, 5, -2, 10), (5, 5), n_iter=100, max_growths=0)
+    assert all(b is None for b in res.basins.values())
 
 
 def test_candidate_stability_is_the_orbits_where_the_orbit_exists():
@@ -91,25 +94,6 @@ def test_candidate_stability_is_the_orbits_where_the_orbit_exists():
         np.testing.assert_allclose(rho[r.exists], r.spectral_radius[r.exists], rtol=1e-12)
         # stability alone is defined beyond existence (viability ignored)
         assert np.isfinite(rho[~r.exists & (r.reason == 3)]).all()
-
-
-def test_conclusion_checks():
-    big = {"exists": [0.5, 0.8, 1.0], "stability": [1.0, 1.0, 1.0], "both": [0.5, 0.8, 1.0]}
-    small = {"exists": [0.3, 0.2, 0.1], "stability": [0.05, 0.03, 0.01],
-             "both": [0.05, 0.03, 0.01]}
-    c1 = C.check_1(big, small)
-    assert c1["verdict"] == "agrees" and c1["by_quantity"]["exists"]["verdict"] == "contradicted"
-    assert C.check_1(small, big)["verdict"] == "contradicted"
-    assert C.check_2(big, small)["verdict"] == "agrees"
-    assert C.check_2(small, big)["verdict"] == "contradicted"
-    assert C.check_3(big)["verdict"] == "agrees" and C.check_3(small)["verdict"] == "contradicted"
-    assert C.check_4([0.5, 0.5, 0.5], [0.4, 0.6, 0.3])["verdict"] == "agrees"
-    assert C.check_4([0.5, 0.5, 0.5], [None, 0.6, 0.3])["verdict"] == "contradicted"
-    assert C.check_4_necessary([True] * 3, [True, False, True]) == "contradicted"
-    assert C.check_4_necessary([True] * 3, [True] * 3) == "not measured"
-    assert C.combine(["agrees", "agrees", "not measured"]) == "agrees"
-    assert C.combine(["agrees", "contradicted"]) == "depends"
-    assert C.combine(["contradicted"]) == "contradicted"
 
 
 @given(st.floats(0.0, 1.0))

@@ -227,7 +227,12 @@ def test_random_oscillators_run_to_the_end(e, F, W, s, zeta):
     ha = impact_oscillator(1.0, zeta, F, W, s, e)
     x0 = oscillator_initial_state(min(s, 0.0) - 0.1, 0.0, force=F, omega=W)
     tr = ha.simulate(x0, "free", (0.0, 60.0), max_jumps=20_000)
-    assert tr.termination in (TerminationCause.END_TIME, TerminationCause.JUMP_LIMIT)
+    if tr.termination is TerminationCause.ZENO:
+        # only an instant loop (e.g. a force of 1e-57 that releases and re-impacts at one
+        # instant for ever) may stop the run: more than max_instant_jumps jumps at t_final
+        assert np.count_nonzero(tr.jumps.t == tr.t_final) > 100
+    else:
+        assert tr.termination in (TerminationCause.END_TIME, TerminationCause.JUMP_LIMIT)
     ts = np.linspace(0.0, tr.t_final, 2001)
     x = tr(ts)[:, 0]
     assert x[_outside_zeno_tails(tr, ts)].max() <= s + 1e-9

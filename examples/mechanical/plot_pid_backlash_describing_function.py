@@ -17,7 +17,7 @@ harmonic-balance solutions ``H(jw) N(A) = -1``: a predicted limit cycle of motor
 
 **Exact cycle** (hybridpd): the same loop as a mechanical model (:mod:`hybridpd.mechanics`,
 the load with a small inertia ``m_L`` and viscous friction ``c_L``), its impact map on the
-backlash's ``hi`` contact (:func:`hybridpd.analysis.hybridmap.mechanical_section`), the
+backlash's ``hi`` contact (:func:`hybridpd.analysis.sections.mechanical_section`), the
 periodic orbit by Newton on the map with ``DP`` from exact flows and saltation matrices
 (:func:`hybridpd.analysis.periodic.find_orbit`), its Floquet multipliers, and its continuation
 in ``ki`` (:func:`hybridpd.analysis.hybridcont.continue_family`).
@@ -111,8 +111,9 @@ def exact_cycle(ma, guess=None, transient=150.0, event="release"):
     period, however many impacts precede the sticking); when the load never sticks (a heavy
     load with ``e > 0`` rattles from wall to wall) it is the impact on ``hi``.
     """
-    from hybridpd.analysis.hybridmap import SectionMap, mechanical_section
+    from hybridpd.analysis.hybridmap import SectionMap
     from hybridpd.analysis.periodic import find_orbit
+    from hybridpd.analysis.sections import mechanical_section
 
     sec = mechanical_section(ma, 0, 1, event=event)
     P = SectionMap(sec, t_max=200.0)
@@ -147,8 +148,9 @@ def _amplitude(ma, orb, P):
 def ki_family(kis):
     """Exact cycles along ``ki`` (natural continuation): ``(ki, w, A, rho)`` per point."""
     from hybridpd.analysis.hybridcont import continue_family
-    from hybridpd.analysis.hybridmap import SectionMap, mechanical_section
+    from hybridpd.analysis.hybridmap import SectionMap
     from hybridpd.analysis.periodic import find_orbit
+    from hybridpd.analysis.sections import mechanical_section
 
     def build(ki):
         ma = model(ki=ki)

@@ -41,8 +41,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridpd._repr import compact_repr
+from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import Section, SectionMap
-from hybridpd.analysis.impactmap import stability
 from hybridpd.analysis.periodic import find_orbit
 
 __all__ = ["FAMILY_EVENTS", "FamilyBranch", "FamilyEvent", "FamilyPoint", "continue_family"]
@@ -237,6 +237,27 @@ def continue_family(builder, s0, p0: float, p_end: float, *, period: int = 1, se
     Returns
     -------
     FamilyBranch
+
+    Raises
+    ------
+    ValueError
+        If a parameter is out of range, ``section`` is missing for an automaton builder, or
+        ``method`` is unknown.
+
+    Examples
+    --------
+    A forced oscillator against a stop, its impacting orbit followed in the forcing
+    frequency:
+
+    >>> import hybridpd as hp
+    >>> from hybridpd.hybrid.samples import impact_oscillator, oscillator_initial_state
+    >>> def build(w):
+    ...     return impact_oscillator(omega0=1.0, zeta=0.1, omega=w, stop=1.0, e=0.8)
+    >>> sec = {"mode": "free", "guard": "impact",
+    ...        "reference": (oscillator_initial_state(0, 0, omega=0.8), 0.0)}
+    >>> br = hp.continue_family(build, [7.7, 1.66], 0.8, 0.82, section=sec, step=0.01)
+    >>> br.termination, round(br.points[-1].p, 6), bool(br.points[-1].stable)
+    ('reached', 0.82, True)
     """
     if method not in ("arclength", "natural"):
         raise ValueError(f"method must be 'arclength' or 'natural', got {method!r}")

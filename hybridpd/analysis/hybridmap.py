@@ -49,6 +49,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg import expm
 
+from hybridpd._deprecated import moved_names
 from hybridpd._jit import njit
 from hybridpd._repr import compact_repr
 from hybridpd.hybrid.automaton import HybridAutomaton, ZenoOptions, run_hybrid
@@ -59,8 +60,6 @@ __all__ = [
     "Section",
     "SectionMap",
     "exosystem",
-    "impact_pair_section",
-    "mechanical_section",
 ]
 
 #: Codes of :attr:`MapResult.status`.
@@ -481,6 +480,7 @@ class SectionMap:
 
     >>> from hybridpd import ImpactPair, PDGains
     >>> from hybridpd.analysis.orbits import symmetric_orbit
+    >>> from hybridpd.analysis.sections import impact_pair_section
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> P = SectionMap(impact_pair_section(orb.system()))
     >>> bool(np.allclose(P(orb.fixed_point), orb.fixed_point, atol=1e-10))
@@ -738,4 +738,5 @@ def _check_k(k) -> int:
 
 
 # the sections of the project's models (they need Section, defined above)
-from hybridpd.analysis.sections import impact_pair_section, mechanical_section
+__getattr__ = moved_names(__name__, {"impact_pair_section": "hybridpd.analysis.sections",
+                                     "mechanical_section": "hybridpd.analysis.sections"})

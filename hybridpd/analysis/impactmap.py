@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hybridpd._repr import compact_repr
+from hybridpd.analysis.floquet import Stability, stability
 from hybridpd.model import (
     Case,
     ImpactPair,
@@ -38,43 +39,6 @@ from hybridpd.pair.batch import (
 )
 
 __all__ = ["ImpactMap", "MapResult", "Stability", "stability"]
-
-_HYPERBOLIC_TOL = 1e-9
-
-
-@dataclass(frozen=True)
-class Stability:
-    """Stability of a fixed point from its Jacobian (paper (27)).
-
-    Attributes
-    ----------
-    multipliers : ndarray, shape (4,), complex
-        Eigenvalues of ``DP`` (Floquet multipliers) by decreasing modulus.
-    spectral_radius : float
-    stable : bool
-        All multipliers inside the unit circle.
-    hyperbolic : bool
-        No multiplier within ``tol`` of the unit circle.
-    """
-
-    __repr__ = compact_repr
-
-    multipliers: np.ndarray
-    spectral_radius: float
-    stable: bool
-    hyperbolic: bool
-
-
-def stability(DP, tol: float = _HYPERBOLIC_TOL) -> Stability:
-    """Multipliers, spectral radius, stability and hyperbolicity of a square Jacobian ``DP``."""
-    DP = np.asarray(DP, float)
-    if DP.ndim != 2 or DP.shape[0] != DP.shape[1] or not np.all(np.isfinite(DP)):
-        raise ValueError(f"DP must be a finite square matrix, got shape {DP.shape}")
-    ev = np.linalg.eigvals(DP)
-    ev = ev[np.argsort(-np.abs(ev))]
-    rho = float(np.abs(ev[0]))
-    return Stability(ev, rho, rho < 1.0, bool(np.all(np.abs(np.abs(ev) - 1.0) > tol)))
-
 
 @dataclass(frozen=True)
 class MapResult:

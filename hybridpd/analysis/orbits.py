@@ -176,6 +176,23 @@ def symmetric_orbits(kp, kv, *, mu, e, L, omega, m2=1.0, x10=1.0, n=1, case="col
     Returns
     -------
     OrbitArrays
+        Every field has the broadcast shape of the parameters.
+
+    Raises
+    ------
+    ValueError
+        If a parameter is out of its range or ``n`` is not odd.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import hybridpd as hp
+    >>> oa = hp.symmetric_orbits(np.array([5.0, 10.0, 40.0]), 20.0, mu=0.1, e=0.5, L=0.75,
+    ...                          omega=5.0)
+    >>> oa.exists, oa.stable
+    (array([ True,  True,  True]), array([ True,  True,  True]))
+    >>> oa.spectral_radius.round(4)
+    array([0.7272, 0.5238, 0.1334])
     """
     case = Case.parse(case)
     n = check_odd_order(n)

@@ -11,10 +11,9 @@ with ``DP`` from exact flows and saltation matrices):
   (eigenvalues of ``DP^k``), the spectral radius and the stability verdict;
   :func:`measured_contraction` estimates the spectral radius independently, from iterated
   small perturbations of the simulated map.
-* :class:`SectionMapper` labels section points by iterating ``P`` in one compiled loop (the
-  mapper interface of :mod:`hybridpd.sweeps.basins`, with its :data:`~hybridpd.sweeps.basins.LABELS`),
-  and :func:`section_basin` labels a 2-D slice of the section into a
-  :class:`~hybridpd.sweeps.basins.BasinResult`.
+* :class:`SectionMapper` labels section points by iterating ``P`` in one compiled loop (an
+  "initial condition -> label" mapper with the labels of :mod:`hybridpd.analysis.labels`);
+  :func:`hybridpd.sweeps.section_basins.section_basin` applies it over a 2-D slice.
 
 Stability: stable iff every multiplier has modulus < 1; hyperbolic iff none is within
 ``1e-9`` of the unit circle (the convention of :mod:`hybridpd.analysis.impactmap`).
@@ -26,16 +25,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hybridpd._deprecated import moved_names
 from hybridpd._jit import njit
 from hybridpd._repr import compact_repr
+from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import (
     ST_RETURNED,
     SectionMap,
     _to_return,
 )
-from hybridpd.analysis.impactmap import stability
-from hybridpd.model import check_axis
-from hybridpd.sweeps.basins import LABELS, OFF_SECTION, BasinResult
+from hybridpd.analysis.labels import LABELS, OFF_SECTION
 
 __all__ = [
     "PeriodicOrbit",
@@ -43,7 +42,6 @@ __all__ = [
     "find_orbit",
     "measured_contraction",
     "orbit_from_model",
-    "section_basin",
 ]
 
 
@@ -160,7 +158,7 @@ def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_it
     --------
     >>> from hybridpd import ImpactPair, PDGains
     >>> from hybridpd.analysis.orbits import symmetric_orbit
-    >>> from hybridpd.analysis.hybridmap import impact_pair_section
+    >>> from hybridpd.analysis.sections import impact_pair_section
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> P = SectionMap(impact_pair_section(orb.system()))
     >>> po = find_orbit(P, orb.fixed_point + [0.01, 0.01, -0.02, 0.05])
@@ -361,9 +359,9 @@ def _label_kernel(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, t
 
 
 class SectionMapper:
-    """Map a section point to a label by iterating ``P^k`` (the mapper of :mod:`hybridpd.sweeps.basins`).
+    """Map a section point to a label by iterating ``P^k`` (an "initial condition -> label" mapper).
 
-    Labels are those of :data:`hybridpd.sweeps.basins.LABELS`: ``converged`` when, after
+    Labels are those of :data:`hybridpd.analysis.labels.LABELS`: ``converged`` when, after
     ``n_iter`` iterations, the squared distance in section coordinates (phase wrapped) to the
     cycle is below ``criterion`` (for ``period = k > 1`` the cycle's ``k`` section points
     ``P^j(fixed_point)`` are all fixed points of ``P^k``; the nearest counts); ``diverged`` (non-finite, beyond ``escape``, or no
@@ -395,7 +393,7 @@ class SectionMapper:
     --------
     >>> from hybridpd import ImpactPair, PDGains
     >>> from hybridpd.analysis.orbits import symmetric_orbit
-    >>> from hybridpd.analysis.hybridmap import impact_pair_section
+    >>> from hybridpd.analysis.sections import impact_pair_section
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> m = SectionMapper(SectionMap(impact_pair_section(orb.system())), orb.fixed_point)
     >>> m.label_name(m(orb.fixed_point + [0, 0.01, 0, 0]))
@@ -526,88 +524,6 @@ class SectionMapper:
         return np.eye(dim), 0.0
 
 
-def section_basin(mapper: SectionMapper, axis_x, axis_y, x, y, *, executor="serial",
-                  chunk_size=None, max_workers=None, progress=False) -> BasinResult:
-    """Label a 2-D slice of the section: coordinates ``axis_x, axis_y`` on a grid, the others
-    at the fixed point's values.
-
-    Parameters
-    ----------
-    mapper : SectionMapper
-    axis_x, axis_y : int or str
-        Section coordinates (index or name, see ``Section.names``) spanned by the grid.
-    x, y : (min, max, num)
-        Grid axes.
-    executor, chunk_size, max_workers, progress
-        ``"serial"`` (default) or passed to :func:`hybridpd.sweeps.sweep.run_sweep`.
-
-    Returns
-    -------
-    BasinResult
-        ``x1``/``y1`` hold the ``x``/``y`` axes; ``metadata["axes"]`` names the coordinates.
-    """
-    names = mapper.map.section.names
-    ix, iy = (_axis_index(a, names) for a in (axis_x, axis_y))
-    if ix == iy:
-        raise ValueError("axis_x and axis_y must differ")
-    xs, ys = check_axis("x", x), check_axis("y", y)
-    X, Y = np.meshgrid(xs, ys)
-    pts = np.tile(mapper.fixed_point, (X.size, 1))
-    pts[:, ix], pts[:, iy] = X.ravel(), Y.ravel()
-    if executor == "serial":
-        lab, its = mapper.labels(pts)
-    else:
-        from hybridpd.sweeps.sweep import run_sweep
-
-        res = run_sweep(_label_chunk, pts, names=[f"s{i}" for i in range(pts.shape[1])],
-                        chunk_size=chunk_size, executor=executor, max_workers=max_workers,
-                        progress=progress, func_kwargs={"mapper": _PickledMapper.of(mapper)},
-                        metadata={"kind": "section_basin"})
-        lab, its = res.outputs["label"], res.outputs["iterations"]
-    lab = lab.reshape(Y.shape)
-    on = lab != OFF_SECTION
-    frac = float((lab[on] == 0).mean()) if np.any(on) else 0.0
-    meta = {"axes": [names[ix], names[iy]], "coordinates": list(names),
-            "n_iter": mapper.n_iter, "criterion": mapper.criterion,
-            "certified_radius": mapper.certified_radius, "period": mapper.period}
-    return BasinResult(xs, ys, lab, its.reshape(Y.shape), mapper.fixed_point.copy(), frac, meta)
-
-
-def _axis_index(a, names) -> int:
-    if isinstance(a, str):
-        if a not in names:
-            raise ValueError(f"axis must be one of {names}, got {a!r}")
-        return names.index(a)
-    if isinstance(a, bool) or int(a) != a or not 0 <= int(a) < len(names):
-        raise ValueError(f"axis must be an index in [0, {len(names)}) or a name, got {a!r}")
-    return int(a)
-
-
-@dataclass(frozen=True, eq=False)
-class _PickledMapper:
-    """A mapper as bytes (the sweep records its arguments by digest and ships them to the
-    worker processes)."""
-
-    blob: np.ndarray
-
-    @classmethod
-    def of(cls, mapper: SectionMapper) -> _PickledMapper:
-        import pickle
-
-        return cls(np.frombuffer(pickle.dumps(mapper), dtype=np.uint8))
-
-    def load(self) -> SectionMapper:
-        import pickle
-
-        return pickle.loads(self.blob.tobytes())
-
-
-def _label_chunk(chunk, mapper: _PickledMapper):
-    S = np.stack([chunk[f"s{i}"] for i in range(len(chunk))], axis=1)
-    lab, its = mapper.load().labels(S)
-    return {"label": lab, "iterations": its}
-
-
 # ----------------------------------------------------------------------------------------
 # mechanical model files
 # ----------------------------------------------------------------------------------------
@@ -627,7 +543,7 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period: i
     period : int
         Number of returns to the section per period (``k`` of ``P^k``).
     guess : array_like, optional
-        Section point (coordinates of :func:`~hybridpd.analysis.hybridmap.mechanical_section`).
+        Section point (coordinates of :func:`~hybridpd.analysis.sections.mechanical_section`).
         Default: simulate from the file's initial state for ``transient`` and take the last
         pre-impact state on the section.
     transient : float, optional
@@ -644,7 +560,7 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period: i
     -------
     (PeriodicOrbit, SectionMap)
     """
-    from hybridpd.analysis.hybridmap import mechanical_section
+    from hybridpd.analysis.sections import mechanical_section
 
     ma = model.automaton
     if isinstance(contact, bool) or int(contact) != contact or \
@@ -684,3 +600,6 @@ def _guess_from_simulation(model, sec, transient):
                          f"within the transient of {float(transient):g}; give --guess")
     i = hits[-1]
     return sec.from_state(J.pre[i], J.t[i])
+
+
+__getattr__ = moved_names(__name__, {"section_basin": "hybridpd.sweeps.section_basins"})

@@ -49,7 +49,7 @@ def main(argv=None) -> int:
         args = parser.parse_args(argv)
         return int(args.func(args) or 0)
     except UsageError as exc:
-        print(f"hybridpd: error: {exc}", file=sys.stderr)
+        print(f"hybridpd: error: {_did_you_mean(str(exc))}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except ValueError as exc:
         print(f"hybridpd: error: {exc}", file=sys.stderr)
@@ -61,6 +61,19 @@ def main(argv=None) -> int:
         # the reader of our stdout went away (e.g. `| head`): not an error of ours
         sys.stderr.close()
         return 0
+
+
+def _did_you_mean(message: str) -> str:
+    """argparse's "invalid choice: 'regoins'" for the command, with the closest command."""
+    import difflib
+    import re
+
+    m = re.match(r"argument COMMAND: invalid choice: '([^']*)'", message)
+    if not m:
+        return message
+    close = difflib.get_close_matches(m.group(1), COMMANDS, n=1, cutoff=0.5)
+    hint = f" (did you mean {close[0]}?)" if close else ""
+    return f"unknown command {m.group(1)!r}{hint}; commands: {', '.join(COMMANDS)}"
 
 
 if __name__ == "__main__":  # pragma: no cover

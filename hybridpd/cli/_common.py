@@ -183,5 +183,8 @@ def save_figure(fig, path) -> None:
     """Write `fig` to `path` (format from the suffix), creating the folder."""
     from pathlib import Path
 
+    from hybridpd.plotting.style import house_style
+
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=130)
+    with house_style():
+        fig.savefig(path, dpi=300)

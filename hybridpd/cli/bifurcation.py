@@ -5,7 +5,7 @@ import argparse
 import json
 import math
 
-from hybridpd.cli._common import check_image
+from hybridpd.cli._common import check_image, save_figure
 
 #: Parameters the command can sweep (``--param NAME``).
 SWEEPABLE = ("kp", "kv", "e", "mu", "gamma", "omega", "m2")
@@ -126,10 +126,13 @@ def run(args) -> int:
                             iterations=args.iterations, keep=args.keep, follow=args.follow,
                             initial=args.initial, max_period=args.max_period)
     d.save(args.out)
+    branch_note = None
     if args.plot:
         from hybridpd.plotting.bifurcation import plot_bifurcation
 
-        plot_bifurcation(d, coordinate=args.coordinate).savefig(args.plot, dpi=130)
+        branches, branch_note = _symmetric_branch(pair, v0, name, hi, args)
+        save_figure(plot_bifurcation(d, coordinate=args.coordinate, branches=branches),
+                    args.plot)
     if args.json:
         lya = [None if not np.isfinite(x) else float(x) for x in d.lyapunov]
         print(json.dumps({
@@ -139,7 +142,7 @@ def run(args) -> int:
             "xm": [None if not np.isfinite(x) else float(x) for x in d.xm],
             "counts": d.counts(), "fixed": d.fixed, "case": d.case,
             "iterations": d.iterations, "keep": d.keep, "follow": d.follow,
-            "out": str(args.out), "plot": args.plot,
+            "out": str(args.out), "plot": args.plot, "branch": branch_note,
         }))
         return 0
     counts = ", ".join(f"{n} {c}" for c, n in d.counts().items() if n)
@@ -148,5 +151,25 @@ def run(args) -> int:
     periods = {int(k): int(np.sum(d.period == k)) for k in np.unique(d.period) if k}
     if periods:
         print("  periods: " + ", ".join(f"{k}: {n} values" for k, n in periods.items()))
+        if any(k > 1 for k in periods):
+            print("  (period k: the kept section points repeat every k applications of P, "
+                  "i.e. k impacts per cycle; the paper's symmetric orbit has period 1)")
+    if branch_note:
+        print(f"  {branch_note}")
     print(f"  wrote {args.out}" + (f" and {args.plot}" if args.plot else ""))
     return 0
+
+
+def _symmetric_branch(pair, v0, name, stop, args):
+    """The symmetric orbit continued over the sweep (drawn over the diagram, stable solid,
+    unstable dashed), and a line saying what was drawn or why not."""
+    from hybridpd.analysis.continuation import continue_symmetric
+    from hybridpd.model import PDGains
+
+    try:
+        br = continue_symmetric(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name,
+                                stop, x10=args.x10, n=args.n, case=args.case)
+    except ValueError as exc:
+        return (), f"no continued branch drawn: {exc}"
+    return [br], (f"continued symmetric branch drawn ({len(br)} points, stopped: "
+                  f"{br.termination})")

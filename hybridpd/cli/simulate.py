@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 
 from hybridpd.cli._common import (
     JSON_HELP,
@@ -77,6 +78,18 @@ def register(sub):
     p.set_defaults(func=run)
 
 
+#: events listed in the text output before it summarises the rest
+_SHOWN = 10
+#: exit status of a model run stopped by an unresolved condition (not a user bound)
+EXIT_STOPPED = 4
+_FAILED = {
+    "simultaneous_contact": "contacts closing at one instant whose joint impact (the "
+                            "multi-contact LCP) has no solution or a degenerate one",
+    "diverged": "the state grew past the divergence bound (an unstable loop?)",
+    "nonfinite": "the state overflowed",
+}
+
+
 def _agree(a, b, rtol=1e-6):
     return math.isclose(a, b, rel_tol=rtol, abs_tol=1e-12)
 
@@ -141,32 +154,49 @@ def _run_model(args) -> int:
     from hybridpd.mechanics.modelfile import load_model
 
     model = load_model(args.model)
+    if not args.t_end > model.t0:
+        raise ValueError(f"--t-end must be > the model's t0 = {model.t0:g}, got {args.t_end:g}")
     traj = model.simulate(args.t_end, max_impacts=args.max_impacts)
     d = traj.to_dict()
     contacts = [{"name": c.name, "normal": [float(w) for w in c.normal],
                  "lo": c.lo, "hi": c.hi} for c in model.contacts]
     _write(args, d, traj.mechanical, model.t0, traj.t_final, model.system.dofs, contacts,
            title=str(model.source), parameters={"model": str(model.source)})
+    status = EXIT_STOPPED if d["termination"] in _FAILED else 0
+    if status:
+        print(f"hybridpd simulate: the run stopped at t = {traj.t_final:.12g}: "
+              f"{d['termination']} ({_FAILED[d['termination']]})", file=sys.stderr)
     if args.json:
         print(json.dumps(d))
-        return 0
+        return status
     dofs = model.system.dofs
     print(f"{model.source}: {len(dofs)} DOFs ({', '.join(dofs)}), {len(model.contacts)} "
           f"contact(s); t in [{model.t0:g}, {traj.t_final:g}]: {traj.n_impacts} impacts, "
           f"{len(traj.sticking)} sticking interval(s); stopped: {d['termination']}")
-    for imp in d["impacts"][:10]:
+    for imp in d["impacts"][:_SHOWN]:
         print(f"  t = {imp['t']:.10f}  contact {imp['contact']}  wall {imp['wall']:+d}")
-    if traj.n_impacts > 10:
-        print(f"  ... {traj.n_impacts - 10} more (use --json for all)")
-    for a, b, k in d["sticking"]:
+    if traj.n_impacts > _SHOWN:
+        print(f"  ... {traj.n_impacts - _SHOWN} more (use --json for all)")
+    for a, b, k in d["sticking"][:_SHOWN]:
         print(f"  sticking on contact {k} on [{a:.10f}, {b:.10f}]")
-    return 0
+    if len(d["sticking"]) > _SHOWN:
+        rest = d["sticking"][_SHOWN:]
+        print(f"  ... {len(rest)} more sticking intervals, {sum(b - a for a, b, _ in rest):.6g} "
+              "time units in all (use --json for all)")
+    for t_inf, k, _, n_res in traj.accumulations[:_SHOWN]:
+        print(f"  accumulation of impacts on contact {k} at t = {t_inf:.12f} "
+              f"({n_res} resolved)")
+    if len(traj.accumulations) > _SHOWN:
+        print(f"  ... {len(traj.accumulations) - _SHOWN} more accumulations")
+    return status
 
 
 def _run_pair(args) -> int:
     from hybridpd.model import ImpactPair, PDGains, Reference
     from hybridpd.pair.impactpair import ControlledImpactPair
 
+    if not args.t_end > 0:
+        raise ValueError(f"--t-end must be > 0 (the run starts at t = 0), got {args.t_end:g}")
     L, xm = geometry(args)
     sysm = ControlledImpactPair(ImpactPair(args.mu, args.e, L, args.m2),
                                 PDGains(args.kp, args.kv), Reference(xm, args.omega),

@@ -27,7 +27,23 @@ written to the jump/segment/Zeno buffers, reset them to 0 before resuming). Outp
 2 grazing, 3 zeno), ``jpre, jpost (cap, N1)``; segments ``st0, st1, smode, sj, sw (cap, N1)``;
 ``zt_out`` Zeno times. ``code``: 0 end time, 1 jump limit, 2 Zeno, 3 non-finite, 4 step limit,
 5 buffer full (resume with fresh or emptied buffers). A basin-of-attraction engine can call
-it with small buffers and read only ``w``, ``fc[0]``, ``ic[0]``, ``ic[1]``.
+it with small buffers and read only ``w``, ``fc[0]``, ``ic[0]``, ``ic[1]``. ``zf`` may carry a
+third entry, ``tail_tol``: an accumulation detected by its ratios is accepted only once the
+extrapolated tail ``t_inf - t_k`` is below ``tail_tol (1 + |t_k|)`` (more jumps are resolved
+until then); a negative or missing entry accepts it at once. A fourth entry ``max_state > 0``
+stops the run with code 8 (diverged) when a state component exceeds it in magnitude at the
+start of a flow.
+
+``run_hybrid_ex(..., zt_out, gkind, simtol)`` adds two returns to the same loop: code 6 when
+the current mode ``ic[0]`` is not built: a target (or Zeno target) ``-2 - r`` names the
+mode reserved as number ``r`` (the jump is applied and recorded with that code as target,
+then the loop returns; build the mode, set ``ic[0]`` to its index, patch the tables and
+resume), and code 7
+when a guard of non-zero group ``gkind[mode, g]`` (shape ``(M, GM)``) fires while another
+guard of the same group is on its guard or closing onto it within ``simtol (1 + |t|)``: the
+joint jump is then the caller's (``w`` holds the pre-jump state, ``fc[0]`` its time and
+``ic[12]`` the guard; apply the jump, set ``ic[0]``, ``ic[2] = ic[3] = -1`` and resume).
+``simtol < 0`` disables the groups.
 """
 from __future__ import annotations
 
@@ -48,11 +64,14 @@ from hybridpd.hybrid.events import (
     flow_to,
 )
 
-__all__ = ["PackedAutomaton", "run_hybrid"]
+__all__ = ["PackedAutomaton", "run_hybrid", "run_hybrid_ex"]
 
 _RC_BUFFER_FULL = 5
 _RC_STEP_LIMIT = 4
-_KIND_NAMES = {1: "crossing", 2: "grazing", 3: "zeno"}
+_RC_NEED_MODE = 6
+_RC_SIMULTANEOUS = 7
+_RC_DIVERGED = 8
+_KIND_NAMES = {1: "crossing", 2: "grazing", 3: "zeno", 4: "simultaneous"}
 
 
 class PackedAutomaton(NamedTuple):
@@ -123,7 +142,7 @@ def _zeno_switch(mode, g, t_k, t_inf, h, Phi, Ah, Rz, zt, max_jumps, Kp1, w, fc,
     zt_out[ic[11]] = t_inf
     ic[11] += 1
     target = zt[mode, g]
-    if target < 0:
+    if target == -1:
         _add_seg(st0, st1, smode, sj, sw, ic, t_k, t_k, mode, ic[1], w)
         return 2
     if ic[1] >= max_jumps:
@@ -152,7 +171,10 @@ def _zeno_switch(mode, g, t_k, t_inf, h, Phi, Ah, Rz, zt, max_jumps, Kp1, w, fc,
     ic[3] = -1
     ic[5] = 0
     ic[6] = 0
-    ic[7] = 0
+    if t_inf > t_k:
+        ic[7] = 0           # an instant accumulation still counts towards an instant loop
+    else:
+        ic[7] += 1
     if not _finite(post):
         _add_seg(st0, st1, smode, sj, sw, ic, t_inf, t_inf, target, ic[1], w)
         return 3
@@ -160,10 +182,11 @@ def _zeno_switch(mode, g, t_k, t_inf, h, Phi, Ah, Rz, zt, max_jumps, Kp1, w, fc,
 
 
 @njit(cache=True)
-def run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target, zt, Rz,
-               dt_min, t_end, max_jumps, max_steps, zf, zi, w, fc, ic,
-               jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out):
-    """Run the automaton from the carried state; see the module docstring for the contract."""
+def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target, zt, Rz,
+                  dt_min, t_end, max_jumps, max_steps, zf, zi, w, fc, ic,
+                  jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out,
+                  gkind, simtol):
+    """:func:`run_hybrid` with modes built on demand and simultaneity groups (module docstring)."""
     # One function on purpose: numba compiles the whole jump loop into one native loop.
     N1 = w.shape[0]
     Kp1 = G.shape[2]
@@ -174,10 +197,19 @@ def run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, targ
     zon = zi[0] != 0
     min_ratios = zi[1]
     max_inst = zi[2]
+    tail_tol = zf[2] if zf.shape[0] > 2 else -1.0
+    max_state = zf[3] if zf.shape[0] > 3 else -1.0
     while True:
         if (ic[9] + 2 > jt.shape[0] or ic[10] + 3 > st0.shape[0]
                 or ic[11] + 2 > zt_out.shape[0]):
             return 5
+        if ic[0] < 0 or ng[ic[0]] < 0:
+            return _RC_NEED_MODE
+        if max_state > 0.0:
+            for i in range(N1 - 1):
+                if abs(w[i]) > max_state:
+                    _add_seg(st0, st1, smode, sj, sw, ic, fc[0], fc[0], ic[0], ic[1], w)
+                    return _RC_DIVERGED
         t = fc[0]
         mode = ic[0]
         si = ic[10]
@@ -210,6 +242,13 @@ def run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, targ
                 w[i] = wout[i]
             fc[0] = tev
             return 1
+        if simtol >= 0.0 and gkind[mode, g] != 0 and _other_active(
+                G[mode], ng[mode], gkind[mode], g, wout, h[mode], simtol * (1.0 + abs(tev))):
+            for i in range(N1):
+                w[i] = wout[i]
+            fc[0] = tev
+            ic[12] = g
+            return _RC_SIMULTANEOUS
         _matvec(Rh[mode, g], wout, post)
         post[N1 - 1] = 1.0
         tgt = target[mode, g]
@@ -272,6 +311,9 @@ def run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, targ
             t_inf = tev
             if 0.0 < r < 1.0:
                 t_inf = tev + dt * r / (1.0 - r)
+            if tail_tol >= 0.0 and dt > dt_min[mode] and t_inf - tev > tail_tol * (1.0 + abs(tev)):
+                # the extrapolated tail is still too long to trust the ratio: resolve more
+                continue
             if dt <= dt_min[mode] and t_inf > t_end:
                 t_inf = t_end
             if t_inf <= t_end:
@@ -280,3 +322,38 @@ def run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, targ
                                   smode, sj, sw, zt_out)
                 if rc >= 0:
                     return rc
+
+
+@njit(cache=True)
+def _other_active(Gm, ngm, gk, g, w, hm, tau):
+    """Whether another guard of group ``gk[g]`` is on its guard at ``w`` or reaches it within
+    ``tau`` (time units) while closing: the jump must then be resolved jointly."""
+    N1 = w.shape[0]
+    for q in range(ngm):
+        if q == g or gk[q] != gk[g]:
+            continue
+        f = 0.0
+        fa = 0.0
+        d1 = 0.0
+        d1a = 0.0
+        for j in range(N1):
+            f += Gm[q, 0, j] * w[j]
+            fa += abs(Gm[q, 0, j] * w[j])
+            d1 += Gm[q, 1, j] * w[j]
+            d1a += abs(Gm[q, 1, j] * w[j])
+        if d1 > 64.0 * 2.220446049250313e-16 * d1a:
+            continue                      # separating: it takes no part
+        if f <= 64.0 * 2.220446049250313e-16 * fa + max(-d1, 0.0) / hm * tau:
+            return True
+    return False
+
+
+@njit(cache=True)
+def run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target, zt, Rz,
+               dt_min, t_end, max_jumps, max_steps, zf, zi, w, fc, ic,
+               jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out):
+    """Run the automaton from the carried state; see the module docstring for the contract."""
+    return run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target,
+                         zt, Rz, dt_min, t_end, max_jumps, max_steps, zf, zi, w, fc, ic, jt, jj,
+                         jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out,
+                         np.zeros((1, 1), np.int64), -1.0)

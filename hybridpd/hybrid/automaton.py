@@ -38,6 +38,21 @@ Conventions
   cause ``ZENO`` at ``t_k``, and ``t_inf`` is recorded in ``zeno_times``. An accumulation
   predicted after the end time is ignored (the jumps before the end are resolved). More than
   ``max_instant_jumps`` consecutive jumps at one instant also end the run with ``ZENO``.
+  With ``ZenoOptions.tail_tol`` an accumulation found by its ratios is accepted only once the
+  extrapolated tail ``t_inf - t_k`` is below ``tail_tol (1 + |t_k|)``; the jumps before are
+  resolved one by one. An immediate accumulation counts towards ``max_instant_jumps``.
+* **Modes on demand**: with a ``mode_builder`` a mode is built (flow prepared, guards
+  packed into the kernel's tables) the first time a run enters it or a caller names it; a
+  guard naming a mode not built yet carries a reservation code, and the jump loop hands
+  control back to build it. :meth:`HybridAutomaton.materialize` builds every reachable mode
+  (``modes`` and ``packed`` do so first, for analyses that need them all).
+* **Simultaneity groups**: a guard of a non-zero ``group`` that fires while another guard of
+  its group is on its guard (or closing onto it within ``simtol (1 + |t|)``) hands the joint
+  jump to the ``resolver`` of :meth:`HybridAutomaton.simulate` (jumps of kind
+  ``'simultaneous'``, one per guard the resolver names, all at one instant); a resolver that
+  finds no joint jump stops the run with ``SIMULTANEOUS``.
+* **Divergence**: with ``max_state`` the run stops with ``DIVERGED`` when a state component
+  exceeds it at a jump or the start of a flow.
 * **Bounds**: every loop is bounded (``max_jumps``, ``max_steps``, the bisection budget); the
   trajectory always says why it stopped (:class:`TerminationCause`). When the jump limit is
   reached the run stops at the event that would have been jump ``max_jumps + 1``, with the
@@ -63,6 +78,8 @@ import numpy as np
 from hybridpd.hybrid._kernel import (  # noqa: F401 (the kernel helpers keep their old path)
     _KIND_NAMES,
     _RC_BUFFER_FULL,
+    _RC_NEED_MODE,
+    _RC_SIMULTANEOUS,
     _RC_STEP_LIMIT,
     PackedAutomaton,
     _add_jump,
@@ -70,8 +87,10 @@ from hybridpd.hybrid._kernel import (  # noqa: F401 (the kernel helpers keep the
     _finite,
     _zeno_switch,
     run_hybrid,
+    run_hybrid_ex,
 )
-from hybridpd.hybrid.events import K_DEFAULT, THETA_DEFAULT, prepare_lti_mode
+from hybridpd.hybrid._store import ModeStore, reset_matrix
+from hybridpd.hybrid.events import K_DEFAULT, THETA_DEFAULT
 from hybridpd.hybrid.modes import Guard, Mode, TerminationCause, ZenoOptions
 from hybridpd.hybrid.trajectory import (
     HybridTrajectory,
@@ -94,6 +113,7 @@ __all__ = [
     "TerminationCause",
     "ZenoOptions",
     "run_hybrid",
+    "run_hybrid_ex",
 ]
 
 
@@ -104,25 +124,7 @@ _INTERP_MAX_STEPS = 2000
 _INTERP_JUMPS = 64
 
 
-def _reset_matrix(where, reset, n):
-    Rh = np.eye(n + 1)
-    if reset is None:
-        return Rh
-    try:
-        R, r = reset
-    except (TypeError, ValueError):
-        raise ValueError(f"{where} must be a pair (R, r)") from None
-    R = np.asarray(R, dtype=float)
-    r = np.asarray(r, dtype=float)
-    if R.shape != (n, n):
-        raise ValueError(f"{where}: R must have shape ({n}, {n}), got {R.shape}")
-    if r.shape != (n,):
-        raise ValueError(f"{where}: r must have shape ({n},), got {r.shape}")
-    if not (np.all(np.isfinite(R)) and np.all(np.isfinite(r))):
-        raise ValueError(f"{where} must be finite")
-    Rh[:n, :n] = R
-    Rh[:n, n] = r
-    return Rh
+_reset_matrix = reset_matrix          # the old private name
 
 
 def _check_modes(modes) -> tuple:
@@ -142,57 +144,6 @@ def _check_modes(modes) -> tuple:
             raise ValueError(f"modes: mode {m.name!r} has A of shape {m.A.shape}, "
                              f"expected ({n}, {n}) like mode {modes[0].name!r}")
     return modes
-
-
-def _pack_modes(modes, index, n, K, theta) -> PackedAutomaton:
-    """Stack the modes' flow and guard data, padded to the largest guard count."""
-    M = len(modes)
-    GM = max(1, max(len(m.guards) for m in modes))
-    N1 = n + 1
-    Kp1 = int(K) + 1
-    pk = {
-        "h": np.zeros(M), "Phi": np.zeros((M, N1, N1)), "Ah": np.zeros((M, N1, N1)),
-        "dinv": np.ones((M, N1)), "trunc": np.zeros(M), "G": np.zeros((M, GM, Kp1, N1)),
-        "gabs": np.zeros((M, GM, Kp1, N1)), "gsum": np.zeros((M, GM, N1)),
-        "cnorm": np.zeros((M, GM)), "prio": np.zeros((M, GM), np.int64),
-        "ng": np.zeros(M, np.int64), "Rh": np.tile(np.eye(N1), (M, GM, 1, 1)),
-        "target": np.zeros((M, GM), np.int64), "zt": np.full((M, GM), -1, np.int64),
-        "Rz": np.tile(np.eye(N1), (M, GM, 1, 1))}
-    for i, m in enumerate(modes):
-        for gi, g in enumerate(m.guards):
-            _pack_guard(pk, i, gi, m, g, index, n)
-        md = prepare_lti_mode(m.A, m.b, [(g.c, g.d, g.direction) for g in m.guards],
-                              K=K, theta=theta, priorities=[g.priority for g in m.guards])
-        ngi = len(m.guards)
-        pk["h"][i] = md.h
-        pk["Phi"][i] = md.Phi
-        pk["Ah"][i] = md.Ah
-        pk["dinv"][i] = md.dinv
-        pk["trunc"][i] = md.trunc
-        pk["G"][i, :ngi] = md.G
-        pk["gabs"][i, :ngi] = md.gabs
-        pk["gsum"][i, :ngi] = md.gsum
-        pk["cnorm"][i, :ngi] = md.cnorm
-        pk["prio"][i, :ngi] = md.prio
-        pk["ng"][i] = ngi
-    return PackedAutomaton(**pk)
-
-
-def _pack_guard(pk, i, gi, m, g, index, n):
-    """Targets and homogeneous resets of guard ``g`` (number ``gi``) of mode ``m`` (number ``i``)."""
-    where = f"mode {m.name!r} guard {g.name!r}"
-    if g.c.shape != (n,):
-        raise ValueError(f"{where}: c must have shape ({n},), got {g.c.shape}")
-    tname = m.name if g.target is None else g.target
-    if tname not in index:
-        raise ValueError(f"{where}: unknown target mode {tname!r}")
-    pk["target"][i, gi] = index[tname]
-    pk["Rh"][i, gi] = _reset_matrix(f"{where} reset", g.reset, n)
-    if g.zeno_target is not None:
-        if g.zeno_target not in index:
-            raise ValueError(f"{where}: unknown zeno_target mode {g.zeno_target!r}")
-        pk["zt"][i, gi] = index[g.zeno_target]
-        pk["Rz"][i, gi] = _reset_matrix(f"{where} zeno_reset", g.zeno_reset, n)
 
 
 def _check_run_args(t_span, max_jumps, max_steps, zeno):
@@ -224,13 +175,21 @@ class HybridAutomaton:
     Parameters
     ----------
     modes : sequence of Mode
-        All modes share the state dimension ``n``; names are unique; guard targets name modes.
+        All modes share the state dimension ``n``; names are unique; guard targets name modes
+        (of this list, or modes that ``mode_builder`` builds).
     state_names : sequence of str, optional
         Names of the ``n`` state components (default ``x0, x1, ...``).
     K : int
         Taylor order of the flow/guard series (default 20).
     theta : float
         Normalised flow step (default 1).
+    mode_builder : callable, optional
+        ``mode_builder(name) -> Mode``: builds a mode the first time a run enters it (or names
+        it as a target); it raises ``ValueError`` for a name that is no mode. With a builder,
+        memory and set-up grow with the modes visited, not with all modes (see
+        :meth:`materialize`).
+    max_modes : int
+        Bound on the number of modes :meth:`materialize` builds (default 4096).
 
     Examples
     --------
@@ -255,7 +214,7 @@ class HybridAutomaton:
     """
 
     def __init__(self, modes: Sequence[Mode], state_names=None, K: int = K_DEFAULT,
-                 theta: float = THETA_DEFAULT):
+                 theta: float = THETA_DEFAULT, mode_builder=None, max_modes: int = 4096):
         modes = _check_modes(modes)
         n = modes[0].A.shape[0]
         if state_names is None:
@@ -264,20 +223,105 @@ class HybridAutomaton:
             state_names = tuple(str(s) for s in state_names)
             if len(state_names) != n:
                 raise ValueError(f"state_names must have {n} entries, got {len(state_names)}")
-        self._modes = modes
-        self._index = {m.name: i for i, m in enumerate(modes)}
+        if mode_builder is not None and not callable(mode_builder):
+            raise ValueError("mode_builder must be callable (name -> Mode)")
+        if isinstance(max_modes, bool) or int(max_modes) != max_modes or max_modes < 1:
+            raise ValueError(f"max_modes must be an int >= 1, got {max_modes!r}")
         self._n = n
         self._state_names = state_names
-        self._packed = _pack_modes(modes, self._index, n, K, theta)
+        self._builder = mode_builder
+        self._max_modes = int(max_modes)
+        self._store = ModeStore(n, K, theta)
+        self._index = {}                 # name -> row of a built mode
+        self._names = []                 # row -> name
+        self._built = []                 # row -> Mode
+        self._reserved = {}              # name -> reservation number r (target code -2 - r)
+        self._res_names = []             # r -> name
+        self._code_rows = {}             # target code -> row, once built
+        given = {m.name: m for m in modes}
+        for m in modes:
+            self._reserve(m.name)
+        for m in modes:
+            if m.name not in self._index:
+                self._build(m.name, given)
+
+    # ---- modes on demand
+    def _reserve(self, name, where=None) -> int:
+        """Row of the mode ``name`` if built, else its reservation code ``-2 - r``."""
+        i = self._index.get(name)
+        if i is not None:
+            return i
+        r = self._reserved.get(name)
+        if r is None:
+            if self._builder is None and where is not None:
+                raise ValueError(f"{where}: unknown target mode {name!r}")
+            r = len(self._res_names)
+            self._reserved[name] = r
+            self._res_names.append(name)
+        return -2 - r
+
+    def _build(self, name, given=None) -> int:
+        """Build the mode ``name`` into a new row (``ValueError`` if it is no mode)."""
+        m = given.get(name) if given else None
+        if m is None:
+            if self._builder is None:
+                raise ValueError(f"unknown mode {name!r}; modes are {tuple(self._names)}")
+            m = self._builder(name)
+            if not isinstance(m, Mode) or m.name != name:
+                raise ValueError(f"mode_builder({name!r}) must return a Mode named {name!r}")
+            if m.A.shape != (self._n, self._n):
+                raise ValueError(f"mode {name!r}: A must have shape ({self._n}, {self._n})")
+        if self._builder is not None and given is None and len(self._names) >= self._max_modes:
+            raise ValueError(
+                f"max_modes: more than {self._max_modes} modes would be built; simulate builds "
+                "the modes it visits, an analysis of every mode needs them all")
+        row = self._store.add(m, self._reserve)
+        self._index[name] = row
+        self._names.append(name)
+        self._built.append(m)
+        r = self._reserved.get(name)
+        if r is not None:
+            self._store.patch(-2 - r, row)
+            self._code_rows[-2 - r] = row
+        return row
+
+    def materialize(self) -> int:
+        """Build every mode reachable from the modes built so far; returns the mode count.
+
+        Raises
+        ------
+        ValueError
+            If more than ``max_modes`` modes would be built.
+        """
+        r = 0
+        while r < len(self._res_names):
+            name = self._res_names[r]
+            if name not in self._index:
+                self._build(name)
+            r += 1
+        return len(self._names)
+
+    @property
+    def n_built(self) -> int:
+        """Number of modes built so far."""
+        return len(self._built)
+
+    @property
+    def table_bytes(self) -> int:
+        """Memory of the packed tables (bytes)."""
+        return self._store.nbytes
 
     @property
     def modes(self) -> tuple:
-        """The modes, in order (their index is the mode code of the kernels)."""
-        return self._modes
+        """The modes, in order (their index is the mode code of the kernels); all reachable
+        modes are built first (:meth:`materialize`)."""
+        self.materialize()
+        return tuple(self._built)
 
     @property
     def mode_names(self) -> tuple:
-        return tuple(m.name for m in self._modes)
+        self.materialize()
+        return tuple(self._names)
 
     @property
     def n_states(self) -> int:
@@ -289,18 +333,31 @@ class HybridAutomaton:
 
     @property
     def packed(self) -> PackedAutomaton:
-        """Stacked arrays for :func:`run_hybrid` (read-only by convention)."""
-        return self._packed
+        """Stacked arrays for :func:`run_hybrid` over all reachable modes (read-only by
+        convention; :meth:`materialize` first)."""
+        self.materialize()
+        return self._store.packed()
+
+    def _packed_now(self) -> PackedAutomaton:
+        """The tables of the modes built so far (targets ``< -1``: reserved modes)."""
+        return self._store.packed()
 
     def mode_index(self, name: str) -> int:
-        """Index of the mode called ``name`` (``ValueError`` if unknown)."""
-        try:
-            return self._index[name]
-        except (KeyError, TypeError):
-            raise ValueError(f"unknown mode {name!r}; modes are {self.mode_names}") from None
+        """Index of the mode called ``name``, built on demand (``ValueError`` if unknown)."""
+        i = self._index.get(name) if isinstance(name, str) else None
+        if i is None:
+            if self._builder is None or not isinstance(name, str):
+                raise ValueError(f"unknown mode {name!r}; modes are {tuple(self._names)}")
+            i = self._build(name)
+        return i
+
+    def mode(self, name: str) -> Mode:
+        """The mode called ``name`` (built on demand)."""
+        return self._built[self.mode_index(name)]
 
     def simulate(self, x0, mode0: str, t_span, max_jumps: int = 10_000,
-                 max_steps: int | None = None, zeno: ZenoOptions | None = None
+                 max_steps: int | None = None, zeno: ZenoOptions | None = None,
+                 resolver=None, simtol: float = 1e-12, max_state: float | None = None
                  ) -> HybridTrajectory:
         """Simulate from ``x0`` in ``mode0`` over ``t_span``.
 
@@ -318,6 +375,18 @@ class HybridAutomaton:
             Maximum number of exact flow steps (default ``10**7``).
         zeno : ZenoOptions, optional
             Accumulation detection (default :class:`ZenoOptions()`).
+        resolver : callable, optional
+            ``resolver(mode, guard, t, z) -> (z_post, target, names)`` for a guard of a
+            non-zero ``group`` that fires while another of its group is active (see
+            :class:`Guard`): ``z`` the pre-jump state (shape ``(n,)``), ``names`` the guard
+            names to record (one jump of kind ``'simultaneous'`` each, all at ``t`` with the
+            joint post state). It returns ``None`` when the joint jump has no solution: the
+            run stops there with ``SIMULTANEOUS``. Without a resolver groups are ignored.
+        simtol : float
+            Guards of a group closing within ``simtol (1 + |t|)`` are simultaneous.
+        max_state : float, optional
+            Stop with ``DIVERGED`` when a state component exceeds this in magnitude (checked
+            at every jump and flow start).
 
         Returns
         -------
@@ -330,6 +399,8 @@ class HybridAutomaton:
             raise ValueError("x0 must be finite")
         mi = self.mode_index(mode0)
         t0, t1, max_jumps, max_steps, zeno = _check_run_args(t_span, max_jumps, max_steps, zeno)
+        if max_state is not None and not (float(max_state) > 0):
+            raise ValueError(f"max_state must be > 0, got {max_state!r}")
         w = np.append(x0, 1.0)
         fc = np.zeros(8)
         fc[0] = t0
@@ -337,59 +408,119 @@ class HybridAutomaton:
         ic[0] = mi
         ic[2] = -1
         ic[3] = -1
-        rc, cat = self._run_chunks(t0, t1, max_jumps, max_steps, zeno, w, fc, ic)
+        opts = (zeno, resolver, float(simtol), -1.0 if max_state is None else float(max_state))
+        rc, cat = self._run_chunks(t0, t1, max_jumps, max_steps, opts, w, fc, ic)
         return self._make_trajectory(t0, rc, cat, w, fc, ic)
 
-    def _run_chunks(self, t0, t1, max_jumps, max_steps, zeno, w, fc, ic):
-        """Run :func:`run_hybrid` from the carried state ``(w, fc, ic)`` until it stops.
+    def _run_chunks(self, t0, t1, max_jumps, max_steps, opts, w, fc, ic):
+        """Run the jump loop from the carried state ``(w, fc, ic)`` until it stops.
 
-        Buffers that fill up are resumed with fresh ones; a small run is interpreted in
-        chunks (see ``_INTERP_MAX_STEPS``). Returns the kernel's code and the concatenated
-        buffer contents.
+        Buffers that fill up are resumed with fresh ones, modes not built yet are built when
+        entered, joint jumps go to the resolver; a small run is interpreted in chunks (see
+        ``_INTERP_MAX_STEPS``). Returns the kernel's code and the concatenated records.
         """
-        pk = self._packed
-        dt_min = (pk.h * 1e-9 if zeno.dt_min is None
-                  else np.full(len(self._modes), float(zeno.dt_min)))
-        zf = np.array([zeno.ratio_max, zeno.ratio_rtol], dtype=float)
+        zeno, resolver, simtol, max_state = opts
+        zf = np.array([zeno.ratio_max, zeno.ratio_rtol,
+                       -1.0 if zeno.tail_tol is None else zeno.tail_tol, max_state])
         zi = np.array([int(bool(zeno.enabled)), int(zeno.min_ratios),
                        int(zeno.max_instant_jumps)], dtype=np.int64)
         N1 = self._n + 1
         chunks = []
         cap = min(max_jumps + 4, 2048)
-        small = (t1 - t0) <= _INTERP_MAX_STEPS * float(np.min(pk.h)) or max_jumps <= _INTERP_JUMPS
+        pk = self._store.packed()
+        hmin = float(np.min(pk.h))
+        small = (t1 - t0) <= _INTERP_MAX_STEPS * hmin or max_jumps <= _INTERP_JUMPS
+        if resolver is None:
+            simtol = -1.0
         while True:
-            interp = small and run_hybrid.prefer_interpreter()
+            pk = self._store.packed()
+            gk = self._store.gkind() if simtol >= 0 else None
+            dt_min = (pk.h * 1e-9 if zeno.dt_min is None
+                      else np.full(pk.h.shape[0], float(zeno.dt_min)))
+            # without groups the plain loop (the same code) is the kernel to compile
+            kern = run_hybrid if simtol < 0 else run_hybrid_ex
+            extra = {} if simtol < 0 else {"gkind": gk, "simtol": simtol}
+            interp = small and kern.prefer_interpreter()
             steps = min(max_steps, int(ic[8]) + _INTERP_MAX_STEPS) if interp else max_steps
             if interp:
                 cap = min(cap, _INTERP_JUMPS + 4)
-            bufs = {
-                "jt": np.empty(cap), "jj": np.empty(cap, np.int64), "jg": np.empty(cap, np.int64),
-                "jsrc": np.empty(cap, np.int64), "jdst": np.empty(cap, np.int64),
-                "jkind": np.empty(cap, np.int64), "jpre": np.empty((cap, N1)),
-                "jpost": np.empty((cap, N1)), "st0": np.empty(cap + 2), "st1": np.empty(cap + 2),
-                "smode": np.empty(cap + 2, np.int64), "sj": np.empty(cap + 2, np.int64),
-                "sw": np.empty((cap + 2, N1)), "zt_out": np.empty(cap)}
+            bufs = _buffers(cap, N1)
             ic[9:12] = 0
-            run = run_hybrid.interpret if interp else run_hybrid
+            run = kern.interpret if interp else kern
             rc = run(pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs, pk.gsum, pk.cnorm,
                      pk.prio, pk.ng, pk.Rh, pk.target, pk.zt, pk.Rz, dt_min, t1, max_jumps,
-                     steps, zf, zi, w, fc, ic, **bufs)
+                     steps, zf, zi, w, fc, ic, **bufs, **extra)
             nj, ns, nz = int(ic[9]), int(ic[10]), int(ic[11])
             chunks.append({k: (v[:nj] if k.startswith("j") else v[:ns] if k.startswith("s")
                                else v[:nz]) for k, v in bufs.items()})
-            if rc != _RC_BUFFER_FULL and not (rc == _RC_STEP_LIMIT and steps < max_steps):
-                break
-            cap = min(max(max_jumps - int(ic[1]), 0) + 4, 65536)
-        return rc, {k: np.concatenate([c[k] for c in chunks]) for k in chunks[0]}
+            if rc == _RC_NEED_MODE:
+                code = int(ic[0])
+                ic[0] = self._build(self._res_names[-2 - code])
+                continue
+            if rc == _RC_SIMULTANEOUS:
+                if int(ic[1]) >= max_jumps:
+                    rc = 1
+                    break
+                done = self._resolve(resolver, w, fc, ic, chunks)
+                if not done:
+                    rc = TerminationCause.SIMULTANEOUS.value
+                    break
+                continue
+            if rc == _RC_BUFFER_FULL or (rc == _RC_STEP_LIMIT and steps < max_steps):
+                cap = min(max(max_jumps - int(ic[1]), 0) + 4, 65536)
+                continue
+            break
+        cat = {k: np.concatenate([c[k] for c in chunks]) for k in chunks[0] if k != "jname"}
+        names = []
+        for c in chunks:
+            names.extend(c["jname"] if "jname" in c else [None] * len(c["jt"]))
+        cat["jname"] = names
+        return rc, cat
+
+    def _resolve(self, resolver, w, fc, ic, chunks) -> bool:
+        """Apply the resolver's joint jump to the carried state; False if it has none."""
+        n = self._n
+        mode = int(ic[0])
+        g = int(ic[12])
+        src = self._names[mode]
+        t = float(fc[0])
+        out = resolver(src, self._built[mode].guards[g].name, t, w[:n].copy())
+        if out is None:
+            return False
+        z_post, target, names = out
+        z_post = np.asarray(z_post, dtype=float)
+        tgt = self.mode_index(target)
+        k = len(names)
+        pre = w.copy()
+        post = np.append(z_post, 1.0)
+        chunks.append({
+            "jt": np.full(k, t), "jj": int(ic[1]) + 1 + np.arange(k, dtype=np.int64),
+            "jg": np.full(k, -1, np.int64), "jsrc": np.full(k, mode, np.int64),
+            "jdst": np.full(k, tgt, np.int64), "jkind": np.full(k, 4, np.int64),
+            "jpre": np.tile(pre, (k, 1)), "jpost": np.tile(post, (k, 1)),
+            "st0": np.empty(0), "st1": np.empty(0), "smode": np.empty(0, np.int64),
+            "sj": np.empty(0, np.int64), "sw": np.empty((0, n + 1)), "zt_out": np.empty(0),
+            "jname": list(names)})
+        ic[1] += k
+        w[:] = post
+        ic[0] = tgt
+        ic[2] = -1
+        ic[3] = -1
+        fc[1] = 0.0
+        return True
 
     def _make_trajectory(self, t0, rc, cat, w, fc, ic) -> HybridTrajectory:
         n = self._n
-        mn = self.mode_names
-        gnames = [[g.name for g in m.guards] for m in self._modes]
+        mn = self._names
+        gnames = [[g.name for g in m.guards] for m in self._built]
+        for key in ("jdst", "smode"):
+            for code in np.unique(cat[key][cat[key] < 0]):
+                cat[key][cat[key] == code] = self._code_rows[int(code)]
         jsrc = cat["jsrc"]
+        guard = tuple(nm if nm is not None else gnames[s][g]
+                      for s, g, nm in zip(jsrc, cat["jg"], cat["jname"]))
         jumps = JumpTable(
-            t=cat["jt"].copy(), j=cat["jj"].copy(),
-            guard=tuple(gnames[s][g] for s, g in zip(jsrc, cat["jg"])),
+            t=cat["jt"].copy(), j=cat["jj"].copy(), guard=guard,
             pre=cat["jpre"][:, :n].copy(), post=cat["jpost"][:, :n].copy(),
             source=tuple(mn[s] for s in jsrc), target=tuple(mn[d] for d in cat["jdst"]),
             kind=tuple(_KIND_NAMES[int(k)] for k in cat["jkind"]))
@@ -402,3 +533,13 @@ class HybridAutomaton:
             x_final=w[:n].copy(), mode_final=mn[int(ic[0])], j_final=int(ic[1]),
             n_steps=int(ic[8]), state_names=self._state_names, _automaton=self,
             _seg_mode_idx=cat["smode"].copy(), _seg_w=np.ascontiguousarray(cat["sw"]))
+
+
+def _buffers(cap, N1):
+    return {
+        "jt": np.empty(cap), "jj": np.empty(cap, np.int64), "jg": np.empty(cap, np.int64),
+        "jsrc": np.empty(cap, np.int64), "jdst": np.empty(cap, np.int64),
+        "jkind": np.empty(cap, np.int64), "jpre": np.empty((cap, N1)),
+        "jpost": np.empty((cap, N1)), "st0": np.empty(cap + 2), "st1": np.empty(cap + 2),
+        "smode": np.empty(cap + 2, np.int64), "sj": np.empty(cap + 2, np.int64),
+        "sw": np.empty((cap + 2, N1)), "zt_out": np.empty(cap)}

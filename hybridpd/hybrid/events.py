@@ -352,6 +352,18 @@ def advance(w0, t0, t_end, h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, 
     for g in range(ng):
         Gg = G[g]
         Ga = gabs[g]
+        # O(N1) pre-test: sum_k e_k <= (c1 + ch) gsum.|w|, so a guard whose value is beyond
+        # that bound is decided without its Taylor coefficients (the same decision)
+        p0 = 0.0
+        sg_abs = 0.0
+        for j in range(N1):
+            p0 += Gg[0, j] * w[j]
+            sg_abs += gsum[g, j] * wa[j]
+        tol_hi = 4.0 * ((c1 + ch) * sg_abs + cnorm[g] * wn * trunc)
+        if g == hot:
+            tol_hi += hot_tol
+        if math.isfinite(tol_hi) and p0 > 2.0 * tol_hi:
+            continue
         etot = 0.0
         for k in range(Kp1):
             s = 0.0
@@ -425,6 +437,22 @@ def advance(w0, t0, t_end, h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, 
                 sh = 0
             m = Kp1 - sh
             Gg = G[g]
+            if sh == 0:
+                # O(N1) pre-test: |p_k| <= gabs_k.|w|, so p_0 - (gsum - gabs_0).|w| bounds the
+                # guard on the whole step; well above the error bound the step is excluded
+                # exactly as the full test below would exclude it
+                p0 = 0.0
+                s0 = 0.0
+                s1 = 0.0
+                Ga0 = gabs[g, 0]
+                gs = gsum[g]
+                for j in range(N1):
+                    p0 += Gg[0, j] * w[j]
+                    s0 += Ga0[j] * wa[j]
+                    s1 += gs[j] * wa[j]
+                bound = 2.0 * ((c1 + ch) * s1 + cnorm[g] * wn * trunc)
+                if math.isfinite(bound) and p0 - (s1 - s0) > bound:
+                    continue
             sabs_p = 0.0
             for kk in range(m):
                 s = 0.0

@@ -26,6 +26,8 @@ class TerminationCause(enum.Enum):
     ZENO = 2          #: accumulation of jumps without a ``zeno_target`` (or an instant loop)
     NONFINITE = 3     #: the state overflowed / became NaN (unstable flow or reset)
     STEP_LIMIT = 4    #: ``max_steps`` flow steps taken
+    SIMULTANEOUS = 7  #: a joint jump of a guard group that the resolver could not resolve
+    DIVERGED = 8      #: the state grew past ``max_state`` (see :meth:`HybridAutomaton.simulate`)
 
 
 @dataclass(frozen=True, eq=False)  # array fields: identity semantics
@@ -53,6 +55,11 @@ class Guard:
         :mod:`hybridpd.hybrid.automaton`).
     zeno_reset : (R, r), optional
         Reset applied at the accumulation time (default identity); only with ``zeno_target``.
+    group : int
+        Simultaneity group (default 0: none). When a guard of a non-zero group fires while
+        another guard of the same group of its mode is on its guard (or closing onto it within
+        the simultaneity tolerance), the joint jump is handed to the ``resolver`` of
+        :meth:`HybridAutomaton.simulate` (without one the reset applies as usual).
     """
 
     __repr__ = compact_repr
@@ -66,8 +73,12 @@ class Guard:
     priority: int = 0
     zeno_target: str | None = None
     zeno_reset: tuple | None = None
+    group: int = 0
 
     def __post_init__(self):
+        if isinstance(self.group, bool) or not isinstance(self.group, (int, np.integer)) \
+                or self.group < 0:
+            raise ValueError(f"guard {self.name!r}: group must be an int >= 0")
         if not isinstance(self.name, str) or not self.name:
             raise ValueError(f"Guard name must be a non-empty string, got {self.name!r}")
         c = np.asarray(self.c, dtype=float)
@@ -157,6 +168,10 @@ class ZenoOptions:
         regardless of the ratios; default ``1e-9`` times the mode's flow step.
     max_instant_jumps : int
         Consecutive jumps at the same instant allowed before stopping with ``ZENO``.
+    tail_tol : float, optional
+        Accept an accumulation found by its ratios only once the extrapolated tail
+        ``t_inf - t_k`` is below ``tail_tol (1 + |t_k|)``; until then the jumps are resolved
+        one by one (default ``None``: accept at once).
     """
 
     enabled: bool = True
@@ -165,6 +180,7 @@ class ZenoOptions:
     ratio_rtol: float = 0.02
     dt_min: float | None = None
     max_instant_jumps: int = 100
+    tail_tol: float | None = None
 
     def __post_init__(self):
         if int(self.min_ratios) < 1:
@@ -175,5 +191,7 @@ class ZenoOptions:
             raise ValueError("zeno.ratio_rtol must be >= 0")
         if self.dt_min is not None and not (float(self.dt_min) >= 0.0):
             raise ValueError("zeno.dt_min must be >= 0")
+        if self.tail_tol is not None and not (float(self.tail_tol) >= 0.0):
+            raise ValueError("zeno.tail_tol must be >= 0")
         if int(self.max_instant_jumps) < 1:
             raise ValueError("zeno.max_instant_jumps must be >= 1")

@@ -187,7 +187,7 @@ class HybridTrajectory:
         ts, scalar, idx = self._locate(t)
         n = len(self.state_names)
         out = np.empty((ts.size, n))
-        pk = self._automaton.packed
+        pk = self._automaton._packed_now()
         Kp1 = pk.G.shape[2]
         for s in np.unique(idx):
             sel = np.nonzero(idx == s)[0]

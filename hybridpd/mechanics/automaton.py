@@ -29,13 +29,22 @@ Guards (``g > 0`` admissible, all with ``direction = -1`` except sampling):
 * ``contact{k}{+|-}`` (rigid ``k`` at ``hi`` / ``lo``): ``g = hi - w.q`` / ``w.q - lo``; reset
   Newton's law in the metric of ``M`` (:mod:`hybridpd.mechanics.contacts`), and while sticking
   on ``S`` in the constrained metric ``M_S^-1 = M^-1 - M^-1 W (W^T M^-1 W)^-1 W^T M^-1``: the
-  held contacts whose reaction impulse pushes stay held, those that would have to pull are
-  released first (decided from the geometry, :meth:`_Geometry.impact_held`); target the
-  mode holding what stays held (the same mode if all do); accumulating impacts enter the mode
-  that also holds ``k`` through the plastic projection onto all of its contacts
-  (``zeno_target``; none if the normals are dependent: the run then ends with ``ZENO``).
-* ``release{k}{+|-}`` (``k`` in ``S``): ``g = -wall * lambda_k``: the contact force would have
-  to pull; reset the plastic projection onto ``S`` (so that rounding accumulated while
+  the held contacts and ``k`` form one multi-contact impact (:mod:`hybridpd.mechanics.impact`):
+  since the held contacts have zero normal velocity, which of them keep pushing (stay held)
+  and which are released is the same for every closing speed, so it is solved once when the
+  mode is built (:meth:`_Geometry.impact_held`); target the mode holding what stays held (the
+  same mode if all do); accumulating impacts enter the mode that also holds ``k`` through the
+  plastic projection onto all of its contacts (``zeno_target``; none if the normals are
+  dependent: the run then ends with ``ZENO``). Impact guards form simultaneity group 1: when
+  another rigid contact is on its bound or closing onto it at the same instant, the joint
+  impact is solved by :func:`~hybridpd.mechanics.impact.multi_impact` at run time
+  (:meth:`MechanicalAutomaton.resolver`).
+* ``release{k}{+|-}`` (``k`` in ``S``): ``g = -wall * lambda_k + delta_k``: the contact force
+  pulls by the margin ``delta_k = RELEASE_MARGIN (|c_k|_1 max(1, |bounds|) + |d_k|)`` (``c_k,
+  d_k`` the affine force row), so that the free flow entered at the release separates
+  clearly; a force that only touches zero within rounding (and would be undone by a
+  re-impact at zero relative velocity, a sticking interval of zero length) releases nothing;
+  reset the plastic projection onto ``S`` (so that rounding accumulated while
   sticking cannot leave the flow outside a gap), target the mode sticking on ``S - {k}``.
 * ``enter{j}{+|-}`` / ``leave{j}{+|-}`` (compliant ``j``): the penetration changes sign;
   identity reset, target the configuration with ``j`` engaged / released.
@@ -44,14 +53,19 @@ Guards (``g > 0`` admissible, all with ``direction = -1`` except sampling):
 
 Priorities for simultaneous events: impacts and compliant switches 2, releases 1, samples 0.
 
-Size: one mode per compliant configuration (``prod_j (1 + number of bounds of j)`` over the
-compliant contacts) times one per set of held rigid contacts with independent normals (at
-most ``prod_k (1 + number of bounds of k)``); for ``m`` contacts at most ``3^m`` modes, each
-an exact LTI flow prepared once.
+Modes on demand: there is one mode per compliant configuration (``prod_j (1 + number of
+bounds of j)`` over the compliant contacts) times one per set of held rigid contacts with
+independent normals, up to ``3^m`` for ``m`` contacts. Only the free mode is built with the
+model (``O(m)`` work besides its own tables); every other mode is built, compiled into the
+kernel's tables and cached the first time a run enters it, so cost and memory grow with the
+modes visited. An analysis that needs every mode calls
+:meth:`HybridAutomaton.materialize <hybridpd.hybrid.automaton.HybridAutomaton.materialize>`
+(implicitly through ``automaton.modes`` or ``automaton.packed``), bounded by ``max_modes``.
 """
 from __future__ import annotations
 
-import itertools
+import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -59,9 +73,16 @@ import numpy as np
 from hybridpd._repr import compact_repr
 from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode
 from hybridpd.mechanics.contacts import Contact
+from hybridpd.mechanics.impact import multi_impact, solve_lcp
 from hybridpd.mechanics.loop import MechanicalLoop
 
 __all__ = ["GuardInfo", "MechanicalAutomaton", "ModeInfo", "build_automaton"]
+
+_STICK_RE = re.compile(r"(\d+)([+-])")
+_GUARD_RE = re.compile(r"\A(contact|release|enter|leave)(\d+)([+-])\Z")
+_GUARD_KIND = {"contact": "impact", "release": "release", "enter": "enter", "leave": "leave"}
+#: relative margin by which a held contact's force must pull before it is released
+RELEASE_MARGIN = 1e-9
 
 
 @dataclass(frozen=True)
@@ -98,10 +119,11 @@ class MechanicalAutomaton:
     loop : MechanicalLoop
         Closed loop (state layout in ``loop.layout``, names in ``loop.state_names``).
     contacts : tuple of Contact
-    modes : dict
-        Mode name -> :class:`ModeInfo`.
-    guards : dict
-        ``(mode name, guard name)`` -> :class:`GuardInfo`.
+    modes : Mapping
+        Mode name -> :class:`ModeInfo` (any valid mode name can be looked up; iteration
+        and ``len`` cover the modes built or named so far).
+    guards : Mapping
+        ``(mode name, guard name)`` -> :class:`GuardInfo` (looked up from the names).
     gap_rows : ndarray, shape (m, N)
         ``w_k . q = gap_rows[k] @ z``.
     impact_resets : dict
@@ -122,6 +144,7 @@ class MechanicalAutomaton:
     impact_resets: dict = field(repr=False)
     plastic_resets: dict = field(repr=False)
     free_mode: str = "free"
+    _geometry: object = field(default=None, repr=False)
     __repr__ = compact_repr
 
     @property
@@ -142,9 +165,25 @@ class MechanicalAutomaton:
             raise ValueError(f"kind must be 'impact', 'release', 'enter' or 'leave', "
                              f"got {kind!r}")
         name = f"{prefix}{int(contact)}{_sign(wall)}"
-        if not any(g == name for _, g in self.guards):
+        k = int(contact)
+        ok = 0 <= k < len(self.contacts) and any(w == wall for w, _ in self.contacts[k].bounds)
+        if ok:
+            rigid = self.contacts[k].rigid
+            ok = rigid if kind in ("impact", "release") else not rigid
+        if not ok:
             raise ValueError(f"no guard {name!r} (contact {contact}, wall {wall:+d})")
         return name
+
+    def resolver(self, time_tol: float = 1e-12):
+        """The joint-impact resolver for :meth:`HybridAutomaton.simulate` (module docstring).
+
+        ``resolver(mode, guard, t, z)`` collects the active rigid contacts at ``z`` (the
+        firing one, those on a bound within the location tolerance or closing onto it within
+        ``time_tol (1 + |t|)``, and every held one), solves their joint impact
+        (:func:`~hybridpd.mechanics.impact.multi_impact`) and returns ``(z_post, target
+        mode, impact guard names)``, or ``None`` when the LCP has no non-degenerate solution.
+        """
+        return lambda mode, guard, t, z: _resolve(self, time_tol, mode, guard, t, z)
 
     def initial_state(self, q0, v0, t0: float = 0.0, controller_state=None) -> np.ndarray:
         """Full state at ``t0`` (see :meth:`MechanicalLoop.initial_state`)."""
@@ -166,6 +205,65 @@ class MechanicalAutomaton:
                         f"initial: the state is outside contact {k}{_label(c)}: gap {s:.12g} "
                         f"beyond {side} = {bound:g}")
         return self.free_mode
+
+
+def _active(model, z, t, time_tol, stick, fired):
+    """Rigid contacts on a bound (or closing onto it within the tolerance) at state ``z``."""
+    iv = model.layout["v"]
+    v = z[iv]
+    held = dict(stick)
+    tau = time_tol * (1.0 + abs(t))
+    out = []
+    for k, c in enumerate(model.contacts):
+        if not c.rigid:
+            continue
+        if k in held:
+            out.append((k, held[k], True))
+            continue
+        if k == fired[0]:
+            out.append((k, fired[1], False))
+            continue
+        row = model.gap_rows[k]
+        s = float(row @ z)
+        scale = float(np.abs(row * z).sum())
+        sd = float(c.normal @ v)
+        sdscale = float(np.abs(c.normal * v).sum())
+        for wall, bound in c.bounds:
+            dist = wall * (bound - s)               # > 0 inside
+            closing = wall * sd
+            if closing < -64 * np.finfo(float).eps * sdscale:
+                continue
+            if dist <= 64 * np.finfo(float).eps * (scale + abs(bound)) + max(closing, 0) * tau:
+                out.append((k, wall, False))
+    return out
+
+
+def _resolve(model, time_tol, mode, guard, t, z):
+    info = model.modes[mode]
+    gi = model.guards[(mode, guard)]
+    act = _active(model, z, t, time_tol, info.stick, (gi.contact, gi.wall))
+    iv = model.layout["v"]
+    W = np.array([-wall * model.contacts[k].normal for k, wall, _ in act])
+    e = np.array([model.contacts[k].restitution for k, _, _ in act])
+    held = np.array([h for *_, h in act])
+    out = multi_impact(model._geometry.Minv, W, z[iv], e, held)
+    if out is None:
+        return None
+    scale = float(out.impulses.max(initial=0.0))
+    b = np.where(held, 0.0, e * np.maximum(-out.u_pre, 0.0))
+    keep = []
+    for i, (k, wall, h) in enumerate(act):
+        pushing = out.impulses[i] > 1e-12 * scale
+        if (h and (pushing or abs(out.u_post[i]) <= 1e-12 * (1 + abs(out.u_pre).max()))) or (
+                not h and pushing and b[i] == 0.0):
+            keep.append((k, wall))
+    keep = tuple(sorted(keep))
+    if keep and model._geometry.held(keep) is None:
+        return None
+    z1 = np.array(z, dtype=float)
+    z1[iv] = out.v
+    names = [f"contact{k}{_sign(wall)}" for k, wall, h in act if not h]
+    return z1, _mode_name(info.config, keep), names
 
 
 def _label(c):
@@ -197,6 +295,9 @@ class _Geometry:
                                  f"{c.normal.shape}")
         self.n, self.N = sysm.n, N
         self.iq, self.iv = lay["q"], lay["v"]
+        self.Minv = np.linalg.inv(sysm.M)
+        self._held = {}
+        self.scale = max([1.0] + [abs(b) for c in contacts for _, b in c.bounds])
         self.gap = np.zeros((len(contacts), N))
         self.Mw = np.zeros((len(contacts), sysm.n))
         for k, c in enumerate(contacts):
@@ -209,6 +310,12 @@ class _Geometry:
 
     def held(self, stick):
         """``(W (n, s), M^-1 W, G^-1 = (W^T M^-1 W)^-1, beta)`` or None if dependent."""
+        key = tuple(stick)
+        if key not in self._held:
+            self._held[key] = self._held_uncached(key)
+        return self._held[key]
+
+    def _held_uncached(self, stick):
         ks = [k for k, _ in stick]
         W = np.array([self.contacts[k].normal for k in ks]).T
         MW = self.Mw[ks].T
@@ -235,21 +342,26 @@ class _Geometry:
     def impact_held(self, k, wall, stick):
         """The contacts of ``stick`` that stay held through an impact of ``k`` at ``wall``.
 
-        With all of ``stick`` held, the reaction impulses there are ``Lambda = -(W^T M^-1
-        W)^-1 W^T M^-1 w_k P`` with the sign of ``P`` fixed by the wall, so whether a held
-        contact would have to pull is known from the geometry alone: such contacts are
-        released (the worst first, then the rest is re-examined).
+        The joint impact of ``k`` and the held contacts (zero normal velocity) is an LCP
+        whose ``q`` is ``-(1 + e) |u_k|`` times a unit vector, so its solution scales with the
+        closing speed: it is solved once here (:func:`solve_lcp`); the held contacts that
+        leave with a positive separating velocity are released, the others stay held.
         """
-        held = list(stick)
-        while held:
-            W, _, Gi, _ = self.held(tuple(held))
-            r = Gi @ (W.T @ self.Mw[k])
-            pull = [s_j * wall * r[i] for i, (_, s_j) in enumerate(held)]
-            worst = int(np.argmax(pull))
-            if pull[worst] <= 1e-12 * (1.0 + float(np.abs(r).max())):
-                break
-            del held[worst]
-        return tuple(held)
+        if not stick:
+            return ()
+        rows = [self.contacts[j].normal * -s_j for j, s_j in stick]
+        rows.append(self.contacts[k].normal * -wall)
+        W = np.array(rows)
+        A = W @ np.linalg.solve(self.loop.system.M, W.T)
+        q = np.zeros(len(rows))
+        q[-1] = -1.0
+        lam = solve_lcp(A, q)
+        if lam is None:
+            return ()
+        # released: only the held contacts that the impact sets moving apart (u+ > 0); one
+        # that neither pushes nor moves stays held, its force decides its release
+        u = A @ lam + q
+        return tuple(s for i, s in enumerate(stick) if u[i] <= 1e-12 * float(lam.max()))
 
     def impact(self, k, stick):
         """Newton's law of contact ``k`` with the contacts of ``stick`` held: ``(R, r)``."""
@@ -291,14 +403,19 @@ def _add(stick, k, wall):
     return tuple(sorted(set(stick) | {(k, wall)}))
 
 
-def build_automaton(loop: MechanicalLoop, contacts) -> MechanicalAutomaton:
+def build_automaton(loop: MechanicalLoop, contacts, max_modes: int = 4096
+                    ) -> MechanicalAutomaton:
     """Build the hybrid automaton of ``loop`` with ``contacts`` (see the module docstring).
+
+    Only the free mode is built here; the others are built the first time a run enters them.
 
     Parameters
     ----------
     loop : MechanicalLoop
     contacts : sequence of Contact
         Normals of shape ``(n,)``; the index in this sequence is the contact number.
+    max_modes : int
+        Bound on the modes an analysis of every mode may build (``automaton.materialize``).
 
     Returns
     -------
@@ -310,6 +427,8 @@ def build_automaton(loop: MechanicalLoop, contacts) -> MechanicalAutomaton:
     >>> sysm = MechanicalSystem(["x1", "x2"], M=[[0.1, 0], [0, 1.0]], B=[0, 1])
     >>> loop = mechanical_loop(sysm, (10.0, 20.0), Reference.sine(1.0, 5.0, 1.0), "x2")
     >>> ma = build_automaton(loop, [Contact([1, -1], -0.75, 0.75, restitution=0.5)])
+    >>> ma.automaton.n_built
+    1
     >>> ma.automaton.mode_names
     ('free', 'stick0-', 'stick0+')
     >>> ma.guards[("free", "contact0+")]
@@ -319,34 +438,149 @@ def build_automaton(loop: MechanicalLoop, contacts) -> MechanicalAutomaton:
         raise ValueError("loop must be a MechanicalLoop")
     contacts = tuple(contacts)
     geo = _Geometry(loop, contacts)
-    impact = {(k, w): geo.impact(k, ()) for k, c in enumerate(contacts) if c.rigid
-              for w, _ in c.bounds}
-    plastic = {(k, w): geo.projection(((k, w),)) for k, c in enumerate(contacts) if c.rigid
-               for w, _ in c.bounds}
-    choices = [(0,) + tuple(w for w, _ in c.bounds) if not c.rigid else (0,) for c in contacts]
-    held = [((0, None),) if not c.rigid else ((0, None),) + tuple((1, w) for w, _ in c.bounds)
-            for c in contacts]
-    sticks = []
-    for combo in itertools.product(*held):
-        stick = tuple((k, w) for k, (on, w) in enumerate(combo) if on)
-        if not stick or geo.held(stick) is not None:
-            sticks.append(stick)
-    modes, minfo, ginfo = [], {}, {}
-    for config in itertools.product(*choices):
-        for stick in sticks:
-            name = _mode_name(config, stick)
-            minfo[name] = ModeInfo(name, tuple(config), stick)
-            A, b, lam_rows, lam_b = geo.flow(config, stick)
-            guards = _guards(geo, config, stick, lam_rows, lam_b, name, ginfo, set(sticks))
-            modes.append(Mode(name, A, b=b, guards=tuple(guards)))
-    ha = HybridAutomaton(modes, state_names=loop.state_names)
-    return MechanicalAutomaton(automaton=ha, loop=loop, contacts=contacts, modes=minfo,
-                               guards=ginfo, gap_rows=geo.gap, impact_resets=impact,
-                               plastic_resets=plastic,
-                               free_mode=_mode_name((0,) * len(contacts), ()))
+
+    def builder(name):
+        config, stick = _parse_mode(name, contacts, geo)
+        A, b, lam_rows, lam_b = geo.flow(config, stick)
+        guards = _guards(geo, config, stick, lam_rows, lam_b)
+        return Mode(name, A, b=b, guards=tuple(guards))
+
+    free = _mode_name((0,) * len(contacts), ())
+    ha = HybridAutomaton([builder(free)], state_names=loop.state_names, mode_builder=builder,
+                         max_modes=max_modes)
+    return MechanicalAutomaton(automaton=ha, loop=loop, contacts=contacts,
+                               modes=_ModeTable(ha, contacts, geo), guards=_GuardTable(ha),
+                               gap_rows=geo.gap, impact_resets=_ResetTable(geo, "impact"),
+                               plastic_resets=_ResetTable(geo, "plastic"), free_mode=free,
+                               _geometry=geo)
 
 
-def _guards(geo, config, stick, lam_rows, lam_b, name, ginfo, sticks):
+def _parse_mode(name, contacts, geo):
+    """``(config, stick)`` of a mode name; ``ValueError`` if it names no mode."""
+    if not isinstance(name, str):
+        raise ValueError(f"mode name must be a string, got {name!r}")
+    base, _, eng = name.partition("/")
+    config = [0] * len(contacts)
+    stick = []
+    if base.startswith("stick"):
+        if re.fullmatch(r"(?:\d+[+-])+", base[5:]) is None:
+            raise ValueError(f"unknown mode {name!r}")
+        stick = [(int(k), 1 if sg == "+" else -1) for k, sg in _STICK_RE.findall(base[5:])]
+    elif base != "free":
+        raise ValueError(f"unknown mode {name!r}")
+    for part in eng.split(",") if eng else ():
+        m = re.fullmatch(r"c(\d+)([+-])", part)
+        if m is None:
+            raise ValueError(f"unknown mode {name!r}")
+        j = int(m.group(1))
+        if j >= len(contacts) or contacts[j].rigid or config[j]:
+            raise ValueError(f"unknown mode {name!r}")
+        config[j] = 1 if m.group(2) == "+" else -1
+    for k, w in stick:
+        if k >= len(contacts) or not contacts[k].rigid:
+            raise ValueError(f"unknown mode {name!r}")
+    for j, w in list(enumerate(config)) + stick:
+        if w and not any(b == w for b, _ in contacts[j].bounds):
+            raise ValueError(f"unknown mode {name!r}: contact {j} has no bound on that side")
+    stick = tuple(stick)
+    if list(stick) != sorted(set(stick)) or len({k for k, _ in stick}) != len(stick):
+        raise ValueError(f"unknown mode {name!r}")
+    if stick and geo.held(stick) is None:
+        raise ValueError(f"unknown mode {name!r}: the held contacts have dependent normals")
+    if _mode_name(tuple(config), stick) != name:
+        raise ValueError(f"unknown mode {name!r}")
+    return tuple(config), stick
+
+
+class _ModeTable(Mapping):
+    """Mode name -> :class:`ModeInfo`, parsed from the name (no mode is built)."""
+
+    def __init__(self, ha, contacts, geo):
+        self._ha, self._contacts, self._geo = ha, contacts, geo
+        self._cache = {}
+
+    def __getitem__(self, name):
+        info = self._cache.get(name) if isinstance(name, str) else None
+        if info is None:
+            try:
+                config, stick = _parse_mode(name, self._contacts, self._geo)
+            except ValueError:
+                raise KeyError(name) from None
+            info = self._cache[name] = ModeInfo(name, config, stick)
+        return info
+
+    def __iter__(self):
+        return iter(list(self._ha._names))
+
+    def __len__(self):
+        return len(self._ha._names)
+
+    def __contains__(self, name):
+        try:
+            self[name]
+        except KeyError:
+            return False
+        return True
+
+
+class _GuardTable(Mapping):
+    """``(mode, guard)`` -> :class:`GuardInfo`, parsed from the guard name."""
+
+    def __init__(self, ha):
+        self._ha = ha
+
+    def __getitem__(self, key):
+        try:
+            _, gname = key
+        except (TypeError, ValueError):
+            raise KeyError(key) from None
+        if gname == "sample":
+            return GuardInfo("sample", -1, 0)
+        m = _GUARD_RE.match(str(gname))
+        if m is None:
+            raise KeyError(key)
+        return GuardInfo(_GUARD_KIND[m.group(1)], int(m.group(2)),
+                         1 if m.group(3) == "+" else -1)
+
+    def _items(self):
+        out = []
+        for i, name in enumerate(self._ha._names):
+            mode = self._ha._built[i]
+            if mode is not None:
+                out.extend((name, g.name) for g in mode.guards)
+        return out
+
+    def __iter__(self):
+        return iter(self._items())
+
+    def __len__(self):
+        return len(self._items())
+
+
+class _ResetTable(Mapping):
+    """``(k, wall)`` -> ``(R, r)`` of a rigid contact, computed on demand."""
+
+    def __init__(self, geo, which):
+        self._geo, self._which = geo, which
+        self._keys = [(k, w) for k, c in enumerate(geo.contacts) if c.rigid
+                      for w, _ in c.bounds]
+
+    def __getitem__(self, key):
+        if key not in self._keys:
+            raise KeyError(key)
+        k, w = key
+        if self._which == "impact":
+            return self._geo.impact(k, ())
+        return self._geo.projection(((k, w),))
+
+    def __iter__(self):
+        return iter(self._keys)
+
+    def __len__(self):
+        return len(self._keys)
+
+
+def _guards(geo, config, stick, lam_rows, lam_b):
     loop, contacts, gap = geo.loop, geo.contacts, geo.gap
     held = {k for k, _ in stick}
     out = []
@@ -361,37 +595,35 @@ def _guards(geo, config, stick, lam_rows, lam_b, name, ginfo, sticks):
                 reset = geo.impact(k, kept)
                 gname = f"contact{k}{_sign(wall)}"
                 to = _add(kept, k, wall)
-                zt = (dict(zeno_target=_mode_name(config, to), zeno_reset=geo.projection(to))
-                      if to in sticks else {})
+                proj = geo.projection(to)
+                zt = (dict(zeno_target=_mode_name(config, to), zeno_reset=proj)
+                      if proj is not None else {})
                 out.append(Guard(gname, c=-wall * gap[k], d=wall * bound, direction=-1,
                                  reset=reset, target=_mode_name(config, kept), priority=2,
-                                 **zt))
-                ginfo[(name, gname)] = GuardInfo("impact", k, wall)
+                                 group=1, **zt))
             elif config[k] == 0:
                 cfg = list(config)
                 cfg[k] = wall
                 gname = f"enter{k}{_sign(wall)}"
                 out.append(Guard(gname, c=-wall * gap[k], d=wall * bound, direction=-1,
                                  target=_mode_name(tuple(cfg), stick), priority=2))
-                ginfo[(name, gname)] = GuardInfo("enter", k, wall)
             elif config[k] == wall:
                 cfg = list(config)
                 cfg[k] = 0
                 gname = f"leave{k}{_sign(wall)}"
                 out.append(Guard(gname, c=wall * gap[k], d=-wall * bound, direction=-1,
                                  target=_mode_name(tuple(cfg), stick), priority=2))
-                ginfo[(name, gname)] = GuardInfo("leave", k, wall)
     for i, (k, wall) in enumerate(stick):
         gname = f"release{k}{_sign(wall)}"
         rest = tuple(s for s in stick if s[0] != k)
-        out.append(Guard(gname, c=-wall * lam_rows[i], d=-wall * float(lam_b[i]), direction=-1,
-                         reset=geo.projection(stick), target=_mode_name(config, rest),
-                         priority=1))
-        ginfo[(name, gname)] = GuardInfo("release", k, wall)
+        margin = RELEASE_MARGIN * (float(np.abs(lam_rows[i]).sum()) * geo.scale
+                                   + abs(float(lam_b[i])))
+        out.append(Guard(gname, c=-wall * lam_rows[i], d=-wall * float(lam_b[i]) + margin,
+                         direction=-1, reset=geo.projection(stick),
+                         target=_mode_name(config, rest), priority=1))
     if loop.sampled:
         cl = np.zeros(loop.n_states)
         cl[loop.layout["clock"]] = 1.0
         out.append(Guard("sample", c=cl, d=-loop.dt, direction=+1, reset=loop.sample_reset,
                          priority=0))
-        ginfo[(name, "sample")] = GuardInfo("sample", -1, 0)
     return out

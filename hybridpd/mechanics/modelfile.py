@@ -17,7 +17,8 @@ TOML layout (every key is checked; a bad file raises ``ValueError`` naming the k
     restitution = 0.5                    # rigid; or stiffness = k, damping = c (compliant)
 
     [controller]
-    type = "pd"                          # "pd" (kp, kv) | "tf" (num, den) | "ss" (A, B, C, D)
+    type = "pd"                          # "pd" (kp, kv) | "pid" (kp, ki, kd, filter_time)
+                                         #   | "tf" (num, den) | "ss" (A, B, C, D)
     kp = 10.0
     kv = 20.0
     measure = "gear"                     # DOF name (or a list of n weights)
@@ -37,6 +38,10 @@ TOML layout (every key is checked; a bad file raises ``ValueError`` naming the k
     t0 = 0.0                             # default 0
 
 Semantics: ``u = feedforward_mass xd'' + kp (xd - q_m) + kv (xd' - v_m)`` along ``input``
+(``pid``: ``u_fb = kp err + ki int(err) + kd d``, ``d`` the derivative ``err_dot`` through
+a first-order filter ``d' = (err_dot - d) / filter_time``, unfiltered when ``filter_time``
+is 0 or absent; ``ki``, ``kd`` default 0; with ``dt`` the same controller sampled with a
+zero-order hold, i.e. its exact discretisation at the sampling instants)
 (``tf``: from ``err = xd - y``; ``ss``: from ``err`` or ``[err, err_dot]``, by the number of
 inputs); ``sine`` is ``xd = amplitude cos(omega t)`` in absolute time, ``constant`` is
 ``xd = value``, ``sum_of_sines`` is ``sum amplitudes[i] cos(omegas[i] t)``.
@@ -67,12 +72,14 @@ _TABLES = {
     "contact": {"between", "dof", "normal", "lo", "hi", "restitution", "stiffness", "damping",
                 "name"},
     "controller": {"type", "kp", "kv", "num", "den", "A", "B", "C", "D", "measure",
-                   "measure_velocity", "dt", "delay"},
+                   "measure_velocity", "dt", "delay", "ki", "kd", "filter_time"},
     "reference": {"type", "amplitude", "omega", "feedforward_mass", "value", "amplitudes",
                   "omegas"},
     "initial": {"q", "v", "t0"},
 }
-_CTRL_KEYS = {"pd": {"kp", "kv"}, "tf": {"num", "den"}, "ss": {"A", "B", "C", "D"}}
+_CTRL_KEYS = {"pd": {"kp", "kv"}, "tf": {"num", "den"}, "ss": {"A", "B", "C", "D"},
+              "pid": {"kp", "ki", "kd", "filter_time"}}
+_CTRL_OPTIONAL = {"ss": {"A"}, "pid": {"ki", "kd", "filter_time"}}
 _REF_KEYS = {"sine": {"amplitude", "omega", "feedforward_mass"}, "constant": {"value"},
              "sum_of_sines": {"amplitudes", "omegas", "feedforward_mass"}}
 
@@ -325,8 +332,8 @@ def _controller(t, system):
                    - {"type", "measure", "measure_velocity", "dt", "delay"})
     if extra:
         raise ValueError(f"controller.{extra[0]}: not a key of type {kind!r}")
-    for k in sorted(_CTRL_KEYS[kind]):
-        if k not in t and not (kind == "ss" and k == "A"):
+    for k in sorted(_CTRL_KEYS[kind] - _CTRL_OPTIONAL.get(kind, set())):
+        if k not in t:
             raise ValueError(f"controller.{k}: required for type {kind!r}")
     if "measure" not in t:
         raise ValueError("controller.measure: required (the measured DOF)")
@@ -346,6 +353,8 @@ def _controller(t, system):
         kp = float(_array("controller.kp", t["kp"], ()))
         kv = float(_array("controller.kv", t["kv"], ()))
         sysc = ct.ss(np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)), [[kp, kv]], dt)
+    elif kind == "pid":
+        sysc = _pid(t, dt)
     elif kind == "tf":
         num = _array("controller.num", t["num"])
         den = _array("controller.den", t["den"])
@@ -375,6 +384,34 @@ def _controller(t, system):
             A, B, C = np.zeros((0, 0)), np.zeros((0, m)), np.zeros((1, 0))
         sysc = ct.ss(A, B, C, D, dt)
     return sysc, measure, measure_v, delay
+
+
+def _pid(t, dt):
+    """The PID of a model file as a state-space controller from ``[err, err_dot]``."""
+    import control as ct
+
+    g = {k: float(_array(f"controller.{k}", t.get(k, 0.0), ())) for k in
+         ("kp", "ki", "kd", "filter_time")}
+    if g["filter_time"] < 0:
+        raise ValueError(f"controller.filter_time: must be >= 0 (time units), got "
+                         f"{g['filter_time']!r}")
+    # states: the integral of err, then (with a filter) the filtered derivative
+    A, B, C = [], [], []
+    D = [g["kp"], 0.0]
+    if g["ki"]:
+        A.append([0.0])
+        B.append([1.0, 0.0])
+        C.append(g["ki"])
+    if g["kd"] and g["filter_time"] > 0:
+        A.append([-1.0 / g["filter_time"]])
+        B.append([0.0, 1.0 / g["filter_time"]])
+        C.append(g["kd"])
+    else:
+        D[1] = g["kd"]
+    k = len(A)
+    Am = np.diag([a[0] for a in A]) if k else np.zeros((0, 0))
+    sysc = ct.ss(Am, np.array(B).reshape(k, 2), np.array(C).reshape(1, k), [D])
+    return sysc.sample(dt, method="zoh") if dt else sysc
 
 
 def _measured(t, key, system):

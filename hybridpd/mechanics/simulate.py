@@ -6,15 +6,22 @@ as impacts, sticking intervals and sampling instants.
 
 Simultaneous contacts
 ---------------------
-When a rigid contact ``i`` fires while another rigid contact ``j`` is closing and would reach
-its bound within ``time_tol (1 + |t|)`` (default ``1e-12``; a contact merely touching, with a
-closing speed below ``1e-6`` of the impact's, is not counted: it is handled by the
-sequential rule of the automaton, which fires it at once if it is pushed in), the outcome of
-two simultaneous Newton impacts is not defined by the law unless the impulses are
-independent, ``w_i . M^-1 w_j = 0`` (to ``1e-12`` relative): then both impulses apply (the
-automaton applies them one after the other at the same instant, which is the same). Otherwise
-the run ends there with termination ``"simultaneous_contact"`` (``t_final`` its time); the
-records stop before that instant.
+When a rigid contact fires while other rigid contacts are active at the same instant (on
+their bound within the location tolerance, or closing onto it within ``time_tol (1 + |t|)``,
+default ``1e-12``; held contacts always take part), Newton's law is solved for all of them at
+once as a linear complementarity problem (:mod:`hybridpd.mechanics.impact`). Each contact
+involved gets one impact record with the same ``t``, the same pre-impact state and the joint
+post-impact state. Only an LCP without a (non-degenerate) solution ends the run, with
+termination ``"simultaneous_contact"`` (``t_final`` its time, the state before it).
+
+Accumulations and divergence
+----------------------------
+Impacts accumulating on one contact are resolved one by one until the tail extrapolated
+from their (verified, geometric) ratios is shorter than ``1e-12 (1 + |t|)``, or a flight is
+shorter than ``1e-9`` flow steps; the sticking phase starts at the accumulation time with the
+state projected onto the contact (gap at its bound, zero normal velocity):
+:attr:`MechanicalTrajectory.accumulations`. A run whose state grows past ``max_state``
+(default ``1e12 max(1, |z0|, |bounds|)``) stops with termination ``"diverged"``.
 
 Contact tolerance
 -----------------
@@ -38,11 +45,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridpd._repr import compact_repr
+from hybridpd.hybrid.automaton import ZenoOptions
 from hybridpd.mechanics.automaton import MechanicalAutomaton
 
 __all__ = ["MechanicalTrajectory", "simulate", "simulate_state"]
 
-_TERMINATIONS = {0: "end_time", 1: "jump_limit", 2: "zeno", 3: "nonfinite", 4: "step_limit"}
+_TERMINATIONS = {0: "end_time", 1: "jump_limit", 2: "zeno", 3: "nonfinite", 4: "step_limit",
+                 7: "simultaneous_contact", 8: "diverged"}
+#: resolve an accumulation until its extrapolated tail is this short (relative to 1 + |t|)
+ZENO_TAIL_TOL = 1e-12
 
 
 @dataclass(frozen=True, eq=False)  # array fields: identity semantics
@@ -68,12 +79,15 @@ class MechanicalTrajectory:
         Wall of each sticking interval.
     zeno_tails : list of (t_k, t_inf, contact)
         Unresolved tails of accumulations (see "Contact tolerance" in the module docstring).
+    accumulations : list of (t_inf, contact, wall, n_resolved)
+        Accumulations of impacts: the accumulation time (the start of sticking), the contact,
+        its wall and how many impacts of it were resolved before (consecutive ones).
     samples : ndarray, shape (s,)
         Sampling instants after ``t0`` (sampled-data loops; the sample at ``t0`` is applied
         to the initial state).
     termination : str
-        ``"end_time"``, ``"jump_limit"``, ``"zeno"``, ``"nonfinite"``, ``"step_limit"`` or
-        ``"simultaneous_contact"``.
+        ``"end_time"``, ``"jump_limit"``, ``"zeno"``, ``"nonfinite"``, ``"step_limit"``,
+        ``"simultaneous_contact"`` or ``"diverged"``.
     t_final : float
         Time reached.
     n_dofs : int
@@ -91,6 +105,7 @@ class MechanicalTrajectory:
     sticking_walls: list
     zeno_tails: list
     samples: np.ndarray
+    accumulations: list
     termination: str
     t_final: float
     n_dofs: int
@@ -130,7 +145,8 @@ class MechanicalTrajectory:
 
 
 def simulate(model: MechanicalAutomaton, x0, t_span, max_impacts: int = 100_000,
-             controller_state=None, time_tol: float = 1e-12, **options) -> MechanicalTrajectory:
+             controller_state=None, time_tol: float = 1e-12, max_state: float | None = None,
+             **options) -> MechanicalTrajectory:
     """Simulate a controlled mechanical system with contacts.
 
     Parameters
@@ -149,6 +165,8 @@ def simulate(model: MechanicalAutomaton, x0, t_span, max_impacts: int = 100_000,
     time_tol : float
         Contacts closing within ``time_tol (1 + |t|)`` of each other are simultaneous
         (module docstring).
+    max_state : float, optional
+        Divergence bound on every state component (module docstring).
     **options
         Passed to :meth:`HybridAutomaton.simulate` (``zeno``, ``max_steps``).
 
@@ -179,12 +197,12 @@ def simulate(model: MechanicalAutomaton, x0, t_span, max_impacts: int = 100_000,
     t0, _ = _check_span(t_span)
     z0 = model.initial_state(x0[0::2], x0[1::2], t0, controller_state)
     return simulate_state(model, z0, t_span, model.initial_mode(z0), max_impacts, time_tol,
-                          **options)
+                          max_state=max_state, **options)
 
 
 def simulate_state(model: MechanicalAutomaton, z0, t_span, mode: str | None = None,
                    max_impacts: int = 100_000, time_tol: float = 1e-12,
-                   **options) -> MechanicalTrajectory:
+                   max_state: float | None = None, **options) -> MechanicalTrajectory:
     """Simulate from a full closed-loop state (e.g. a point of a Poincare section).
 
     Parameters
@@ -196,7 +214,7 @@ def simulate_state(model: MechanicalAutomaton, z0, t_span, mode: str | None = No
     t_span : (float, float)
     mode : str, optional
         Mode to start in (default: checked to lie inside every contact, ``model.free_mode``).
-    max_impacts, time_tol, **options
+    max_impacts, time_tol, max_state, **options
         As in :func:`simulate`.
 
     Returns
@@ -212,13 +230,22 @@ def simulate_state(model: MechanicalAutomaton, z0, t_span, mode: str | None = No
     if mode is None:
         mode = model.initial_mode(z0)
     elif mode not in model.modes:
-        raise ValueError(f"mode must be one of {sorted(model.modes)}, got {mode!r}")
+        raise ValueError(f"mode must be a mode name such as 'free' or 'stick0+', got {mode!r}")
     loop = model.loop
     max_jumps = int(max_impacts)
     if loop.sampled:
         max_jumps += math.ceil((t1 - t0) / loop.dt) + 2
-    traj = model.automaton.simulate(z0, mode, (t0, t1), max_jumps=max_jumps, **options)
-    return _wrap(model, traj, time_tol)
+    if not (isinstance(time_tol, (int, float)) and math.isfinite(time_tol) and time_tol >= 0):
+        raise ValueError(f"time_tol must be >= 0, got {time_tol!r}")
+    if max_state is None:
+        bounds = [abs(b) for c in model.contacts for _, b in c.bounds]
+        max_state = 1e12 * max([1.0, float(np.abs(z0).max(initial=0.0))] + bounds)
+    if options.get("zeno") is None:
+        options["zeno"] = ZenoOptions(tail_tol=ZENO_TAIL_TOL)
+    traj = model.automaton.simulate(z0, mode, (t0, t1), max_jumps=max_jumps,
+                                    resolver=model.resolver(time_tol), simtol=time_tol,
+                                    max_state=max_state, **options)
+    return _wrap(model, traj)
 
 
 def _check_span(t_span):
@@ -231,70 +258,45 @@ def _check_span(t_span):
     return t0, t1
 
 
-class _Coupling:
-    """Per-model constants of the simultaneous-contact test (computed once per run)."""
-
-    def __init__(self, model):
-        sysm = model.loop.system
-        W = np.array([c.normal for c in model.contacts]).reshape(len(model.contacts), -1)
-        self.rigid = [j for j, c in enumerate(model.contacts) if c.rigid]
-        self.norm = np.linalg.norm(W, axis=1) if W.size else np.zeros(0)
-        G = W @ np.linalg.solve(sysm.M, W.T) if W.size else np.zeros((0, 0))
-        d = np.sqrt(np.abs(np.diag(G)))
-        # impulses i and j are independent when w_i . M^-1 w_j = 0 (relative to 1e-12)
-        self.coupled = np.abs(G) > 1e-12 * np.outer(d, d)
-
-    def simultaneous(self, model, k, t, pre, time_tol):
-        """True if another rigid contact closes within ``time_tol`` of this impact and the
-        two impulses are not independent (see the module docstring)."""
-        iv = model.layout["v"]
-        v = pre[iv]
-        speed_i = abs(float(model.contacts[k].normal @ v)) / self.norm[k]
-        tau = time_tol * (1.0 + abs(t))
-        for j in self.rigid:
-            if j == k or not self.coupled[k, j]:
-                continue
-            c = model.contacts[j]
-            s = float(model.gap_rows[j] @ pre) / self.norm[j]
-            speed = float(c.normal @ v) / self.norm[j]
-            for wall, bound in c.bounds:
-                closing, dist = wall * speed, wall * (bound / self.norm[j] - s)
-                # a contact merely touching (closing speed ~ 0) is left to the sequential rule
-                if closing > 1e-6 * speed_i and dist <= closing * tau + 1e-15 * (1 + abs(bound)):
-                    return True
-        return False
-
-
-def _wrap(model, traj, time_tol) -> MechanicalTrajectory:
+def _wrap(model, traj) -> MechanicalTrajectory:
     n = model.loop.system.n
     jt = traj.jumps
     info = [model.guards[(s, g)] for s, g in zip(jt.source, jt.guard)]
-    coupling = _Coupling(model) if len(model.contacts) > 1 else None
     t_final, termination = traj.t_final, _TERMINATIONS[traj.termination.value]
     stop = len(jt)
-    for i, gi in enumerate(info):
-        if (gi.kind == "impact" and jt.kind[i] != "zeno"
-                and not model.modes[jt.source[i]].stick
-                and coupling is not None
-                and coupling.simultaneous(model, gi.contact, float(jt.t[i]), jt.pre[i],
-                                          time_tol)):
-            stop, t_final, termination = i, float(jt.t[i]), "simultaneous_contact"
-            break
     imp = [i for i in range(stop) if info[i].kind == "impact" and jt.kind[i] != "zeno"]
-    # intervals per contact: a 'zeno' jump opens one, the release of that contact closes it
+    # sticking intervals per contact: opened by a jump into a mode that holds the contact,
+    # closed by one into a mode that does not
     spans, opened = [], {}
+    held = dict(model.modes[traj.segments.mode[0]].stick) if len(traj.segments) else {}
+    for k, wall in held.items():
+        opened[k] = (traj.t0, wall)
     for i in range(stop):
-        if jt.kind[i] == "zeno":
-            opened[info[i].contact] = (float(jt.t[i]), info[i].wall)
-        elif info[i].kind == "release" and info[i].contact in opened:
-            t_open, wall = opened.pop(info[i].contact)
-            spans.append((t_open, float(jt.t[i]), info[i].contact, wall))
+        after = dict(model.modes[jt.target[i]].stick)
+        t = float(jt.t[i])
+        for k in list(opened):
+            if k not in after:
+                t_open, wall = opened.pop(k)
+                spans.append((t_open, t, k, wall))
+        for k, wall in after.items():
+            if k not in opened:
+                opened[k] = (t, wall)
     spans += [(t_open, t_final, k, wall) for k, (t_open, wall) in opened.items()]
     spans.sort()
     sticking = [(a, b, k) for a, b, k, _ in spans]
     sticking_walls = [w for *_, w in spans]
     tails = [(float(jt.t[i - 1]) if i else traj.t0, float(jt.t[i]), info[i].contact)
              for i in range(stop) if jt.kind[i] == "zeno"]
+    accum = []
+    for i in range(stop):
+        if jt.kind[i] != "zeno":
+            continue
+        c, w, r = info[i].contact, info[i].wall, 0
+        q = i - 1
+        while q >= 0 and info[q].kind == "impact" and info[q].contact == c and jt.kind[q] != "zeno":
+            r += 1
+            q -= 1
+        accum.append((float(jt.t[i]), c, w, r))
     idx = np.asarray(imp, dtype=int)
     samples = np.asarray([jt.t[i] for i in range(stop) if info[i].kind == "sample"], float)
     return MechanicalTrajectory(
@@ -305,4 +307,5 @@ def _wrap(model, traj, time_tol) -> MechanicalTrajectory:
         post=np.asarray(jt.post, float)[idx, :2 * n].reshape(-1, 2 * n),
         grazing=np.asarray([jt.kind[i] == "grazing" for i in imp], dtype=bool),
         sticking=sticking, sticking_walls=sticking_walls, zeno_tails=tails, samples=samples,
-        termination=termination, t_final=float(t_final), n_dofs=n, hybrid=traj)
+        accumulations=accum, termination=termination, t_final=float(t_final), n_dofs=n,
+        hybrid=traj)

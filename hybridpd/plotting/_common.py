@@ -1,7 +1,20 @@
-"""Shared helpers of the figures."""
+"""Shared helpers of the figures: bare figures, legends built from what is drawn, captions.
+
+Legend entries are built from the drawn artists: each labelled artist carries its label as
+its ``gid``, and :func:`register` records the legend handle that draws it (a proxy with the
+artist's colour *and* its line style, marker or hatch), so a legend never claims what is not
+drawn and never tells two entries apart by colour alone.
+"""
 from __future__ import annotations
 
-_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
+import numpy as np
+
+from hybridpd.plotting.style import SERIES
+
+#: Series colours (Okabe-Ito), in the order of :data:`~hybridpd.plotting.style.SERIES`.
+_COLORS = tuple(s["color"] for s in SERIES)
+
+_KEY = "_hybridpd_legend"
 
 
 def figure(ax, **kw):
@@ -12,3 +25,86 @@ def figure(ax, **kw):
 
     fig = Figure(**kw)
     return fig, fig.add_subplot(1, 1, 1)
+
+
+def tag(artist, label):
+    """Set ``label`` as the artist's gid (and its sub-collections' for contour sets)."""
+    for a in [artist, *getattr(artist, "collections", [])]:
+        try:
+            a.set_gid(label)
+        except AttributeError:
+            pass
+    return artist
+
+
+def register(ax, artist, label, proxy):
+    """Tag ``artist`` with ``label`` and record ``proxy`` as its legend handle on ``ax``."""
+    tag(artist, label)
+    ax.__dict__.setdefault(_KEY, {}).setdefault(label, proxy)
+    return artist
+
+
+def line_proxy(**kw):
+    from matplotlib.lines import Line2D
+
+    return Line2D([], [], **kw)
+
+
+def patch_proxy(**kw):
+    from matplotlib.patches import Patch
+
+    return Patch(**kw)
+
+
+def _proxy_of(a, g):
+    """A legend handle copying a drawn artist's style (for artists not registered)."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.lines import Line2D
+
+    if isinstance(a, Line2D):
+        return line_proxy(color=a.get_color(), ls=a.get_linestyle(), lw=a.get_linewidth(),
+                          marker=a.get_marker(), ms=a.get_markersize(),
+                          mfc=a.get_markerfacecolor(), mec=a.get_markeredgecolor())
+    if isinstance(a, LineCollection):
+        col = a.get_edgecolor()[0] if len(a.get_edgecolor()) else "k"
+        return line_proxy(color=col, ls=a.get_linestyle()[0] if a.get_linestyle() else "-")
+    fc = a.get_facecolor()
+    if np.ndim(fc) == 2:
+        fc = fc[0] if len(fc) else "none"
+    ec = a.get_edgecolor()
+    if np.ndim(ec) == 2:
+        ec = ec[0] if len(ec) else "0.3"
+    return patch_proxy(facecolor=fc, edgecolor=ec,
+                       hatch=a.get_hatch() if hasattr(a, "get_hatch") else None)
+
+
+def legend_handles(axes) -> list:
+    """``[(label, handle)]`` of every labelled artist drawn on ``axes``, in drawing order."""
+    seen = {}
+    for ax in axes:
+        reg = ax.__dict__.get(_KEY, {})
+        for a in ax.get_children():
+            g = a.get_gid() if hasattr(a, "get_gid") else None
+            if g and g not in seen:
+                seen[g] = reg.get(g) or _proxy_of(a, g)
+    return list(seen.items())
+
+
+def legend_from_gids(fig, axes, *, loc="outside lower center", ncol=3, **kw):
+    """A figure legend whose entries are exactly the labelled artists drawn on ``axes``."""
+    pairs = legend_handles(axes)
+    if pairs:
+        labels, handles = zip(*pairs)
+        fig.legend(handles=list(handles), labels=list(labels), loc=loc,
+                   ncol=min(ncol, len(handles)), **kw)
+    return [p[0] for p in pairs]
+
+
+def param_line(params: dict) -> str:
+    """``mu = .., gamma = .., omega = .., n = .., m2 = ..`` in mathtext."""
+    parts = []
+    for key, sym in (("mu", r"$\mu$"), ("gamma", r"$\gamma$"), ("omega", r"$\omega$"),
+                     ("n", "$n$"), ("m2", "$m_2$"), ("x10", "$x_{10}$")):
+        if key in params and params[key] is not None:
+            parts.append(f"{sym} = {params[key]:g}")
+    return ", ".join(parts)

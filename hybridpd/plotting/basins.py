@@ -17,11 +17,12 @@ from hybridpd.analysis.attractors import (
     UNRESOLVED,
     outcome,
 )
-from hybridpd.plotting._common import figure
+from hybridpd.plotting._common import figure, patch_proxy, register
+from hybridpd.plotting.style import axis_label, house_figure, styled
 from hybridpd.sweeps.attractor_basins import AttractorBasin, format_percent
 from hybridpd.sweeps.basins import BasinResult
 
-__all__ = ["basin_colors", "basin_title", "plot_basin"]
+__all__ = ["basin_colors", "basin_hatches", "basin_title", "plot_basin"]
 
 _SYMMETRIC = "#0072B2"
 _PERIODIC = ("#E69F00", "#009E73", "#CC79A7", "#F0E442")
@@ -31,6 +32,22 @@ _MARKERS = ("D", "o", "s", "^", "v", "P")
 # the paper's labels as attractor codes (a BasinResult has no attractor identification)
 _FROM_PAPER = {0: 0, 1: NO_CONVERGENCE, 2: DIVERGED, 3: STICKING, 4: UNRESOLVED,
                5: OFF_SECTION_LABEL}
+
+
+_PERIODIC_HATCHES = ("////", "\\\\\\\\", "||||", "----", "oo")
+_OUTCOME_HATCHES = {NO_CONVERGENCE: "....", DIVERGED: "xxxx", STICKING: "++++",
+                    UNRESOLVED: "OO", OFF_SECTION_LABEL: "///"}
+
+
+def basin_hatches(labels) -> dict:
+    """Hatch of each attractor label: none for the symmetric orbit, one pattern per other
+    attractor and outcome (so the legend never relies on colour alone)."""
+    out = {}
+    for k in labels:
+        k = int(k)
+        out[k] = ("" if k == 0 else _PERIODIC_HATCHES[(k - 1) % len(_PERIODIC_HATCHES)]
+                  if k > 0 else _OUTCOME_HATCHES[k])
+    return out
 
 
 def basin_colors(labels) -> dict:
@@ -84,6 +101,7 @@ def _as_attractor_basin(b):
     raise ValueError(f"basin must be an AttractorBasin or a BasinResult, got {type(b).__name__}")
 
 
+@styled
 def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     """The basin slice ``(x1, y1)`` coloured by attractor, with section points marked.
 
@@ -93,7 +111,8 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
         An attractor-labelled basin (:func:`hybridpd.sweeps.attractor_basins.attractor_basin`), or the
         paper's labels only (:func:`hybridpd.sweeps.basins.basin_of_attraction`).
     ax : matplotlib Axes, optional
-        Draw there; else a new constrained-layout figure.
+        Draw there (legend below the axes); else a new figure 7.2 in wide in the house style
+        (legend beside the axes).
     title : str, optional
         Replaces the default title (case, gains and conventions).
     legend : bool
@@ -112,16 +131,16 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     ``y2*`` are stated under the axes.
     """
     from matplotlib.colors import BoundaryNorm, ListedColormap
-    from matplotlib.patches import Patch, Rectangle
+    from matplotlib.patches import Rectangle
 
     lab, entries, pb, edges = _as_attractor_basin(basin)
     if ax is None:
-        from matplotlib.figure import Figure
-
-        fig = Figure(figsize=(6.4, 6.6), layout="constrained")
+        fig = house_figure("double", 4.2)
         ax = fig.add_subplot(1, 1, 1)
+        beside = True
     else:
         fig, ax = figure(ax)
+        beside = False
     meta = dict(pb.metadata)
     L = float(meta.get("L", 0.0))
     x, y = pb.x1, pb.y1
@@ -140,20 +159,34 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     fp = pb.fixed_point
     handles = []
     present = set(np.unique(lab).tolist())
+    hatches = basin_hatches(codes)
+    X, Y = np.meshgrid(x, y)
     for a in entries:
-        if a.label not in present:
+        if a.label not in present or a.label == OFF_SECTION_LABEL:
             continue
-        if a.label == OFF_SECTION_LABEL:
-            continue
+        h = hatches[a.label]
+        if h:
+            cs = ax.contourf(X, Y, (lab == a.label).astype(float), levels=[0.5, 1.5],
+                             colors="none", hatches=[h])
+            for art in [cs, *getattr(cs, "collections", [])]:
+                try:
+                    art.set_edgecolor("0.15")
+                    art.set_linewidth(0.0)
+                except AttributeError:
+                    pass
         share = format_percent(int((lab == a.label).sum()), int((lab != OFF_SECTION_LABEL).sum()))
-        handles.append(Patch(facecolor=colors[a.label], edgecolor="0.3",
-                             label=f"{a.name}: {share}"))
+        proxy = patch_proxy(facecolor=colors[a.label], edgecolor="0.3", hatch=h)
+        register(ax, ax.images[-1] if not h else cs, a.name, proxy)
+        handles.append(patch_proxy(facecolor=colors[a.label], edgecolor="0.3", hatch=h,
+                                   label=f"{a.name}: {share}"))
     if OFF_SECTION_LABEL in present:
         band = Rectangle((extent[0], extent[2]), extent[1] - extent[0],
                          min(fp[2], extent[3]) - extent[2], facecolor="white",
                          edgecolor="0.45", hatch="///", linewidth=0, zorder=1.5,
                          label="off the section ($y_1 \\leq y_2^*$)")
         ax.add_patch(band)
+        register(ax, band, band.get_label(),
+                 patch_proxy(facecolor="white", edgecolor="0.45", hatch="///"))
         handles.append(band)
     outside = []
     for a in entries:
@@ -166,16 +199,24 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
             outside.append(a.name)
             continue
         ln = _mark(ax, a, xy[inside], len(xy), colors[a.label])
+        register(ax, ln, "fixed point of the symmetric orbit" if a.label == 0
+                 else f"section points of the {a.name}", None)
         handles.append(ln)
     ax.set_xlim(extent[0], extent[1])
     ax.set_ylim(extent[2], extent[3])
-    ax.set_xlabel("$x_1$ at the impact")
-    ax.set_ylabel("$y_1$ before the impact")
-    ax.set_title(title if title is not None else basin_title(meta), fontsize=9)
+    ax.set_xlabel(axis_label("x1") + " at the impact")
+    ax.set_ylabel(axis_label("y1") + " before it")
+    ax.set_title(title if title is not None else basin_title(meta))
     if legend:
-        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=1,
-                  fontsize=8, frameon=False, title=_note(fp, len(x), len(y), outside, edges),
-                  title_fontsize=8)
+        where = (dict(loc="upper left", bbox_to_anchor=(1.03, 1.0)) if beside else
+                 dict(loc="upper center", bbox_to_anchor=(0.5, -0.16)))
+        import textwrap
+
+        for h in handles:   # legends of a print figure wrap rather than widen it
+            h.set_label("\n".join(textwrap.wrap(h.get_label(), 44)))
+        leg = ax.legend(handles=handles, ncol=1, frameon=False,
+                        title=_note(fp, len(x), len(y), outside, edges), **where)
+        leg._legend_box.align = "left"
     return fig
 
 
@@ -190,13 +231,13 @@ def _mark(ax, a, xy, n_total: int, color):
     """Markers of an attractor's section points inside the window (projected on the slice)."""
     part = "" if len(xy) == n_total else f", {len(xy)} of {n_total} inside the window"
     if a.label == 0:
-        (ln,) = ax.plot(xy[:, 0], xy[:, 1], ls="none", marker="*", ms=15, mfc="white",
+        (ln,) = ax.plot(xy[:, 0], xy[:, 1], ls="none", marker="*", ms=11, mfc="white",
                         mec="black", mew=1.2, zorder=3,
                         label=f"fixed point of the symmetric orbit{_stability_words(a)}")
         return ln
     k = (a.label - 1) % len(_MARKERS)
     # drawn over the (larger) star, so both show where they overlap
-    (ln,) = ax.plot(xy[:, 0], xy[:, 1], ls="none", marker=_MARKERS[k], ms=7, mfc=color,
+    (ln,) = ax.plot(xy[:, 0], xy[:, 1], ls="none", marker=_MARKERS[k], ms=5, mfc=color,
                     mec="black", mew=1.2, zorder=4,
                     label=f"section points of the {a.name} (projected{part}"
                           f"{_stability_words(a)})")
@@ -205,12 +246,12 @@ def _mark(ax, a, xy, n_total: int, color):
 
 def _note(fp, nx: int, ny: int, outside, edges) -> str:
     """Legend title: the slice's fixed coordinates, the grid, what lies outside the window."""
-    note = (f"slice: $\\phi = \\phi^* = {fp[0]:.4g}$, $y_2 = y_2^* = {fp[2]:.4g}$; "
+    note = (f"slice: $\\phi = \\phi^* = {fp[0]:.4g}$, $y_2 = y_2^* = {fp[2]:.4g}$;\n"
             f"{nx} x {ny} points")
     if outside:
-        note += "\nsection points outside the window: " + ", ".join(outside)
+        note += "\nsection points outside the window:\n" + ", ".join(outside)
     if edges:
-        note += ("\nthe symmetric orbit's basin reaches the window's edge ("
+        note += ("\nthe symmetric orbit's basin reaches the window's edge\n("
                  + ", ".join(e.replace("x1", "$x_1$").replace("y1", "$y_1$") for e in edges)
                  + "):\nit may extend beyond the window")
     return note

@@ -5,22 +5,30 @@ import numpy as np
 
 from hybridpd.analysis.bifdiagram import COORDINATES, section_coordinate
 from hybridpd.plotting._common import _COLORS, figure
+from hybridpd.plotting.style import DOUBLE, house_figure, styled
 
 __all__ = ["PARAMETER_LABELS", "bifurcation_legend", "plot_bifurcation"]
 
 #: Axis labels of the parameters (maths text).
-PARAMETER_LABELS = {"kp": r"$k_p$", "kv": r"$k_v$", "e": r"$e$", "mu": r"$\mu$",
-                    "gamma": r"$\gamma = L / x_{10}$", "omega": r"$\omega$", "m2": r"$m_2$",
-                    "xm": r"$x_m$", "L": r"$L$", "x10": r"$x_{10}$"}
-_COORD_LABELS = {"phi": r"impact phase $\varphi = t\ \mathrm{mod}\ T$",
-                 "z1": r"$z_1 = x_2$ at impact", "x2": r"$x_2$ at impact",
-                 "z2": r"$z_2 = y_2$ before impact", "y2": r"$y_2$ before impact",
-                 "z4": r"$z_4 = y_1 - y_2$ before impact",
-                 "x1": r"$x_1 = x_2 + L$ at impact", "y1": r"$y_1$ before impact"}
-_EVENT_MARKERS = {"period_doubling": ("D", "tab:purple", "period doubling"),
-                  "fold": ("s", "tab:red", "fold"),
+PARAMETER_LABELS = {"kp": r"$k_p$ (force/length)", "kv": r"$k_v$ (force$\cdot$time/length)",
+                    "e": r"$e$ (1)", "mu": r"$\mu$ (1)", "gamma": r"$\gamma = L / x_{10}$ (1)",
+                    "omega": r"$\omega$ (rad/time)", "m2": r"$m_2$ (mass)",
+                    "xm": r"$x_m$ (length)", "L": r"$L$ (length)",
+                    "x10": r"$x_{10}$ (length)"}
+_COORD_LABELS = {"phi": r"impact phase $\varphi = t\ \mathrm{mod}\ T$ (time)",
+                 "z1": r"$z_1 = x_2$ at impact (length)",
+                 "x2": r"$x_2$ at impact (length)",
+                 "z2": r"$z_2 = y_2$ before impact (length/time)",
+                 "y2": r"$y_2$ before impact (length/time)",
+                 "z4": r"$z_4 = y_1 - y_2$ before impact (length/time)",
+                 "x1": r"$x_1 = x_2 + L$ at impact (length)",
+                 "y1": r"$y_1$ before impact (length/time)"}
+_EVENT_MARKERS = {"period_doubling": ("D", "#CC79A7", "period doubling"),
+                  "fold": ("s", "#D55E00", "fold"),
                   "grazing": ("v", "black", "grazing"),
-                  "neimark_sacker": ("*", "tab:green", "Neimark-Sacker")}
+                  "neimark_sacker": ("*", "#009E73", "Neimark-Sacker")}
+#: Markers telling branches apart besides their colour (the first branch has none).
+_BRANCH_MARKERS = ("", "o", "s", "^", "v", "P")
 _SYMBOLS = {"kp": "k_p", "kv": "k_v", "e": "e", "mu": r"\mu", "omega": r"\omega",
             "m2": "m_2", "xm": "x_m", "x10": "x_{10}", "n": "n", "L": "L"}
 
@@ -72,6 +80,7 @@ def _title(diagram):
     return ", ".join(parts) + f"\n{path}; {run}"
 
 
+@styled
 def plot_bifurcation(diagram, ax=None, coordinate: str = "z1", branches=(), *,
                      events: bool = True, title: str | None = None, markersize: float = 1.0,
                      color: str = "k", label: str | None = None, legend: bool = True,
@@ -123,11 +132,15 @@ def plot_bifurcation(diagram, ax=None, coordinate: str = "z1", branches=(), *,
     ...                         np.linspace(18, 20, 3), iterations=100, keep=10)
     >>> fig = plot_bifurcation(d, coordinate="x1")
     >>> fig.axes[0].get_xlabel()
-    '$k_v$'
+    '$k_v$ (force$\\\\cdot$time/length)'
     """
     if coordinate not in COORDINATES:
         raise ValueError(f"coordinate must be one of {COORDINATES}, got {coordinate!r}")
-    fig, ax = figure(ax, figsize=(7, 4.5))
+    if ax is None:
+        fig = house_figure(DOUBLE, 4.2)
+        ax = fig.add_subplot(1, 1, 1)
+    else:
+        fig, ax = figure(ax)
     y = diagram.coordinate(coordinate)
     x = np.repeat(diagram.values[:, None], y.shape[1], axis=1)
     ok = np.isfinite(y)
@@ -141,18 +154,33 @@ def plot_bifurcation(diagram, ax=None, coordinate: str = "z1", branches=(), *,
         name = blabel or (f"period-{br.period} branch"
                           + (" (symmetric)" if br.family == "symmetric" else ""))
         # branches with the same label are pieces of one family: one colour, one entry
-        c = colors.setdefault(name, _COLORS[len(colors) % len(_COLORS)])
-        _draw_branch(ax, br, coordinate, c, name, events, seen)
+        k = colors.setdefault(name, len(colors))
+        _draw_branch(ax, br, coordinate, (_COLORS[k % len(_COLORS)],
+                                          _BRANCH_MARKERS[k % len(_BRANCH_MARKERS)]),
+                     name, events, seen)
     ax.set_xlabel(PARAMETER_LABELS.get(diagram.parameter_name, diagram.parameter_name))
     ax.set_ylabel(_COORD_LABELS[coordinate])
     ax.set_xlim(float(np.min(diagram.values)), float(np.max(diagram.values)))
-    ax.set_title(title if title is not None else _title(diagram), fontsize=9)
+    ax.set_title(title if title is not None else _title(diagram))
     if legend:
         bifurcation_legend(ax)
     counts = {c: n for c, n in diagram.counts().items() if n and c != "periodic"}
-    if note and counts:
-        ax.text(0.01, 0.01, ", ".join(f"{n} {c.replace('_', ' ')}" for c, n in counts.items()),
-                transform=ax.transAxes, fontsize=6, color="gray", va="bottom")
+    per = {int(k): int(np.sum(diagram.period == k)) for k in np.unique(diagram.period) if k > 1}
+    lines = []
+    if counts:
+        lines.append(", ".join(f"{n} {c.replace('_', ' ')}" for c, n in counts.items()))
+    if per:
+        lines.append("period k (at " + ", ".join(f"{n} values: k = {k}" for k, n in per.items())
+                     + "): the section points repeat every k applications of $P$")
+    if note and lines:
+        ax.text(0.01, 0.01, "\n".join(lines), transform=ax.transAxes, fontsize=7, color="0.3",
+                va="bottom")
+    if ok.any():   # a flat diagram: a readable range instead of an offset of 1e-13
+        lo_, hi_ = float(np.min(y[ok])), float(np.max(y[ok]))
+        if hi_ - lo_ <= 1e-9 * max(1.0, abs(hi_)):
+            pad = max(1e-3, 0.05 * abs(hi_))
+            ax.set_ylim(lo_ - pad, hi_ + pad)
+    ax.ticklabel_format(axis="y", useOffset=False)
     return fig
 
 
@@ -170,8 +198,13 @@ def bifurcation_legend(ax, **kw):
     return leg
 
 
-def _draw_branch(ax, br, coordinate, c, name, events, seen):
-    """Draw one branch, labelling the first artist of every kind not yet in ``seen``."""
+bifurcation_legend = styled(bifurcation_legend)
+
+
+def _draw_branch(ax, br, coordinate, style, name, events, seen):
+    """Draw one branch (``style``: colour and marker), labelling the first artist of every
+    kind not yet in ``seen``."""
+    c, marker = style
     cyc, L = _branch_cycles(br)
     yc = section_coordinate(cyc, coordinate, L[:, None])
     p = br.parameter
@@ -183,7 +216,8 @@ def _draw_branch(ax, br, coordinate, c, name, events, seen):
         mm = _pieces(m) & br.viable
         text = f"{name}, {lab}"
         for q in range(yc.shape[1]):
-            ax.plot(p, np.where(mm, yc[:, q], np.nan), ls, color=c, lw=1.4, zorder=3,
+            ax.plot(p, np.where(mm, yc[:, q], np.nan), ls=ls, color=c, lw=1.4, zorder=3,
+                    marker=marker or None, ms=3.5, markevery=max(1, len(p) // 10),
                     label=text if text not in seen else None)
             seen.add(text)
     if not events:
@@ -194,6 +228,8 @@ def _draw_branch(ax, br, coordinate, c, name, events, seen):
         mk, col, text = _EVENT_MARKERS[ev.kind]
         if ev.kind == "fold" and "turns back" not in ev.detail:
             mk, text = "o", "branch point"
+        if not ev.located:   # a sign change between two points, not an event at this point
+            mk, col, text = "X", "0.45", f"{text}? (not located, uncertain)"
         s = np.asarray(ev.point, float)
         Lv = float(L[min(ev.index, len(L) - 1)])
         yv = float(section_coordinate(s, coordinate, Lv))

@@ -10,6 +10,7 @@ e.g. one per restitution coefficient as in Figs 4-5).
 from __future__ import annotations
 
 from hybridpd.plotting._common import figure
+from hybridpd.plotting.style import SINGLE, axis_label, house_figure, styled
 
 __all__ = ["CODIM2_STYLES", "KIND_STYLES", "draw_boundaries"]
 
@@ -40,6 +41,7 @@ CODIM2_STYLES = {
 }
 
 
+@styled
 def draw_boundaries(ax, result, *, color=None, codim2: bool = True, legend: bool = True,
                     kinds=None, label_suffix: str = "", markersize: float = 6.0):
     """Draw traced boundary curves (and codimension-2 points) on ``ax``.
@@ -75,7 +77,11 @@ def draw_boundaries(ax, result, *, color=None, codim2: bool = True, legend: bool
     >>> [t.get_text().split(":")[0] for t in fig.axes[0].get_legend().get_texts()][:2]
     ['fold / branch point', 'Neimark-Sacker']
     """
-    fig, ax = figure(ax, figsize=(6, 5))
+    if ax is None:
+        fig = house_figure(SINGLE, 3.6)
+        ax = fig.add_subplot(1, 1, 1)
+    else:
+        fig, ax = figure(ax)
     curves = getattr(result, "curves", result)
     seen, done = set(), set()
     for c in curves:
@@ -97,8 +103,8 @@ def draw_boundaries(ax, result, *, color=None, codim2: bool = True, legend: bool
     if hasattr(result, "plane"):
         ax.set_xlim(result.plane.x.lo, result.plane.x.hi)
         ax.set_ylim(result.plane.y.lo, result.plane.y.hi)
-        ax.set_xlabel(result.plane.x.name)
-        ax.set_ylabel(result.plane.y.name)
+        ax.set_xlabel(axis_label(result.plane.x.name))
+        ax.set_ylabel(axis_label(result.plane.y.name))
     if legend and (seen or done):
-        ax.legend(loc="best", fontsize=7)
+        ax.legend(loc="best")
     return fig

@@ -120,7 +120,7 @@ def plot_file(path: str | os.PathLike, **options):
     >>> file_kind(p)
     'branch'
     >>> plot_file(p, quantity="margin").axes[0].get_xlabel()
-    'kv'
+    '$k_v$ (force$\\\\cdot$time/length)'
     """
     kind = file_kind(path)
     options = {k: v for k, v in options.items() if v is not None}
@@ -161,15 +161,27 @@ def _diagram(path, title=None, coordinate="z1"):
     return plot_bifurcation(load_diagram(path), coordinate=coordinate, title=title)
 
 
+_BRANCH_UNITS = {"spectral_radius": "(1)", "multipliers": "(1)", "margin": "(length)",
+                 "xm": "(length)", "min_impact_speed": "(length/time)", 0: "(time)",
+                 1: "(length)", 2: "(length/time)", 3: "(length/time)"}
+
+
 def _branch(path, title=None, quantity="spectral_radius"):
     from hybridpd.analysis.continuation import load_branch, plot_branch
+    from hybridpd.plotting.style import DOUBLE, axis_label, house_figure, house_style
 
     br = load_branch(path)
-    fig = plot_branch(br, quantity=quantity)
-    fig.axes[0].set_title(title if title is not None else
-                          f"{br.case.value} {br.family} branch in {br.parameter_name} "
-                          f"({len(br)} points; stopped: {br.termination})", fontsize=9)
-    fig.tight_layout()
+    with house_style():
+        fig = house_figure(DOUBLE, 3.8)
+        ax = fig.add_subplot(1, 1, 1)
+        plot_branch(br, ax=ax, quantity=quantity)
+        ax.set_xlabel(axis_label(br.parameter_name))
+        unit = _BRANCH_UNITS.get(quantity)
+        if unit and not ax.get_ylabel().endswith(")"):
+            ax.set_ylabel(f"{ax.get_ylabel()} {unit}".strip())
+        ax.set_title(title if title is not None else
+                     f"{br.case.value} {br.family} branch in {br.parameter_name} "
+                     f"({len(br)} points; stopped: {br.termination})")
     return fig
 
 

@@ -10,9 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from hybridpd.plotting.style import DOUBLE, MAX_HEIGHT, house_style, series
+
 __all__ = ["plot_model_trajectory", "plot_trajectory", "plot_trajectory_samples"]
 
-_MAX_PHASE = 6  # phase portraits drawn (one per DOF, the first ones)
+_MAX_PHASE = 4  # phase portraits drawn (one per DOF, the first ones), to fit 7.2 in
 
 
 def _contact(c) -> dict:
@@ -46,6 +48,7 @@ def plot_trajectory_samples(t, q, v, *, dofs=None, contacts=(), impact_times=(),
         Intervals held on a contact, shaded.
     title : str, optional
     fig : matplotlib Figure, optional
+        Drawn into; else a new figure 7.2 in wide in the house style.
 
     Returns
     -------
@@ -61,6 +64,14 @@ def plot_trajectory_samples(t, q, v, *, dofs=None, contacts=(), impact_times=(),
     >>> len(fig.axes)
     4
     """
+    with house_style():
+        return _plot_samples(t, q, v, dofs=dofs, contacts=contacts, impact_times=impact_times,
+                             impact_contacts=impact_contacts, impact_states=impact_states,
+                             sticking=sticking, title=title, fig=fig)
+
+
+def _plot_samples(t, q, v, *, dofs, contacts, impact_times, impact_contacts, impact_states,
+                  sticking, title, fig):
     from matplotlib.figure import Figure
 
     t = np.asarray(t, float)
@@ -76,27 +87,31 @@ def plot_trajectory_samples(t, q, v, *, dofs=None, contacts=(), impact_times=(),
     ic = np.zeros(it.size, int) if impact_contacts is None else np.asarray(impact_contacts, int)
     npp = min(n, _MAX_PHASE)
     rows = 3 if contacts else 2
-    fig = fig or Figure(figsize=(max(8.0, 2.6 * npp), 2.6 * rows + 0.6))
+    fig = fig or Figure(figsize=(DOUBLE, min(MAX_HEIGHT, 2.0 * rows + 0.8)),
+                        layout="constrained")
     gs = fig.add_gridspec(rows, npp)
     ax = fig.add_subplot(gs[0, :])
     for i in range(n):
-        ax.plot(t, q[:, i], lw=1.0, label=dofs[i])
+        s = series(i)
+        ax.plot(t, q[:, i], lw=1.0, color=s["color"], ls=s["ls"], label=dofs[i])
     if it.size:
         ax.plot(it, np.full(it.size, np.nanmin(q) if q.size else 0.0), "k|", ms=8,
                 label="impacts")
     _shade(ax, sticking, label="sticking")
-    ax.set_xlabel("t")
-    ax.set_ylabel("position")
-    ax.legend(loc="best", fontsize=8, ncol=min(n + 2, 5))
+    ax.set_xlabel("$t$ (time)")
+    ax.set_ylabel("position (length)")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     if title:
-        ax.set_title(title, fontsize=9)
+        ax.set_title(title)
     if contacts:
         axg = fig.add_subplot(gs[1, :], sharex=ax)
         pre = None if impact_states is None else np.asarray(impact_states, float)
         marked = False
         for k, c in enumerate(contacts):
             w = c["normal"]
-            line, = axg.plot(t, q @ w, lw=1.0, label=_gap_label(c, dofs, k))
+            sk = series(k)
+            line, = axg.plot(t, q @ w, lw=1.0, color=sk["color"], ls=sk["ls"],
+                             label=_gap_label(c, dofs, k))
             for b in (c["lo"], c["hi"]):
                 if b is not None:
                     axg.axhline(b, color=line.get_color(), lw=0.6, ls=":")
@@ -107,16 +122,18 @@ def plot_trajectory_samples(t, q, v, *, dofs=None, contacts=(), impact_times=(),
                 axg.plot(it[sel], y, "|", color="k", ms=8, label=None if marked else "impacts")
                 marked = True
         _shade(axg, sticking)
-        axg.set_xlabel("t")
-        axg.set_ylabel("gap")
-        axg.legend(loc="best", fontsize=8)
+        axg.set_xlabel("$t$ (time)")
+        axg.set_ylabel("gap (length)")
+        axg.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     for i in range(npp):
         axp = fig.add_subplot(gs[rows - 1, i])
-        axp.plot(q[:, i], v[:, i], lw=0.8, color=f"C{i}")
-        axp.set_xlabel(dofs[i])
-        axp.set_ylabel(f"d{dofs[i]}/dt")
-        axp.set_title(f"phase portrait: {dofs[i]}", fontsize=9)
-    fig.tight_layout()
+        s = series(i)
+        axp.plot(q[:, i], v[:, i], lw=0.8, color=s["color"], ls=s["ls"])
+        axp.set_xlabel(f"{dofs[i]} (length)")
+        axp.set_ylabel(f"d{dofs[i]}/dt (length/time)")
+        axp.set_title(f"phase portrait: {dofs[i]}")
+    if fig.get_layout_engine() is None:
+        fig.tight_layout()
     return fig
 
 
@@ -136,7 +153,8 @@ def _gap_label(c, dofs, k):
 
 def _shade(ax, sticking, label=None):
     for k, s in enumerate(sticking):
-        ax.axvspan(s[0], s[1], color="tab:red", alpha=0.15, label=label if k == 0 else None)
+        ax.axvspan(s[0], s[1], facecolor="#D55E00", alpha=0.15, hatch="//", edgecolor="none",
+                   label=label if k == 0 else None)
 
 
 def plot_trajectory(traj, L, t=None, fig=None):

@@ -13,10 +13,40 @@
   alone and both; **the mu and gamma studies** (:mod:`~hybridpd.reproduce.params`).
 * ``summary.json`` (schema :data:`~hybridpd.reproduce.summary.SCHEMA`) and ``summary.md``.
 
-Every open convention is a field of :class:`Settings`.
+Every open convention is a field of :class:`Settings`. The package itself is callable:
+``hp.reproduce(out, mode="quick")`` runs :func:`reproduce`.
+
+Examples
+--------
+>>> import hybridpd as hp
+>>> s = hp.reproduce.Settings.quick()
+>>> s.m2, s.basin
+((1.0, 'auto'), (41, 41))
+>>> summary = hp.reproduce("reproduce-out", mode="quick", log=None)  # doctest: +SKIP
+
+The last line takes about a minute on two cores and writes the figures, ``summary.md`` and
+``summary.json`` into ``reproduce-out/``.
 """
+import sys
+import types
+
 from hybridpd.reproduce.pipeline import reproduce, run_convention
 from hybridpd.reproduce.settings import AUTO, PAPER, Settings
 from hybridpd.reproduce.summary import SCHEMA, validate
 
 __all__ = ["AUTO", "PAPER", "SCHEMA", "Settings", "reproduce", "run_convention", "validate"]
+
+
+class _ReproducePackage(types.ModuleType):
+    """This package, callable as :func:`reproduce`.
+
+    ``hybridpd.reproduce`` names both this package and the function that runs it; once the
+    package is imported, Python binds the package to that attribute of ``hybridpd``, so the
+    package itself answers the call and ``hp.reproduce(...)`` always runs the reproduction.
+    """
+
+    def __call__(self, *args, **kwargs):
+        return reproduce(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _ReproducePackage

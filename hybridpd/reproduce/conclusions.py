@@ -1,18 +1,23 @@
 """The paper's five conclusions (section 5) as computed tests.
 
-Each ``check_*`` function takes computed numbers and returns a dict with a ``"verdict"``
-(``"agrees"`` or ``"contradicted"``) and the numbers it rests on. The thresholds that turn a
-qualitative statement into a test are module constants, so that a reader can see and change
-them. Region statements are tested on three quantities: existence alone, stability alone (of
-the orbit candidate, viability ignored) and both (the paper's shaded regions); the verdict of
-a conclusion is that of "both", the others are evidence.
+Each ``check_*`` function takes computed numbers and returns a dict with a ``"verdict"`` (one
+of :data:`~hybridpd.reproduce.rules.VERDICTS`, by the rules of
+:mod:`hybridpd.reproduce.rules`) and the numbers it rests on, every share with its cell count
+and grid. The thresholds that turn a qualitative statement into a test are module constants,
+so that a reader can see and change them. Region statements are tested on three quantities:
+existence alone, stability alone (of the orbit candidate, viability ignored) and both (the
+paper's shaded regions); the verdict of a conclusion is that of "both", the others are
+evidence.
 """
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["LARGE", "MUCH_SMALLER", "QUANTITIES", "SATURATED", "SIMILAR", "STATEMENTS",
-           "check_1", "check_2", "check_3", "check_4", "check_5", "combine"]
+from hybridpd.reproduce import rules as R
+from hybridpd.reproduce.rules import AGREES, CONTRADICTED, DEPENDS, UNRESOLVED, combine
+
+__all__ = ["LARGE", "MUCH_SMALLER", "QUANTITIES", "SIMILAR", "STATEMENTS", "check_1",
+           "check_2", "check_3", "check_4", "check_4_necessary", "check_5", "combine"]
 
 STATEMENTS = {
     1: "The existence and stability regions are much smaller for the non-collocated case "
@@ -31,95 +36,87 @@ MUCH_SMALLER = 0.2
 LARGE = 0.3
 #: "Similar size": basin-measure ratio non-collocated / collocated inside this range, every e.
 SIMILAR = (0.5, 2.0)
-#: A region covering more than this share of the box cannot show growth ("saturated").
-SATURATED = 0.99
 #: The region quantities of conclusions 1-3.
 QUANTITIES = ("exists", "stability", "both")
 
-AGREES, CONTRADICTED, DEPENDS, NOT_MEASURED = "agrees", "contradicted", "depends", "not measured"
+__all__ += ["AGREES", "CONTRADICTED", "DEPENDS", "UNRESOLVED"]
 
 
 def _v(ok) -> str:
     return AGREES if ok else CONTRADICTED
 
 
-def combine(verdicts) -> str:
-    """``"agrees"``/``"contradicted"`` if all measured verdicts say so, else ``"depends"``."""
-    vs = {v for v in verdicts if v in (AGREES, CONTRADICTED)}
-    if not vs:
-        return DEPENDS
-    return vs.pop() if len(vs) == 1 else DEPENDS
+def _shares(a, grid):
+    return [R.share(x, grid) for x in np.asarray(a, float)]
 
 
-def _lst(a):
-    return [float(x) for x in np.asarray(a, float)]
-
-
-def check_1(col: dict, non: dict) -> dict:
-    """Conclusion 1 from box shares ``{quantity: (len(e),)}`` of both cases (same box)."""
+def check_1(col: dict, non: dict, grid) -> dict:
+    """Conclusion 1 from box shares ``{quantity: (len(e),)}`` of both cases on one ``grid``
+    ``(nx, ny)``: the ratio non-collocated / collocated is below :data:`MUCH_SMALLER` for
+    every ``e``."""
     out = {}
     for q in QUANTITIES:
         c, n = np.asarray(col[q], float), np.asarray(non[q], float)
         with np.errstate(all="ignore"):
             ratio = np.where(c > 0, n / c, np.where(n > 0, np.inf, np.nan))
         ok = bool(np.all(np.isfinite(ratio) & (ratio < MUCH_SMALLER)))
-        out[q] = {"collocated": _lst(c), "noncollocated": _lst(n),
+        out[q] = {"collocated": _shares(c, grid), "noncollocated": _shares(n, grid),
                   "ratio": [None if not np.isfinite(r) else float(r) for r in ratio],
                   "verdict": _v(ok)}
-    return {"verdict": out["both"]["verdict"], "by_quantity": out}
+    return {"verdict": out["both"]["verdict"], "by_quantity": out, "grid": list(grid)}
 
 
-def _trend(a, sign):
-    a = np.asarray(a, float)
-    d = np.diff(a)
-    sat = (a[:-1] > SATURATED) & (a[1:] > SATURATED)
-    strict = bool(np.all(sign * d > 0))
-    allowed = bool(np.all((sign * d > 0) | sat))
-    return strict, allowed, [bool(s) for s in sat]
-
-
-def check_2(col: dict, non: dict) -> dict:
-    """Conclusion 2: non-collocated shares strictly decrease along ``e``; collocated ones
-    increase (steps between two saturated shares are not counted against it)."""
+def check_2(col: dict, non: dict, grid, e) -> dict:
+    """Conclusion 2 by the trend rule (:func:`~hybridpd.reproduce.rules.trend`) along ``e``:
+    the non-collocated share does not increase with ``e`` and the collocated one does not
+    decrease, each within two cells of ``grid``."""
+    cells = int(grid[0]) * int(grid[1])
     out = {}
     for q in QUANTITIES:
-        dec, _, _ = _trend(non[q], -1)
-        inc, inc_allowed, sat = _trend(col[q], +1)
-        out[q] = {"noncollocated": _lst(non[q]), "collocated": _lst(col[q]),
-                  "noncollocated_decreases": dec, "collocated_increases": inc,
-                  "collocated_saturated_steps": sat,
-                  "verdict": _v(dec and inc_allowed)}
-    return {"verdict": out["both"]["verdict"], "by_quantity": out}
+        tn = R.trend(e, non[q], cells, direction="decreasing")
+        tc = R.trend(e, col[q], cells, direction="increasing")
+        out[q] = {"noncollocated": _shares(non[q], grid), "collocated": _shares(col[q], grid),
+                  "noncollocated_trend": tn, "collocated_trend": tc,
+                  "verdict": _v(tn["verdict"] == AGREES and tc["verdict"] == AGREES)}
+    return {"verdict": out["both"]["verdict"], "by_quantity": out, "grid": list(grid)}
 
 
-def check_3(col: dict) -> dict:
+def check_3(col: dict, grid) -> dict:
     """Conclusion 3: the collocated shares are at least :data:`LARGE` for every ``e``."""
-    out = {q: {"collocated": _lst(col[q]), "verdict": _v(bool(np.min(col[q]) >= LARGE))}
-           for q in QUANTITIES}
-    return {"verdict": out["both"]["verdict"], "by_quantity": out}
+    out = {q: {"collocated": _shares(col[q], grid),
+               "verdict": _v(bool(np.min(col[q]) >= LARGE))} for q in QUANTITIES}
+    return {"verdict": out["both"]["verdict"], "by_quantity": out, "grid": list(grid)}
 
 
-def check_4(col: list, non: list) -> dict:
-    """Conclusion 4 from per-``e`` basin measures (areas in the ``(x1, y1)`` slice; None: no
-    stable orbit).
+def check_4(col: list, non: list, touches_edge=None, *, window=None, grid=None,
+            distance=None) -> dict:
+    """Conclusion 4 from per-``e`` basin areas in one window shared by every panel and both
+    cases (None: no stable orbit), by :func:`~hybridpd.reproduce.rules.basin_comparison`.
 
-    Similar means both non-empty and the ratio inside :data:`SIMILAR`, for every ``e``.
+    ``touches_edge`` (``{"collocated": [bool], "noncollocated": [bool]}``, default: none
+    touches), ``window``, ``grid`` and ``distance`` (the window-free measure, see
+    :func:`hybridpd.reproduce.basins.boundary_distance`) are recorded as evidence.
     """
-    ratios, ok = [], True
+    if touches_edge is None:
+        touches_edge = {"collocated": [False] * len(col), "noncollocated": [False] * len(non)}
+    cmp = R.basin_comparison(col, non, touches_edge, SIMILAR)
+    ratios = []
     for c, n in zip(col, non):
         c, n = (0.0 if c is None else float(c)), (0.0 if n is None else float(n))
-        r = n / c if c > 0 else (float("inf") if n > 0 else float("nan"))
-        ratios.append(None if not np.isfinite(r) else r)
-        ok &= bool(c > 0 and n > 0 and SIMILAR[0] < r < SIMILAR[1])
-    return {"verdict": _v(ok), "collocated": col, "noncollocated": non, "ratio": ratios}
+        ratios.append(n / c if c > 0 and n > 0 else None)
+    return {"verdict": cmp["verdict"], "collocated": col, "noncollocated": non,
+            "ratio": ratios, "ratio_bounds": cmp["ratio_bounds"], "per_e": cmp["per_e"],
+            "touches_edge": touches_edge, "window": None if window is None else list(window),
+            "grid": None if grid is None else list(grid), "distance": distance}
 
 
 def check_4_necessary(col_stable: list, non_stable: list) -> str:
     """Conclusion 4 without basins: a missing or unstable orbit on one side only has an
-    empty basin while the other side's is not (contradicted); otherwise not measured."""
+    empty basin while the other side's is not (contradicted); otherwise the orbits alone
+    cannot decide (unresolved)."""
     if any(bool(c) != bool(n) for c, n in zip(col_stable, non_stable)):
         return CONTRADICTED
-    return NOT_MEASURED
+    return UNRESOLVED
 
 
 def check_5(comparison) -> dict:

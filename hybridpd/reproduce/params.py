@@ -20,7 +20,7 @@ from hybridpd.analysis.orbits import symmetric_orbits
 from hybridpd.model import Case
 from hybridpd.reproduce.study import candidate_stability
 
-__all__ = ["LIMIT_POINTS", "ParamStudy", "param_shares", "param_study"]
+__all__ = ["LIMIT_POINTS", "ParamStudy", "check_study", "param_shares", "param_study"]
 
 #: Parameter values at which the limits are checked.
 LIMIT_POINTS = {"mu": (1e-4, 1e4), "gamma": (1e-4,)}
@@ -50,6 +50,9 @@ class ParamStudy:
         ``{str(value): {case: {quantity: [share per e]}}}`` at :data:`LIMIT_POINTS`.
     fixed : dict
         The other parameters.
+    check : dict or None
+        The resolution check: ``{"box", "fractions", "limits"}`` as above on a grid with
+        another number of cells (:func:`check_study`).
     """
 
     name: str
@@ -62,6 +65,7 @@ class ParamStudy:
     maps: dict
     limits: dict
     fixed: dict
+    check: dict = None
     __repr__ = compact_repr
 
     def to_dict(self) -> dict:
@@ -69,7 +73,35 @@ class ParamStudy:
                 "box": self.box, "map_kp": self.map_kp, "fixed": self.fixed,
                 "fractions": {c: {q: a.tolist() for q, a in d.items()}
                               for c, d in self.fractions.items()},
-                "limits": self.limits}
+                "limits": self.limits,
+                "check": None if self.check is None else {
+                    "box": self.check["box"], "limits": self.check["limits"],
+                    "fractions": {c: {q: a.tolist() for q, a in d.items()}
+                                  for c, d in self.check["fractions"].items()}}}
+
+
+def _box(kp_axis, kv_axis):
+    return {"kp": [float(kp_axis[0]), float(kp_axis[-1]), len(kp_axis)],
+            "kv": [float(kv_axis[0]), float(kv_axis[-1]), len(kv_axis)]}
+
+
+def check_study(study: ParamStudy, kp_axis, kv_axis) -> ParamStudy:
+    """``study`` with :attr:`ParamStudy.check` filled: its shares and limits recomputed on
+    the gain grid ``kp_axis x kv_axis`` (the same box, another number of cells)."""
+    from dataclasses import replace
+
+    kp_axis, kv_axis = np.asarray(kp_axis, float), np.asarray(kv_axis, float)
+    fixed = dict(study.fixed)
+    fractions, limits = {}, {}
+    for case in study.fractions:
+        fractions[case] = param_shares(case, study.name, study.values, kp_axis, kv_axis,
+                                       e=study.e, fixed=fixed)
+        lim = param_shares(case, study.name, LIMIT_POINTS[study.name], kp_axis, kv_axis,
+                           e=study.e, fixed=fixed)
+        for k, v in enumerate(LIMIT_POINTS[study.name]):
+            limits.setdefault(f"{v:g}", {})[case] = {q: a[:, k].tolist() for q, a in lim.items()}
+    return replace(study, check={"box": _box(kp_axis, kv_axis), "fractions": fractions,
+                                 "limits": limits})
 
 
 def _plant(name, value, fixed):
@@ -154,7 +186,6 @@ def param_study(name, *, values_range, points, kp_axis, kv_axis, e, fixed, map_k
             limits.setdefault(f"{v:g}", {})[case] = {q: a[:, k].tolist() for q, a in lim.items()}
         if log is not None:
             log(f"{name} study {case}: done")
-    box = {"kp": [float(kp_axis[0]), float(kp_axis[-1]), len(kp_axis)],
-           "kv": [float(kv_axis[0]), float(kv_axis[-1]), len(kv_axis)]}
+    box = _box(kp_axis, kv_axis)
     fx = {k: v for k, v in fixed.items() if k != name}
     return ParamStudy(name, vals, es, fractions, box, kv_axis, float(map_kp), maps, limits, fx)

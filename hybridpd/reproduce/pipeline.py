@@ -7,7 +7,7 @@ Layout of the output directory::
     m2=<value>/                       one directory per convention:
         fig3_orbit.png, fig4_regions_collocated.png, fig5_regions_noncollocated.png,
         fig6_basins_collocated.png, fig7_basins_noncollocated.png,
-        regions_*.npz, basin_*.npz, robustness.json
+        regions_*.nc, basin_*.nc, robustness.json
 """
 from __future__ import annotations
 
@@ -49,7 +49,19 @@ class ConventionRun:
         ``{(case, e): BasinResult or None}`` (None: no orbit, or not stable).
     comparison : RobustnessComparison
     checks : dict
-        ``{1..5: result of conclusions.check_*}``.
+        ``{1..5: result of conclusions.check_*}`` on the run's grids.
+    check_grid_checks : dict
+        The same on the resolution-check grids.
+    check_grids : dict
+        ``{1..5: [[nx, ny], [nx2, ny2]]}``: the grids behind the two.
+    verdicts : dict
+        ``{1..5: verdict}``: the run's, or ``"unresolved"`` if the check grid's differs.
+    check_shares : dict
+        :attr:`shares` on the check grid.
+    basin_window : tuple
+        The window shared by every basin (physical units); ``basin_windows`` all tried.
+    touches_edge : dict
+        ``{case: [bool per e]}``: the symmetric orbit's basin touches the window's edge.
     directory : Path
     timings : dict
     """
@@ -65,6 +77,13 @@ class ConventionRun:
     basins: dict = field(default_factory=dict)
     comparison: object = None
     checks: dict = field(default_factory=dict)
+    check_grid_checks: dict = field(default_factory=dict)
+    check_grids: dict = field(default_factory=dict)
+    verdicts: dict = field(default_factory=dict)
+    check_shares: dict = field(default_factory=dict)
+    basin_window: tuple = None
+    basin_windows: list = field(default_factory=list)
+    touches_edge: dict = field(default_factory=dict)
     directory: Path = None
     timings: dict = field(default_factory=dict)
     __repr__ = compact_repr
@@ -89,6 +108,10 @@ class M2Study:
     robust_grid : ndarray
     rho : dict
         ``{(case, e): spectral radius along a fine grid}`` for the figure, with ``rho_grid``.
+    checked : dict
+        ``{id: [verdict per grid value]}`` on the resolution-check grids.
+    gain_grids : (int, int)
+        Points per axis of the verdict grid and of the check grid.
     """
 
     intervals: dict
@@ -99,6 +122,8 @@ class M2Study:
     robust_grid: np.ndarray
     rho_grid: np.ndarray
     rho: dict
+    checked: dict = None
+    gain_grids: tuple = None
     __repr__ = compact_repr
 
 
@@ -106,11 +131,23 @@ def _say(log):
     return log or (lambda *_: None)
 
 
+def _verdicts_at(m2, kp_axis, kv_axis, common) -> dict:
+    """Checks 1-3 on one gain grid at one ``m2``."""
+    P = PAPER
+    grid = (len(kp_axis), len(kv_axis))
+    sh = {case: box_fractions(case, kp_axis, kv_axis, e=P["e"], m2=m2, **common)
+          for case in CASES}
+    return {1: C.check_1(sh["collocated"], sh["noncollocated"], grid),
+            2: C.check_2(sh["collocated"], sh["noncollocated"], grid, P["e"]),
+            3: C.check_3(sh["collocated"], grid)}
+
+
 def m2_study(settings: Settings, *, log=None) -> M2Study:
     """Stable ``m2`` intervals at the paper's gains and every verdict against ``m2``.
 
     The verdicts use the paper's gain box **as printed** (``kp, kv`` in ``[0.1, max]``, not
-    scaled), so they show what Figs 4-7 would say for each ``m2``.
+    scaled), so they show what Figs 4-7 would say for each ``m2``; each is computed on the
+    verdict grid and on the resolution-check grid (:meth:`Settings.check_num`).
     """
     from hybridpd.analysis.design import robustness_comparison
     from hybridpd.analysis.orbits import symmetric_orbits
@@ -123,7 +160,8 @@ def m2_study(settings: Settings, *, log=None) -> M2Study:
                                             **common)
                         for e in P["e"]} for case in CASES}
     say("m2 study: stable intervals located")
-    chosen = choose_m2(intervals["noncollocated"])
+    chosen = choose_m2({(c, e): iv for c, d in intervals.items() for e, iv in d.items()},
+                       settings.m2_range)
     lo, hi = settings.m2_range
     rho_grid = np.logspace(math.log10(lo), math.log10(hi), 400)
     rho = {}
@@ -132,70 +170,139 @@ def m2_study(settings: Settings, *, log=None) -> M2Study:
             r = symmetric_orbits(P["kp"], P["kv"], m2=rho_grid, e=e, case=case, **common)
             rho[(case, e)] = np.where(r.exists, r.spectral_radius, np.nan)
     grid = np.logspace(math.log10(lo), math.log10(hi), settings.m2_verdicts)
-    g = settings.verdict_grid
-    kp_axis = np.linspace(0.1, settings.gains[0], g)
-    kv_axis = np.linspace(0.1, settings.gains[1], g)
+    axes = []
+    for g in (settings.verdict_grid, settings.check_num(settings.verdict_grid)):
+        axes.append((np.linspace(0.1, settings.gains[0], g), np.linspace(0.1, settings.gains[1], g)))
     verdicts = {k: [] for k in range(1, 6)}
+    checked = {k: [] for k in range(1, 6)}
     evidence = {k: [] for k in range(1, 6)}
     for m2 in grid:
-        sh = {case: box_fractions(case, kp_axis, kv_axis, e=P["e"], m2=m2, **common)
-              for case in CASES}
-        for k, chk in ((1, C.check_1(sh["collocated"], sh["noncollocated"])),
-                       (2, C.check_2(sh["collocated"], sh["noncollocated"])),
-                       (3, C.check_3(sh["collocated"]))):
-            verdicts[k].append(chk["verdict"])
-            evidence[k].append(chk)
+        run_g, check_g = (_verdicts_at(m2, kp, kv, common) for kp, kv in axes)
+        for k in (1, 2, 3):
+            verdicts[k].append(run_g[k]["verdict"])
+            checked[k].append(check_g[k]["verdict"])
+            evidence[k].append(run_g[k])
         st = {case: [bool(symmetric_orbits(P["kp"], P["kv"], m2=m2, e=e, case=case,
                                            **common).stable) for e in P["e"]]
               for case in CASES}
         v4 = C.check_4_necessary(st["collocated"], st["noncollocated"])
         verdicts[4].append(v4)
+        checked[4].append(v4)
         evidence[4].append({"verdict": v4, "stable": st})
     say(f"m2 study: verdicts on {len(grid)} values of m2")
     robust_grid = np.logspace(math.log10(lo), math.log10(hi), settings.m2_robust)
     for m2 in robust_grid:
-        cmp = robustness_comparison(mu=P["mu"], gamma=P["gamma"], x10=settings.x10, m2=m2,
-                                    n=P["n"], omega=P["omega"], e=0.5,
-                                    grid=settings.m2_robust_grid, uncertainty_grid=(3, 3),
-                                    n_starts=1, maxiter=40)
-        chk = C.check_5(cmp)
-        verdicts[5].append(chk["verdict"])
-        evidence[5].append(chk)
+        for g, out in ((settings.m2_robust_grid, verdicts[5]),
+                       (tuple(settings.check_num(v) for v in settings.m2_robust_grid),
+                        checked[5])):
+            cmp = robustness_comparison(mu=P["mu"], gamma=P["gamma"], x10=settings.x10, m2=m2,
+                                        n=P["n"], omega=P["omega"], e=0.5, grid=g,
+                                        uncertainty_grid=(3, 3), n_starts=1, maxiter=40)
+            chk = C.check_5(cmp)
+            out.append(chk["verdict"])
+            if out is verdicts[5]:
+                evidence[5].append(chk)
     say(f"m2 study: conclusion 5 on {len(robust_grid)} values of m2")
-    return M2Study(intervals, chosen, grid, verdicts, evidence, robust_grid, rho_grid, rho)
+    return M2Study(intervals, chosen, grid, verdicts, evidence, robust_grid, rho_grid, rho,
+                   checked, (settings.verdict_grid, settings.check_num(settings.verdict_grid)))
 
 
-def _basin_step(orbit, settings: Settings, *, executor, max_workers, progress):
-    """Attractor-labelled basin slice of the symmetric orbit (an ``AttractorBasin``).
+def _regions(run, settings, common, *, progress, tick):
+    """Region maps of Figs 4-5 on the scaled box (saved as .nc) and their shares on the
+    run's grid and on the resolution-check grid."""
+    from hybridpd.sweeps.regions import region_map
 
-    The window starts at the settings' window and is extended while the symmetric orbit's
-    basin reaches its edge (at most ``settings.basin_extensions`` times). Returns None when
-    the orbit does not exist or is not stable (its basin is empty).
-    """
-    from hybridpd.sweeps.attractor_basins import attractor_basin
-    from hybridpd.sweeps.basins import ImpactMapper
+    s, d, m2 = run.scale, run.directory, run.m2
+    kpm, kvm, num = settings.gains
+    num2 = settings.check_num(num)
+    for case in CASES:
+        t0 = time.perf_counter()
+        rm = region_map(case, x=("kp", 0.1 * s, kpm * s, num), y=("kv", 0.1 * s, kvm * s, num),
+                        progress=progress, **common)
+        rm.save(d / f"regions_{case}.nc")
+        run.maps[case] = rm
+        run.shares[case] = box_fractions(case, rm.x, rm.y, **common)
+        run.check_shares[case] = box_fractions(
+            case, np.linspace(0.1 * s, kpm * s, num2), np.linspace(0.1 * s, kvm * s, num2),
+            **common)
+        run.timings[f"regions {case}"] = time.perf_counter() - t0
+        tick(f"m2 = {m2:g}: regions {case}")
+    zk, zv, zn = settings.zoom
+    run.maps["zoom"] = region_map("noncollocated", x=("kp", 0.1 * s, zk * s, zn),
+                                  y=("kv", 0.1 * s, zv * s, zn), progress=progress, **common)
+    run.maps["zoom"].save(d / "regions_noncollocated_zoom.nc")
 
-    if not orbit.exists or not orbit.stable:
-        return None
-    x10 = settings.x10
+
+def _basins(run, settings, *, executor, max_workers, progress, say):
+    """Figs 6-7: every basin on one shared window (grown up to the cap), relabelled on the
+    check grid; returns the check grid's basins."""
+    from hybridpd.reproduce.basins import relabel, shared_window_basins
+
+    P = PAPER
+    t0 = time.perf_counter()
     w = settings.basin_window
-    nx, ny = settings.basin
-    mapper = ImpactMapper.from_orbit(orbit, n_iter=settings.iterations)
-    return attractor_basin(mapper, (w[0] * x10, w[1] * x10, nx), (w[2] * x10, w[3] * x10, ny),
-                           extend=settings.basin_extensions > 0,
-                           max_extensions=max(settings.basin_extensions, 1),
-                           executor=executor, max_workers=max_workers, progress=progress)
+    x10 = settings.x10
+    res = shared_window_basins(run.orbits, tuple(v * x10 for v in w), settings.basin,
+                               n_iter=settings.iterations,
+                               max_growths=settings.basin_extensions, executor=executor,
+                               max_workers=max_workers, progress=progress,
+                               log=lambda m: say(f"m2 = {run.m2:g}: {m}"))
+    run.basins = res.basins
+    run.basin_window = res.window
+    run.basin_windows = res.windows
+    run.touches_edge = {case: [res.touches_edge[(case, e)] for e in P["e"]] for case in CASES}
+    for (case, e), b in res.basins.items():
+        if b is not None:
+            b.save(run.directory / f"basin_{case}_e{e:g}.nc")
+    run.timings["basins"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    grid2 = tuple(settings.check_num(v) for v in settings.basin)
+    check = relabel(run.orbits, res.window, grid2, n_iter=settings.iterations,
+                    executor=executor, max_workers=max_workers, progress=progress)
+    run.timings["basins (resolution check)"] = time.perf_counter() - t0
+    return check, grid2
+
+
+def _check_4(run, basins, grid, settings):
+    from hybridpd.reproduce.basins import boundary_distance
+
+    P = PAPER
+    touches = {case: [bool(basins[(case, e)] is not None and basins[(case, e)].reaches_edge)
+                      for e in P["e"]] for case in CASES}
+    area = lambda case: [None if basins[(case, e)] is None
+                         else basins[(case, e)].measure(0).area for e in P["e"]]
+    dist = {case: [None if basins[(case, e)] is None else
+                   boundary_distance(basins[(case, e)], x10=settings.x10, omega=P["omega"])
+                   for e in P["e"]] for case in CASES}
+    return C.check_4(area("collocated"), area("noncollocated"), touches,
+                     window=run.basin_window, grid=grid, distance=dist)
+
+
+def _comparison(m2, settings, grid, n_starts, maxiter):
+    from hybridpd.analysis.design import robustness_comparison
+
+    P = PAPER
+    return robustness_comparison(
+        mu=P["mu"], gamma=P["gamma"], x10=settings.x10, m2=m2, n=P["n"], omega=P["omega"],
+        e=0.5, grid=grid, uncertainty_grid=settings.uncertainty_grid, n_starts=n_starts,
+        maxiter=maxiter, kp_range=(0.1 * m2, 100.0 * m2), kv_range=(0.1 * m2, 100.0 * m2))
 
 
 def run_convention(m2, settings: Settings, out, *, executor="processes", max_workers=None,
-                   progress=False, log=None, tick=None, figure_hook=None) -> ConventionRun:
+                   progress=False, log=None, tick=None, figure_hook=None,
+                   study=None, cache=None) -> ConventionRun:
     """Figs 3-7, their data and the conclusions' checks under one ``m2`` (see module doc).
 
-    ``figure_hook(path, fig)``, if given, sees every figure before it is saved.
+    Every check is computed on the run's grids and on the resolution-check grids
+    (:meth:`Settings.check_num`); the convention's verdict is
+    :func:`~hybridpd.reproduce.rules.resolution` of the two. ``figure_hook(path, fig)``, if
+    given, sees every figure before it is saved; ``study`` (an :class:`M2Study`) lets a basin
+    panel with no stable orbit show the orbit's spectral radius along ``m2``; ``cache`` (a
+    dict) lets conventions share work that depends on ``kp/m2, kv/m2`` only.
     """
-    from hybridpd.analysis.design import robustness_comparison
     from hybridpd.analysis.orbits import symmetric_orbit
-    from hybridpd.sweeps.regions import region_map
+    from hybridpd.reproduce.figures import convention_figures
+    from hybridpd.reproduce.rules import resolution
 
     say = _say(log)
     tick = tick or say
@@ -207,146 +314,43 @@ def run_convention(m2, settings: Settings, out, *, executor="processes", max_wor
     run.directory = d
     common = dict(mu=P["mu"], omega=P["omega"], L=settings.L, x10=settings.x10, m2=m2,
                   n=P["n"], e=P["e"])
-    s = run.scale
-    kpm, kvm, num = settings.gains
-    for case in CASES:
-        t0 = time.perf_counter()
-        rm = region_map(case, x=("kp", 0.1 * s, kpm * s, num), y=("kv", 0.1 * s, kvm * s, num),
-                        progress=progress, **common)
-        rm.save(d / f"regions_{case}.npz")
-        run.maps[case] = rm
-        run.shares[case] = box_fractions(case, rm.x, rm.y, **{k: v for k, v in common.items()})
-        run.timings[f"regions {case}"] = time.perf_counter() - t0
-        tick(f"m2 = {m2:g}: regions {case}")
-    zk, zv, zn = settings.zoom
-    run.maps["zoom"] = region_map("noncollocated", x=("kp", 0.1 * s, zk * s, zn),
-                                  y=("kv", 0.1 * s, zv * s, zn), progress=progress, **common)
-    run.maps["zoom"].save(d / "regions_noncollocated_zoom.npz")
+    _regions(run, settings, common, progress=progress, tick=tick)
     for case in CASES:
         for e in P["e"]:
             run.orbits[(case, e)] = symmetric_orbit(
                 ImpactPair(P["mu"], e, settings.L, m2), PDGains(P["kp"], P["kv"]), P["omega"],
                 x10=settings.x10, n=P["n"], case=case)
-    for case in CASES:
-        t0 = time.perf_counter()
-        for e in P["e"]:
-            b = _basin_step(run.orbits[(case, e)], settings, executor=executor,
-                            max_workers=max_workers, progress=progress)
-            run.basins[(case, e)] = b
-            if b is not None:
-                b.save(d / f"basin_{case}_e{e:g}.npz")
-        run.timings[f"basins {case}"] = time.perf_counter() - t0
-        tick(f"m2 = {m2:g}: basins {case}")
+    check_basins, grid2 = _basins(run, settings, executor=executor, max_workers=max_workers,
+                                  progress=progress, say=say)
+    tick(f"m2 = {m2:g}: basins")
     t0 = time.perf_counter()
-    run.comparison = robustness_comparison(
-        mu=P["mu"], gamma=P["gamma"], x10=settings.x10, m2=m2, n=P["n"], omega=P["omega"],
-        e=0.5, grid=settings.comparison_grid, uncertainty_grid=settings.uncertainty_grid,
-        n_starts=settings.design_search[0], maxiter=settings.design_search[1],
-        kp_range=(0.1 * s, 100.0 * s),
-        kv_range=(0.1 * s, 100.0 * s))
+    ds = settings.design_search
+    run.comparison = _comparison(m2, settings, settings.comparison_grid, *ds)
+    g5 = tuple(settings.check_num(v) for v in settings.comparison_grid)
+    check_cmp = _comparison(m2, settings, g5, 1, ds[1])
     (d / "robustness.json").write_text(json.dumps([r.to_dict() for r in run.comparison.rows],
                                                   indent=1))
     run.timings["robustness comparison"] = time.perf_counter() - t0
     tick(f"m2 = {m2:g}: robustness comparison")
-    col, non = run.shares["collocated"], run.shares["noncollocated"]
-    # areas, not fractions: the windows may have been extended differently
-    meas = lambda case: [None if run.basins[(case, e)] is None
-                         else run.basins[(case, e)].measure(0).area for e in P["e"]]
-    run.checks = {1: C.check_1(col, non), 2: C.check_2(col, non), 3: C.check_3(col),
-                  4: C.check_4(meas("collocated"), meas("noncollocated")),
-                  5: C.check_5(run.comparison)}
+    num = settings.gains[2]
+    g1, g2 = (num, num), (settings.check_num(num),) * 2
+    for sh, g, out_, bas, gb, cmp in (
+            (run.shares, g1, run.checks, run.basins, settings.basin, run.comparison),
+            (run.check_shares, g2, run.check_grid_checks, check_basins, grid2, check_cmp)):
+        col, non = sh["collocated"], sh["noncollocated"]
+        out_.update({1: C.check_1(col, non, g), 2: C.check_2(col, non, g, P["e"]),
+                     3: C.check_3(col, g), 4: _check_4(run, bas, gb, settings),
+                     5: C.check_5(cmp)})
+    run.check_grids = {1: [list(g1), list(g2)], 2: [list(g1), list(g2)],
+                       3: [list(g1), list(g2)], 4: [list(settings.basin), list(grid2)],
+                       5: [list(settings.comparison_grid), list(g5)]}
+    run.verdicts = {k: resolution(run.checks[k]["verdict"], run.check_grid_checks[k]["verdict"])
+                    for k in run.checks}
     t0 = time.perf_counter()
-    _figures(run, settings, figure_hook)
+    convention_figures(run, settings, study=study, hook=figure_hook, cache=cache)
     run.timings["figures"] = time.perf_counter() - t0
     tick(f"m2 = {m2:g}: figures")
     return run
-
-
-def _params_text(run) -> dict:
-    return dict(mu=PAPER["mu"], gamma=run.gamma, omega=PAPER["omega"], n=PAPER["n"], m2=run.m2,
-                x10=run.x10)
-
-
-def _save(fig, path, hook, dpi=110):
-    if hook is not None:
-        hook(path, fig)
-    fig.savefig(path, dpi=dpi)
-
-
-def _figures(run: ConventionRun, settings: Settings, hook=None):
-    from hybridpd.plotting.basins import plot_basin
-    from hybridpd.plotting.orbit import plot_orbit_phase
-    from hybridpd.plotting.regions import plot_region_panels
-
-    d = run.directory
-    par = _params_text(run)
-    mark = (PAPER["kp"], PAPER["kv"])
-    fig = plot_region_panels(run.maps["collocated"], mark=mark, params=par,
-                             curves=_traced(run, "collocated", settings),
-                             title="Fig. 4, collocated PD")
-    _save(fig, d / "fig4_regions_collocated.png", hook)
-    fig = plot_region_panels(run.maps["noncollocated"], zoom=run.maps["zoom"], mark=mark,
-                             params=par, curves=_traced(run, "noncollocated", settings),
-                             title="Fig. 5, non-collocated PD")
-    _save(fig, d / "fig5_regions_noncollocated.png", hook)
-    fig = plot_orbit_phase([run.orbits[(c, e)] for c in CASES for e in PAPER["e"]], params=par)
-    _save(fig, d / "fig3_orbit.png", hook)
-    from matplotlib.figure import Figure
-
-    for case, name, label in (("collocated", "fig6_basins_collocated.png", "Fig. 6"),
-                              ("noncollocated", "fig7_basins_noncollocated.png", "Fig. 7")):
-        es = PAPER["e"]
-        fig = Figure(figsize=(5.4 * len(es), 5.2), layout="constrained")
-        for k, e in enumerate(es):
-            ax = fig.add_subplot(1, len(es), k + 1)
-            b, o = run.basins[(case, e)], run.orbits[(case, e)]
-            if b is None:
-                ax.set_axis_off()
-                why = (o.reason if not o.exists else
-                       f"orbit unstable (spectral radius {o.spectral_radius:.4g}):\n"
-                       "its basin is empty")
-                ax.text(0.5, 0.5, f"e = {e:g}\n{_wrap(why)}", ha="center", va="center",
-                        fontsize=9, transform=ax.transAxes)
-                continue
-            plot_basin(b, ax=ax, title=f"e = {e:g}: symmetric orbit {b.measure(0).percent}")
-        fig.suptitle(f"{label}, {case.replace('non', 'non-')} PD at $k_p$ = {PAPER['kp']:g}, $k_v$ = {PAPER['kv']:g}; "
-                     + _param_line(par), fontsize=10)
-        _save(fig, d / name, hook, dpi=100)
-
-
-def _traced(run: ConventionRun, case: str, settings: Settings):
-    """``{(row, e): curves}`` bounding the exists-and-stable region in each panel's box
-    (row 1: the zoom), or None (grid contours) if not wanted."""
-    if not settings.traced_boundaries:
-        return None
-    from hybridpd.analysis.boundaries import boundary_curves
-    from hybridpd.analysis.boundarymask import stable_region_edges
-
-    out = {}
-    for row, rm in enumerate((run.maps[case], run.maps["zoom"] if case == "noncollocated"
-                              else None)):
-        if rm is None:
-            continue
-        box = dict(x=("kp", float(rm.x[0]), float(rm.x[-1])),
-                   y=("kv", float(rm.y[0]), float(rm.y[-1])))
-        for e in rm.e:
-            res = boundary_curves(case, e=float(e), mu=PAPER["mu"], gamma=run.gamma,
-                                  omega=PAPER["omega"], m2=run.m2, x10=run.x10,
-                                  n=PAPER["n"], **box)
-            out[(row, float(e))] = stable_region_edges(res)
-    return out
-
-
-def _wrap(text, width=44):
-    import textwrap
-
-    return "\n".join(textwrap.wrap(text, width))
-
-
-def _param_line(par) -> str:
-    from hybridpd.plotting.regions import param_line
-
-    return param_line(par)
 
 
 def resolve_conventions(settings: Settings, study: M2Study | None) -> list:
@@ -392,7 +396,7 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
     Path
         ``summary.md`` (``summary.json`` is beside it).
     """
-    from hybridpd.reproduce.params import param_study
+    from hybridpd.reproduce.params import check_study, param_study
     from hybridpd.reproduce.summary import write_summary
 
     if mode not in ("quick", "full"):
@@ -433,25 +437,30 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
     studies = {}
     for name, rng in (("mu", settings.mu_range), ("gamma", settings.gamma_range)):
         t0 = time.perf_counter()
-        studies[name] = param_study(name, values_range=rng, points=settings.param_points,
-                                    kp_axis=kp_axis, kv_axis=kv_axis, e=PAPER["e"],
-                                    fixed=fixed, map_kp=PAPER["kp"] * s)
+        ps = param_study(name, values_range=rng, points=settings.param_points,
+                         kp_axis=kp_axis, kv_axis=kv_axis, e=PAPER["e"], fixed=fixed,
+                         map_kp=PAPER["kp"] * s)
+        g2 = settings.check_num(settings.param_grid)
+        studies[name] = check_study(ps, np.linspace(kp_axis[0], kp_axis[-1], g2),
+                                    np.linspace(kv_axis[0], kv_axis[-1], g2))
         timings[f"{name} study"] = time.perf_counter() - t0
         tick(f"{name} study")
     runs = []
+    cache = {}
     for m2 in conventions:
         runs.append(run_convention(m2, settings, out, executor=executor,
                                    max_workers=max_workers, progress=progress, log=say, tick=tick,
-                                   figure_hook=figure_hook))
-    from hybridpd.plotting.regions import plot_m2_study, plot_param_study
+                                   figure_hook=figure_hook, study=study, cache=cache))
+    from hybridpd.reproduce.figures import study_figures
 
-    _save(plot_m2_study(study, m2_range=settings.m2_range, runs=[r.m2 for r in runs]),
-          out / "m2_study.png", figure_hook)
-    for name, ps in studies.items():
-        _save(plot_param_study(ps), out / f"{name}_study.png", figure_hook)
+    t0 = time.perf_counter()
+    study_figures(out, study=study, studies=studies, settings=settings, runs=runs,
+                  hook=figure_hook)
+    timings["figures of the studies"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_start
+    figures = sorted(p.relative_to(out).as_posix() for p in out.rglob("*.png"))
     path = write_summary(out, settings=settings, mode=mode, study=study, studies=studies,
-                         runs=runs, timings=timings)
+                         runs=runs, timings=timings, figures=figures)
     tick(f"summary written to {path}")
     bar.close()
     return path

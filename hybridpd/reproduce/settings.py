@@ -57,9 +57,14 @@ class Settings:
         Draw the region boundaries of Figs 4-5 as traced curves (pseudo-arclength
         continuation of the test functions, sharp at any zoom) instead of grid contours.
     basin_extensions : int
-        Times the basin window may be doubled (about the fixed point) while the symmetric
-        orbit's basin reaches its edge; the measure is then reported on the last window,
-        flagged as a lower bound if the basin still reaches the edge.
+        The cap on the growths of the basin window: one window is shared by every panel of
+        Figs 6-7 and both cases, and grown (each touching side pushed out to twice its
+        distance from the fixed point) while some symmetric orbit's basin touches its edge.
+        If a basin still touches it after the last growth, its area is a lower bound.
+    check_scale : float
+        The resolution check: every verdict is recomputed on grids with this many times the
+        cells per axis (about twice as fine in full mode, half as fine in quick mode); a
+        verdict that changes is ``"unresolved"``.
     comparison_grid : (int, int)
         Gain grid of the robustness comparison (conclusion 5).
     uncertainty_grid : (int, int)
@@ -68,9 +73,10 @@ class Settings:
         Local refinements of the comparison's best designs (they do not change the shares of
         the gain box that conclusion 5 rests on).
     m2 : tuple of float or ``"auto"``
-        The conventions for the secondary mass; ``"auto"`` is the geometric centre of the
-        ``m2`` interval (within :attr:`m2_range`) where all three non-collocated orbits at the
-        paper's gains exist and are stable, rounded to 3 significant digits.
+        The conventions for the secondary mass; ``"auto"`` is the smallest value of the 1-2-5
+        series at or above every threshold at which all six orbits of Figs 6-7 (both cases,
+        every ``e``, the paper's gains) exist and are stable
+        (:func:`~hybridpd.reproduce.study.choose_m2`).
     x10 : float
         Primary-mass amplitude; ``L = gamma * x10``.
     basin_window : (x1_min, x1_max, y1_min, y1_max)
@@ -100,7 +106,8 @@ class Settings:
     zoom: tuple
     basin: tuple
     iterations: int = 1500
-    basin_extensions: int = 1
+    basin_extensions: int = 2
+    check_scale: float = 2.0
     traced_boundaries: bool = True
     comparison_grid: tuple = (48, 48)
     uncertainty_grid: tuple = (5, 5)
@@ -133,6 +140,7 @@ class Settings:
             _count("basin num", v)
         _count("iterations", self.iterations, 1)
         _count("basin_extensions", self.basin_extensions + 1, 1)
+        check_positive("check_scale", self.check_scale)
         for v in self.comparison_grid:
             _count("comparison_grid", v)
         for v in self.uncertainty_grid:
@@ -165,7 +173,7 @@ class Settings:
         """Coarse grids: about a minute on 2 cores."""
         base = dict(gains=(50.0, 50.0, 61), zoom=(20.0, 6.0, 61), basin=(41, 41),
                     comparison_grid=(12, 12), uncertainty_grid=(3, 3), design_search=(1, 40),
-                    verdict_grid=31,
+                    verdict_grid=31, basin_extensions=1, check_scale=0.5,
                     param_points=25, param_grid=21)
         return cls(**{**base, **kw})
 
@@ -176,6 +184,10 @@ class Settings:
                     m2_grid=8001, m2_verdicts=17, m2_robust=5, m2_robust_grid=(16, 16),
                     verdict_grid=81, param_points=61, param_grid=41)
         return cls(**{**base, **kw})
+
+    def check_num(self, num: int) -> int:
+        """Points per axis of the resolution check for ``num`` points (at least 3)."""
+        return max(3, round((int(num) - 1) * self.check_scale) + 1)
 
     def with_(self, **kw) -> Settings:
         """A copy with some fields replaced."""

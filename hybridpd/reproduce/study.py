@@ -12,7 +12,8 @@ law involves ``mu`` only, so at fixed ``mu`` every result depends on ``(kp, kv, 
   exact test function (``spectral radius - 1`` or the viability margin), and verified by
   recomputing that test function at the located point.
 * :func:`choose_m2` — the documented rule for the second convention of a reproduction: the
-  geometric centre of the common interval of all non-collocated orbits.
+  smallest value of the 1-2-5 series at or above every threshold at which all six orbits of
+  Figs 6-7 exist and are stable.
 * :func:`box_fractions` — shares of a gain box where the orbit exists (alone), where its
   candidate is stable (alone, viability ignored), and where both hold.
 """
@@ -28,7 +29,8 @@ from hybridpd._repr import compact_repr
 from hybridpd.analysis.orbits import REASONS, symmetric_orbits
 from hybridpd.model import Case, check_positive
 
-__all__ = ["EndPoint", "StableInterval", "box_fractions", "choose_m2", "stable_intervals"]
+__all__ = ["EndPoint", "StableInterval", "box_fractions", "choose_m2", "series_125",
+           "stable_intervals"]
 
 _VERIFY_TOL = 1e-6
 
@@ -192,20 +194,60 @@ def intersect(interval_lists) -> list:
     return common or []
 
 
-def choose_m2(noncollocated_intervals: dict) -> float | None:
-    """The second convention's ``m2``: geometric centre of the widest (in log) common interval.
+def series_125(lo: float, hi: float) -> list:
+    """The values of the 1-2-5 series (..., 0.1, 0.2, 0.5, 1, 2, 5, 10, ...) in ``[lo, hi]``.
 
-    ``noncollocated_intervals`` maps each ``e`` to its :func:`stable_intervals`. The centre is
-    rounded to 3 significant digits (readable figure titles) and kept only if still inside
-    the interval. Returns None when the orbits have no common interval.
+    Examples
+    --------
+    >>> from hybridpd.reproduce.study import series_125
+    >>> series_125(3.7, 60)
+    [5.0, 10.0, 20.0, 50.0]
     """
-    common = intersect(noncollocated_intervals.values())
+    lo, hi = check_positive("lo", lo), check_positive("hi", hi)
+    out = []
+    for dec in range(math.floor(math.log10(lo)) - 1, math.ceil(math.log10(hi)) + 1):
+        for m in (1, 2, 5):
+            v = float(f"{m}e{dec}")
+            if lo * (1 - 1e-12) <= v <= hi * (1 + 1e-12):
+                out.append(v)
+    return out
+
+
+def choose_m2(intervals: dict, m2_range=None) -> float | None:
+    """The second convention's ``m2``, by a rule that needs no study edge.
+
+    ``intervals`` maps each orbit (e.g. ``(case, e)``) to its :func:`stable_intervals`. The
+    common interval of all of them that reaches the top of the studied range (the orbits stay
+    stable for every larger ``m2``) starts at the largest threshold; the rule takes the
+    smallest value of the 1-2-5 series at or above it. When no common interval reaches the
+    top, the smallest 1-2-5 value inside the widest common interval (in log) is taken.
+    Returns None when the orbits have no common interval or it holds no 1-2-5 value.
+
+    Parameters
+    ----------
+    intervals : dict
+        ``{key: [StableInterval]}``.
+    m2_range : (lo, hi), optional
+        The studied range (default: the largest upper end of the intervals).
+
+    Examples
+    --------
+    >>> from hybridpd.reproduce.study import EndPoint, StableInterval, choose_m2
+    >>> end = lambda m2, kind="stability": EndPoint(m2, kind, 0.0, True)
+    >>> choose_m2({1: [StableInterval(end(3.7), end(1000.0, "window"))],
+    ...            2: [StableInterval(end(53.8), end(1000.0, "window"))]})
+    100.0
+    """
+    common = intersect(intervals.values())
     if not common:
         return None
-    lo, hi = max(common, key=lambda iv: math.log(iv[1] / iv[0]))
-    centre = math.sqrt(lo * hi)
-    rounded = float(f"{centre:.3g}")
-    return rounded if lo < rounded < hi else centre
+    top = m2_range[1] if m2_range is not None else max(iv[1] for iv in common)
+    open_top = [iv for iv in common if iv[1] >= top * (1 - 1e-12)]
+    lo, hi = open_top[0] if open_top else max(common, key=lambda iv: math.log(iv[1] / iv[0]))
+    if open_top:   # stable for every larger m2: the first value at or above the threshold
+        return series_125(lo, 10 * lo)[0]
+    values = [v for v in series_125(lo, hi) if lo < v < hi]
+    return values[0] if values else None
 
 
 def candidate_stability(case, kp, kv, *, mu, e, L, omega, m2, x10=1.0, n=1):

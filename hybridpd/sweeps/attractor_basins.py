@@ -291,8 +291,33 @@ class AttractorBasin:
 
 
 def load_attractor_basin(path) -> AttractorBasin:
-    """Read an :class:`AttractorBasin` written by :meth:`AttractorBasin.save` (``.nc``,
-    ``.zarr`` or ``.npz``)."""
+    """Read an :class:`AttractorBasin` written by :meth:`AttractorBasin.save`.
+
+    Parameters
+    ----------
+    path : str or path
+        A ``.nc``, ``.zarr`` or (earlier versions) ``.npz`` file.
+
+    Returns
+    -------
+    AttractorBasin
+
+    Raises
+    ------
+    ValueError
+        If the suffix is unknown or the file holds something else.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> import hybridpd as hp
+    >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
+    >>> ab = hp.attractor_basin(hp.ImpactMapper.from_orbit(orb, n_iter=100), (-1, 3, 4),
+    ...                         (-1, 5, 3), extend=False)
+    >>> back = hp.load_attractor_basin(ab.save(os.path.join(tempfile.mkdtemp(), "ab.nc")))
+    >>> back.labels.shape, len(back.attractors)
+    ((3, 4), 1)
+    """
     from hybridpd.sweeps.labelled import check_suffix, read_dataset
     from hybridpd.sweeps.npz import load_npz
 

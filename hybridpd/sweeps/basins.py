@@ -48,16 +48,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg import solve_discrete_lyapunov
 
+from hybridpd._deprecated import moved_names
 from hybridpd._repr import compact_repr
 from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.analysis.labels import LABELS, OFF_SECTION
 from hybridpd.model import check_array, check_axis, check_int, check_positive
 from hybridpd.pair.batch import impact_map, map_labels
 
 __all__ = ["LABELS", "BasinResult", "ImpactMapper", "basin_of_attraction", "load_basin",
            "section_grid"]
 
-LABELS = ("converged", "not_converged", "diverged", "zeno_sticking", "unresolved", "off_section")
-OFF_SECTION = 5
 
 
 class ImpactMapper:
@@ -228,8 +228,33 @@ def section_grid(fixed_point, L, x1, y1) -> np.ndarray:
 
 
 def load_basin(path) -> BasinResult:
-    """Read a :class:`BasinResult` written by :meth:`BasinResult.save` (``.nc``, ``.zarr``,
-    ``.npz``)."""
+    """Read a :class:`BasinResult` written by :meth:`BasinResult.save`.
+
+    Parameters
+    ----------
+    path : str or path
+        A ``.nc``, ``.zarr`` or (earlier versions) ``.npz`` file.
+
+    Returns
+    -------
+    BasinResult
+
+    Raises
+    ------
+    ValueError
+        If the suffix is unknown or the file holds something else.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> import hybridpd as hp
+    >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
+    >>> b = hp.basin_of_attraction(hp.ImpactMapper.from_orbit(orb, n_iter=100),
+    ...                            (-1, 3, 3), (-1, 5, 2), progress=False)
+    >>> path = b.save(os.path.join(tempfile.mkdtemp(), "basin.nc"))
+    >>> bool((hp.load_basin(path).labels == b.labels).all())
+    True
+    """
     from hybridpd.sweeps.labelled import check_suffix, read_dataset
     from hybridpd.sweeps.npz import load_npz
 
@@ -357,6 +382,21 @@ def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chun
     Returns
     -------
     BasinResult
+        Labels of shape ``(len(y1), len(x1))``.
+
+    Raises
+    ------
+    ValueError
+        If ``mapper`` is not an :class:`ImpactMapper` or a grid axis is malformed.
+
+    Examples
+    --------
+    >>> import hybridpd as hp
+    >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
+    >>> mapper = hp.ImpactMapper.from_orbit(orb, n_iter=200)
+    >>> b = hp.basin_of_attraction(mapper, (-1, 3, 5), (-1, 5, 4), progress=False)
+    >>> b.labels.shape, b.converged_fraction
+    ((4, 5), 1.0)
     """
     if not isinstance(mapper, ImpactMapper):
         raise ValueError(f"mapper must be an ImpactMapper, got {type(mapper).__name__}")
@@ -467,3 +507,9 @@ def _tails(params, c, final, which, n, mapper: _MapperSpec) -> np.ndarray:
 # ----------------------------------------------------------------------------------------
 # Attractor-labelled basins with a measure
 # ----------------------------------------------------------------------------------------
+
+
+__getattr__ = moved_names(__name__, {
+    name: "hybridpd.sweeps.attractor_basins"
+    for name in ("AttractorBasin", "BasinMeasure", "attractor_basin", "format_percent",
+                 "load_attractor_basin")})

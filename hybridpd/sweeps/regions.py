@@ -153,7 +153,32 @@ class RegionMap:
 
 
 def load_region_map(path) -> RegionMap:
-    """Read a :class:`RegionMap` written by :meth:`RegionMap.save` (``.nc``, ``.zarr``, ``.npz``)."""
+    """Read a :class:`RegionMap` written by :meth:`RegionMap.save`.
+
+    Parameters
+    ----------
+    path : str or path
+        A ``.nc``, ``.zarr`` or (earlier versions) ``.npz`` file.
+
+    Returns
+    -------
+    RegionMap
+
+    Raises
+    ------
+    ValueError
+        If the suffix is unknown or the file holds something else.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> import hybridpd as hp
+    >>> rm = hp.region_map("collocated", x=("kp", 1, 40, 4), y=("kv", 1, 40, 3), e=[0.5],
+    ...                    mu=0.1, gamma=0.75, omega=5.0, progress=False)
+    >>> back = hp.load_region_map(rm.save(os.path.join(tempfile.mkdtemp(), "regions.nc")))
+    >>> back.stable.shape, bool((back.stable == rm.stable).all())
+    ((1, 3, 4), True)
+    """
     from hybridpd.sweeps.labelled import check_suffix, read_dataset
     from hybridpd.sweeps.npz import load_npz
 

@@ -61,8 +61,7 @@ from hybridpd.analysis.continuation._common import (
     design_xm,
 )
 from hybridpd.analysis.continuation.branch import continue_orbit
-from hybridpd.analysis.continuation.branchio import load_branch
-from hybridpd.analysis.continuation.events import BifurcationEvent, Branch
+from hybridpd.analysis.continuation.events import BifurcationEvent, Branch, load_branch
 from hybridpd.analysis.continuation.newton import map_power_jacobian
 from hybridpd.analysis.continuation.periodic import PeriodicOrbit, find_periodic_orbit
 from hybridpd.analysis.continuation.plot import plot_branch

@@ -49,7 +49,8 @@ from hybridpd.analysis.continuation.periodic import (
     _orbit_diagnostics,
     find_periodic_orbit,
 )
-from hybridpd.analysis.impactmap import ImpactMap, stability
+from hybridpd.analysis.floquet import stability
+from hybridpd.analysis.impactmap import ImpactMap
 from hybridpd.model import check_finite
 
 

@@ -23,7 +23,8 @@ from hybridpd.analysis.continuation.newton import (
     map_power_jacobian,
 )
 from hybridpd.analysis.continuation.trace import trace_map
-from hybridpd.analysis.impactmap import ImpactMap, stability
+from hybridpd.analysis.floquet import stability
+from hybridpd.analysis.impactmap import ImpactMap
 
 
 @dataclass(frozen=True)

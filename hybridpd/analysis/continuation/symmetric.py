@@ -25,7 +25,7 @@ from hybridpd.analysis.continuation.events import (
     _Point,
     _Tracker,
 )
-from hybridpd.analysis.impactmap import stability
+from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.orbits import REASONS, symmetric_orbits
 from hybridpd.model import Case, ImpactPair, PDGains, as_gains, check_finite, check_odd_order
 from hybridpd.pair import symbolic

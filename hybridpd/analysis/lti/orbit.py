@@ -13,7 +13,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from hybridpd._repr import compact_repr
-from hybridpd.analysis.impactmap import stability
+from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.lti.flight import _WALL_PLUS, _FreeFlight, _impact_full
 from hybridpd.analysis.lti.section_map import LTIImpactMap, _chain_jacobian
 from hybridpd.analysis.orbits import _END_RTOL, _HYPERBOLIC_TOL, REASONS

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hybridpd._repr import compact_repr
-from hybridpd.analysis.impactmap import Stability, stability
+from hybridpd.analysis.floquet import Stability, stability
 from hybridpd.analysis.lti.flight import (
     _WALL_MINUS,
     _WALL_PLUS,

@@ -1,0 +1,216 @@
+"""The reproduction's figures, in the house style (:mod:`hybridpd.plotting.style`).
+
+Each figure is saved at its print size as PNG (300 dpi) and PDF. Per convention: Fig. 3 (the
+orbit's phase plane), Figs 4-5 (regions over the gain box scaled by ``m2``, the zoom window
+outlined), Figs 6-7 (basins on the window shared by every panel and both cases; a panel
+with no stable orbit shows the orbit's spectral radius along ``m2`` instead). Once: Figs 4-5
+in the scaled gains ``(kp/m2, kv/m2)`` with the paper's gains as the ray ``(10/m2, 20/m2)``,
+and the figures of the ``m2``, ``mu`` and ``gamma`` studies.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hybridpd.reproduce.settings import PAPER
+
+__all__ = ["ScaledMap", "convention_figures", "save", "scaled_map", "study_figures"]
+
+CASES = ("collocated", "noncollocated")
+#: Scaled-gain window of the m2-free figure (log10 of kp/m2 and kv/m2): the paper's gains
+#: for every m2 in [0.1, 1000] lie inside it.
+SCALED_WINDOW = ((-2.5, 2.2), (-2.0, 2.5))
+
+
+@dataclass
+class ScaledMap:
+    """Existence and stability over log-spaced scaled gains (valid for every ``m2``).
+
+    Attributes
+    ----------
+    x, y : ndarray
+        ``kp/m2`` and ``kv/m2`` (1/time^2 and 1/time).
+    e : ndarray
+    exists, stable : ndarray of bool, shape (len(e), len(y), len(x))
+    case : str
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    e: np.ndarray
+    exists: np.ndarray
+    stable: np.ndarray
+    case: str
+
+
+def scaled_map(case, settings, num) -> ScaledMap:
+    """The regions in ``(kp/m2, kv/m2)``: computed at ``m2 = 1`` (only the ratios matter)."""
+    from hybridpd.analysis.orbits import symmetric_orbits
+
+    (xa, xb), (ya, yb) = SCALED_WINDOW
+    x, y = np.logspace(xa, xb, num), np.logspace(ya, yb, num)
+    es = np.asarray(PAPER["e"], float)
+    E, Y, X = np.meshgrid(es, y, x, indexing="ij")
+    r = symmetric_orbits(X, Y, mu=PAPER["mu"], e=E, L=settings.L, omega=PAPER["omega"],
+                         m2=1.0, x10=settings.x10, n=PAPER["n"], case=case)
+    return ScaledMap(x, y, es, np.asarray(r.exists, bool), np.asarray(r.stable, bool), case)
+
+
+def save(fig, path, hook=None) -> None:
+    """Show ``fig`` to ``hook`` and write it as PNG (300 dpi) and PDF."""
+    from hybridpd.plotting.style import house_style, save_figure
+
+    if hook is not None:
+        hook(path, fig)
+    with house_style():
+        save_figure(fig, path)
+
+
+def _params(run) -> dict:
+    return dict(mu=PAPER["mu"], gamma=run.gamma, omega=PAPER["omega"], n=PAPER["n"], m2=run.m2,
+                x10=run.x10)
+
+
+def _ray_events(study) -> dict:
+    """``{case: {e: [(m2, "exists" | "stable")]}}`` along the paper's gains: where each orbit
+    starts to exist (first point of the study's m2 grid with an orbit) and to be stable
+    (located interval ends)."""
+    out = {}
+    for case in CASES:
+        for e in PAPER["e"]:
+            ev = []
+            rho = study.rho[(case, e)]
+            ok = np.isfinite(rho)
+            if ok.any() and not ok[0]:
+                ev.append((float(study.rho_grid[int(np.argmax(ok))]), "exists"))
+            for iv in study.intervals[case][e]:
+                if iv.lo.kind != "window":
+                    ev.append((iv.lo.m2, "stable"))
+            out.setdefault(case, {})[float(e)] = ev
+    return out
+
+
+def study_figures(out, *, study, studies, settings, runs, hook=None) -> None:
+    """The m2-free scaled figures and the three study figures, into ``out``."""
+    from hybridpd.plotting.studies import plot_m2_study, plot_param_study, plot_scaled_regions
+
+    num = 241 if settings.gains[2] > 100 else 121
+    events = _ray_events(study)
+    lo, hi = settings.m2_range
+    par = dict(mu=PAPER["mu"], gamma=PAPER["gamma"], omega=PAPER["omega"], n=PAPER["n"])
+    zk, zv, _ = settings.zoom
+    for case, label in (("collocated", "Fig. 4"), ("noncollocated", "Fig. 5")):
+        sm = scaled_map(case, settings, num)
+        ray = {"kp": PAPER["kp"], "kv": PAPER["kv"],
+               "m2": np.logspace(np.log10(lo), np.log10(hi), 200), "events": events[case]}
+        fig = plot_scaled_regions(sm, ray=ray, zoom=(zk, zv) if case == "noncollocated" else None,
+                                  params=par,
+                                  title=f"{label}, {case.replace('non', 'non-')} PD in scaled "
+                                        "gains, every $m_2$")
+        save(fig, out / f"scaled_regions_{case}.png", hook)
+    save(plot_m2_study(study, m2_range=settings.m2_range, runs=[r.m2 for r in runs]),
+         out / "m2_study.png", hook)
+    for name, ps in studies.items():
+        save(plot_param_study(ps), out / f"{name}_study.png", hook)
+
+
+def convention_figures(run, settings, *, study=None, hook=None, cache=None) -> None:
+    """Figs 3-7 of one convention, into its directory.
+
+    ``cache`` (a dict shared by the conventions of a run) keeps the traced boundaries in
+    scaled gains: the gain boxes are scaled by ``m2``, so one tracing serves every ``m2``.
+    """
+    from hybridpd.plotting.orbit import plot_orbit_phase
+    from hybridpd.plotting.regions import plot_region_panels
+
+    d = run.directory
+    par = _params(run)
+    mark = (PAPER["kp"], PAPER["kv"])
+    fig = plot_region_panels(run.maps["collocated"], mark=mark, params=par,
+                             curves=_traced(run, "collocated", settings, cache),
+                             title="Fig. 4, collocated PD")
+    save(fig, d / "fig4_regions_collocated.png", hook)
+    fig = plot_region_panels(run.maps["noncollocated"], zoom=run.maps["zoom"], mark=mark,
+                             params=par, curves=_traced(run, "noncollocated", settings, cache),
+                             title="Fig. 5, non-collocated PD")
+    save(fig, d / "fig5_regions_noncollocated.png", hook)
+    fig = plot_orbit_phase([run.orbits[(c, e)] for c in CASES for e in PAPER["e"]], params=par)
+    save(fig, d / "fig3_orbit.png", hook)
+    for case, name, label in (("collocated", "fig6_basins_collocated.png", "Fig. 6"),
+                              ("noncollocated", "fig7_basins_noncollocated.png", "Fig. 7")):
+        save(_basin_figure(run, case, label, par, study), d / name, hook)
+
+
+def _basin_figure(run, case, label, par, study):
+    from hybridpd.plotting._common import legend_from_gids, param_line
+    from hybridpd.plotting.basins import plot_basin
+    from hybridpd.plotting.studies import plot_rho_along_m2
+    from hybridpd.plotting.style import DOUBLE, house_figure, house_style
+
+    es = PAPER["e"]
+    with house_style():
+        fig = house_figure(DOUBLE, 4.3)
+        axes = []
+        for k, e in enumerate(es):
+            ax = fig.add_subplot(1, len(es), k + 1)
+            b, o = run.basins[(case, e)], run.orbits[(case, e)]
+            if b is None:
+                why = (f"no orbit ({o.reason.split('(')[0].split(':')[-1].strip()})"
+                       if not o.exists else f"unstable, spectral radius {o.spectral_radius:.4g}")
+                if study is not None:
+                    plot_rho_along_m2(ax, study.rho_grid, study.rho[(case, e)], m2=run.m2, k=k,
+                                      label=f"e = {e:g}: spectral radius along $m_2$")
+                else:
+                    ax.set_axis_off()
+                import textwrap
+
+                ax.set_title(f"e = {e:g} at $m_2$ = {run.m2:g}: no basin,\n"
+                             + "\n".join(textwrap.wrap(why, 30)))
+            else:
+                plot_basin(b, ax=ax, legend=False,
+                           title=f"e = {e:g}: symmetric orbit {b.measure(0).percent}"
+                                 + ("\n(touches the window's edge)" if b.reaches_edge else ""))
+                if k:
+                    ax.set_ylabel("")
+            axes.append(ax)
+        legend_from_gids(fig, axes, ncol=3)
+        fig.suptitle(f"{label}, {case.replace('non', 'non-')} PD at $k_p$ = {PAPER['kp']:g}, "
+                     f"$k_v$ = {PAPER['kv']:g}; {param_line(par)}")
+    return fig
+
+
+def _traced(run, case: str, settings, cache=None):
+    """``{(row, e): curves}`` bounding the exists-and-stable region in each panel's box
+    (row 1: the zoom), or None (grid contours) if not wanted.
+
+    Traced once in scaled gains (at ``m2 = 1``, on the box divided by ``m2``) and scaled back:
+    at fixed ``mu`` only ``kp/m2`` and ``kv/m2`` matter.
+    """
+    if not settings.traced_boundaries:
+        return None
+    from types import SimpleNamespace
+
+    from hybridpd.analysis.boundaries import boundary_curves
+    from hybridpd.analysis.boundarymask import stable_region_edges
+
+    cache = {} if cache is None else cache
+    s = run.m2
+    out = {}
+    for row, rm in enumerate((run.maps[case], run.maps["zoom"] if case == "noncollocated"
+                              else None)):
+        if rm is None:
+            continue
+        box = (float(rm.x[0]) / s, float(rm.x[-1]) / s, float(rm.y[0]) / s,
+               float(rm.y[-1]) / s)
+        for e in rm.e:
+            key = (case, row, float(e), tuple(round(v, 12) for v in box))
+            if key not in cache:
+                res = boundary_curves(case, e=float(e), mu=PAPER["mu"], gamma=run.gamma,
+                                      omega=PAPER["omega"], m2=1.0, x10=run.x10, n=PAPER["n"],
+                                      x=("kp", box[0], box[1]), y=("kv", box[2], box[3]))
+                cache[key] = stable_region_edges(res)
+            out[(row, float(e))] = [SimpleNamespace(kind=c.kind, x=np.asarray(c.x) * s,
+                                                    y=np.asarray(c.y) * s)
+                                    for c in cache[key]]
+    return out

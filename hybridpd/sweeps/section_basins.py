@@ -1,0 +1,117 @@
+"""Basins of any section map: a :class:`~hybridpd.analysis.periodic.SectionMapper` over a grid.
+
+The mapper takes one section point to a label (:mod:`hybridpd.analysis.labels`); this module is
+the thin layer that applies it over a 2-D slice of the section (the other coordinates at the
+fixed point's values), serially or through :func:`hybridpd.sweeps.sweep.run_sweep`.
+"""
+from __future__ import annotations
+
+import pickle
+from dataclasses import dataclass
+
+import numpy as np
+
+from hybridpd.analysis.labels import OFF_SECTION
+from hybridpd.analysis.periodic import SectionMapper
+from hybridpd.model import check_axis
+from hybridpd.sweeps.basins import BasinResult
+from hybridpd.sweeps.sweep import run_sweep
+
+__all__ = ["section_basin"]
+
+
+def section_basin(mapper: SectionMapper, axis_x, axis_y, x, y, *, executor="serial",
+                  chunk_size=None, max_workers=None, progress=False) -> BasinResult:
+    """Label a 2-D slice of the section: coordinates ``axis_x, axis_y`` on a grid, the others
+    at the fixed point's values.
+
+    Parameters
+    ----------
+    mapper : SectionMapper
+        Labels one section point (fixed point, iterations, criterion).
+    axis_x, axis_y : int or str
+        Section coordinates (index or name, see ``Section.names``) spanned by the grid.
+    x, y : (min, max, num)
+        Grid axes, in the units of those coordinates.
+    executor : str or executor, optional
+        ``"serial"`` (default), or an executor accepted by
+        :func:`hybridpd.sweeps.sweep.run_sweep` (``"processes"``, ``"dask"``, a Dask ``Client``).
+    chunk_size, max_workers, progress
+        Passed to :func:`~hybridpd.sweeps.sweep.run_sweep` when not serial.
+
+    Returns
+    -------
+    BasinResult
+        ``x1``/``y1`` hold the ``x``/``y`` axes, ``labels`` has shape ``(ny, nx)``;
+        ``metadata["axes"]`` names the coordinates.
+
+    Raises
+    ------
+    ValueError
+        If an axis is unknown, both axes are the same, or a grid axis is malformed.
+
+    Examples
+    --------
+    >>> import hybridpd as hp
+    >>> from hybridpd.analysis.sections import impact_pair_section
+    >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
+    >>> P = hp.SectionMap(impact_pair_section(orb.system()))
+    >>> b = hp.section_basin(hp.SectionMapper(P, orb.fixed_point, n_iter=50), "z1", "z4",
+    ...                      (-0.5, 0.5, 3), (1.0, 2.0, 2))
+    >>> b.labels.shape
+    (2, 3)
+    """
+    names = mapper.map.section.names
+    ix, iy = (_axis_index(a, names) for a in (axis_x, axis_y))
+    if ix == iy:
+        raise ValueError("axis_x and axis_y must differ")
+    xs, ys = check_axis("x", x), check_axis("y", y)
+    X, Y = np.meshgrid(xs, ys)
+    pts = np.tile(mapper.fixed_point, (X.size, 1))
+    pts[:, ix], pts[:, iy] = X.ravel(), Y.ravel()
+    if executor == "serial":
+        lab, its = mapper.labels(pts)
+    else:
+        res = run_sweep(_label_chunk, pts, names=[f"s{i}" for i in range(pts.shape[1])],
+                        chunk_size=chunk_size, executor=executor, max_workers=max_workers,
+                        progress=progress, func_kwargs={"mapper": _PickledMapper.of(mapper)},
+                        metadata={"kind": "section_basin"})
+        lab, its = res.outputs["label"], res.outputs["iterations"]
+    lab = lab.reshape(Y.shape)
+    on = lab != OFF_SECTION
+    frac = float((lab[on] == 0).mean()) if np.any(on) else 0.0
+    meta = {"axes": [names[ix], names[iy]], "coordinates": list(names),
+            "n_iter": mapper.n_iter, "criterion": mapper.criterion,
+            "certified_radius": mapper.certified_radius, "period": mapper.period}
+    return BasinResult(xs, ys, lab, its.reshape(Y.shape), mapper.fixed_point.copy(), frac, meta)
+
+
+def _axis_index(a, names) -> int:
+    if isinstance(a, str):
+        if a not in names:
+            raise ValueError(f"axis must be one of {names}, got {a!r}")
+        return names.index(a)
+    if isinstance(a, bool) or int(a) != a or not 0 <= int(a) < len(names):
+        raise ValueError(f"axis must be an index in [0, {len(names)}) or a name, got {a!r}")
+    return int(a)
+
+
+@dataclass(frozen=True, eq=False)
+class _PickledMapper:
+    """A mapper as bytes (the sweep records its arguments by digest and ships them to the
+    worker processes)."""
+
+    blob: np.ndarray
+
+    @classmethod
+    def of(cls, mapper: SectionMapper) -> _PickledMapper:
+        return cls(np.frombuffer(pickle.dumps(mapper), dtype=np.uint8))
+
+    def load(self) -> SectionMapper:
+        return pickle.loads(self.blob.tobytes())
+
+
+def _label_chunk(chunk, mapper: _PickledMapper):
+    S = np.stack([chunk[f"s{i}"] for i in range(len(chunk))], axis=1)
+    lab, its = mapper.load().labels(S)
+    return {"label": lab, "iterations": its}

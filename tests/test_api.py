@@ -1,0 +1,218 @@
+"""The public API: a flat, lazily loaded namespace and old import paths that still work.
+
+``import hybridpd as hp`` gives every workflow name; importing the package loads none of the
+heavy libraries, and the general path loads no module of the impact pair. Module paths of
+earlier versions, and names moved since, import with a ``DeprecationWarning`` naming the new
+place (one release, then they go).
+"""
+import importlib
+import inspect
+import json
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import pytest
+
+import hybridpd as hp
+
+ROOT = Path(__file__).resolve().parents[1]
+HEAVY = ("numba", "sympy", "control", "matplotlib", "xarray", "scipy", "dask", "zarr")
+
+# Every module path of the first version, the module that replaced it, and its public names
+# then (read from the repository's history).
+OLD_MODULES = {
+    "hybridpd.automaton": ("hybridpd.hybrid.automaton", """
+        Guard HybridAutomaton HybridTrajectory Jump JumpTable Mode PackedAutomaton
+        Segment SegmentTable TerminationCause ZenoOptions run_hybrid
+    """),
+    "hybridpd.basins": ("hybridpd.sweeps.basins", """
+        BasinResult ImpactMapper LABELS basin_of_attraction load_basin section_grid
+    """),
+    "hybridpd.batch": ("hybridpd.pair.batch", """
+        LABELS STATUS_IMPACT STATUS_NONFINITE STATUS_STICK STATUS_TIMEOUT
+        STATUS_UNRESOLVED impact_map iterate_map map_labels next_impact pack_params
+    """),
+    "hybridpd.continuation": ("hybridpd.analysis.continuation", """
+        BifurcationEvent Branch EVENT_KINDS ImpactStep MapTrace PARAMETERS PeriodicOrbit
+        SYMMETRIC_PARAMETERS continue_orbit continue_symmetric find_periodic_orbit
+        map_power_jacobian plot_branch trace_map
+    """),
+    "hybridpd.design": ("hybridpd.analysis.design", """
+        ComparisonRow DesignMap DesignResult InfeasibleDesignError OptimizerRun
+        PLANT_STATUS RobustReport RobustnessComparison design design_objective
+        robustness robustness_comparison shifted_amplitude shifted_orbit
+    """),
+    "hybridpd.events": ("hybridpd.hybrid.events", """
+        CrossingResult EV_CROSSING EV_GRAZING EV_NONE EV_NONFINITE EV_START
+        EV_STEP_LIMIT K_DEFAULT LTIModeData THETA_DEFAULT advance first_crossing
+        flow_eval flow_to lti_flow prepare_lti_mode
+    """),
+    "hybridpd.impactmap": ("hybridpd.analysis.impactmap", """
+        ImpactMap MapResult Stability stability
+    """),
+    "hybridpd.impactpair": ("hybridpd.pair.impactpair", """
+        ControlledImpactPair ImpactPairTrajectory
+    """),
+    "hybridpd.lti": ("hybridpd.analysis.lti", """
+        LTIImpactMap LTIJacobian LTIMapResult LTIOrbitResult LTI_REASONS filtered_pd
+        filtered_pid lead_lag lti_symmetric_orbit
+    """),
+    "hybridpd.naive": ("hybridpd.pair.naive", """
+        NaiveResult naive_simulate
+    """),
+    "hybridpd.orbits": ("hybridpd.analysis.orbits", """
+        OrbitArrays REASONS SymmetricOrbitResult symmetric_orbit symmetric_orbits
+    """),
+    "hybridpd.regions": ("hybridpd.sweeps.regions", """
+        AXES RegionMap load_region_map region_map
+    """),
+    "hybridpd.samples": ("hybridpd.hybrid.samples", """
+        ball_initial_state bouncing_ball impact_oscillator oscillator_initial_state
+    """),
+    "hybridpd.sweep": ("hybridpd.sweeps.sweep", """
+        ChunkError EXECUTORS ExecutorSpec FORMAT SweepResult default_chunk_size
+        grid_points load_npz load_sweep resolve_executor run_sweep save_npz
+    """),
+    "hybridpd.symbolic": ("hybridpd.pair.symbolic", """
+        Derivation ImpactMapResult JacobianResult SymmetricOrbit dch derivation dsh
+        flight_block flight_section_map flight_time flow gap gap_derivatives
+        impact_block impact_map impact_section_map map_jacobian orbit_jacobian
+        section_from_state state_from_section symmetric_orbit symmetric_velocities
+        sympy_functions system_matrix transition_matrix virtual_restitution
+    """),
+}
+
+# Names moved out of a module that still exists: (old module, name, new module).
+MOVED_NAMES = [
+    ("hybridpd.sweeps.basins", "attractor_basin", "hybridpd.sweeps.attractor_basins"),
+    ("hybridpd.sweeps.basins", "AttractorBasin", "hybridpd.sweeps.attractor_basins"),
+    ("hybridpd.sweeps.basins", "BasinMeasure", "hybridpd.sweeps.attractor_basins"),
+    ("hybridpd.sweeps.basins", "format_percent", "hybridpd.sweeps.attractor_basins"),
+    ("hybridpd.sweeps.basins", "load_attractor_basin", "hybridpd.sweeps.attractor_basins"),
+    ("hybridpd.analysis.periodic", "section_basin", "hybridpd.sweeps.section_basins"),
+    ("hybridpd.analysis.hybridmap", "impact_pair_section", "hybridpd.analysis.sections"),
+    ("hybridpd.analysis.hybridmap", "mechanical_section", "hybridpd.analysis.sections"),
+]
+
+
+def _probe(code: str) -> dict:
+    """Run ``code`` in a fresh interpreter; it prints one JSON object."""
+    r = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
+                       timeout=300, check=False)
+    assert r.returncode == 0, r.stderr
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+def test_import_loads_no_heavy_library():
+    out = _probe("import sys, json, hybridpd; "
+                 "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in "
+                 f"{HEAVY!r})))")
+    assert out == [], f"import hybridpd loaded {out}"
+
+
+@pytest.mark.parametrize("name", ["find_orbit", "SectionMap", "continue_orbit", "load_model",
+                                  "simulate", "HybridAutomaton", "stability", "section_basin"])
+def test_general_names_load_no_pair_module(name):
+    out = _probe(f"import sys, json, hybridpd as hp; hp.{name}; "
+                 "print(json.dumps(sorted(m for m in sys.modules "
+                 "if m.startswith('hybridpd.pair'))))")
+    assert out == [], f"hp.{name} loaded {out}"
+
+
+def test_every_public_name_resolves():
+    assert len(hp.__all__) >= 30
+    assert hp.__all__ == sorted(hp.__all__)
+    for name in hp.__all__:
+        assert getattr(hp, name) is not None, name
+    assert set(hp.__all__) <= set(dir(hp))
+
+
+def test_flat_names_are_the_defining_objects():
+    from hybridpd.analysis.periodic import find_orbit
+    from hybridpd.mechanics.modelfile import load_model
+    from hybridpd.model import ImpactPair
+
+    assert hp.find_orbit is find_orbit and hp.load_model is load_model
+    assert hp.ImpactPair is ImpactPair
+
+
+def test_unknown_name_is_an_attribute_error():
+    with pytest.raises(AttributeError, match="no attribute 'nonexistent'"):
+        hp.nonexistent  # noqa: B018
+
+
+def test_reproduce_is_callable_as_name_and_as_package():
+    import hybridpd.reproduce as pkg
+
+    assert callable(hp.reproduce) and callable(pkg)
+    assert pkg.Settings is not None
+    with pytest.raises(ValueError, match="mode"):
+        hp.reproduce(mode="fastest")
+
+
+def test_old_design_module_keeps_the_flat_design_callable():
+    sys.modules.pop("hybridpd.design", None)
+    with pytest.deprecated_call():
+        importlib.import_module("hybridpd.design")
+    from hybridpd.analysis.design import design
+
+    assert callable(hp.design)
+    with pytest.raises(ValueError):
+        hp.design(case="sideways", mu=0.1, e=0.5, omega=5.0)
+    with pytest.raises(ValueError):
+        design(case="sideways", mu=0.1, e=0.5, omega=5.0)
+
+
+def test_every_shim_is_listed():
+    from hybridpd._deprecated import MOVED_MODULES
+
+    assert set(OLD_MODULES) <= set(MOVED_MODULES)
+    for old in MOVED_MODULES:
+        path = ROOT / (old.replace(".", "/") + ".py")
+        assert "moved_module(__name__)" in path.read_text(), old
+
+
+@pytest.mark.parametrize("old", sorted(OLD_MODULES))
+def test_old_module_paths_import_with_a_warning(old):
+    new, names = OLD_MODULES[old]
+    sys.modules.pop(old, None)
+    with pytest.deprecated_call(match=new.replace(".", r"\.")):
+        mod = importlib.import_module(old)
+    target = importlib.import_module(new)
+    for name in names.split():
+        assert getattr(mod, name) is getattr(target, name), f"{old}.{name}"
+
+
+@pytest.mark.parametrize(("old", "name", "new"), MOVED_NAMES)
+def test_moved_names_warn_and_resolve(old, name, new):
+    mod = importlib.import_module(old)
+    with pytest.deprecated_call(match=new.replace(".", r"\.")):
+        obj = getattr(mod, name)
+    assert obj is getattr(importlib.import_module(new), name)
+
+
+def test_a_moved_name_warning_points_at_the_caller():
+    mod = importlib.import_module("hybridpd.sweeps.basins")
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        mod.attractor_basin  # noqa: B018
+    assert rec and Path(rec[0].filename).name == Path(__file__).name
+
+
+def test_shims_do_not_hide_missing_names():
+    with pytest.raises(AttributeError, match="no attribute"):
+        importlib.import_module("hybridpd.sweeps.basins").no_such_name  # noqa: B018
+
+
+def test_flat_names_have_docstrings_with_examples():
+    missing = []
+    for name in hp.__all__:
+        if name == "__version__":
+            continue
+        module = hp._NAMES.get(name, f"hybridpd.{name}")
+        doc = inspect.getdoc(getattr(importlib.import_module(module), name)) or ""
+        if "Examples\n--------" not in doc:
+            missing.append(name)
+    assert not missing, f"no Examples section: {missing}"

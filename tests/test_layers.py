@@ -1,0 +1,162 @@
+"""The package's layers, read from the source: imports point one way and never form a cycle.
+
+Layers, lowest first: the parameter modules (``model``, ``loop`` and the private helpers) ->
+``hybrid`` -> ``pair`` and ``mechanics`` -> ``analysis`` -> ``sweeps`` -> ``plotting`` ->
+``reproduce`` -> ``cli``. The general analysis (the section map, Newton, continuation and basins
+on any automaton) does not import the impact pair. Imports under ``if TYPE_CHECKING:`` are for
+annotations only and are not arrows; the deprecation shims name their targets as strings.
+"""
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PKG = Path(__file__).resolve().parents[1] / "hybridpd"
+
+LAYER = {"model": 0, "loop": 1, "hybrid": 2, "pair": 3, "mechanics": 3, "analysis": 4,
+         "sweeps": 5, "plotting": 6, "reproduce": 7, "cli": 8, "__main__": 9}
+
+# Modules that make up the general path: they may not import hybridpd.pair.
+GENERAL = ("hybridpd.analysis.hybridmap", "hybridpd.analysis.sections",
+           "hybridpd.analysis.periodic", "hybridpd.analysis.hybridcont",
+           "hybridpd.analysis.floquet", "hybridpd.analysis.labels",
+           "hybridpd.sweeps.section_basins")
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(PKG.parent).with_suffix("").parts
+    name = ".".join(parts)
+    return name.removesuffix(".__init__")
+
+
+def _type_checking_lines(tree) -> set:
+    lines = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            for sub in node.body:
+                lines.update(range(sub.lineno, (sub.end_lineno or sub.lineno) + 1))
+    return lines
+
+
+def _imports(path: Path):
+    """Yield ``(target module, line, deferred)`` for every hybridpd import in ``path``."""
+    src = path.read_text()
+    tree = ast.parse(src)
+    skip = _type_checking_lines(tree)
+    top = {id(n) for n in tree.body}
+    mod = _module_name(path)
+    for node in ast.walk(tree):
+        if node.lineno in skip if hasattr(node, "lineno") else False:
+            continue
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = mod.split(".")[: -node.level + (1 if path.name == "__init__.py" else 0)
+                                    or None]
+                names = [".".join([*base, node.module] if node.module else base)]
+            else:
+                names = [node.module or ""]
+            # ``from hybridpd.x import y`` may name a submodule y
+            names += [f"{names[0]}.{a.name}" for a in node.names]
+        else:
+            continue
+        for n in names:
+            if n.startswith("hybridpd"):
+                yield n, node.lineno, id(node) not in top
+
+
+def _graph():
+    modules = {_module_name(p): p for p in PKG.rglob("*.py")}
+    edges = {}
+    for mod, path in modules.items():
+        targets = set()
+        for name, line, deferred in _imports(path):
+            # resolve to the longest existing module prefix
+            parts = name.split(".")
+            while parts and ".".join(parts) not in modules:
+                parts.pop()
+            if parts and ".".join(parts) != mod:
+                targets.add((".".join(parts), line, deferred))
+        edges[mod] = targets
+    return modules, edges
+
+
+def _layer(mod: str) -> int:
+    parts = mod.split(".")
+    if len(parts) == 1:
+        return -1
+    return LAYER.get(parts[1], 0)
+
+
+MODULES, EDGES = _graph()
+
+
+def test_the_graph_is_read():
+    assert len(MODULES) > 80
+    assert ("hybridpd.hybrid.events", ) and any(
+        t[0] == "hybridpd.hybrid.events" for t in EDGES["hybridpd.hybrid.automaton"])
+
+
+def test_no_import_points_upward():
+    upward = [f"{m} -> {t} (line {line})" for m, ts in EDGES.items() for t, line, _ in ts
+              if _layer(t) > _layer(m) >= 0 and _layer(t) >= 0
+              # a package's __init__ may gather its own subpackages
+              and not t.startswith(m + ".")]
+    assert not upward, "imports pointing to a higher layer:\n" + "\n".join(sorted(upward))
+
+
+def test_general_path_does_not_import_the_pair():
+    bad = [f"{m} -> {t} (line {line})" for m in GENERAL for t, line, _ in EDGES[m]
+           if t.startswith("hybridpd.pair")]
+    assert not bad, "the general path imports the impact pair:\n" + "\n".join(bad)
+
+
+def _cycles():
+    adj = {m: sorted({t for t, _, _ in ts if not m.startswith(t + ".")}) for m, ts in
+           EDGES.items()}
+    index, low, stack, on, out = {}, {}, [], set(), []
+    counter = [0]
+
+    def strong(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in adj.get(v, ()):
+            if w not in index:
+                strong(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(adj):
+        if v not in index:
+            strong(v)
+    return out
+
+
+def test_no_import_cycles():
+    """Deferred imports count: an import moved into a function does not break a cycle."""
+    cycles = _cycles()
+    assert not cycles, "import cycles:\n" + "\n".join(" <-> ".join(c) for c in cycles)
+
+
+@pytest.mark.parametrize("layer", ["hybrid", "mechanics"])
+def test_lower_layers_import_nothing_above(layer):
+    banned = ("analysis", "pair", "sweeps", "plotting", "reproduce", "cli")
+    bad = [f"{m} -> {t}" for m, ts in EDGES.items() if m.startswith(f"hybridpd.{layer}")
+           for t, _, _ in ts if t.split(".")[1] in banned]
+    assert not bad, "\n".join(bad)
