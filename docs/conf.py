@@ -9,6 +9,7 @@ The API reference is generated from the docstrings (numpydoc format, autosummary
 every build), the subpackages recursively. The gallery runs every ``examples/<topic>/plot_*.py``
 in quick mode (``-D plot_gallery=0`` skips running them).
 """
+import shutil
 import sys
 from pathlib import Path
 
@@ -40,7 +41,10 @@ exclude_patterns = ["_build", "**.ipynb_checkpoints", "auto_examples/**/*.ipynb"
 root_doc = "index"
 
 # API reference ---------------------------------------------------------------------------
+# Stub pages are regenerated at every build: a stale page of a name that moved would fail it.
+shutil.rmtree(DOCS / "api" / "generated", ignore_errors=True)
 N_NAMESPACE = hybridpd_docs.write_namespace_page(DOCS / "api" / "namespace.rst")
+hybridpd_docs.fix_autosummary_summaries()
 autosummary_generate = True
 autosummary_imported_members = False
 autodoc_default_options = {"member-order": "bysource"}

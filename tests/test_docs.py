@@ -53,7 +53,10 @@ def rst_blocks(text):
 
 def run_blocks(blocks, cwd, label, timeout=300):
     """Run the blocks one after the other in one fresh interpreter; fail naming the block."""
-    script = ["import sys"]
+    # the documentation never shows an import path that is going away
+    script = ["import sys, warnings",
+              ("warnings.filterwarnings('error', message=r'.*will be removed in hybridpd',"
+               " category=DeprecationWarning)")]
     for i, b in enumerate(blocks, 1):
         script.append(f"print('--- block {i}', file=sys.stderr, flush=True)")
         script.append(b)

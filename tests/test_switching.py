@@ -202,4 +202,5 @@ def test_the_switched_2cycle_takes_most_of_the_basin_slice():
 
     to2 = ok & ((crit(c0) < 1e-3) | (crit(c1) < 1e-3))
     to1 = ok & (crit(o.fixed_point) < 1e-3)
-    assert 0.98 < to2.mean() < 0.99 and to1.mean() + to2.mean() == 1.0
+    # every point reaches one of the two (counts, not a sum of rounded shares)
+    assert 0.98 < to2.mean() < 0.99 and int(to1.sum()) + int(to2.sum()) == to1.size

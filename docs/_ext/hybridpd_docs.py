@@ -124,3 +124,42 @@ def check_gallery_figures(app, exception):
         if not list(images.glob(f"sphx_glr_{script.stem}_001.*")):
             logger.warning(f"gallery: {script.parent.name}/{script.name} shows no figure "
                            f"(it must save at least one image into its --out folder)")
+
+
+def fix_autosummary_summaries():
+    """Make autosummary's one-line summaries end outside inline literals.
+
+    Autosummary cuts a docstring's first sentence at the first ``". "``; it means to extend
+    the cut while the cut text has broken markup, but checks the whole paragraph instead, so
+    a period inside a literal (``w . q``, ``z . (A z + q)``) cuts the summary in the middle
+    of the literal (a docutils warning, an error under ``-W``). The cut is extended here to
+    the first sentence end after which every literal is closed.
+    """
+    import re
+
+    from sphinx.ext import autosummary
+
+    original = autosummary.extract_summary
+    if getattr(original, "_hybridpd_fixed", False):
+        return
+
+    def extract_summary(doc, settings):
+        summary = original(doc, settings)
+        if summary.count("``") % 2 == 0:
+            return summary
+        stanza = []
+        for line in doc:
+            if line.strip():
+                stanza.append(line.strip())
+            elif stanza:
+                break
+        text = " ".join(stanza)
+        sentences = re.split(r"\.\s+", text)
+        for i in range(len(sentences)):
+            candidate = ". ".join(sentences[: i + 1]).rstrip(".") + "."
+            if candidate.count("``") % 2 == 0:
+                return candidate
+        return text
+
+    extract_summary._hybridpd_fixed = True
+    autosummary.extract_summary = extract_summary
