@@ -247,14 +247,18 @@ def _conclusion(con, d, w):
       f"{rc['verdicts'][1]} on {_grid(rc['grids'][1])}"
       + ("." if rc["verdicts"][0] == rc["verdicts"][1] else ": the grids disagree, so the "
          "verdict is unresolved."))
+    checks = con["evidence"].get("by_convention_check_grid", {})
     for m2, chk in con["evidence"]["by_convention"].items():
+        other = checks.get(m2, {}).get("verdict", chk["verdict"])
+        grids = (f"run grid: {chk['verdict']}" if other == chk["verdict"] else
+                 f"run grid: {chk['verdict']}, check grid: {other}")
         if k in (1, 2, 3):
             text = _measure_123(k, chk, d) + f" ({_grid(chk['grid'])} grid)"
         elif k == 4:
             text = _measure_4(chk, d["paper"]["e"])
         else:
             text = _measure_5(chk)
-        w(f"- **Measurement at m2 = {m2}** ({chk['verdict']}): {text}.")
+        w(f"- **Measurement at m2 = {m2}** ({grids}): {text}.")
     w(f"- **Caveat:** {_CAVEATS[k]}\n")
 
 
