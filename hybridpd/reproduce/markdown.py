@@ -199,6 +199,8 @@ def _measure_4(chk, es):
              + ", ".join(touch) if touch else "no basin touches the window's edge")
     dist = chk.get("distance") or {}
     parts = []
+    cells = [row["cell"] for c in ("collocated", "noncollocated") for row in dist.get(c, [])
+             if row is not None]
     for c in ("collocated", "noncollocated"):
         for row in dist.get(c, []):
             if row is None:
@@ -209,7 +211,9 @@ def _measure_4(chk, es):
         text += ("; distance from the fixed point to the nearest point outside its basin "
                  "(x1/x10, y1/(omega x10); collocated then non-collocated, e = "
                  + ", ".join(f"{e:g}" for e in es) + "): "
-                 + ", ".join(parts))
+                 + ", ".join(parts)
+                 + (f" (grid cell {max(cells):.2g}: a distance of about one cell is "
+                    "resolution-limited)" if cells else ""))
     return text
 
 
