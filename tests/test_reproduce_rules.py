@@ -66,6 +66,10 @@ def test_trend_tolerates_two_cells_and_no_more():
     x = [1, 2, 3]
     cells = 100
     assert R.trend(x, [0.50, 0.52, 0.40], cells)["verdict"] == "agrees"       # +2 cells
+    # 7 then 9 cells of 1681: exactly two cells, whatever the rounding of 9/1681 - 7/1681
+    t = R.trend([1e-4, 0.1], [7 / 1681, 9 / 1681], 1681)
+    assert t["verdict"] == "agrees"
+    np.testing.assert_allclose(t["violation_cells"], 2.0, rtol=0, atol=1e-9)
     assert R.trend(x, [0.50, 0.53, 0.40], cells)["verdict"] == "contradicted"  # +3 cells
     inc = R.trend(x, [0.99, 1.00, 0.98], cells, direction="increasing")
     assert inc["verdict"] == "agrees"                                          # saturated

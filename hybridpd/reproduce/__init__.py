@@ -8,9 +8,12 @@
   paper's gains exist and are stable (end points are located bifurcation points), and every
   conclusion's verdict against ``m2`` over ``[0.1, 1000]``.
 * **Figs 3-7 under each convention** (default ``m2 = 1`` and the ``m2`` chosen by the
-  documented rule of :func:`~hybridpd.reproduce.study.choose_m2`), gain boxes scaled by ``m2``.
+  documented rule of :func:`~hybridpd.reproduce.study.choose_m2`), gain boxes scaled by ``m2``,
+  and Figs 4-5 once for every ``m2`` in the scaled gains (:mod:`~hybridpd.reproduce.figures`).
 * **The conclusions** (:mod:`~hybridpd.reproduce.conclusions`) on existence alone, stability
-  alone and both; **the mu and gamma studies** (:mod:`~hybridpd.reproduce.params`).
+  alone and both, by the verdict rules of :mod:`~hybridpd.reproduce.rules` (four verdicts,
+  two grid resolutions, whole-range trends, one basin window per figure); **the mu and gamma
+  studies** (:mod:`~hybridpd.reproduce.params`).
 * ``summary.json`` (schema :data:`~hybridpd.reproduce.summary.SCHEMA`) and ``summary.md``.
 
 Every open convention is a field of :class:`Settings`. The package itself is callable:

@@ -199,6 +199,8 @@ def _measure_4(chk, es):
              + ", ".join(touch) if touch else "no basin touches the window's edge")
     dist = chk.get("distance") or {}
     parts = []
+    cells = [row["cell"] for c in ("collocated", "noncollocated") for row in dist.get(c, [])
+             if row is not None]
     for c in ("collocated", "noncollocated"):
         for row in dist.get(c, []):
             if row is None:
@@ -209,7 +211,9 @@ def _measure_4(chk, es):
         text += ("; distance from the fixed point to the nearest point outside its basin "
                  "(x1/x10, y1/(omega x10); collocated then non-collocated, e = "
                  + ", ".join(f"{e:g}" for e in es) + "): "
-                 + ", ".join(parts))
+                 + ", ".join(parts)
+                 + (f" (grid cell {max(cells):.2g}: a distance of about one cell is "
+                    "resolution-limited)" if cells else ""))
     return text
 
 
@@ -247,14 +251,18 @@ def _conclusion(con, d, w):
       f"{rc['verdicts'][1]} on {_grid(rc['grids'][1])}"
       + ("." if rc["verdicts"][0] == rc["verdicts"][1] else ": the grids disagree, so the "
          "verdict is unresolved."))
+    checks = con["evidence"].get("by_convention_check_grid", {})
     for m2, chk in con["evidence"]["by_convention"].items():
+        other = checks.get(m2, {}).get("verdict", chk["verdict"])
+        grids = (f"run grid: {chk['verdict']}" if other == chk["verdict"] else
+                 f"run grid: {chk['verdict']}, check grid: {other}")
         if k in (1, 2, 3):
             text = _measure_123(k, chk, d) + f" ({_grid(chk['grid'])} grid)"
         elif k == 4:
             text = _measure_4(chk, d["paper"]["e"])
         else:
             text = _measure_5(chk)
-        w(f"- **Measurement at m2 = {m2}** ({chk['verdict']}): {text}.")
+        w(f"- **Measurement at m2 = {m2}** ({grids}): {text}.")
     w(f"- **Caveat:** {_CAVEATS[k]}\n")
 
 

@@ -1,8 +1,10 @@
 """The reproduction pipeline: both ``m2`` conventions, the studies, the figures, the summary.
 
-Layout of the output directory::
+Layout of the output directory (every figure as PNG at 300 dpi and as PDF)::
 
     summary.md, summary.json          verdicts and every number behind them
+    scaled_regions_collocated.png, scaled_regions_noncollocated.png
+                                      Figs 4-5 in (kp/m2, kv/m2), valid for every m2
     m2_study.png, mu_study.png, gamma_study.png
     m2=<value>/                       one directory per convention:
         fig3_orbit.png, fig4_regions_collocated.png, fig5_regions_noncollocated.png,
@@ -256,7 +258,7 @@ def _basins(run, settings, *, executor, max_workers, progress, say):
             b.save(run.directory / f"basin_{case}_e{e:g}.nc")
     run.timings["basins"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    grid2 = tuple(settings.check_num(v) for v in settings.basin)
+    grid2 = tuple(settings.check_num(v, settings.basin_check_scale) for v in settings.basin)
     check = relabel(run.orbits, res.window, grid2, n_iter=settings.iterations,
                     executor=executor, max_workers=max_workers, progress=progress)
     run.timings["basins (resolution check)"] = time.perf_counter() - t0

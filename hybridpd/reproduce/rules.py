@@ -136,7 +136,9 @@ def trend(values, shares, cells, *, direction="decreasing",
                          f"and {s.size}")
     if not (int(cells) == cells and cells >= 1):
         raise ValueError(f"cells must be an integer >= 1, got {cells!r}")
-    c = s * int(cells) * (1.0 if direction == "decreasing" else -1.0)
+    # shares of a grid are whole cells: count them exactly (no rounding error at the
+    # tolerance)
+    c = np.round(s * int(cells), 6) * (1.0 if direction == "decreasing" else -1.0)
     # the largest rise of a later value over the running minimum of the earlier ones
     best, where = 0.0, None
     k_min = 0

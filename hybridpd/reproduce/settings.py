@@ -65,6 +65,9 @@ class Settings:
         The resolution check: every verdict is recomputed on grids with this many times the
         cells per axis (about twice as fine in full mode, half as fine in quick mode); a
         verdict that changes is ``"unresolved"``.
+    basin_check_scale : float
+        The same for the basin slices, whose cost grows with their cells and with the
+        iterations of the weakly damped orbits: half as fine in both modes by default.
     comparison_grid : (int, int)
         Gain grid of the robustness comparison (conclusion 5).
     uncertainty_grid : (int, int)
@@ -106,8 +109,9 @@ class Settings:
     zoom: tuple
     basin: tuple
     iterations: int = 1500
-    basin_extensions: int = 2
+    basin_extensions: int = 1
     check_scale: float = 2.0
+    basin_check_scale: float = 0.5
     traced_boundaries: bool = True
     comparison_grid: tuple = (48, 48)
     uncertainty_grid: tuple = (5, 5)
@@ -141,6 +145,7 @@ class Settings:
         _count("iterations", self.iterations, 1)
         _count("basin_extensions", self.basin_extensions + 1, 1)
         check_positive("check_scale", self.check_scale)
+        check_positive("basin_check_scale", self.basin_check_scale)
         for v in self.comparison_grid:
             _count("comparison_grid", v)
         for v in self.uncertainty_grid:
@@ -181,13 +186,15 @@ class Settings:
     def full(cls, **kw) -> Settings:
         """The 200 x 200 grids of the paper's figures (a few minutes on 2 cores)."""
         base = dict(gains=(50.0, 50.0, 201), zoom=(20.0, 6.0, 201), basin=(201, 201),
-                    m2_grid=8001, m2_verdicts=17, m2_robust=5, m2_robust_grid=(16, 16),
+                    basin_extensions=1, m2_grid=8001, m2_verdicts=9, m2_robust=5, m2_robust_grid=(16, 16),
                     verdict_grid=81, param_points=61, param_grid=41)
         return cls(**{**base, **kw})
 
-    def check_num(self, num: int) -> int:
-        """Points per axis of the resolution check for ``num`` points (at least 3)."""
-        return max(3, round((int(num) - 1) * self.check_scale) + 1)
+    def check_num(self, num: int, scale: float | None = None) -> int:
+        """Points per axis of the resolution check for ``num`` points (at least 3), with
+        :attr:`check_scale` or ``scale``."""
+        s = self.check_scale if scale is None else scale
+        return max(3, round((int(num) - 1) * s) + 1)
 
     def with_(self, **kw) -> Settings:
         """A copy with some fields replaced."""
