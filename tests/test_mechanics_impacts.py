@@ -88,6 +88,20 @@ def test_four_clearances_of_a_converging_chain(e):
         np.testing.assert_allclose(tr.mechanical(0.3)[1::2], 0.0, atol=1e-13)
 
 
+def test_three_clearances_of_a_converging_chain():
+    """Four unit masses at v = [1.5, 0.5, -0.5, -1.5] (e = 0.5), three clearances closing at
+    t = 0.1. By hand: A = tridiag(-1, 2, -1) (3 x 3), q = -1.5 [1, 1, 1],
+    lambda = 1.5 [1.5, 2, 1.5] > 0, v+ = -e v."""
+    cs = [Contact(np.eye(4)[i] - np.eye(4)[i + 1], hi=0.1, restitution=0.5) for i in range(3)]
+    v = np.array([1.5, 0.5, -0.5, -1.5])
+    tr = simulate(_free_chain(np.eye(4), cs), _x0([0] * 4, v), (0.0, 0.15))
+    t, _, v1 = _joint(tr, 3)
+    np.testing.assert_allclose(t, 0.1, atol=1e-14)
+    np.testing.assert_allclose(v1, -0.5 * v, atol=1e-13)
+    out = multi_impact(np.eye(4), -np.array([c.normal for c in cs]), v, [0.5] * 3)
+    np.testing.assert_allclose(out.impulses, 1.5 * np.array([1.5, 2.0, 1.5]), rtol=1e-13)
+
+
 def test_one_contact_of_the_set_inactive():
     """Mass 0 touches mass 1 (clearance at lo, zero relative speed) while mass 1 hits mass 2
     (e = 0.5), v = [1, 1, 0]. By hand: both active would need lambda = [-0.5, 1] (< 0), so

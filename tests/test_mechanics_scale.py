@@ -37,3 +37,19 @@ def test_on_demand_matches_a_materialized_automaton():
     assert a.hybrid.jumps.guard == b.hybrid.jumps.guard
     np.testing.assert_allclose(a.hybrid.jumps.t, b.hybrid.jumps.t, rtol=0, atol=0)
     np.testing.assert_allclose(a.post, b.post, rtol=0, atol=0)
+
+
+def test_an_automaton_built_on_demand_pickles_for_workers():
+    """Worker processes receive the automaton by pickle: the mode builder goes with it and
+    builds the modes the copy visits, with the same jumps."""
+    import pickle
+
+    ma = mass_chain(4)
+    simulate(ma, np.zeros(8), (0.0, 5.0), max_impacts=300)
+    ha = pickle.loads(pickle.dumps(ma.automaton))
+    assert ha.n_built == ma.automaton.n_built
+    z0 = ma.initial_state(np.zeros(4), np.zeros(4))
+    a = ma.automaton.simulate(z0, "free", (0.0, 5.0), max_jumps=2000)
+    b = ha.simulate(z0, "free", (0.0, 5.0), max_jumps=2000)
+    assert len(b.jumps) > 100 and b.jumps.guard == a.jumps.guard
+    np.testing.assert_allclose(b.jumps.t, a.jumps.t, rtol=0, atol=0)

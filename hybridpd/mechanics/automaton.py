@@ -280,12 +280,23 @@ def _mode_name(config, stick):
     return base + ("/" + ",".join(eng) if eng else "")
 
 
+class _LoopData:
+    """The parts of a :class:`MechanicalLoop` that building a mode reads."""
+
+    def __init__(self, loop):
+        self.system, self.A, self.b = loop.system, loop.A, loop.b
+        self.layout, self.n_states = loop.layout, loop.n_states
+        self.sampled, self.dt, self.sample_reset = loop.sampled, loop.dt, loop.sample_reset
+
+
 class _Geometry:
     """Normals, bounds and the metric of ``M`` on the closed-loop state."""
 
     def __init__(self, loop, contacts):
         sysm = loop.system
-        self.loop, self.contacts = loop, contacts
+        # the numbers the modes need, without python-control objects (automata pickle)
+        self.loop = _LoopData(loop)
+        self.contacts = contacts
         N, lay = loop.n_states, loop.layout
         for k, c in enumerate(contacts):
             if not isinstance(c, Contact):
@@ -439,12 +450,7 @@ def build_automaton(loop: MechanicalLoop, contacts, max_modes: int = 4096
     contacts = tuple(contacts)
     geo = _Geometry(loop, contacts)
 
-    def builder(name):
-        config, stick = _parse_mode(name, contacts, geo)
-        A, b, lam_rows, lam_b = geo.flow(config, stick)
-        guards = _guards(geo, config, stick, lam_rows, lam_b)
-        return Mode(name, A, b=b, guards=tuple(guards))
-
+    builder = _ModeBuilder(geo)
     free = _mode_name((0,) * len(contacts), ())
     ha = HybridAutomaton([builder(free)], state_names=loop.state_names, mode_builder=builder,
                          max_modes=max_modes)
@@ -453,6 +459,20 @@ def build_automaton(loop: MechanicalLoop, contacts, max_modes: int = 4096
                                gap_rows=geo.gap, impact_resets=_ResetTable(geo, "impact"),
                                plastic_resets=_ResetTable(geo, "plastic"), free_mode=free,
                                _geometry=geo)
+
+
+class _ModeBuilder:
+    """Builds the mode called ``name`` (a module-level class: automata pickle for workers)."""
+
+    def __init__(self, geo):
+        self.geo = geo
+
+    def __call__(self, name):
+        geo = self.geo
+        config, stick = _parse_mode(name, geo.contacts, geo)
+        A, b, lam_rows, lam_b = geo.flow(config, stick)
+        guards = _guards(geo, config, stick, lam_rows, lam_b)
+        return Mode(name, A, b=b, guards=tuple(guards))
 
 
 def _parse_mode(name, contacts, geo):
