@@ -9,15 +9,11 @@ attribute, e.g. a mechanical automaton) together with ``section=dict(mode=..., g
 followed: a gain, a clearance, a restitution coefficient, a sampling period, a forcing
 amplitude. The section dimension must not change along the family.
 
-:func:`continue_family` follows a fixed point of ``P^k`` from ``(s0, p0)``:
-
-* ``method="natural"``: ``p`` steps by ``step``; secant predictor on ``s``; Newton on ``s``
-  (:func:`~hybridpd.analysis.periodic.find_orbit`);
-* ``method="arclength"`` (pseudo-arclength): unknowns ``u = (s, p)``; tangent = null vector
-  of ``[DP^k - I, dF/dp]`` (``dF/dp`` by central differences of the map in ``p``), Newton on
-  ``F(u) = 0`` plus the arclength condition; passes folds.
-
-Step sizes halve on a failed correction (bounded number of halvings) and grow after easy
+:func:`continue_family` follows a fixed point of ``P^k`` from ``(s0, p0)`` on the package's
+path-following engine (:func:`hybridpd.analysis.pathfollow.follow_path`): ``method="natural"``
+(``p`` steps, secant predictor on ``s``) or ``"arclength"`` (pseudo-arclength in ``(s, p)``,
+``dF/dp`` by central differences of the map in ``p``; passes folds). Step sizes halve on a
+failed correction (bounded number of halvings) and grow after easy
 ones. At every accepted point the Floquet multipliers (eigenvalues of ``DP^k``), spectral
 radius and impact sequence are recorded; between consecutive points the events below are
 detected by sign changes of test functions, and located by Illinois (safeguarded regula

@@ -152,7 +152,7 @@ class ImpactMap(PoincareMap):
         """
         k = check_returns(k)
         cur = self._points(check_array("s", s, shape=(4,)))[0]
-        L, T = self.pair.L, self.period
+        T = self.period
         jumps = [(float(cur[0]), "free", "wall+", "free", "crossing")]
         s0, blocks = cur, []
         t_abs = float(cur[0])
@@ -174,19 +174,23 @@ class ImpactMap(PoincareMap):
                 else:
                     jumps.append((t, "free", g, "free", _KINDS[int(r[3])]))
             if st != 0:
-                z = np.array([out[1] + L, out[2] + out[3], out[1], out[2],
-                              *self.reference.exo_state(out[0])])
                 return MapResult(np.full(4, np.nan), False, STATUS_NAMES.get(int(st),
-                                 str(int(st))), float(jumps[0][0]), float(out[0]), z, "free",
-                                 tuple(jumps), any(j[4] == "grazing" for j in jumps))
+                                 str(int(st))), float(jumps[0][0]), float(out[0]),
+                                 self.state(out, out[0]), "free", tuple(jumps),
+                                 any(j[4] == "grazing" for j in jumps))
             blocks.append((cur, rec))
             cur = out
-        z = np.array([cur[1] + L, cur[2] + cur[3], cur[1], cur[2],
-                      *self.reference.exo_state(t_abs)])
+        z = self.state(cur, t_abs)
         grazing = any(j[4] == "grazing" for j in jumps) or cur[3] <= 1e-12 * max(1.0, T)
         DP = self._power_dp(s0, k, blocks) if jacobian else None
         return MapResult(cur.copy(), True, "returned", float(jumps[0][0]), t_abs, z, "free",
                          tuple(jumps), bool(grazing), DP)
+
+    def state(self, s, t) -> np.ndarray:
+        """Full state ``[x1, y1, x2, y2, pc, ps]`` of the pre-impact section point ``s`` at time
+        ``t``."""
+        return np.array([s[1] + self.pair.L, s[2] + s[3], s[1], s[2],
+                         *self.reference.exo_state(t)])
 
     def _power_dp(self, s, k, blocks) -> np.ndarray:
         """``DP^k``: the chain of symbolic blocks when every return is simple, else FD."""

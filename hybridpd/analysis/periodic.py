@@ -607,12 +607,9 @@ class SectionMapper(BasinMapper):
     ``unresolved`` (jump or step bound); ``off_section`` (the flow does not fire the guard at
     the point).
 
-    **Early exit** as in :mod:`hybridpd.sweeps.basins`: for a stable fixed point, ``Q`` solving
-    the Lyapunov equation of ``DP / rho_t`` (``rho_t = (1 + rho) / 2``) defines a norm in which
-    ``P^k`` contracts; the largest ball (inside half the criterion ball) whose sampled images
-    fall inside ``(1 + rho_t) / 2`` of its radius, on nested spheres, is used at 0.9 of its
-    radius: an iterate inside it is labelled ``converged`` at once (numerical, sampled
-    certification, not interval-rigorous; one ball per cycle point).
+    **Early exit** as in :mod:`hybridpd.sweeps.basins`: an iterate inside the certified
+    contraction ball of a cycle point (:func:`hybridpd.analysis.certify.certify_ball`, one
+    ball per cycle point; numerical, sampled) is labelled ``converged`` at once.
 
     Parameters
     ----------

@@ -85,7 +85,10 @@ def map_power_jacobian(impact_map_: ImpactMap, s, period: int = 1, *, method: st
         raise ValueError("method='symbolic' needs the simple pattern (+L, -L, +L) on every "
                          f"iterate; got {[tr.walls for tr in traces]}")
     if simple and method != "fd":
-        return P.apply(s, k, jacobian=True).DP, "symbolic", traces
+        J = np.eye(4)
+        for si, tr in zip(pts, traces):
+            J = P._symbolic(si, tr.steps[0].tau, tr.steps[1].tau).DP.reshape(4, 4) @ J
+        return J, "symbolic", traces
     return _fd_jacobian(P, s, k, fd_step), "fd", traces
 
 

@@ -219,12 +219,10 @@ def _make_orbit(P, res, k, jacobian, fd_step, margin_samples, graze_tol) -> Peri
             stab.hyperbolic
     minimal = minimal_period(P, s, k) if res.converged else k
     pattern = tuple(tr.steps for tr in traces)
-    L = P.pair.L
     sig = P.apply(s, k).signature if res.converged else ()
     return PeriodicOrbit(
         t_period=float(sum(st.tau + st.stick_time for p in pattern for st in p)),
-        signature=sig, names=P.names, z=np.array([s[1] + L, s[2] + s[3], s[1], s[2],
-                                                 *P.reference.exo_state(s[0])]),
+        signature=sig, names=P.names, z=P.state(s, s[0]),
         converged=bool(res.converged), reason=res.reason, s=s, orbit=orbit, period=k,
         minimal_period=minimal, residual=resid, residual_history=np.asarray(res.history),
         iterations=res.iterations, DP=DP, jacobian_method=method, multipliers=mult,

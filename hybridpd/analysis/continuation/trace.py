@@ -88,18 +88,6 @@ class MapTrace:
         return self.signature == ((-1, "impact"), (1, "impact"))
 
 
-def _flight_margin(params, case, t0, x1, y1, x2, y2, tau, nsamp):
-    """Smallest ``distance / L`` to the wall approached at interior turning points of ``z3``.
-
-    Turning points are sign changes of ``z4`` on a uniform grid of ``nsamp`` intervals,
-    refined by bisection. A maximum of ``z3`` is measured to ``+L``, a minimum to ``-L``
-    (a small hop away from the wall just left is not a near-grazing).
-    """
-    if not tau > 0.0:
-        return 1.0
-    return turning_margins(params, case, t0, x1, y1, x2, y2, tau, nsamp, True)[0]
-
-
 def trace_map(impact_map_: ImpactMap, s, *, margin: bool = True,
               margin_samples: int = 256) -> MapTrace:
     """Apply ``P`` once from ``s`` and record every contact (the impact pattern).
@@ -145,8 +133,9 @@ def trace_map(impact_map_: ImpactMap, s, *, margin: bool = True,
                              float(r[4])) for r in rec)
     marg = np.nan
     if margin:
-        marg = min([1.0] + [_flight_margin(P.params, P._c, *r[5:10], r[1], nsamp)
-                            for r in rec])
+        # smallest distance / L to the wall approached at interior turning points of z3
+        marg = min([1.0] + [turning_margins(P.params, P._c, *r[5:10], r[1], nsamp, True)[0]
+                            for r in rec if r[1] > 0.0])
     speeds = [float(r[2]) for r in rec if r[3] != 2]
     ok = st == STATUS_IMPACT
     return MapTrace(out if ok else np.full(4, np.nan), bool(ok), int(st), steps, marg,
