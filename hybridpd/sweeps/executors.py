@@ -35,8 +35,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["EXECUTORS", "ChunkError", "ExecutorSpec", "check_scheduler_address", "compute",
-           "resolve_executor", "scheduler_from_env"]
+__all__ = ["EXECUTORS", "ChunkError", "ExecutorSpec", "SchedulerUnreachable",
+           "check_scheduler_address", "compute", "resolve_executor", "scheduler_from_env"]
 
 #: Executor names accepted by :func:`hybridpd.sweeps.sweep.run_sweep` (besides instances).
 EXECUTORS = ("serial", "processes", "dask")
@@ -413,15 +413,20 @@ class _ClusterBackend(_DaskBackend):
             self.client.close()
 
 
+class SchedulerUnreachable(ConnectionError, ValueError):
+    """No Dask scheduler answers at the address given (a ValueError too: the command line
+    reports it in one line, like any unusable argument)."""
+
+
 def _connect(address: str):
     from distributed import Client
 
     try:
-        return Client(address, timeout="30s", set_as_default=False)
+        return Client(address, timeout="20s", set_as_default=False)
     except (OSError, TimeoutError) as exc:
-        raise ConnectionError(f"no Dask scheduler answers at {address} ({exc}); start one "
-                              "with 'dask scheduler' and workers with 'dask worker ADDRESS'"
-                              ) from None
+        raise SchedulerUnreachable(
+            f"scheduler: no Dask scheduler answers at {address} ({type(exc).__name__}); "
+            "start one with 'dask scheduler' and workers with 'dask worker ADDRESS'") from None
 
 
 def _open_backend(spec: ExecutorSpec, n_tasks: int, func: Callable, cols: dict, kwargs: dict):

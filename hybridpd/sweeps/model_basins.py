@@ -189,8 +189,13 @@ def _grid(name, spec, coords):
     return str(key), (lo, hi, int(numf))
 
 
-def _orbit_entry(label, po, name=None):
-    return {"label": int(label), "name": name or f"period-{po.period} orbit ({po.n_periods} T)",
+def _orbit_name(label, period, n_periods):
+    what = f"period-{period} orbit ({n_periods} T)"
+    return f"the {what}" if label == 0 else f"attractor {label}: {what}"
+
+
+def _orbit_entry(label, po):
+    return {"label": int(label), "name": _orbit_name(label, po.period, po.n_periods),
             "period": int(po.period), "n_periods": int(po.n_periods),
             "points": [[float(v) for v in po.s]], "stable": bool(po.stable),
             "spectral_radius": float(po.spectral_radius)}
