@@ -77,7 +77,7 @@ _NAMES = {
     "load_model": "hybridpd.mechanics.modelfile",
     "simulate": "hybridpd.mechanics.simulate",
     # continuation, boundaries, diagrams
-    "continue_orbit": "hybridpd.analysis.continuation",
+    "continue_orbit": "hybridpd.analysis.orbitcont",
     "switch_branch": "hybridpd.analysis.continuation",
     "load_branch": "hybridpd.analysis.continuation",
     "continue_family": "hybridpd.analysis.hybridcont",
@@ -89,7 +89,7 @@ _NAMES = {
     "load_region_map": "hybridpd.sweeps.regions",
     "basin_of_attraction": "hybridpd.sweeps.basins",
     "ImpactMapper": "hybridpd.sweeps.basins",
-    "load_basin": "hybridpd.sweeps.basins",
+    "load_basin": "hybridpd.sweeps.basin_result",
     "attractor_basin": "hybridpd.sweeps.attractor_basins",
     "load_attractor_basin": "hybridpd.sweeps.attractor_basins",
     "section_basin": "hybridpd.sweeps.section_basins",

@@ -13,6 +13,7 @@ import sys
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import hybridpd as hp
@@ -211,8 +212,39 @@ def test_flat_names_have_docstrings_with_examples():
     for name in hp.__all__:
         if name == "__version__":
             continue
-        module = hp._NAMES.get(name, f"hybridpd.{name}")
-        doc = inspect.getdoc(getattr(importlib.import_module(module), name)) or ""
+        if name in hp._SUBPACKAGES:  # reproduce: the callable package
+            doc = inspect.getdoc(importlib.import_module(f"hybridpd.{name}")) or ""
+        else:
+            module = hp._NAMES[name]
+            doc = inspect.getdoc(getattr(importlib.import_module(module), name)) or ""
         if "Examples\n--------" not in doc:
             missing.append(name)
     assert not missing, f"no Examples section: {missing}"
+
+
+def test_continue_orbit_takes_a_builder_or_the_pairs_map():
+    from hybridpd.analysis.continuation import continue_orbit as continue_pair
+    from hybridpd.analysis.hybridcont import continue_family
+    from hybridpd.hybrid.samples import impact_oscillator, oscillator_initial_state
+
+    def build(w):
+        return impact_oscillator(omega0=1.0, zeta=0.1, omega=w, stop=1.0, e=0.8)
+
+    sec = {"mode": "free", "guard": "impact",
+           "reference": (oscillator_initial_state(0, 0, omega=0.8), 0.0)}
+    a = hp.continue_orbit(build, [7.7, 1.66], 0.8, 0.81, section=sec, step=0.01)
+    b = continue_family(build, [7.7, 1.66], 0.8, 0.81, section=sec, step=0.01)
+    np.testing.assert_allclose(np.array([pt.s for pt in a.points]),
+                               np.array([pt.s for pt in b.points]), rtol=0, atol=1e-12,
+                               err_msg="same engine, same path")
+    np.testing.assert_allclose(a.p, b.p, rtol=0, atol=1e-12)
+    pair = hp.ImpactPair(mu=0.1, e=0.5, L=0.75)
+    orb = hp.symmetric_orbit(pair, hp.PDGains(10, 20), 5.0)
+    P = hp.ImpactMap(pair, hp.PDGains(10, 20), hp.Reference(orb.xm, 5.0))
+    c = hp.continue_orbit(P, orb.fixed_point, "kv", 21.0, step=0.5)
+    d = continue_pair(P, orb.fixed_point, "kv", 21.0, step=0.5)
+    np.testing.assert_allclose(c.points, d.points, rtol=0, atol=1e-12)
+    with pytest.raises(ValueError, match="builder"):
+        hp.continue_orbit(P, orb.fixed_point, 20.0, 21.0)
+    with pytest.raises(ValueError, match="ImpactMap"):
+        hp.continue_orbit(build, [7.7, 1.66], "omega", 0.82)

@@ -93,6 +93,19 @@ class PeriodicOrbit:
     return_error : float
         Relative distance between the section point and where an independent simulation of
         one period returns (NaN where not checked).
+
+    Examples
+    --------
+    The impact pair's symmetric orbit, found again by Newton on the general map:
+
+    >>> import hybridpd as hp
+    >>> from hybridpd.analysis.sections import impact_pair_section
+    >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
+    >>> po = hp.find_orbit(hp.SectionMap(impact_pair_section(orb.system())), orb.fixed_point)
+    >>> po.reason, po.period, round(po.spectral_radius, 6), bool(po.stable)
+    ('converged', 1, 0.523818, True)
+    >>> po.signature
+    (('wall+', 'crossing'), ('wall-', 'crossing'))
     """
 
     s: np.ndarray

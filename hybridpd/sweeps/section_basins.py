@@ -14,7 +14,7 @@ import numpy as np
 from hybridpd.analysis.labels import OFF_SECTION
 from hybridpd.analysis.periodic import SectionMapper
 from hybridpd.model import check_axis
-from hybridpd.sweeps.basins import BasinResult
+from hybridpd.sweeps.basin_result import BasinResult
 from hybridpd.sweeps.sweep import run_sweep
 
 __all__ = ["section_basin"]
