@@ -13,6 +13,7 @@ central finite differences of the simulated map as an independent check.
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -150,6 +151,10 @@ class ImpactMap(PoincareMap):
         ``DP^k`` is the chain of symbolic blocks when every return has the simple pattern,
         else central differences of the engine's ``P^k``.
         """
+        if np.ndim(s) == 2:             # the former batch call
+            warnings.warn("ImpactMap.apply of an (N, 4) array is deprecated: use apply_batch",
+                          DeprecationWarning, stacklevel=2)
+            return self.apply_batch(s)
         k = check_returns(k)
         cur = self._points(check_array("s", s, shape=(4,)))[0]
         T = self.period
