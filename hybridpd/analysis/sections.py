@@ -5,19 +5,14 @@
 * :func:`mechanical_section`: a contact's impacts (or the ends of its sticking phases) of a
   mechanical automaton of :mod:`hybridpd.mechanics`.
 
-Both are also importable from :mod:`hybridpd.analysis.hybridmap`.
 """
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-# Section is imported inside the functions: hybridpd.analysis.hybridmap re-exports this
-# module's functions at its end, so importing it here would make `import sections` first a cycle.
-if TYPE_CHECKING:
-    from hybridpd.analysis.hybridmap import Section
+from hybridpd.analysis.hybridmap import Section
 
 __all__ = ["impact_pair_section", "mechanical_section"]
 
@@ -28,8 +23,6 @@ def impact_pair_section(system, wall: int = 1) -> Section:
     Pre-impact states on the ``wall`` (``+1``: ``z3 = +L``), coordinates
     ``(phi, z1, z2, z4, c_1, ...)`` = ``(t mod T, x2, y2, y1 - y2, controller states)``.
     """
-    from hybridpd.analysis.hybridmap import Section
-
     if wall not in (1, -1):
         raise ValueError(f"wall must be +1 or -1, got {wall!r}")
     ha = system.automaton
@@ -91,8 +84,6 @@ def mechanical_section(model, contact: int = 0, wall: int = 1, *, period=None,
         if max(omegas) - min(omegas) > 1e-12 * max(omegas):
             raise ValueError("the reference has several frequencies: give period=")
         period = 2 * math.pi / omegas[0]
-    from hybridpd.analysis.hybridmap import Section
-
     sec = Section(model.automaton, mode, name, exo=exo, period=period,
                   exo_state=ref.exo_state(0.0))
     return sec
