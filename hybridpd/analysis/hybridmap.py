@@ -432,6 +432,8 @@ class SectionMap(PoincareMap):
     max_steps : int
         Bound on the exact flow steps of one application.
     zeno : ZenoOptions, optional
+        Accumulation rules (default the automaton's own, ``section.automaton.zeno``, which
+        its simulations use too); ``tail_tol`` included.
 
     Examples
     --------
@@ -460,9 +462,13 @@ class SectionMap(PoincareMap):
         if isinstance(max_steps, bool) or int(max_steps) != max_steps or max_steps < 1:
             raise ValueError(f"max_steps must be an int >= 1, got {max_steps!r}")
         self.max_steps = int(max_steps)
-        zeno = ZenoOptions() if zeno is None else zeno
+        # the automaton's own rules by default: the map then resolves an accumulation where
+        # a simulation of the automaton does (a shorter resolved burst moves its end, and
+        # with it the orbit, by the error of the earlier extrapolation)
+        zeno = section.automaton.zeno if zeno is None else zeno
         if not isinstance(zeno, ZenoOptions):
             raise ValueError("zeno must be a ZenoOptions instance")
+        self.zeno = zeno
         ha = section.automaton
         pk = ha.packed
         M, GM = pk.ng.shape[0], pk.G.shape[1]
@@ -478,7 +484,8 @@ class SectionMap(PoincareMap):
         self._kernel_args = (
             pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs, pk.gsum, pk.cnorm, pk.prio,
             pk.ng, pk.Rh, pk.target, pk.zt, pk.Rz, dt_min,
-            np.array([zeno.ratio_max, zeno.ratio_rtol], float),
+            np.array([zeno.ratio_max, zeno.ratio_rtol,
+                      -1.0 if zeno.tail_tol is None else float(zeno.tail_tol), -1.0], float),
             np.array([int(bool(zeno.enabled)), int(zeno.min_ratios),
                       int(zeno.max_instant_jumps)], np.int64), gc, gdir)
         self._hint = {}
@@ -587,6 +594,7 @@ class SectionMap(PoincareMap):
         q = 0
         tangent = False
         tgrad = []        # d t_jump / d z0 of every jump so far
+        burst = _accumulating(bufs, nb)
         for m in range(nb + 1):
             # flows of the segments at jump count m, then jump m + 1 (table index m)
             while q < nseg and sj[q] == m:
@@ -598,7 +606,10 @@ class SectionMap(PoincareMap):
                 break
             Z, tg, tan = self._jump(m, bufs, Z, tgrad, jt)
             tgrad.append(tg)
-            tangent = tangent or tan
+            # the closing speed of a burst ending in an accumulation shrinks to zero by design
+            # (the more so the shorter the unresolved tail, ZenoOptions.tail_tol): its
+            # impacts are no tangential touch of the orbit
+            tangent = tangent or (tan and not burst[m])
         mode = ha.modes[sec.mode_index]
         f = mode.A @ z_hit + mode.b
         cf = sec.c @ f
@@ -657,6 +668,23 @@ class SectionMap(PoincareMap):
         dD = tgrad[k] - tgrad[k1]
         dr = (dD - r * (tgrad[k1] - tgrad[k2])) / D1
         return tgrad[k] + (dD * r + D * dr / (1 - r)) / (1 - r)
+
+
+def _accumulating(bufs, nb) -> np.ndarray:
+    """Per jump ``q < nb``: a crossing of a burst that ends in a Zeno switch (the jumps from
+    ``q`` on fire the same guard of the same mode up to a jump of kind ``'zeno'`` of it)."""
+    jg, jsrc, jkind = bufs[5], bufs[6], bufs[8]
+    out = np.zeros(nb, bool)
+    ends = False
+    for q in range(nb - 1, -1, -1):
+        if jkind[q] == 3:
+            ends = True
+        elif q + 1 < nb and ends and jkind[q] == 1 and jg[q] == jg[q + 1] and \
+                jsrc[q] == jsrc[q + 1]:
+            out[q] = True
+        else:
+            ends = False
+    return out
 
 
 # the sections of the project's models (they need Section, defined above)

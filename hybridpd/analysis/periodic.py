@@ -462,7 +462,7 @@ def _return_error(P, s, k, t_per) -> float:
     z0, t0 = sec.to_state(s)
     try:
         tr = ha.simulate(z0, sec.mode, (t0, t0 + t_per * (1 + 1e-9) + 1e-12),
-                         max_jumps=P.max_jumps, max_steps=P.max_steps)
+                         max_jumps=P.max_jumps, max_steps=P.max_steps, zeno=P.zeno)
     except (ValueError, RuntimeError, FloatingPointError) as exc:
         del exc
         return math.inf

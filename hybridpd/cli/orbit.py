@@ -25,7 +25,7 @@ def register(sub):
                 description=DESCRIPTION,
                 example=("hybridpd orbit --case noncollocated --mu 0.1 --e 0.5 "
                          "--gamma 0.75 --omega 5 --kp 10 --kv 20\n  hybridpd orbit --model "
-                         "examples/models/drivetrain.toml --contact 0 --period 8 --json"))
+                         "examples/models/drivetrain.toml --contact 0 --event release --json"))
     add_plant(p, xm=False, gamma=True, required=False)
     p.add_argument("--e", type=float, default=None, help="restitution coefficient in [0, 1]")
     p.add_argument("--n", type=int, default=1, help="odd orbit order (period n T)")

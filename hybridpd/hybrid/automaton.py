@@ -190,6 +190,11 @@ class HybridAutomaton:
         :meth:`materialize`).
     max_modes : int
         Bound on the number of modes :meth:`materialize` builds (default 4096).
+    zeno : ZenoOptions, optional
+        The accumulation rules of this automaton (default :class:`ZenoOptions()`): used by
+        :meth:`simulate` and by every map of a section of it
+        (:class:`~hybridpd.analysis.hybridmap.SectionMap`) unless they are given others, so
+        that a map and a simulation of one automaton resolve an accumulation alike.
 
     Examples
     --------
@@ -214,8 +219,12 @@ class HybridAutomaton:
     """
 
     def __init__(self, modes: Sequence[Mode], state_names=None, K: int = K_DEFAULT,
-                 theta: float = THETA_DEFAULT, mode_builder=None, max_modes: int = 4096):
+                 theta: float = THETA_DEFAULT, mode_builder=None, max_modes: int = 4096,
+                 zeno: ZenoOptions | None = None):
         modes = _check_modes(modes)
+        if zeno is not None and not isinstance(zeno, ZenoOptions):
+            raise ValueError("zeno must be a ZenoOptions instance")
+        self.zeno = ZenoOptions() if zeno is None else zeno
         n = modes[0].A.shape[0]
         if state_names is None:
             state_names = tuple(f"x{i}" for i in range(n))
@@ -374,7 +383,7 @@ class HybridAutomaton:
         max_steps : int, optional
             Maximum number of exact flow steps (default ``10**7``).
         zeno : ZenoOptions, optional
-            Accumulation detection (default :class:`ZenoOptions()`).
+            Accumulation detection (default the automaton's own, :attr:`zeno`).
         resolver : callable, optional
             ``resolver(mode, guard, t, z) -> (z_post, target, names)`` for a guard of a
             non-zero ``group`` that fires while another of its group is active (see
@@ -398,7 +407,8 @@ class HybridAutomaton:
         if not np.all(np.isfinite(x0)):
             raise ValueError("x0 must be finite")
         mi = self.mode_index(mode0)
-        t0, t1, max_jumps, max_steps, zeno = _check_run_args(t_span, max_jumps, max_steps, zeno)
+        t0, t1, max_jumps, max_steps, zeno = _check_run_args(
+            t_span, max_jumps, max_steps, self.zeno if zeno is None else zeno)
         if max_state is not None and not (float(max_state) > 0):
             raise ValueError(f"max_state must be > 0, got {max_state!r}")
         w = np.append(x0, 1.0)

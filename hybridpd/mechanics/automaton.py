@@ -71,7 +71,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridpd._repr import compact_repr
-from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode
+from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode, ZenoOptions
 from hybridpd.mechanics.contacts import Contact
 from hybridpd.mechanics.impact import multi_impact, solve_lcp
 from hybridpd.mechanics.loop import MechanicalLoop
@@ -83,6 +83,8 @@ _GUARD_RE = re.compile(r"\A(contact|release|enter|leave)(\d+)([+-])\Z")
 _GUARD_KIND = {"contact": "impact", "release": "release", "enter": "enter", "leave": "leave"}
 #: relative margin by which a held contact's force must pull before it is released
 RELEASE_MARGIN = 1e-9
+#: resolve an accumulation until its extrapolated tail is this short (relative to 1 + |t|)
+ZENO_TAIL_TOL = 1e-12
 
 
 @dataclass(frozen=True)
@@ -452,8 +454,10 @@ def build_automaton(loop: MechanicalLoop, contacts, max_modes: int = 4096
 
     builder = _ModeBuilder(geo)
     free = _mode_name((0,) * len(contacts), ())
+    # the automaton's own accumulation rule, so that its simulations and the maps of its
+    # sections end an accumulation at the same (resolved) point
     ha = HybridAutomaton([builder(free)], state_names=loop.state_names, mode_builder=builder,
-                         max_modes=max_modes)
+                         max_modes=max_modes, zeno=ZenoOptions(tail_tol=ZENO_TAIL_TOL))
     return MechanicalAutomaton(automaton=ha, loop=loop, contacts=contacts,
                                modes=_ModeTable(ha, contacts, geo), guards=_GuardTable(ha),
                                gap_rows=geo.gap, impact_resets=_ResetTable(geo, "impact"),

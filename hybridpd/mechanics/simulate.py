@@ -45,15 +45,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridpd._repr import compact_repr
-from hybridpd.hybrid.automaton import ZenoOptions
-from hybridpd.mechanics.automaton import MechanicalAutomaton
+from hybridpd.mechanics.automaton import ZENO_TAIL_TOL, MechanicalAutomaton  # noqa: F401 (old path)
 
 __all__ = ["MechanicalTrajectory", "simulate", "simulate_state"]
 
 _TERMINATIONS = {0: "end_time", 1: "jump_limit", 2: "zeno", 3: "nonfinite", 4: "step_limit",
                  7: "simultaneous_contact", 8: "diverged"}
-#: resolve an accumulation until its extrapolated tail is this short (relative to 1 + |t|)
-ZENO_TAIL_TOL = 1e-12
 
 
 @dataclass(frozen=True, eq=False)  # array fields: identity semantics
@@ -240,8 +237,8 @@ def simulate_state(model: MechanicalAutomaton, z0, t_span, mode: str | None = No
     if max_state is None:
         bounds = [abs(b) for c in model.contacts for _, b in c.bounds]
         max_state = 1e12 * max([1.0, float(np.abs(z0).max(initial=0.0))] + bounds)
-    if options.get("zeno") is None:
-        options["zeno"] = ZenoOptions(tail_tol=ZENO_TAIL_TOL)
+    # zeno=None: the automaton's own rule (tail below ZENO_TAIL_TOL), the one the maps of its
+    # sections use as well
     traj = model.automaton.simulate(z0, mode, (t0, t1), max_jumps=max_jumps,
                                     resolver=model.resolver(time_tol), simtol=time_tol,
                                     max_state=max_state, **options)
