@@ -80,13 +80,17 @@ def _ray_events(study) -> dict:
     for case in CASES:
         for e in PAPER["e"]:
             ev = []
+            for iv in study.intervals[case][e]:
+                if iv.lo.kind != "window":
+                    # a located stability end, or an existence end (grazing) where the orbit
+                    # starts to exist already stable
+                    ev.append((iv.lo.m2, "stable" if iv.lo.kind == "stability" else "exists"))
             rho = study.rho[(case, e)]
             ok = np.isfinite(rho)
             if ok.any() and not ok[0]:
-                ev.append((float(study.rho_grid[int(np.argmax(ok))]), "exists"))
-            for iv in study.intervals[case][e]:
-                if iv.lo.kind != "window":
-                    ev.append((iv.lo.m2, "stable"))
+                m = float(study.rho_grid[int(np.argmax(ok))])
+                if not any(abs(np.log(m / m2)) < 0.1 for m2, _ in ev):
+                    ev.append((m, "exists"))
             out.setdefault(case, {})[float(e)] = ev
     return out
 
