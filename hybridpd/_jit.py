@@ -80,6 +80,7 @@ def numba_cache_dir() -> Path | None:
     (owned by this user and writable by no one else, in a parent that is private too or
     sticky): the kernels then compile in memory.
     """
+    # deferred import: loaded only when this runs, for start-up time
     import numba
 
     from hybridpd._version import __version__

@@ -160,3 +160,31 @@ def test_lower_layers_import_nothing_above(layer):
     bad = [f"{m} -> {t}" for m, ts in EDGES.items() if m.startswith(f"hybridpd.{layer}")
            for t, _, _ in ts if t.split(".")[1] in banned]
     assert not bad, "\n".join(bad)
+
+
+def _deferred_without_reason(path: Path) -> list:
+    """Lines of ``path`` with an import of hybridpd inside a function (or below the top level)
+    that no ``deferred`` comment explains (on the line, or above it in its block of imports)."""
+    lines = path.read_text().split("\n")
+    out = []
+    for name, line, deferred in _imports(path):
+        if not deferred or "deferred" in lines[line - 1]:
+            continue
+        j = line - 2
+        while j >= 0:
+            s = lines[j].strip()
+            if s.startswith("#") and "deferred" in s:
+                break
+            if s.startswith(("#", "from ", "import ", ")")) or s == "" or s.endswith(","):
+                j -= 1
+                continue
+            out.append(f"{_module_name(path)}:{line} ({name})")
+            break
+    return out
+
+
+def test_deferred_imports_say_why():
+    """An import of the package placed inside a function is there for start-up time and says
+    so; one placed there to dodge a cycle would show up in test_no_import_cycles."""
+    bad = sorted({b for p in PKG.rglob("*.py") for b in _deferred_without_reason(p)})
+    assert not bad, "deferred imports without a comment saying why:\n" + "\n".join(bad)

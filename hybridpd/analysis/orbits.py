@@ -340,12 +340,14 @@ class SymmetricOrbitResult:
 
     def system(self):
         """The :class:`~hybridpd.pair.impactpair.ControlledImpactPair` with this orbit's reference."""
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.pair.impactpair import ControlledImpactPair
 
         return ControlledImpactPair(self.pair, self.gains, self.reference(), self.case)
 
     def flight(self, t) -> np.ndarray:
         """``[x1, y1, x2, y2]`` at times ``t`` in ``[t0, t0 + tau]`` (the half-period flight)."""
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.pair.batch import pack_params
 
         p = pack_params(self.gains.kp, self.gains.kv, self.pair.m2, self.pair.mu, self.pair.e,

@@ -762,6 +762,7 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period: i
     (PeriodicOrbit, SectionMap)
         The orbit (``converged = False`` with the reason where there is none) and the map.
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.sections import mechanical_section
 
     ma = model.automaton
@@ -788,6 +789,7 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period: i
 
 
 def _guess_from_simulation(model, sec, transient):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.mechanics.simulate import simulate
 
     if transient is None:

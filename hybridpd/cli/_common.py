@@ -118,6 +118,7 @@ def add_model_section(p, *, period_help="returns to the section per orbit (k of 
 
 
 def clearance(args):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.model import check_positive
 
     x10 = check_positive("x10", args.x10)
@@ -172,6 +173,7 @@ def executor_of(args):
 
     A scheduler address is what :func:`hybridpd.sweeps.sweep.run_sweep` takes as executor.
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.executors import check_scheduler_address, scheduler_from_env
 
     chosen = getattr(args, "executor", None)
@@ -211,12 +213,14 @@ def check_image(path, flag: str = "--plot"):
 def check_out(path, flag: str = "--out", allowed=None):
     """Refuse (ValueError, before any computation) a result path whose suffix cannot be
     written (default: ``.nc``, ``.zarr``, ``.npz``)."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.labelled import SUFFIXES
 
     return _check(path, flag, allowed or SUFFIXES)
 
 
 def _check(path, flag, allowed):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.labelled import check_suffix
 
     if path is None:
@@ -233,6 +237,7 @@ def _check(path, flag, allowed):
 
 def save_figure(fig, path) -> None:
     """Write `fig` to `path` (format from the suffix), creating the folder."""
+    # deferred import: loaded only when this runs, for start-up time
     from pathlib import Path
 
     from hybridpd.plotting.style import house_style

@@ -69,6 +69,7 @@ def register(sub):
 
 
 def run(args) -> int:
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.orbits import symmetric_orbit
     from hybridpd.model import ImpactPair, PDGains
     from hybridpd.sweeps.attractor_basins import attractor_basin
@@ -93,6 +94,7 @@ def run(args) -> int:
                           args.omega, x10=x10, n=args.n, case=args.case)
     if not orb.exists:
         raise ValueError(f"no symmetric orbit at these parameters: {orb.reason}")
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.reproduce.settings import Settings
 
     win = Settings.__dataclass_fields__["basin_window"].default
@@ -120,6 +122,7 @@ def run(args) -> int:
     if args.out:
         ab.save(args.out)
     if args.plot:
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.plotting.basins import plot_basin
 
         save_figure(plot_basin(ab), args.plot)
@@ -149,6 +152,7 @@ def run(args) -> int:
 
 
 def _run_model(args) -> int:
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.model_basins import model_basin
 
     given = [f"--{k}" for k in _PAIR if getattr(args, k) is not None]
@@ -166,6 +170,7 @@ def _run_model(args) -> int:
         except ValueError:
             raise ValueError(f"--set {key}: VALUE must be a number, got {val!r}") from None
     if values:
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.model_regions import template_of
 
         template_of(args.model).check(*values)
@@ -178,6 +183,7 @@ def _run_model(args) -> int:
     if args.out:
         mb.save(args.out)
     if args.plot:
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.plotting.model_basins import plot_model_basin
 
         save_figure(plot_model_basin(mb), args.plot)

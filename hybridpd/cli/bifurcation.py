@@ -115,6 +115,7 @@ def run(args) -> int:
     if args.case is None:
         raise UsageError("the following arguments are required: --case (or give --model "
                          "FILE.toml)")
+    # deferred import: loaded only when this runs, for start-up time
     import numpy as np
 
     from hybridpd.analysis.bifdiagram import bifurcation_diagram
@@ -146,6 +147,7 @@ def run(args) -> int:
         raise UsageError("--follow runs the values one after another: it cannot be spread "
                          "over --executor/--scheduler workers")
     else:
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.diagram_sweep import pair_diagram
 
         d = pair_diagram(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name, values,
@@ -153,6 +155,7 @@ def run(args) -> int:
     d.save(args.out)
     branch_note = None
     if args.plot:
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.plotting.bifurcation import plot_bifurcation
 
         branches, branch_note = _symmetric_branch(pair, v0, name, hi, args)
@@ -188,6 +191,7 @@ def run(args) -> int:
 def _symmetric_branch(pair, v0, name, stop, args):
     """The symmetric orbit continued over the sweep (drawn over the diagram, stable solid,
     unstable dashed), and a line saying what was drawn or why not."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.continuation import continue_symmetric
     from hybridpd.model import PDGains
 
@@ -201,6 +205,7 @@ def _symmetric_branch(pair, v0, name, stop, args):
 
 
 def _run_model(args) -> int:
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.model_diagrams import model_diagram
 
     given = [f"--{k}" for k in ("case", *_REQUIRED, "m2") if getattr(args, k) is not None]
@@ -215,6 +220,7 @@ def _run_model(args) -> int:
                       executor=executor_of(args), max_workers=args.workers, progress=False)
     d.save(args.out)
     if args.plot:
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.plotting.model_diagrams import plot_model_diagram
 
         save_figure(plot_model_diagram(d), args.plot)

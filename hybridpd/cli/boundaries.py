@@ -63,6 +63,7 @@ def _parse_axis(which, spec):
 
 
 def run(args) -> int:
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.boundaries import boundary_curves
 
     x = _parse_axis("x", args.x)

@@ -63,6 +63,7 @@ def run(args) -> int:
     if missing:
         raise UsageError(f"the following arguments are required: {', '.join(missing)} "
                          "(or give --model FILE.toml)")
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.orbits import symmetric_orbit
     from hybridpd.model import ImpactPair, PDGains
 
@@ -86,12 +87,14 @@ def run(args) -> int:
 
 
 def _run_model(args) -> int:
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.periodic import orbit_from_model
     from hybridpd.mechanics.modelfile import load_model
 
     if args.period < 1:
         raise UsageError(f"--period must be >= 1, got {args.period}")
     if args.set:
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.mechanics.params import ModelTemplate
 
         values = {}

@@ -42,6 +42,7 @@ def default_image(path) -> Path:
 
 
 def run(args) -> int:
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting.files import plot_file
 
     out = check_image(args.out, "--out") if args.out else default_image(args.file)

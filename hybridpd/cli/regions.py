@@ -68,6 +68,7 @@ def run(args) -> int:
     if missing:
         raise UsageError(f"the following arguments are required: {', '.join(missing)} "
                          "(or give --model FILE.toml)")
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.regions import region_map
 
     check_out(args.out)
@@ -84,6 +85,7 @@ def run(args) -> int:
     if args.out:
         rm.save(args.out)
     if args.plot:
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.plotting.regions import plot_region_panels
 
         save_figure(plot_region_panels(rm), args.plot)
@@ -98,6 +100,7 @@ def run(args) -> int:
 
 
 def _run_model(args) -> int:
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.model_regions import model_region_map
 
     given = [f"--{k}" for k in _PAIR if getattr(args, k) is not None]
@@ -116,6 +119,7 @@ def _run_model(args) -> int:
     if args.out:
         rm.save(args.out)
     if args.plot:
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.plotting.regions import plot_region_panels
         from hybridpd.sweeps.regions import RegionMap
 

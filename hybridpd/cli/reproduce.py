@@ -39,6 +39,7 @@ def register(sub):
 
 
 def _m2_values(values):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.reproduce import AUTO
 
     out = []
@@ -54,6 +55,7 @@ def _m2_values(values):
 
 
 def run(args) -> int:
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.reproduce import Settings, reproduce
 
     kw = {}

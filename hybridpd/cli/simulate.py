@@ -96,6 +96,7 @@ def _agree(a, b, rtol=1e-6):
 
 def geometry(args):
     """``(L, xm)`` from ``--L/--xm`` or ``--gamma/--x10`` (see the module docstring)."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.orbits import symmetric_orbit
     from hybridpd.model import ImpactPair, PDGains, check_positive
 
@@ -151,6 +152,7 @@ def run(args) -> int:
 
 
 def _run_model(args) -> int:
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.mechanics.modelfile import load_model
 
     model = load_model(args.model)
@@ -192,6 +194,7 @@ def _run_model(args) -> int:
 
 
 def _run_pair(args) -> int:
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.model import ImpactPair, PDGains, Reference
     from hybridpd.pair.impactpair import ControlledImpactPair
 
@@ -258,6 +261,7 @@ def _write(args, result, state, t0, t_final, dofs, contacts, *, title, parameter
         Path(args.out).parent.mkdir(parents=True, exist_ok=True)
         Path(args.out).write_text(json.dumps(rec))
     if args.plot is not None:
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.plotting.trajectory import plot_trajectory_samples
 
         imp = result["impacts"]

@@ -112,6 +112,7 @@ class MechanicalModel:
 
     def simulate(self, t_end: float, max_impacts: int = 100_000, **options):
         """Simulate from the file's initial state over ``[t0, t_end]``."""
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.mechanics.simulate import simulate
 
         if not float(t_end) > self.t0:

@@ -196,6 +196,7 @@ class ModelTemplate:
 
         Raises ValueError (naming the key) if the values make the file invalid.
         """
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.mechanics.modelfile import model_from_dict
 
         return model_from_dict(self.with_values(values), source=self.source)

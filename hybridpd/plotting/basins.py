@@ -91,6 +91,7 @@ def _as_attractor_basin(b):
         entries = []
         for k in sorted(set(np.unique(lab).tolist()) | {0}, reverse=True):
             if k == 0:
+                # deferred import: loaded only when this runs, for start-up time
                 from hybridpd.analysis.attractors import Attractor
 
                 entries.insert(0, Attractor(0, "symmetric", "converged to the symmetric orbit",

@@ -35,6 +35,7 @@ _SYMBOLS = {"kp": "k_p", "kv": "k_v", "e": "e", "mu": r"\mu", "omega": r"\omega"
 
 def _branch_cycles(branch):
     """The ``k`` section points of every orbit of a branch, shape (N, k, 4), and ``L``."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.continuation import branch_map
 
     k = int(branch.period)

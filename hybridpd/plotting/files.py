@@ -61,6 +61,7 @@ def file_kind(path: str | os.PathLike) -> str:
 
 def _read_kind(p: Path):
     if p.is_dir() or _magic(p, b"CDF") or _magic(p, b"\x89HDF"):
+        # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
         from hybridpd.sweeps.labelled import decode_attrs
@@ -134,6 +135,7 @@ def plot_file(path: str | os.PathLike, **options):
 
 
 def _region_map(path, title=None):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting.regions import plot_region_panels
     from hybridpd.sweeps.regions import load_region_map
 
@@ -141,6 +143,7 @@ def _region_map(path, title=None):
 
 
 def _basin(path, title=None):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting.basins import plot_basin
     from hybridpd.sweeps.basins import load_basin
 
@@ -148,6 +151,7 @@ def _basin(path, title=None):
 
 
 def _attractor_basin(path, title=None):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting.basins import plot_basin
     from hybridpd.sweeps.attractor_basins import load_attractor_basin
 
@@ -155,6 +159,7 @@ def _attractor_basin(path, title=None):
 
 
 def _diagram(path, title=None, coordinate="z1"):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.bifdiagram import load_diagram
     from hybridpd.plotting.bifurcation import plot_bifurcation
 
@@ -167,6 +172,7 @@ _BRANCH_UNITS = {"spectral_radius": "(1)", "multipliers": "(1)", "margin": "(len
 
 
 def _branch(path, title=None, quantity="spectral_radius"):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.continuation import load_branch, plot_branch
     from hybridpd.plotting.style import DOUBLE, axis_label, house_figure, house_style
 
@@ -186,6 +192,7 @@ def _branch(path, title=None, quantity="spectral_radius"):
 
 
 def _trajectory(path, title=None):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting.trajectory import plot_trajectory_samples
 
     with open(path, encoding="utf-8") as fh:
@@ -204,6 +211,7 @@ def _trajectory(path, title=None):
 
 
 def _model_basin(path, title=None):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting.model_basins import plot_model_basin
     from hybridpd.sweeps.model_basins import load_model_basin
 
@@ -211,6 +219,7 @@ def _model_basin(path, title=None):
 
 
 def _model_diagram(path, title=None):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting.model_diagrams import plot_model_diagram
     from hybridpd.sweeps.model_diagrams import load_model_diagram
 

@@ -28,6 +28,7 @@ def plot_model_diagram(d, coordinate: str | None = None, ax=None, title=None):
     -------
     matplotlib.figure.Figure
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.model_diagrams import DIAGRAM_CLASSES
 
     names = list(d.coords)

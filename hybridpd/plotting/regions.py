@@ -199,6 +199,7 @@ def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, ti
     matplotlib.figure.Figure
         7.2 in wide (the house style).
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd._format import pct as _pct
 
     maps = [rm] + ([zoom] if zoom is not None else [])
@@ -241,6 +242,7 @@ def plot_regions(rm, ax=None, title=None, curves=None):
     Without ``ax`` this returns :func:`plot_region_panels` (one panel per ``e``), which reads
     better in print. ``curves`` as in :func:`plot_region_panels` (one list for all ``e``).
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting.style import HATCHES
 
     if ax is None:
@@ -276,6 +278,7 @@ def plot_regions(rm, ax=None, title=None, curves=None):
 
 def _axes_legend(ax):
     """The gid legend of one axes, beside it (outside the data)."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting._common import legend_handles
 
     pairs = legend_handles([ax])

@@ -109,6 +109,7 @@ def plot_m2_study(study, *, m2_range=None, runs=()):
 def plot_param_study(ps):
     """Shares of the gain box against ``mu`` or ``gamma`` and the (parameter, kv) maps
     (7.2 in wide)."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting._common import param_line
 
     name = ps.name
@@ -208,6 +209,7 @@ def plot_scaled_regions(sm, *, ray=None, zoom=None, params=None, title=None):
     matplotlib.figure.Figure
         7.2 in wide.
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting._common import param_line
     from hybridpd.plotting.regions import _panel
 

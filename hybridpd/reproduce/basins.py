@@ -50,6 +50,7 @@ class SharedWindowBasins:
 
 
 def _label_all(mappers, window, grid, **kw):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.attractor_basins import attractor_basin
 
     x0, x1, y0, y1 = window
@@ -85,6 +86,7 @@ def shared_window_basins(orbits: dict, window, grid, *, n_iter=1500, max_growths
     -------
     SharedWindowBasins
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.attractor_basins import _grow
     from hybridpd.sweeps.basins import ImpactMapper
 
@@ -119,6 +121,7 @@ def _centre(b):
 def relabel(orbits: dict, window, grid, *, n_iter=1500, **kw) -> dict:
     """Every orbit's basin on ``window`` with ``grid`` points (no growth): the resolution
     check of a :class:`SharedWindowBasins`."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.basins import ImpactMapper
 
     mappers = {k: ImpactMapper.from_orbit(o, n_iter=n_iter) if o.exists and o.stable else None
@@ -161,6 +164,7 @@ def boundary_distance(basin, *, x10, omega) -> dict:
     >>> d["distance"] > 0
     True
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.attractors import OFF_SECTION_LABEL
 
     from_x = lambda v: np.asarray(v, float) / x10

@@ -46,6 +46,7 @@ class ScaledMap:
 
 def scaled_map(case, settings, num) -> ScaledMap:
     """The regions in ``(kp/m2, kv/m2)``: computed at ``m2 = 1`` (only the ratios matter)."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.orbits import symmetric_orbits
 
     (xa, xb), (ya, yb) = SCALED_WINDOW
@@ -59,6 +60,7 @@ def scaled_map(case, settings, num) -> ScaledMap:
 
 def save(fig, path, hook=None) -> None:
     """Show ``fig`` to ``hook`` and write it as PNG (300 dpi) and PDF."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting.style import house_style, save_figure
 
     if hook is not None:
@@ -97,6 +99,7 @@ def _ray_events(study) -> dict:
 
 def study_figures(out, *, study, studies, settings, runs, hook=None) -> None:
     """The m2-free scaled figures and the three study figures, into ``out``."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting.studies import plot_m2_study, plot_param_study, plot_scaled_regions
 
     num = 241 if settings.gains[2] > 100 else 121
@@ -125,6 +128,7 @@ def convention_figures(run, settings, *, study=None, hook=None, cache=None) -> N
     ``cache`` (a dict shared by the conventions of a run) keeps the traced boundaries in
     scaled gains: the gain boxes are scaled by ``m2``, so one tracing serves every ``m2``.
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting.orbit import plot_orbit_phase
     from hybridpd.plotting.regions import plot_region_panels
 
@@ -147,6 +151,7 @@ def convention_figures(run, settings, *, study=None, hook=None, cache=None) -> N
 
 
 def _basin_figure(run, case, label, par, study):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting._common import legend_from_gids, param_line
     from hybridpd.plotting.basins import plot_basin
     from hybridpd.plotting.studies import plot_rho_along_m2
@@ -195,6 +200,7 @@ def _traced(run, case: str, settings, cache=None):
         return None
     from types import SimpleNamespace
 
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.boundaries import boundary_curves
     from hybridpd.analysis.boundarymask import stable_region_edges
 

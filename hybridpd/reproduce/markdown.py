@@ -17,6 +17,7 @@ def _f(x, nd=4):
 
 
 def _p(x):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd._format import pct as _pct
 
     return "-" if x is None else _pct(x)

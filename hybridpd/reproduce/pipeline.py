@@ -151,6 +151,7 @@ def m2_study(settings: Settings, *, log=None) -> M2Study:
     scaled), so they show what Figs 4-7 would say for each ``m2``; each is computed on the
     verdict grid and on the resolution-check grid (:meth:`Settings.check_num`).
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.design import robustness_comparison
     from hybridpd.analysis.orbits import symmetric_orbits
 
@@ -212,6 +213,7 @@ def m2_study(settings: Settings, *, log=None) -> M2Study:
 def _regions(run, settings, common, *, progress, tick):
     """Region maps of Figs 4-5 on the scaled box (saved as .nc) and their shares on the
     run's grid and on the resolution-check grid."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.regions import region_map
 
     s, d, m2 = run.scale, run.directory, run.m2
@@ -238,6 +240,7 @@ def _regions(run, settings, common, *, progress, tick):
 def _basins(run, settings, *, executor, max_workers, progress, say):
     """Figs 6-7: every basin on one shared window (grown up to the cap), relabelled on the
     check grid; returns the check grid's basins."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.reproduce.basins import relabel, shared_window_basins
 
     P = PAPER
@@ -266,6 +269,7 @@ def _basins(run, settings, *, executor, max_workers, progress, say):
 
 
 def _check_4(run, basins, grid, settings):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.reproduce.basins import boundary_distance
 
     P = PAPER
@@ -281,6 +285,7 @@ def _check_4(run, basins, grid, settings):
 
 
 def _comparison(m2, settings, grid, n_starts, maxiter):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.design import robustness_comparison
 
     P = PAPER
@@ -302,6 +307,7 @@ def run_convention(m2, settings: Settings, out, *, executor="processes", max_wor
     panel with no stable orbit show the orbit's spectral radius along ``m2``; ``cache`` (a
     dict) lets conventions share work that depends on ``kp/m2, kv/m2`` only.
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.orbits import symmetric_orbit
     from hybridpd.reproduce.figures import convention_figures
     from hybridpd.reproduce.rules import resolution
@@ -398,6 +404,7 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
     Path
         ``summary.md`` (``summary.json`` is beside it).
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.reproduce.params import check_study, param_study
     from hybridpd.reproduce.summary import write_summary
 
@@ -411,6 +418,7 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
     out.mkdir(parents=True, exist_ok=True)
     say = _say(log)
     n_conv = len(settings.m2)
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.progress import Progress
 
     # the steps; the sweeps inside a step report their own points
@@ -453,6 +461,7 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
         runs.append(run_convention(m2, settings, out, executor=executor,
                                    max_workers=max_workers, progress=progress, log=say, tick=tick,
                                    figure_hook=figure_hook, study=study, cache=cache))
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.reproduce.figures import study_figures
 
     t0 = time.perf_counter()

@@ -256,6 +256,7 @@ def candidate_stability(case, kp, kv, *, mu, e, L, omega, m2, x10=1.0, n=1):
     "Stability alone": the multipliers of the solution of (13)-(14) with ``xm > 0``, whether
     or not the flight between the impacts is viable.
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.pair import symbolic
 
     cand = symbolic.symmetric_orbit(kp=kp, kv=kv, m2=m2, mu=mu, e=e, L=L, w=omega, x10=x10,

@@ -159,6 +159,7 @@ def _orbit_row(o) -> dict:
 
 
 def _run_dict(r) -> dict:
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.basins import LABELS
 
     basins = []
@@ -285,6 +286,7 @@ def _feedback(m2, settings) -> dict | None:
     """How strong the feedback is at the chosen ``m2``: scaled gains and spectral radii."""
     if m2 is None:
         return None
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.orbits import symmetric_orbits
 
     P = PAPER
@@ -353,6 +355,7 @@ def _f(x, nd=4):
 
 
 def _pcts(a) -> str:
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd._format import pct as _pct
 
     return ", ".join(_pct(v) for v in a)
@@ -360,6 +363,7 @@ def _pcts(a) -> str:
 
 def render_markdown(d: dict) -> str:
     """``summary.md`` from the ``summary.json`` dict."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.reproduce.markdown import render
 
     return render(d)

@@ -225,6 +225,7 @@ class AttractorBasin:
         the attractors, windows, edges, fixed point and parameters are attributes. E.g.
         ``(ab.to_dataset().attractor == 0).plot()`` draws the symmetric orbit's basin.
         """
+        # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
         from hybridpd.sweeps.labelled import axis_attrs, encode_attrs
@@ -255,6 +256,7 @@ class AttractorBasin:
     @classmethod
     def from_dataset(cls, ds) -> AttractorBasin:
         """Inverse of :meth:`to_dataset`."""
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.labelled import decode_attrs
 
         a = decode_attrs(ds.attrs)
@@ -274,6 +276,7 @@ class AttractorBasin:
     def save(self, path):
         """Write to ``.nc`` (netCDF) or ``.zarr`` (:meth:`to_dataset`), or ``.npz``, by suffix
         (see :func:`load_attractor_basin`)."""
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.labelled import check_suffix, write_dataset
         from hybridpd.sweeps.npz import save_npz
 
@@ -318,6 +321,7 @@ def load_attractor_basin(path) -> AttractorBasin:
     >>> back.labels.shape, len(back.attractors)
     ((3, 4), 1)
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.labelled import check_suffix, read_dataset
     from hybridpd.sweeps.npz import load_npz
 

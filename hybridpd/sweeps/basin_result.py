@@ -44,6 +44,7 @@ def load_basin(path) -> BasinResult:
     >>> bool((hp.load_basin(path).labels == b.labels).all())
     True
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.labelled import check_suffix, read_dataset
     from hybridpd.sweeps.npz import load_npz
 
@@ -99,6 +100,7 @@ class BasinResult:
         parameters, the fixed point and the converged fraction are attributes. E.g.
         ``(b.to_dataset().labels == 0).plot()`` draws the basin.
         """
+        # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
         from hybridpd.sweeps.labelled import axis_attrs, encode_attrs
@@ -121,6 +123,7 @@ class BasinResult:
     @classmethod
     def from_dataset(cls, ds) -> BasinResult:
         """Inverse of :meth:`to_dataset`."""
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.labelled import decode_attrs
 
         a = decode_attrs(ds.attrs)
@@ -136,6 +139,7 @@ class BasinResult:
     def save(self, path):
         """Write to ``.nc`` (netCDF) or ``.zarr`` (:meth:`to_dataset`), or ``.npz``, by suffix
         (see :func:`load_basin`)."""
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.labelled import check_suffix, write_dataset
         from hybridpd.sweeps.npz import save_npz
 

@@ -232,6 +232,7 @@ def _label_grid(mapper: ImpactMapper, xs, ys, tail: int, *, executor="serial", c
     grid = section_grid(mapper.fixed_point, mapper.map.pair.L, xs, ys)
     pts = grid.reshape(-1, 4)
     spec = _MapperSpec.of(mapper)
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.sweep import run_sweep
 
     res = run_sweep(_label_chunk, {"phi": pts[:, 0], "z1": pts[:, 1], "z2": pts[:, 2],

@@ -46,6 +46,7 @@ def pair_diagram(pair: ImpactPair, gains, omega: float, parameter: str, values, 
     BifurcationDiagram
         The same as the serial call.
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.sweep import run_sweep
 
     if kwargs.get("follow"):

@@ -118,6 +118,7 @@ class ModelBasin:
     def to_dataset(self):
         """Dimensions ``(y_name, x_name)``; ``attractor`` (CF flags name the attractors),
         ``criterion_label``, ``iterations``; attractors and settings as attributes."""
+        # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
         from hybridpd.sweeps.labelled import encode_attrs
@@ -146,6 +147,7 @@ class ModelBasin:
     @classmethod
     def from_dataset(cls, ds) -> ModelBasin:
         """Inverse of :meth:`to_dataset`."""
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.labelled import decode_attrs
 
         a = decode_attrs(ds.attrs)
@@ -160,6 +162,7 @@ class ModelBasin:
 
     def save(self, path) -> Path:
         """Write to ``.nc`` or ``.zarr`` (by suffix)."""
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.labelled import check_suffix, write_dataset
 
         check_suffix(path, "path", (".nc", ".zarr"))
@@ -168,6 +171,7 @@ class ModelBasin:
 
 def load_model_basin(path) -> ModelBasin:
     """Read a :class:`ModelBasin` written by :meth:`ModelBasin.save`."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.labelled import check_suffix, read_dataset
 
     check_suffix(path, "path", (".nc", ".zarr"))
@@ -253,6 +257,7 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
     ValueError
         Bad coordinates, paths or section, or no periodic orbit found to take the basin of.
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.section_basins import section_basin
 
     template = template_of(model)

@@ -86,6 +86,7 @@ class ModelDiagram:
 
     def to_dataset(self):
         """Dimensions ``(value, iterate, coordinate)``; attributes name the parameter."""
+        # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
         from hybridpd.sweeps.labelled import encode_attrs
@@ -105,6 +106,7 @@ class ModelDiagram:
     @classmethod
     def from_dataset(cls, ds) -> ModelDiagram:
         """Inverse of :meth:`to_dataset`."""
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.labelled import decode_attrs
 
         a = decode_attrs(ds.attrs)
@@ -118,6 +120,7 @@ class ModelDiagram:
 
     def save(self, path) -> Path:
         """Write to ``.nc`` or ``.zarr`` (by suffix)."""
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.labelled import check_suffix, write_dataset
 
         check_suffix(path, "path", (".nc", ".zarr"))
@@ -126,6 +129,7 @@ class ModelDiagram:
 
 def load_model_diagram(path) -> ModelDiagram:
     """Read a :class:`ModelDiagram` written by :meth:`ModelDiagram.save`."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.labelled import check_suffix, read_dataset
 
     check_suffix(path, "path", (".nc", ".zarr"))
@@ -188,6 +192,7 @@ def model_diagram(model, param, *, contact: int = 0, wall: int | None = None,
     -------
     ModelDiagram
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.model_regions import _axis
     from hybridpd.sweeps.sweep import run_sweep
 

@@ -187,6 +187,7 @@ class ModelRegionMap:
         """The labelled form of the pair's region maps (dimensions ``e, y_name, x_name`` with
         ``e`` the section contact's restitution, NaN for a compliant contact) plus the
         per-cell ``status``, ``section_point``, ``signature`` and second-orbit variables."""
+        # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
         from hybridpd.sweeps.labelled import axis_attrs, encode_attrs
@@ -240,6 +241,7 @@ class ModelRegionMap:
     @classmethod
     def from_dataset(cls, ds) -> ModelRegionMap:
         """Inverse of :meth:`to_dataset`."""
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.labelled import decode_attrs
 
         a = decode_attrs(ds.attrs)
@@ -259,6 +261,7 @@ class ModelRegionMap:
 
     def save(self, path) -> Path:
         """Write to ``.nc`` or ``.zarr`` (by suffix)."""
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.labelled import check_suffix, write_dataset
 
         check_suffix(path, "path", (".nc", ".zarr"))
@@ -267,6 +270,7 @@ class ModelRegionMap:
 
 def load_model_region_map(path) -> ModelRegionMap:
     """Read a :class:`ModelRegionMap` written by :meth:`ModelRegionMap.save`."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.labelled import check_suffix, read_dataset
 
     check_suffix(path, "path", (".nc", ".zarr"))
@@ -474,6 +478,7 @@ def model_region_map(model, x, y, *, contact: int = 0, wall: int | None = None,
     >>> rm is None or bool(rm.stable.all())
     True
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.sweep import run_sweep
 
     template = template_of(model)

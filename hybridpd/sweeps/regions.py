@@ -97,6 +97,7 @@ class RegionMap:
         ``reason`` carries CF ``flag_values``/``flag_meanings``. E.g.
         ``rm.to_dataset().stable.sel(e=0.5).plot()`` draws the stability region for e = 0.5.
         """
+        # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
         from hybridpd.sweeps.labelled import axis_attrs, encode_attrs
@@ -125,6 +126,7 @@ class RegionMap:
     @classmethod
     def from_dataset(cls, ds) -> RegionMap:
         """Inverse of :meth:`to_dataset`."""
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.labelled import decode_attrs
 
         a = decode_attrs(ds.attrs)
@@ -140,6 +142,7 @@ class RegionMap:
 
     def save(self, path) -> Path:
         """Write to ``.nc`` (netCDF) or ``.zarr`` (:meth:`to_dataset`), or ``.npz``, by suffix."""
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.labelled import check_suffix, write_dataset
         from hybridpd.sweeps.npz import save_npz
 
@@ -179,6 +182,7 @@ def load_region_map(path) -> RegionMap:
     >>> back.stable.shape, bool((back.stable == rm.stable).all())
     ((1, 3, 4), True)
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.labelled import check_suffix, read_dataset
     from hybridpd.sweeps.npz import load_npz
 
@@ -277,6 +281,7 @@ def region_map(case="collocated", *, x=("kp", 0.1, 50.0, 200), y=("kv", 0.1, 50.
     points = {"e": E.ravel(), yname: Y.ravel(), xname: X.ravel()}
     shape = E.shape
     kwargs = {"case": case, "n": n, "fixed": fixed}
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.sweep import default_chunk_size, run_sweep
 
     label = f"regions {case} e={','.join(f'{v:g}' for v in es)}"

@@ -385,6 +385,7 @@ class SweepResult:
             One variable per output (trailing dimensions ``"<name>_dim1", ...``), the points
             as coordinates, the metadata and the sweep's identity as attributes.
         """
+        # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
         from hybridpd.sweeps.labelled import encode_attrs
@@ -419,6 +420,7 @@ class SweepResult:
         netCDF of :meth:`to_dataset`; ``.npz``: the format of earlier versions. All three
         are read back by :func:`load_sweep`.
         """
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.labelled import check_suffix, write_dataset
 
         p = Path(path)
@@ -469,6 +471,7 @@ def load_sweep(path: str | os.PathLike) -> SweepResult:
     if p.is_dir() and (p / "result.npz").is_file():
         p = p / "result.npz"
     if p.suffix == ".nc":
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.labelled import decode_attrs, read_dataset
 
         ds = read_dataset(p)

@@ -42,6 +42,7 @@ def _section_point(s, name, closure=False) -> np.ndarray:
 
 
 def _impact_map(P):
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.impactmap import ImpactMap
 
     if not isinstance(P, ImpactMap):

@@ -186,6 +186,7 @@ class LTIOrbitResult:
         Start it on the orbit with ``simulate(orb.pre_plus, (orb.t0, t1),
         controller_state=orb.controller_state)``.
         """
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.pair.impactpair import ControlledImpactPair
 
         return ControlledImpactPair(self.pair, self.controller, self.reference(), self.case)

@@ -62,6 +62,7 @@ def derivation_key() -> str:
 
 
 def _generate(name: str, case: str) -> str:
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.pair.symbolic.derive import kernel_source
 
     return kernel_source(name, case, func_name="kernel")

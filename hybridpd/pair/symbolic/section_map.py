@@ -154,6 +154,7 @@ def flight_time(s, *, xm, kp, kv, m2=1.0, w, L, wall=1, case="collocated",
     hit : int
         Only with ``return_wall``: the wall hit (0 if none).
     """
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.pair.batch import STATUS_IMPACT, STATUS_STICK, next_impact, pack_params
 
     collocated = _case(case) == "collocated"
