@@ -245,3 +245,20 @@ def save_figure(fig, path) -> None:
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     with house_style():
         fig.savefig(path, dpi=300)
+
+
+def check_model_command(args, pair_options, hint: str, axes: str | None = None) -> None:
+    """Refuse impact-pair options and malformed output paths of a ``--model`` command.
+
+    ``pair_options`` are the attribute names of the pair's options, ``hint`` says what to use
+    instead, and ``axes`` (e.g. ``"KEY"``) makes ``--x``/``--y`` required. Runs before
+    anything is computed.
+    """
+    given = [f"--{k}" for k in pair_options if getattr(args, k) is not None]
+    if given:
+        raise UsageError(f"{', '.join(given)}: impact-pair options, not used with --model "
+                         f"({hint})")
+    if axes is not None and (args.x is None or args.y is None):
+        raise UsageError(f"--model needs --x {axes} MIN MAX NUM and --y {axes} MIN MAX NUM")
+    check_out(args.out, allowed=(".nc", ".zarr"))
+    check_image(args.plot)

@@ -9,6 +9,7 @@ from hybridpd.cli._common import (
     add_plant,
     add_sweep,
     check_image,
+    check_model_command,
     check_out,
     clearance,
     command,
@@ -155,14 +156,7 @@ def _run_model(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.model_basins import model_basin
 
-    given = [f"--{k}" for k in _PAIR if getattr(args, k) is not None]
-    if given:
-        raise UsageError(f"{', '.join(given)}: impact-pair options, not used with --model "
-                         "(set the file's entries with --set KEY VALUE)")
-    if args.x is None or args.y is None:
-        raise UsageError("--model needs --x COORD MIN MAX NUM and --y COORD MIN MAX NUM")
-    check_out(args.out, allowed=(".nc", ".zarr"))
-    check_image(args.plot)
+    check_model_command(args, _PAIR, "set the file's entries with --set KEY VALUE", "COORD")
     values = {}
     for key, val in args.set or ():
         try:

@@ -9,6 +9,7 @@ from hybridpd.cli._common import (
     add_plant,
     add_sweep,
     check_image,
+    check_model_command,
     check_out,
     clearance,
     command,
@@ -103,14 +104,7 @@ def _run_model(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.model_regions import model_region_map
 
-    given = [f"--{k}" for k in _PAIR if getattr(args, k) is not None]
-    if given:
-        raise UsageError(f"{', '.join(given)}: impact-pair options, not used with --model "
-                         "(sweep the file's entries with --x KEY and --y KEY)")
-    if args.x is None or args.y is None:
-        raise UsageError("--model needs --x KEY MIN MAX NUM and --y KEY MIN MAX NUM")
-    check_out(args.out, allowed=(".nc", ".zarr"))
-    check_image(args.plot)
+    check_model_command(args, _PAIR, "sweep the file's entries with --x KEY and --y KEY", "KEY")
     rm = model_region_map(args.model, tuple(args.x), tuple(args.y), contact=args.contact,
                           wall=args.wall, event=args.event, period=args.period,
                           periods=args.periods, tile=args.tile, executor=executor_of(args),
