@@ -187,7 +187,7 @@ class Settings:
         """The 200 x 200 grids of the paper's figures (a few minutes on 2 cores)."""
         base = dict(gains=(50.0, 50.0, 201), zoom=(20.0, 6.0, 201), basin=(201, 201),
                     basin_extensions=1, m2_grid=8001, m2_verdicts=9, m2_robust=5, m2_robust_grid=(16, 16),
-                    verdict_grid=81, param_points=61, param_grid=41)
+                    verdict_grid=61, param_points=61, param_grid=31)
         return cls(**{**base, **kw})
 
     def check_num(self, num: int, scale: float | None = None) -> int:
