@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from hybridpd.plotting._common import figure
-from hybridpd.plotting.basins import _MARKERS, basin_colors
+from hybridpd.plotting.basins import _MARKERS, basin_colors, basin_hatches
 from hybridpd.sweeps.attractor_basins import format_percent
 
 __all__ = ["plot_model_basin"]
@@ -52,6 +52,12 @@ def plot_model_basin(basin, ax=None, title=None):
     ax.imshow(img, origin="lower", extent=extent, aspect="auto", interpolation="nearest",
               cmap=ListedColormap([colors[k] for k in codes]),
               norm=BoundaryNorm(np.arange(len(codes) + 1) - 0.5, len(codes)))
+    # every basin but the orbit's own gets a hatch too, so that none differs by colour alone
+    hatches = basin_hatches([k for k in codes if k != -5])
+    for k in codes:
+        if k != -5 and hatches[k] and np.any(lab == k):
+            ax.contourf(x, y, (lab == k).astype(float), levels=[0.5, 1.5], colors="none",
+                        hatches=[hatches[k]])
     if np.any(lab == -5):
         ax.contourf(x, y, (lab == -5).astype(float), levels=[0.5, 1.5], colors="none",
                     hatches=["///"])
@@ -64,7 +70,7 @@ def plot_model_basin(basin, ax=None, title=None):
                                  label=f"{a['name']}: {share} of the window"))
             continue
         handles.append(Patch(facecolor=colors[a["label"]], edgecolor="0.3",
-                             label=f"{a['name']}: {share}"))
+                             hatch=hatches.get(a["label"], ""), label=f"{a['name']}: {share}"))
         if a.get("points"):
             pts = np.asarray(a["points"])
             star = a["label"] == 0
