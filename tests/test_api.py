@@ -125,6 +125,7 @@ def test_general_names_load_no_pair_module(name):
 def test_every_public_name_resolves():
     assert len(hp.__all__) >= 30
     assert hp.__all__ == sorted(hp.__all__)
+    assert set(hp.__all__) == set(hp._NAMES) | {"__version__", "reproduce"}
     for name in hp.__all__:
         assert getattr(hp, name) is not None, name
     assert set(hp.__all__) <= set(dir(hp))
