@@ -83,7 +83,8 @@ def pair_rates():
 
 
 def drivetrain_basin(grid, iterations, workers):
-    from hybridpd.analysis.periodic import SectionMapper, orbit_from_model
+    from hybridpd.analysis.model_orbits import orbit_from_model
+    from hybridpd.analysis.periodic import SectionMapper
     from hybridpd.mechanics.modelfile import load_model
     from hybridpd.sweeps.section_basins import section_basin
 

@@ -93,6 +93,7 @@ MOVED_NAMES = [
     ("hybridpd.sweeps.basins", "format_percent", "hybridpd.sweeps.attractor_basins"),
     ("hybridpd.sweeps.basins", "load_attractor_basin", "hybridpd.sweeps.attractor_basins"),
     ("hybridpd.analysis.periodic", "section_basin", "hybridpd.sweeps.section_basins"),
+    ("hybridpd.analysis.periodic", "orbit_from_model", "hybridpd.analysis.model_orbits"),
     ("hybridpd.analysis.hybridmap", "impact_pair_section", "hybridpd.analysis.sections"),
     ("hybridpd.analysis.hybridmap", "mechanical_section", "hybridpd.analysis.sections"),
 ]

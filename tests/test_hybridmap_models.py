@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains
+from hybridpd.analysis.model_orbits import orbit_from_model
 from hybridpd.analysis.orbits import symmetric_orbit
-from hybridpd.analysis.periodic import measured_contraction, orbit_from_model
+from hybridpd.analysis.periodic import measured_contraction
 from hybridpd.analysis.sections import mechanical_section
 from hybridpd.cli import main
 from hybridpd.mechanics.modelfile import load_model, model_from_dict
@@ -115,7 +116,7 @@ def test_sampled_data_orbit_dp(tmp_path):
         "reference": {"type": "sine", "amplitude": 1.0, "omega": 5.0, "feedforward_mass": 1.0},
         "initial": {"q": [0.3, 0.0], "v": [0.5, 0.0]}})
     from hybridpd.analysis.hybridmap import SectionMap
-    from hybridpd.analysis.periodic import _guess_from_simulation
+    from hybridpd.analysis.model_orbits import _guess_from_simulation
 
     sec = mechanical_section(model.automaton, 0, 1)
     P = SectionMap(sec)
@@ -174,8 +175,7 @@ def test_section_map_and_simulation_end_an_accumulation_alike():
     plain ratio rule (no tail tolerance) stops resolving earlier and lands measurably
     elsewhere (its extrapolated accumulation time is off)."""
     from hybridpd.analysis.hybridmap import SectionMap
-    from hybridpd.analysis.model_orbits import SectionSpec
-    from hybridpd.analysis.periodic import _guess_from_simulation
+    from hybridpd.analysis.model_orbits import SectionSpec, _guess_from_simulation
     from hybridpd.hybrid.automaton import ZenoOptions
     from hybridpd.mechanics.params import ModelTemplate
     from hybridpd.mechanics.simulate import simulate_state

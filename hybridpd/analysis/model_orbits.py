@@ -20,11 +20,11 @@ import numpy as np
 
 from hybridpd._repr import compact_repr
 from hybridpd.analysis.hybridmap import SectionMap
-from hybridpd.analysis.periodic import PeriodicOrbit, _guess_from_simulation, find_orbit
+from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
 from hybridpd.analysis.sections import mechanical_section
 
-__all__ = ["FAMILY_DISTANCE", "STATUS", "OrbitSearch", "SectionSpec", "orbit_status",
-           "other_family", "signature_codes", "signature_table", "solve_at"]
+__all__ = ["FAMILY_DISTANCE", "STATUS", "OrbitSearch", "SectionSpec", "orbit_from_model",
+           "orbit_status", "other_family", "signature_codes", "signature_table", "solve_at"]
 
 #: Status of a parameter point: an orbit found (stable / unstable) or why none was.
 STATUS = {0: "stable", 1: "unstable", 2: "not_converged", 3: "degenerate_return",
@@ -251,3 +251,84 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
     if last is None:
         return OrbitSearch(_CODE["not_converged"], (), attempts, detail or "no seed")
     return OrbitSearch(orbit_status(last), (), attempts, last.detail or last.reason)
+
+
+def orbit_from_model(model, contact: int = 0, wall: int | None = None, period: int = 1, *,
+                     guess=None, transient: float | None = None, tol: float = 1e-11,
+                     event: str = "impact", map_options: dict | None = None,
+                     periods: int | None = None, min_return: float | None = None) -> tuple:
+    """A periodic orbit of a mechanical model on the section of one of its contacts.
+
+    Parameters
+    ----------
+    model : MechanicalModel
+        A loaded model file (:func:`hybridpd.mechanics.modelfile.load_model`).
+    contact : int
+        0-based contact index (file order).
+    wall : {+1, -1}, optional
+        Bound of the contact (default ``hi`` if the contact has one, else ``lo``).
+    period : int
+        Number of returns to the section per period (``k`` of ``P^k``).
+    guess : array_like, optional
+        Section point (coordinates of :func:`~hybridpd.analysis.sections.mechanical_section`).
+        Default: simulate from the file's initial state for ``transient`` and take the last
+        pre-impact state on the section.
+    transient : float, optional
+        Time of that simulation (default 50 reference periods, or 200 time units).
+    tol : float
+        Newton tolerance.
+    event : {"impact", "release"}
+        Section on the impacts, or on the ends of sticking phases (one crossing per phase
+        however many impacts precede the sticking).
+    map_options : dict, optional
+        Keyword arguments of :class:`~hybridpd.analysis.hybridmap.SectionMap`.
+    periods, min_return : optional
+        As in :func:`find_orbit`. A sampled-data controller's ``dt`` is checked against the
+        reference period (``sampling_incommensurate``).
+
+    Returns
+    -------
+    (PeriodicOrbit, SectionMap)
+        The orbit (``converged = False`` with the reason where there is none) and the map.
+    """
+    ma = model.automaton
+    if isinstance(contact, bool) or int(contact) != contact or \
+            not 0 <= int(contact) < len(ma.contacts):
+        raise ValueError(f"contact must be an index in [0, {len(ma.contacts)}), got {contact!r}")
+    c = ma.contacts[int(contact)]
+    walls = [w for w, _ in c.bounds]
+    if wall is None:
+        wall = 1 if 1 in walls else -1
+    if wall not in walls:
+        raise ValueError(f"wall must be one of {walls} for contact {contact} (its bounds), "
+                         f"got {wall!r}")
+    sec = mechanical_section(ma, int(contact), wall, event=event)
+    P = SectionMap(sec, **dict(map_options or {}))
+    if guess is None:
+        guess = _guess_from_simulation(model, sec, transient)
+    s0 = np.asarray(guess, float)
+    if s0.shape != (sec.dim,):
+        raise ValueError(f"guess must have {sec.dim} numbers {sec.names}, got {s0.size}")
+    dt = float(getattr(ma.loop, "dt", 0.0) or 0.0)
+    return find_orbit(P, s0, period, tol=tol, periods=periods, min_return=min_return,
+                      sampling_period=dt if dt > 0 else None), P
+
+
+def _guess_from_simulation(model, sec, transient):
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.mechanics.simulate import simulate
+
+    if transient is None:
+        transient = 50.0 * sec.period if sec.has_phase else 200.0
+    if not (float(transient) > 0 and math.isfinite(float(transient))):
+        raise ValueError(f"transient must be finite and > 0, got {transient!r}")
+    tr = simulate(model.automaton, model.x0, (model.t0, model.t0 + float(transient)))
+    J = tr.hybrid.jumps
+    # the first firing of a burst (after a jump of another guard): the start of a pattern
+    hits = [i for i in range(len(J)) if J.source[i] == sec.mode and J.guard[i] == sec.guard
+            and J.kind[i] == "crossing" and (i == 0 or J.guard[i - 1] != sec.guard)]
+    if not hits:
+        raise ValueError(f"guess: no impact on the section ({sec.guard} in mode {sec.mode}) "
+                         f"within the transient of {float(transient):g}; give --guess")
+    i = hits[-1]
+    return sec.from_state(J.pre[i], J.t[i])

@@ -88,7 +88,7 @@ def run(args) -> int:
 
 def _run_model(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.periodic import orbit_from_model
+    from hybridpd.analysis.model_orbits import orbit_from_model
     from hybridpd.mechanics.modelfile import load_model
 
     if args.period < 1:

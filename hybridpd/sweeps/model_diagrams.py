@@ -19,8 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from hybridpd._repr import compact_repr
-from hybridpd.analysis.model_orbits import SectionSpec
-from hybridpd.analysis.periodic import _guess_from_simulation
+from hybridpd.analysis.model_orbits import SectionSpec, _guess_from_simulation
 from hybridpd.mechanics.params import ModelTemplate
 from hybridpd.sweeps.model_regions import template_of
 
