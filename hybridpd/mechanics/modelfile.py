@@ -133,6 +133,15 @@ def load_model(path) -> MechanicalModel:
     >>> m is None or m.system.dofs == ("x1", "x2")
     True
     """
+    data, p = read_model_file(path)
+    return model_from_dict(data, source=str(p))
+
+
+def read_model_file(path) -> tuple:
+    """``(table, Path)``: the parsed TOML of a model file, unchecked.
+
+    Raises ``ValueError`` naming the file when it cannot be read or is not valid TOML.
+    """
     p = Path(path)
     try:
         text = p.read_text(encoding="utf-8")
@@ -142,7 +151,7 @@ def load_model(path) -> MechanicalModel:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"model file {p.name}: invalid TOML ({exc})") from None
-    return model_from_dict(data, source=str(p))
+    return data, p
 
 
 def _check_keys(where, table, allowed):

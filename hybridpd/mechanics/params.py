@@ -14,16 +14,10 @@ from __future__ import annotations
 import copy
 import difflib
 import math
-import sys
 from dataclasses import dataclass, field
-from pathlib import Path
 
 from hybridpd._repr import compact_repr
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from hybridpd.mechanics.modelfile import model_from_dict, read_model_file
 
 __all__ = ["ModelTemplate", "check_path", "get_value", "numeric_paths", "set_values"]
 
@@ -97,7 +91,7 @@ def set_values(data: dict, values: dict) -> dict:
     Parameters
     ----------
     data : dict
-        Parsed model file (:func:`tomllib.loads`).
+        Parsed model file (:func:`~hybridpd.mechanics.modelfile.read_model_file`).
     values : dict of str to float
         ``{path: value}``; every value finite.
 
@@ -161,15 +155,7 @@ class ModelTemplate:
     @classmethod
     def load(cls, path) -> ModelTemplate:
         """Parse a TOML model file (checked by building its model once)."""
-        p = Path(path)
-        try:
-            text = p.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise ValueError(f"model file {str(path)!r}: cannot read ({exc.strerror})") from None
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise ValueError(f"model file {p.name}: invalid TOML ({exc})") from None
+        data, p = read_model_file(path)
         t = cls(data, str(p))
         t.model()
         return t
@@ -196,7 +182,4 @@ class ModelTemplate:
 
         Raises ValueError (naming the key) if the values make the file invalid.
         """
-        # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.mechanics.modelfile import model_from_dict
-
         return model_from_dict(self.with_values(values), source=self.source)
