@@ -27,14 +27,20 @@ def figure(ax, **kw):
     return fig, fig.add_subplot(1, 1, 1)
 
 
-def tag(artist, label):
-    """Set ``label`` as the artist's gid (and its sub-collections' for contour sets)."""
+def set_all(artist, **props):
+    """``artist.set(**props)`` and the same on its sub-collections (contour sets of older
+    matplotlib); an artist without one of the properties is left as it is."""
     for a in [artist, *getattr(artist, "collections", [])]:
         try:
-            a.set_gid(label)
+            a.set(**props)
         except AttributeError:
             pass
     return artist
+
+
+def tag(artist, label):
+    """Set ``label`` as the artist's gid (and its sub-collections' for contour sets)."""
+    return set_all(artist, gid=label)
 
 
 def register(ax, artist, label, proxy):

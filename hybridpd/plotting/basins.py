@@ -17,7 +17,7 @@ from hybridpd.analysis.attractors import (
     UNRESOLVED,
     outcome,
 )
-from hybridpd.plotting._common import figure, patch_proxy, register
+from hybridpd.plotting._common import figure, patch_proxy, register, set_all
 from hybridpd.plotting.style import axis_label, house_figure, styled
 from hybridpd.sweeps.attractor_basins import AttractorBasin, format_percent
 from hybridpd.sweeps.basins import BasinResult
@@ -169,12 +169,7 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
         if h:
             cs = ax.contourf(X, Y, (lab == a.label).astype(float), levels=[0.5, 1.5],
                              colors="none", hatches=[h])
-            for art in [cs, *getattr(cs, "collections", [])]:
-                try:
-                    art.set_edgecolor("0.15")
-                    art.set_linewidth(0.0)
-                except AttributeError:
-                    pass
+            set_all(cs, edgecolor="0.15", linewidth=0.0)
         share = format_percent(int((lab == a.label).sum()), int((lab != OFF_SECTION_LABEL).sum()))
         proxy = patch_proxy(facecolor=colors[a.label], edgecolor="0.3", hatch=h)
         register(ax, ax.images[-1] if not h else cs, a.name, proxy)

@@ -34,13 +34,7 @@ def plot_model_basin(basin, ax=None, title=None):
     from matplotlib.colors import BoundaryNorm, ListedColormap
     from matplotlib.patches import Patch
 
-    if ax is None:
-        from matplotlib.figure import Figure
-
-        fig = Figure(figsize=(3.5, 4.6), layout="constrained")
-        ax = fig.add_subplot(1, 1, 1)
-    else:
-        fig, ax = figure(ax)
+    fig, ax = figure(ax, figsize=(3.5, 4.6), layout="constrained")
     lab = basin.labels
     x, y = basin.x, basin.y
     dx, dy = x[1] - x[0], y[1] - y[0]

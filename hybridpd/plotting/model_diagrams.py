@@ -37,13 +37,7 @@ def plot_model_diagram(d, coordinate: str | None = None, ax=None, title=None):
     if coordinate not in names:
         raise ValueError(f"coordinate must be one of {names}, got {coordinate!r}")
     j = names.index(coordinate)
-    if ax is None:
-        from matplotlib.figure import Figure
-
-        fig = Figure(figsize=(7.2, 3.6), layout="constrained")
-        ax = fig.add_subplot(1, 1, 1)
-    else:
-        fig, ax = figure(ax)
+    fig, ax = figure(ax, figsize=(7.2, 3.6), layout="constrained")
     for c, cls in enumerate(DIAGRAM_CLASSES[:2]):
         sel = d.code == c
         if not np.any(sel):

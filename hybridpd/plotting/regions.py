@@ -19,6 +19,7 @@ from hybridpd.plotting._common import (
     param_line,
     patch_proxy,
     register,
+    set_all,
     tag,
 )
 from hybridpd.plotting.style import DOUBLE, axis_label, house_figure, series, styled
@@ -256,11 +257,7 @@ def plot_regions(rm, ax=None, title=None, curves=None):
         lab = f"e = {e:g}: exists, stable"
         if st.any():
             cs = ax.contourf(X, Y, st, levels=[0.5, 1.5], colors="none", hatches=[h])
-            for a in [cs, *getattr(cs, "collections", [])]:
-                try:
-                    a.set_edgecolor(c)
-                except AttributeError:
-                    pass
+            set_all(cs, edgecolor=c)
             register(ax, cs, lab, patch_proxy(facecolor="white", edgecolor=c, hatch=h))
             ax.contour(X, Y, st, levels=[0.5], colors=[c], linewidths=1.1,
                        linestyles=[s["ls"]])

@@ -13,7 +13,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from hybridpd.plotting._common import legend_from_gids, line_proxy, patch_proxy, register
+from hybridpd.plotting._common import (
+    legend_from_gids,
+    line_proxy,
+    patch_proxy,
+    register,
+    set_all,
+)
 from hybridpd.plotting.style import DOUBLE, axis_label, house_figure, series, styled
 
 __all__ = ["VERDICT_STYLES", "plot_m2_study", "plot_param_study", "plot_rho_along_m2",
@@ -150,11 +156,7 @@ def plot_param_study(ps):
         if n.any():
             cs = a.contourf(V, KV, n.astype(float), levels=[0.5, 1.5], colors="none",
                             hatches=["////"])
-            for art in [cs, *getattr(cs, "collections", [])]:
-                try:
-                    art.set_edgecolor("#D55E00")
-                except AttributeError:
-                    pass
+            set_all(cs, edgecolor="#D55E00")
             register(a, cs, "non-collocated: exists and stable (hatched)",
                      patch_proxy(facecolor="white", edgecolor="#D55E00", hatch="////"))
         a.set_xscale("log")
