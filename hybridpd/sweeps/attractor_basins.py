@@ -41,6 +41,13 @@ from hybridpd.sweeps.basins import (
     _basin_result,
     _label_grid,
 )
+from hybridpd.sweeps.labelled import (
+    axis_attrs,
+    decode_attrs,
+    encode_attrs,
+    load_result,
+    save_result,
+)
 
 __all__ = ["AttractorBasin", "BasinMeasure", "attractor_basin", "format_percent",
            "load_attractor_basin"]
@@ -228,8 +235,6 @@ class AttractorBasin:
         # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
-        from hybridpd.sweeps.labelled import axis_attrs, encode_attrs
-
         dims = ("y1", "x1")
         b = self.basin
         labels = [a.label for a in self.attractors]
@@ -256,9 +261,6 @@ class AttractorBasin:
     @classmethod
     def from_dataset(cls, ds) -> AttractorBasin:
         """Inverse of :meth:`to_dataset`."""
-        # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.sweeps.labelled import decode_attrs
-
         a = decode_attrs(ds.attrs)
         if a.get("kind") != "attractor_basin":
             raise ValueError("the dataset does not hold an attractor basin (attribute kind)")
@@ -276,21 +278,14 @@ class AttractorBasin:
     def save(self, path):
         """Write to ``.nc`` (netCDF) or ``.zarr`` (:meth:`to_dataset`), or ``.npz``, by suffix
         (see :func:`load_attractor_basin`)."""
-        # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.sweeps.labelled import check_suffix, write_dataset
-        from hybridpd.sweeps.npz import save_npz
-
-        if check_suffix(path) != ".npz":
-            return write_dataset(self.to_dataset(), path)
         b = self.basin
-        return save_npz(path, {"x1": self.x1, "y1": self.y1, "labels": self.labels,
-                               "criterion_labels": b.labels, "iterations": b.iterations,
-                               "fixed_point": b.fixed_point},
-                        {"kind": "attractor_basin",
-                         "attractors": [a.to_dict() for a in self.attractors],
-                         "windows": [list(w) for w in self.windows], "edges": list(self.edges),
-                         "basin_metadata": b.metadata,
-                         "converged_fraction": b.converged_fraction, **self.metadata})
+        return save_result(self, path, lambda: (
+            {"x1": self.x1, "y1": self.y1, "labels": self.labels, "criterion_labels": b.labels,
+             "iterations": b.iterations, "fixed_point": b.fixed_point},
+            {"kind": "attractor_basin", "attractors": [a.to_dict() for a in self.attractors],
+             "windows": [list(w) for w in self.windows], "edges": list(self.edges),
+             "basin_metadata": b.metadata, "converged_fraction": b.converged_fraction,
+             **self.metadata}))
 
 
 def load_attractor_basin(path) -> AttractorBasin:
@@ -321,21 +316,19 @@ def load_attractor_basin(path) -> AttractorBasin:
     >>> back.labels.shape, len(back.attractors)
     ((3, 4), 1)
     """
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.labelled import check_suffix, read_dataset
-    from hybridpd.sweeps.npz import load_npz
 
-    if check_suffix(path) != ".npz":
-        return AttractorBasin.from_dataset(read_dataset(path))
-    a, meta = load_npz(path)
-    if meta.pop("kind", None) != "attractor_basin":
-        raise ValueError(f"{path} does not hold an attractor basin")
-    atts = tuple(Attractor.from_dict(d) for d in meta.pop("attractors"))
-    windows = tuple(tuple(w) for w in meta.pop("windows"))
-    edges = tuple(meta.pop("edges"))
-    b = BasinResult(a["x1"], a["y1"], a["criterion_labels"], a["iterations"], a["fixed_point"],
-                    float(meta.pop("converged_fraction")), meta.pop("basin_metadata"))
-    return AttractorBasin(a["x1"], a["y1"], a["labels"], atts, b, windows, edges, meta)
+    def from_npz(a, meta):
+        if meta.pop("kind", None) != "attractor_basin":
+            raise ValueError(f"{path} does not hold an attractor basin")
+        atts = tuple(Attractor.from_dict(d) for d in meta.pop("attractors"))
+        windows = tuple(tuple(w) for w in meta.pop("windows"))
+        edges = tuple(meta.pop("edges"))
+        b = BasinResult(a["x1"], a["y1"], a["criterion_labels"], a["iterations"],
+                        a["fixed_point"], float(meta.pop("converged_fraction")),
+                        meta.pop("basin_metadata"))
+        return AttractorBasin(a["x1"], a["y1"], a["labels"], atts, b, windows, edges, meta)
+
+    return load_result(AttractorBasin, path, from_npz)
 
 
 _EDGE_NAMES = ("x1 min", "x1 max", "y1 min", "y1 max")

@@ -12,6 +12,13 @@ import numpy as np
 
 from hybridpd._repr import compact_repr
 from hybridpd.analysis.labels import LABELS
+from hybridpd.sweeps.labelled import (
+    axis_attrs,
+    decode_attrs,
+    encode_attrs,
+    load_result,
+    save_result,
+)
 
 __all__ = ["BasinResult", "load_basin"]
 
@@ -44,19 +51,16 @@ def load_basin(path) -> BasinResult:
     >>> bool((hp.load_basin(path).labels == b.labels).all())
     True
     """
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.labelled import check_suffix, read_dataset
-    from hybridpd.sweeps.npz import load_npz
 
-    if check_suffix(path) != ".npz":
-        return BasinResult.from_dataset(read_dataset(path))
-    a, meta = load_npz(path)
-    if meta.pop("kind", None) != "basin":
-        raise ValueError(f"{path} does not hold a basin")
-    frac = float(meta.pop("converged_fraction"))
-    meta.pop("label_names", None)
-    return BasinResult(a["x1"], a["y1"], a["labels"], a["iterations"], a["fixed_point"], frac,
-                       meta)
+    def from_npz(a, meta):
+        if meta.pop("kind", None) != "basin":
+            raise ValueError(f"{path} does not hold a basin")
+        frac = float(meta.pop("converged_fraction"))
+        meta.pop("label_names", None)
+        return BasinResult(a["x1"], a["y1"], a["labels"], a["iterations"], a["fixed_point"],
+                           frac, meta)
+
+    return load_result(BasinResult, path, from_npz)
 
 
 @dataclass(frozen=True)
@@ -103,8 +107,6 @@ class BasinResult:
         # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
-        from hybridpd.sweeps.labelled import axis_attrs, encode_attrs
-
         dims = ("y1", "x1")
         names = list(self.label_names)
         data = {
@@ -123,9 +125,6 @@ class BasinResult:
     @classmethod
     def from_dataset(cls, ds) -> BasinResult:
         """Inverse of :meth:`to_dataset`."""
-        # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.sweeps.labelled import decode_attrs
-
         a = decode_attrs(ds.attrs)
         if a.pop("kind", None) != "basin":
             raise ValueError("the dataset does not hold a basin (attribute kind)")
@@ -139,16 +138,11 @@ class BasinResult:
     def save(self, path):
         """Write to ``.nc`` (netCDF) or ``.zarr`` (:meth:`to_dataset`), or ``.npz``, by suffix
         (see :func:`load_basin`)."""
-        # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.sweeps.labelled import check_suffix, write_dataset
-        from hybridpd.sweeps.npz import save_npz
-
-        if check_suffix(path) != ".npz":
-            return write_dataset(self.to_dataset(), path)
-        return save_npz(path, {"x1": self.x1, "y1": self.y1, "labels": self.labels,
-                               "iterations": self.iterations, "fixed_point": self.fixed_point},
-                        {"kind": "basin", "converged_fraction": self.converged_fraction,
-                         "label_names": list(LABELS), **self.metadata})
+        return save_result(self, path, lambda: (
+            {"x1": self.x1, "y1": self.y1, "labels": self.labels,
+             "iterations": self.iterations, "fixed_point": self.fixed_point},
+            {"kind": "basin", "converged_fraction": self.converged_fraction,
+             "label_names": list(LABELS), **self.metadata}))
 
     def area(self, label: str = "converged") -> float:
         """Area (in ``x1``-``y1`` units) of the grid cells with ``label``."""

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 __all__ = ["SUFFIXES", "UNITS", "axis_attrs", "check_suffix", "decode_attrs", "encode_attrs",
-           "read_dataset", "write_dataset"]
+           "load_result", "read_dataset", "save_result", "write_dataset"]
 
 #: Suffixes of the result files hybridpd writes and reads.
 SUFFIXES = (".nc", ".zarr", ".npz")
@@ -172,6 +172,30 @@ def read_dataset(path: str | os.PathLike):
     consolidated = (p / ".zmetadata").is_file()
     with xr.open_dataset(p, engine="zarr", consolidated=consolidated) as ds:
         return ds.load()
+
+
+def save_result(result, path: str | os.PathLike, npz=None) -> Path:
+    """Write ``result.to_dataset()`` to ``.nc`` or ``.zarr`` by the suffix of `path` (see
+    :func:`write_dataset`); with `npz` (a function returning the arrays and metadata that
+    :func:`~hybridpd.sweeps.npz.save_npz` takes) ``.npz`` is allowed too."""
+    if check_suffix(path, "path", SUFFIXES if npz else SUFFIXES[:2]) != ".npz":
+        return write_dataset(result.to_dataset(), path)
+    # deferred import: the archives of earlier versions, loaded only when one is written
+    from hybridpd.sweeps.npz import save_npz
+
+    return save_npz(path, *npz())
+
+
+def load_result(cls, path: str | os.PathLike, npz=None):
+    """``cls.from_dataset`` of the ``.nc`` file or ``.zarr`` store at `path` (see
+    :func:`save_result`); with `npz` (a function of the arrays and metadata that
+    :func:`~hybridpd.sweeps.npz.load_npz` returns) an ``.npz`` file is read too."""
+    if check_suffix(path, "path", SUFFIXES if npz else SUFFIXES[:2]) != ".npz":
+        return cls.from_dataset(read_dataset(path))
+    # deferred import: the archives of earlier versions, loaded only when one is read
+    from hybridpd.sweeps.npz import load_npz
+
+    return npz(*load_npz(path))
 
 
 def _zarr2() -> dict:

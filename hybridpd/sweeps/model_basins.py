@@ -26,6 +26,7 @@ from hybridpd.analysis.labels import LABELS
 from hybridpd.analysis.model_orbits import SectionSpec, solve_at
 from hybridpd.analysis.periodic import SectionMapper, find_orbit
 from hybridpd.sweeps.attractor_basins import format_percent
+from hybridpd.sweeps.labelled import decode_attrs, encode_attrs, load_result, save_result
 from hybridpd.sweeps.model_regions import template_of
 
 __all__ = ["ModelBasin", "load_model_basin", "model_basin"]
@@ -121,8 +122,6 @@ class ModelBasin:
         # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
-        from hybridpd.sweeps.labelled import encode_attrs
-
         dims = (self.y_name, self.x_name)
         flags = [a["label"] for a in self.attractors]
         data = {
@@ -147,9 +146,6 @@ class ModelBasin:
     @classmethod
     def from_dataset(cls, ds) -> ModelBasin:
         """Inverse of :meth:`to_dataset`."""
-        # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.sweeps.labelled import decode_attrs
-
         a = decode_attrs(ds.attrs)
         if a.get("kind") != "model_basin":
             raise ValueError("the dataset does not hold a model basin (attribute kind)")
@@ -162,20 +158,12 @@ class ModelBasin:
 
     def save(self, path) -> Path:
         """Write to ``.nc`` or ``.zarr`` (by suffix)."""
-        # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.sweeps.labelled import check_suffix, write_dataset
-
-        check_suffix(path, "path", (".nc", ".zarr"))
-        return write_dataset(self.to_dataset(), path)
+        return save_result(self, path)
 
 
 def load_model_basin(path) -> ModelBasin:
     """Read a :class:`ModelBasin` written by :meth:`ModelBasin.save`."""
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.labelled import check_suffix, read_dataset
-
-    check_suffix(path, "path", (".nc", ".zarr"))
-    return ModelBasin.from_dataset(read_dataset(path))
+    return load_result(ModelBasin, path)
 
 
 def _grid(name, spec, coords):

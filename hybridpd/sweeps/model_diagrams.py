@@ -21,6 +21,7 @@ import numpy as np
 from hybridpd._repr import compact_repr
 from hybridpd.analysis.model_orbits import SectionSpec, _guess_from_simulation
 from hybridpd.mechanics.params import ModelTemplate
+from hybridpd.sweeps.labelled import decode_attrs, encode_attrs, load_result, save_result
 from hybridpd.sweeps.model_regions import template_of
 
 __all__ = ["DIAGRAM_CLASSES", "ModelDiagram", "load_model_diagram", "model_diagram"]
@@ -88,8 +89,6 @@ class ModelDiagram:
         # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
-        from hybridpd.sweeps.labelled import encode_attrs
-
         data = {"points": (("value", "iterate", "coordinate"), self.points),
                 "code": ("value", self.code, {
                     "flag_values": list(range(len(DIAGRAM_CLASSES))),
@@ -105,9 +104,6 @@ class ModelDiagram:
     @classmethod
     def from_dataset(cls, ds) -> ModelDiagram:
         """Inverse of :meth:`to_dataset`."""
-        # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.sweeps.labelled import decode_attrs
-
         a = decode_attrs(ds.attrs)
         if a.get("kind") != "model_diagram":
             raise ValueError("the dataset does not hold a model diagram (attribute kind)")
@@ -119,20 +115,12 @@ class ModelDiagram:
 
     def save(self, path) -> Path:
         """Write to ``.nc`` or ``.zarr`` (by suffix)."""
-        # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.sweeps.labelled import check_suffix, write_dataset
-
-        check_suffix(path, "path", (".nc", ".zarr"))
-        return write_dataset(self.to_dataset(), path)
+        return save_result(self, path)
 
 
 def load_model_diagram(path) -> ModelDiagram:
     """Read a :class:`ModelDiagram` written by :meth:`ModelDiagram.save`."""
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.labelled import check_suffix, read_dataset
-
-    check_suffix(path, "path", (".nc", ".zarr"))
-    return ModelDiagram.from_dataset(read_dataset(path))
+    return load_result(ModelDiagram, path)
 
 
 def _detect_period(pts, wrap, max_period):

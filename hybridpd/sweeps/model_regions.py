@@ -43,6 +43,13 @@ from hybridpd.analysis.model_orbits import (
     solve_at,
 )
 from hybridpd.mechanics.params import ModelTemplate
+from hybridpd.sweeps.labelled import (
+    axis_attrs,
+    decode_attrs,
+    encode_attrs,
+    load_result,
+    save_result,
+)
 
 __all__ = ["ModelRegionMap", "load_model_region_map", "model_region_map", "template_of"]
 
@@ -190,8 +197,6 @@ class ModelRegionMap:
         # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
-        from hybridpd.sweeps.labelled import axis_attrs, encode_attrs
-
         e = np.array([self.metadata.get("restitution", math.nan)], float)
         dims = ("e", self.y_name, self.x_name)
         coords = {"e": ("e", e, axis_attrs("e")), self.y_name: (self.y_name, self.y),
@@ -241,9 +246,6 @@ class ModelRegionMap:
     @classmethod
     def from_dataset(cls, ds) -> ModelRegionMap:
         """Inverse of :meth:`to_dataset`."""
-        # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.sweeps.labelled import decode_attrs
-
         a = decode_attrs(ds.attrs)
         if a.get("model_kind") != "model_region_map":
             raise ValueError("the dataset does not hold a model region map (attribute "
@@ -261,20 +263,12 @@ class ModelRegionMap:
 
     def save(self, path) -> Path:
         """Write to ``.nc`` or ``.zarr`` (by suffix)."""
-        # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.sweeps.labelled import check_suffix, write_dataset
-
-        check_suffix(path, "path", (".nc", ".zarr"))
-        return write_dataset(self.to_dataset(), path)
+        return save_result(self, path)
 
 
 def load_model_region_map(path) -> ModelRegionMap:
     """Read a :class:`ModelRegionMap` written by :meth:`ModelRegionMap.save`."""
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.labelled import check_suffix, read_dataset
-
-    check_suffix(path, "path", (".nc", ".zarr"))
-    return ModelRegionMap.from_dataset(read_dataset(path))
+    return load_result(ModelRegionMap, path)
 
 
 def _sig_text(sig) -> str:

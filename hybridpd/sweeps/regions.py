@@ -16,6 +16,13 @@ import numpy as np
 from hybridpd._repr import compact_repr
 from hybridpd.analysis.orbits import REASONS, symmetric_orbits
 from hybridpd.model import Case, check_array, check_named_axis, check_odd_order, check_positive
+from hybridpd.sweeps.labelled import (
+    axis_attrs,
+    decode_attrs,
+    encode_attrs,
+    load_result,
+    save_result,
+)
 
 __all__ = ["AXES", "RegionMap", "load_region_map", "region_map"]
 
@@ -100,8 +107,6 @@ class RegionMap:
         # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
-        from hybridpd.sweeps.labelled import axis_attrs, encode_attrs
-
         dims = ("e", self.y_name, self.x_name)
         coords = {n: (n, np.asarray(v), axis_attrs(n))
                   for n, v in (("e", self.e), (self.y_name, self.y), (self.x_name, self.x))}
@@ -126,9 +131,6 @@ class RegionMap:
     @classmethod
     def from_dataset(cls, ds) -> RegionMap:
         """Inverse of :meth:`to_dataset`."""
-        # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.sweeps.labelled import decode_attrs
-
         a = decode_attrs(ds.attrs)
         if a.get("kind") != "region_map":
             raise ValueError("the dataset does not hold a region map (attribute kind)")
@@ -142,17 +144,12 @@ class RegionMap:
 
     def save(self, path) -> Path:
         """Write to ``.nc`` (netCDF) or ``.zarr`` (:meth:`to_dataset`), or ``.npz``, by suffix."""
-        # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.sweeps.labelled import check_suffix, write_dataset
-        from hybridpd.sweeps.npz import save_npz
-
-        if check_suffix(path) != ".npz":
-            return write_dataset(self.to_dataset(), path)
-        meta = {"kind": "region_map", "case": self.case, "x_name": self.x_name,
-                "y_name": self.y_name, "fixed": self.fixed, **self.metadata}
-        return save_npz(path, {"x": self.x, "y": self.y, "e": self.e, "exists": self.exists,
-                               "stable": self.stable, "spectral_radius": self.spectral_radius,
-                               "xm": self.xm, "reason": self.reason}, meta)
+        return save_result(self, path, lambda: (
+            {"x": self.x, "y": self.y, "e": self.e, "exists": self.exists,
+             "stable": self.stable, "spectral_radius": self.spectral_radius, "xm": self.xm,
+             "reason": self.reason},
+            {"kind": "region_map", "case": self.case, "x_name": self.x_name,
+             "y_name": self.y_name, "fixed": self.fixed, **self.metadata}))
 
 
 def load_region_map(path) -> RegionMap:
@@ -182,21 +179,17 @@ def load_region_map(path) -> RegionMap:
     >>> back.stable.shape, bool((back.stable == rm.stable).all())
     ((1, 3, 4), True)
     """
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.labelled import check_suffix, read_dataset
-    from hybridpd.sweeps.npz import load_npz
 
-    if check_suffix(path) != ".npz":
-        return RegionMap.from_dataset(read_dataset(path))
-    arrays, meta = load_npz(path)
-    if meta.get("kind") != "region_map":
-        raise ValueError(f"{path} does not hold a region map")
-    extra = {k: v for k, v in meta.items()
-             if k not in ("kind", "case", "x_name", "y_name", "fixed")}
-    return RegionMap(meta["case"], meta["x_name"], meta["y_name"], arrays["x"], arrays["y"],
-                     arrays["e"], meta["fixed"], arrays["exists"].astype(bool),
-                     arrays["stable"].astype(bool), arrays["spectral_radius"], arrays["xm"],
-                     arrays["reason"], extra)
+    def from_npz(a, meta):
+        if meta.get("kind") != "region_map":
+            raise ValueError(f"{path} does not hold a region map")
+        extra = {k: v for k, v in meta.items()
+                 if k not in ("kind", "case", "x_name", "y_name", "fixed")}
+        return RegionMap(meta["case"], meta["x_name"], meta["y_name"], a["x"], a["y"], a["e"],
+                         meta["fixed"], a["exists"].astype(bool), a["stable"].astype(bool),
+                         a["spectral_radius"], a["xm"], a["reason"], extra)
+
+    return load_result(RegionMap, path, from_npz)
 
 
 def _region_chunk(chunk, case, n, fixed):
