@@ -55,17 +55,35 @@ def sympy_functions():
             val = sp.exp(-a * t) * (sp.cosh(r * t) if which == "ch" else sp.sinh(r * t) / r)
         return val.evalf(dps)
 
-    class DCh(sp.Function):
-        """``exp(-a t) cosh(sqrt(D) t)`` (entire in ``D``); arguments ``(a, D, t)``."""
-
+    class _Damped(sp.Function):
+        # what DCh and DSh share: three arguments, a value at t = 0, numeric values, LaTeX
         nargs = 3
         is_real = True
 
         @classmethod
         def eval(cls, a, D, t):
             if t.is_zero:
-                return sp.S.One
+                return cls._at_zero
             return None
+
+        def _eval_evalf(self, prec):
+            if all(x.is_number for x in self.args):
+                return _numeric_value(*self.args, self._which, prec)
+            return None
+
+        def _latex(self, printer, exp=None):
+            # %-formatting: LaTeX braces would need doubling with str.format / f-strings
+            a, D, t = (printer._print(x) for x in self.args)
+            s = r"\operatorname{%s}_{%s}\left(%s, %s\right)" % (  # noqa: UP031
+                self._which.title(), a, D, t)
+            return s if exp is None else r"%s^{%s}" % (s, exp)  # noqa: UP031
+
+    class DCh(_Damped):
+        """``exp(-a t) cosh(sqrt(D) t)`` (entire in ``D``); arguments ``(a, D, t)``."""
+
+        nargs = 3
+        _at_zero = sp.S.One
+        _which = "ch"
 
         def fdiff(self, argindex=1):
             a, D, t = self.args
@@ -77,31 +95,15 @@ def sympy_functions():
                 return -a * self + D * DSh(a, D, t)
             raise ArgumentIndexError(self, argindex)
 
-        def _eval_evalf(self, prec):
-            if all(x.is_number for x in self.args):
-                return _numeric_value(*self.args, "ch", prec)
-            return None
-
         def _eval_rewrite_as_cosh(self, a, D, t, **kwargs):
             return sp.exp(-a * t) * sp.cosh(sp.sqrt(D) * t)
 
-        def _latex(self, printer, exp=None):
-            # %-formatting: LaTeX braces would need doubling with str.format / f-strings
-            a, D, t = (printer._print(x) for x in self.args)
-            s = r"\operatorname{Ch}_{%s}\left(%s, %s\right)" % (a, D, t)  # noqa: UP031
-            return s if exp is None else r"%s^{%s}" % (s, exp)  # noqa: UP031
-
-    class DSh(sp.Function):
+    class DSh(_Damped):
         """``exp(-a t) sinh(sqrt(D) t)/sqrt(D)`` (entire in ``D``); arguments ``(a, D, t)``."""
 
         nargs = 3
-        is_real = True
-
-        @classmethod
-        def eval(cls, a, D, t):
-            if t.is_zero:
-                return sp.S.Zero
-            return None
+        _at_zero = sp.S.Zero
+        _which = "sh"
 
         def fdiff(self, argindex=1):
             a, D, t = self.args
@@ -113,18 +115,8 @@ def sympy_functions():
                 return DCh(a, D, t) - a * self
             raise ArgumentIndexError(self, argindex)
 
-        def _eval_evalf(self, prec):
-            if all(x.is_number for x in self.args):
-                return _numeric_value(*self.args, "sh", prec)
-            return None
-
         def _eval_rewrite_as_sinh(self, a, D, t, **kwargs):
             return sp.exp(-a * t) * sp.sinh(sp.sqrt(D) * t) / sp.sqrt(D)
-
-        def _latex(self, printer, exp=None):
-            a, D, t = (printer._print(x) for x in self.args)
-            s = r"\operatorname{Sh}_{%s}\left(%s, %s\right)" % (a, D, t)  # noqa: UP031
-            return s if exp is None else r"%s^{%s}" % (s, exp)  # noqa: UP031
 
     return DCh, DSh
 
