@@ -7,7 +7,7 @@ pipeline.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from hybridpd.model import check_positive
 
@@ -195,10 +195,6 @@ class Settings:
         :attr:`check_scale` or ``scale``."""
         s = self.check_scale if scale is None else scale
         return max(3, round((int(num) - 1) * s) + 1)
-
-    def with_(self, **kw) -> Settings:
-        """A copy with some fields replaced."""
-        return replace(self, **kw)
 
     @property
     def gamma(self) -> float:

@@ -354,13 +354,6 @@ def _f(x, nd=4):
     return "-" if x is None else f"{x:.{nd}g}"
 
 
-def _pcts(a) -> str:
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd._format import pct as _pct
-
-    return ", ".join(_pct(v) for v in a)
-
-
 def render_markdown(d: dict) -> str:
     """``summary.md`` from the ``summary.json`` dict."""
     # deferred import: loaded only when this runs, for start-up time
