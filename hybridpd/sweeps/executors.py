@@ -114,10 +114,8 @@ class ChunkError(RuntimeError):
         self.chunk_index = chunk_index
         self.start = start
         self.stop = stop
-        super().__init__(
-            f"sweep chunk {chunk_index} (points {start}:{stop}) failed: "
-            f"{type(cause).__name__}: {cause}"
-        )
+        super().__init__(f"sweep chunk {chunk_index} (points {start}:{stop}) failed: "
+                         f"{type(cause).__name__}: {cause}")
 
 
 def _check_positive_int(value: Any, name: str) -> int:
@@ -221,9 +219,8 @@ def resolve_executor(executor: Any = "processes", max_workers: int | None = None
     ...
     ValueError: executor must be one of 'serial', 'processes', 'dask', a scheduler address, a concurrent.futures.Executor or a distributed.Client; got 'threads'
     """
-    workers = (
-        _cpu_count() if max_workers is None else _check_positive_int(max_workers, "max_workers")
-    )
+    workers = (_cpu_count() if max_workers is None
+               else _check_positive_int(max_workers, "max_workers"))
     if executor is None:
         executor = "processes"
     if isinstance(executor, str):
@@ -240,9 +237,8 @@ def resolve_executor(executor: Any = "processes", max_workers: int | None = None
             import importlib.util
 
             if importlib.util.find_spec("distributed") is None:
-                raise ImportError(
-                    "executor='dask' needs the optional dependency: pip install 'hybridpd[dask]'"
-                )
+                raise ImportError("executor='dask' needs the optional dependency: pip install "
+                                  "'hybridpd[dask]'")
             if scheduler is not None:
                 return ExecutorSpec("scheduler", scheduler, workers)
             return ExecutorSpec("dask", None, workers)
@@ -250,15 +246,12 @@ def resolve_executor(executor: Any = "processes", max_workers: int | None = None
         return ExecutorSpec("executor", executor, getattr(executor, "_max_workers", workers))
     elif _is_dask_client(executor):
         return ExecutorSpec("client", executor, workers)
-    raise ValueError(
-        "executor must be one of 'serial', 'processes', 'dask', a scheduler address, a "
-        f"concurrent.futures.Executor or a distributed.Client; got {executor!r}"
-    )
+    raise ValueError("executor must be one of 'serial', 'processes', 'dask', a scheduler address, "
+                     f"a concurrent.futures.Executor or a distributed.Client; got {executor!r}")
 
 
-def _run_chunk(
-    func: Callable, chunk: dict[str, np.ndarray], kwargs: Mapping[str, Any]
-) -> tuple[dict, float]:
+def _run_chunk(func: Callable, chunk: dict[str, np.ndarray],
+               kwargs: Mapping[str, Any]) -> tuple[dict, float]:
     """Worker side: call func on one chunk; return (outputs, seconds)."""
     t0 = time.perf_counter()
     out = func(chunk, **kwargs)
@@ -270,9 +263,8 @@ def _run_chunk(
     return out, dt
 
 
-def _run_chunk_slice(
-    func: Callable, cols: Mapping[str, np.ndarray], start: int, stop: int, kwargs: Mapping[str, Any]
-):
+def _run_chunk_slice(func: Callable, cols: Mapping[str, np.ndarray], start: int, stop: int,
+                     kwargs: Mapping[str, Any]):
     """Dask worker side: the full points are scattered once; slice here."""
     return _run_chunk(func, _slice(cols, start, stop), kwargs)
 
@@ -304,9 +296,8 @@ def _terminate_process_pool(pool: cf.ProcessPoolExecutor) -> None:
 class _PoolBackend:
     """A concurrent.futures executor: chunks are sliced here and pickled."""
 
-    def __init__(
-        self, executor: cf.Executor, owned: bool, func: Callable, cols: dict, kwargs: dict
-    ):
+    def __init__(self, executor: cf.Executor, owned: bool, func: Callable, cols: dict,
+                 kwargs: dict):
         self.executor, self.owned = executor, owned
         self.func, self.cols, self.kwargs = func, cols, kwargs
 
@@ -450,12 +441,10 @@ def _open_backend(spec: ExecutorSpec, n_tasks: int, func: Callable, cols: dict, 
         try:
             from distributed import Client, LocalCluster
         except ImportError as exc:  # pragma: no cover - checked by resolve_executor
-            raise ImportError(
-                "executor='dask' needs the optional dependency: pip install 'hybridpd[dask]'"
-            ) from exc
-        cluster = LocalCluster(
-            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0"
-        )
+            raise ImportError("executor='dask' needs the optional dependency: pip install "
+                              "'hybridpd[dask]'") from exc
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                               dashboard_address=":0")
         try:
             client = Client(cluster)
         except BaseException:
@@ -474,10 +463,9 @@ def _check_picklable(func: Callable, kwargs: Mapping[str, Any]) -> None:
     try:
         pickle.dumps(func)
     except Exception as exc:
-        raise ValueError(
-            f"func {getattr(func, '__qualname__', func)!r} cannot be pickled for a process pool ({exc}); "
-            "define it at module level (not a lambda or nested function) or use executor='serial'"
-        ) from None
+        raise ValueError(f"func {getattr(func, '__qualname__', func)!r} cannot be pickled for a "
+                         f"process pool ({exc}); define it at module level (not a lambda or "
+                         "nested function) or use executor='serial'") from None
     try:
         pickle.dumps(dict(kwargs))
     except Exception as exc:
@@ -518,10 +506,9 @@ def _compute_futures(backend, bounds, pending, on_result, timeout) -> None:
                     break  # draining after a failure: report the failure itself
                 left = sorted(index_of.values())
                 more = f" (+{len(left) - 10} more)" if len(left) > 10 else ""
-                raise TimeoutError(
-                    f"no sweep chunk finished within timeout={timeout} s; pending chunks {left[:10]}{more}. "
-                    "Finished chunks are saved; increase timeout or use smaller chunks"
-                ) from None
+                raise TimeoutError(f"no sweep chunk finished within timeout={timeout} s; pending "
+                                   f"chunks {left[:10]}{more}. Finished chunks are saved; "
+                                   "increase timeout or use smaller chunks") from None
             i = index_of.pop(f, None)
             if i is None or f.cancelled():
                 continue

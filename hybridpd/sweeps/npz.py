@@ -63,14 +63,9 @@ def _atomic_write(path: Path, writer: Callable[[Any], None], *, fsync: bool = Tr
         _fsync_dir(path.parent)
 
 
-def save_npz(
-    path: str | os.PathLike,
-    arrays: Mapping[str, Any],
-    metadata: Mapping[str, Any] | None = None,
-    *,
-    compress: bool = False,
-    fsync: bool = True,
-) -> Path:
+def save_npz(path: str | os.PathLike, arrays: Mapping[str, Any],
+             metadata: Mapping[str, Any] | None = None, *, compress: bool = False,
+             fsync: bool = True) -> Path:
     """Write arrays plus JSON metadata to an ``.npz`` file, atomically.
 
     The file is a standard NumPy archive (:func:`numpy.load` reads it without
@@ -110,20 +105,17 @@ def save_npz(
     """
     path = Path(path)
     if not isinstance(arrays, Mapping):
-        raise ValueError(
-            f"arrays must be a mapping of names to arrays, got {type(arrays).__qualname__}"
-        )
+        raise ValueError(f"arrays must be a mapping of names to arrays, got "
+                         f"{type(arrays).__qualname__}")
     items: list[tuple[str, np.ndarray]] = []
     for k, v in arrays.items():
         if not isinstance(k, str) or not k or k == _METADATA_KEY:
-            raise ValueError(
-                f"arrays keys must be non-empty strings other than {_METADATA_KEY!r}, got {k!r}"
-            )
+            raise ValueError(f"arrays keys must be non-empty strings other than "
+                             f"{_METADATA_KEY!r}, got {k!r}")
         a = np.asarray(v)
         if a.dtype.hasobject:
-            raise ValueError(
-                f"arrays[{k!r}] has object dtype; only plain numpy dtypes can be stored without pickle"
-            )
+            raise ValueError(f"arrays[{k!r}] has object dtype; only plain numpy dtypes can be "
+                             "stored without pickle")
         items.append((k, a))
     meta = jsonable(dict(metadata or {}), "metadata", arrays="list")
     items.append((_METADATA_KEY, np.array(canonical_json(meta))))

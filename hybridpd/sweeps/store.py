@@ -60,10 +60,8 @@ _DONE = "_sweep/done"
 # Identity (canonical JSON)
 # --------------------------------------------------------------------------
 
-_JSON_ALLOWED = (
-    "None, bool, int, float, complex, str, lists/tuples, dicts with str keys, "
-    "numpy scalars and numeric arrays, os.PathLike, dataclass instances"
-)
+_JSON_ALLOWED = ("None, bool, int, float, complex, str, lists/tuples, dicts with str keys, "
+                 "numpy scalars and numeric arrays, os.PathLike, dataclass instances")
 
 
 def _array_digest(a: np.ndarray) -> str:
@@ -92,15 +90,13 @@ def jsonable(obj: Any, where: str, *, arrays: str) -> Any:
         return {"__complex__": [obj.real, obj.imag]}
     if isinstance(obj, np.generic):
         if obj.dtype.kind not in _NUMERIC_KINDS:
-            raise ValueError(
-                f"{where} holds a numpy scalar of dtype {obj.dtype}; allowed: {_JSON_ALLOWED}"
-            )
+            raise ValueError(f"{where} holds a numpy scalar of dtype {obj.dtype}; allowed: "
+                             f"{_JSON_ALLOWED}")
         return jsonable(obj.item(), where, arrays=arrays)
     if isinstance(obj, np.ndarray):
         if obj.dtype.kind not in _NUMERIC_KINDS:
-            raise ValueError(
-                f"{where} holds an array of dtype {obj.dtype}; allowed: {_JSON_ALLOWED}"
-            )
+            raise ValueError(f"{where} holds an array of dtype {obj.dtype}; allowed: "
+                             f"{_JSON_ALLOWED}")
         if arrays == "digest":
             return {
                 "__ndarray__": {
@@ -130,10 +126,8 @@ def jsonable(obj: Any, where: str, *, arrays: str) -> Any:
                 for f in dataclasses.fields(obj)
             },
         }
-    raise ValueError(
-        f"{where} holds an object of type {type(obj).__qualname__} that cannot be "
-        f"recorded as JSON; allowed: {_JSON_ALLOWED}"
-    )
+    raise ValueError(f"{where} holds an object of type {type(obj).__qualname__} that cannot be "
+                     f"recorded as JSON; allowed: {_JSON_ALLOWED}")
 
 
 def canonical_json(obj: Any) -> str:
@@ -194,10 +188,9 @@ def raise_mismatch(where: Path, stored: Any, current: dict) -> None:
         keys = sorted(k for k in set(stored) | set(current) if stored.get(k) != current.get(k))
     else:
         keys = ["?"]
-    raise ValueError(
-        f"store {where} holds a different sweep (identity differs in: {', '.join(keys) or '?'}); "
-        "refusing to mix results. Pass resume=False to overwrite it, or use another store"
-    )
+    raise ValueError(f"store {where} holds a different sweep (identity differs in: "
+                     f"{', '.join(keys) or '?'}); refusing to mix results. Pass resume=False to "
+                     "overwrite it, or use another store")
 
 
 # --------------------------------------------------------------------------
@@ -259,10 +252,9 @@ def check_store_path(store: Any) -> Path:
         raise ValueError(f"store must be None or a directory path, got {store!r}")
     p = Path(store)
     if p.suffix in (".npz", ".nc"):
-        raise ValueError(
-            f"store {str(p)!r} names a {p.suffix} file; a sweep store is a Zarr directory "
-            "written as it goes, e.g. 'run.zarr' (write other formats afterwards with save)"
-        )
+        raise ValueError(f"store {str(p)!r} names a {p.suffix} file; a sweep store is a Zarr "
+                         "directory written as it goes, e.g. 'run.zarr' (write other formats "
+                         "afterwards with save)")
     if p.exists() and not p.is_dir():
         raise ValueError(f"store {str(p)!r} exists and is not a directory; pass a directory path")
     return p

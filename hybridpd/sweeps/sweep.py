@@ -163,15 +163,13 @@ def grid_points(axes: Mapping[str, Any]) -> tuple[dict[str, np.ndarray], tuple[i
     return {k: m.reshape(-1) for k, m in zip(axes, mesh)}, tuple(a.size for a in arrs)
 
 
-def _normalize_points(
-    points: Any, names: Sequence[str] | None, allow_nan: bool
-) -> dict[str, np.ndarray]:
+def _normalize_points(points: Any, names: Sequence[str] | None,
+                      allow_nan: bool) -> dict[str, np.ndarray]:
     allowed = "a dict of equally long 1-D numeric arrays, or a 2-D numeric array of shape (N, d)"
     if isinstance(points, Mapping):
         if names is not None:
-            raise ValueError(
-                "names applies only when points is a 2-D array; dict keys already name the points"
-            )
+            raise ValueError("names applies only when points is a 2-D array; dict keys already "
+                             "name the points")
         if not points:
             raise ValueError(f"points is empty; expected {allowed}")
         cols = {}
@@ -180,17 +178,15 @@ def _normalize_points(
                 raise ValueError(f"points keys must be non-empty strings, got {k!r}")
             a = np.asarray(v)
             if a.ndim != 1:
-                raise ValueError(
-                    f"points[{k!r}] must be 1-D, got shape {a.shape}; expected {allowed}"
-                )
+                raise ValueError(f"points[{k!r}] must be 1-D, got shape {a.shape}; expected "
+                                 f"{allowed}")
             cols[k] = a
     else:
         try:
             a = np.asarray(points)
         except (TypeError, ValueError) as exc:  # ragged nested lists, ...
-            raise ValueError(
-                f"points could not be converted to an array ({exc}); expected {allowed}"
-            ) from None
+            raise ValueError(f"points could not be converted to an array ({exc}); expected "
+                             f"{allowed}") from None
         if a.ndim != 2:
             raise ValueError(f"points must be {allowed}; got an array of shape {a.shape}")
         if a.shape[1] == 0:
@@ -198,14 +194,10 @@ def _normalize_points(
         if names is None:
             names = [f"x{j}" for j in range(a.shape[1])]
         names = list(names)
-        if (
-            len(names) != a.shape[1]
-            or len(set(names)) != len(names)
-            or not all(isinstance(n, str) and n for n in names)
-        ):
-            raise ValueError(
-                f"names must be {a.shape[1]} distinct non-empty strings (one per column of points), got {names!r}"
-            )
+        if (len(names) != a.shape[1] or len(set(names)) != len(names)
+                or not all(isinstance(n, str) and n for n in names)):
+            raise ValueError(f"names must be {a.shape[1]} distinct non-empty strings (one per "
+                             f"column of points), got {names!r}")
         cols = {n: a[:, j] for j, n in enumerate(names)}
     lengths = {k: len(v) for k, v in cols.items()}
     if len(set(lengths.values())) != 1:
@@ -215,14 +207,12 @@ def _normalize_points(
     out = {}
     for k, a in cols.items():
         if a.dtype.kind not in _NUMERIC_KINDS:
-            raise ValueError(
-                f"points[{k!r}] has dtype {a.dtype}; allowed: bool, integer, float, complex"
-            )
+            raise ValueError(f"points[{k!r}] has dtype {a.dtype}; allowed: bool, integer, "
+                             "float, complex")
         if not allow_nan and a.dtype.kind in "fc" and np.isnan(a).any():
-            raise ValueError(
-                f"points[{k!r}] contains NaN at index {int(np.flatnonzero(np.isnan(a))[0])}; "
-                "pass allow_nan=True if that is intended"
-            )
+            raise ValueError(f"points[{k!r}] contains NaN at index "
+                             f"{int(np.flatnonzero(np.isnan(a))[0])}; pass allow_nan=True if "
+                             "that is intended")
         if not a.dtype.isnative:
             a = a.astype(a.dtype.newbyteorder("="))
         # A private read-only copy: the sweep must not see later changes made
@@ -251,29 +241,23 @@ class _Assembler:
         start, stop = self.bounds(i)
         m = stop - start
         if not isinstance(out, Mapping):
-            raise ValueError(
-                f"func must return a dict of arrays; {source} for chunk {i} gave {type(out).__qualname__}"
-            )
+            raise ValueError(f"func must return a dict of arrays; {source} for chunk {i} gave "
+                             f"{type(out).__qualname__}")
         if not out:
-            raise ValueError(
-                f"func returned no outputs for chunk {i} ({source}); it must return at least one array"
-            )
+            raise ValueError(f"func returned no outputs for chunk {i} ({source}); it must return "
+                             "at least one array")
         checked = {}
         for k in sorted(out, key=str):
             if not isinstance(k, str) or not k:
-                raise ValueError(
-                    f"func output names must be non-empty strings; chunk {i} returned {k!r}"
-                )
+                raise ValueError(f"func output names must be non-empty strings; chunk {i} "
+                                 f"returned {k!r}")
             a = np.asarray(out[k])
             if a.dtype.kind not in _NUMERIC_KINDS:
-                raise ValueError(
-                    f"output {k!r} of chunk {i} ({source}) has dtype {a.dtype}; allowed: bool, integer, float, complex"
-                )
+                raise ValueError(f"output {k!r} of chunk {i} ({source}) has dtype {a.dtype}; "
+                                 "allowed: bool, integer, float, complex")
             if a.ndim == 0 or a.shape[0] != m:
-                raise ValueError(
-                    f"output {k!r} of chunk {i} ({source}) has shape {a.shape}; expected leading length {m} "
-                    "(one row per point of the chunk)"
-                )
+                raise ValueError(f"output {k!r} of chunk {i} ({source}) has shape {a.shape}; "
+                                 f"expected leading length {m} (one row per point of the chunk)")
             if not a.dtype.isnative:
                 a = a.astype(a.dtype.newbyteorder("="))
             checked[k] = a
@@ -288,10 +272,9 @@ class _Assembler:
             def fmt(s):
                 return ", ".join(f"{k}: {dt} {tuple(tr)}" for k, (dt, tr) in s.items())
 
-            raise ValueError(
-                f"chunk {i} ({source}) returned outputs {{{fmt(schema)}}} but earlier chunks returned "
-                f"{{{fmt(self.schema)}}}; every chunk must return the same names, dtypes and trailing shapes"
-            )
+            raise ValueError(f"chunk {i} ({source}) returned outputs {{{fmt(schema)}}} but earlier "
+                             f"chunks returned {{{fmt(self.schema)}}}; every chunk must return the "
+                             "same names, dtypes and trailing shapes")
         for k, a in checked.items():
             self.arrays[k][start:stop] = a
         self.done.add(i)
@@ -500,23 +483,13 @@ def load_sweep(path: str | os.PathLike) -> SweepResult:
                        identity=info["identity"], path=p, executor="")
 
 
-def run_sweep(
-    func: Callable[..., Mapping[str, Any]],
-    points: Mapping[str, Any] | np.ndarray,
-    *,
-    chunk_size: int | None = None,
-    executor: Any = "processes",
-    max_workers: int | None = None,
-    store: str | os.PathLike | None = None,
-    resume: bool = True,
-    progress: bool = True,
-    label: str | None = None,
-    metadata: Mapping[str, Any] | None = None,
-    func_kwargs: Mapping[str, Any] | None = None,
-    names: Sequence[str] | None = None,
-    allow_nan: bool = False,
-    timeout: float | None = None,
-) -> SweepResult:
+def run_sweep(func: Callable[..., Mapping[str, Any]], points: Mapping[str, Any] | np.ndarray, *,
+              chunk_size: int | None = None, executor: Any = "processes",
+              max_workers: int | None = None, store: str | os.PathLike | None = None,
+              resume: bool = True, progress: bool = True, label: str | None = None,
+              metadata: Mapping[str, Any] | None = None,
+              func_kwargs: Mapping[str, Any] | None = None, names: Sequence[str] | None = None,
+              allow_nan: bool = False, timeout: float | None = None) -> SweepResult:
     """Evaluate `func` over all points, chunk by chunk, optionally on disk.
 
     Parameters
@@ -635,29 +608,22 @@ def run_sweep(
     if label is not None and not isinstance(label, str):
         raise ValueError(f"label must be None or a string, got {label!r}")
     if timeout is not None:
-        if (
-            isinstance(timeout, bool)
-            or not isinstance(timeout, (int, float, np.integer, np.floating))
-            or not (math.isfinite(timeout) and timeout > 0)
-        ):
-            raise ValueError(
-                f"timeout must be None or a positive number of seconds, got {timeout!r}"
-            )
+        if (isinstance(timeout, bool)
+                or not isinstance(timeout, (int, float, np.integer, np.floating))
+                or not (math.isfinite(timeout) and timeout > 0)):
+            raise ValueError(f"timeout must be None or a positive number of seconds, got "
+                             f"{timeout!r}")
         timeout = float(timeout)
     cols = _normalize_points(points, names, allow_nan)
     n_points = len(next(iter(cols.values())))
-    cs = (
-        default_chunk_size(n_points)
-        if chunk_size is None
-        else _check_positive_int(chunk_size, "chunk_size")
-    )
+    cs = (default_chunk_size(n_points) if chunk_size is None
+          else _check_positive_int(chunk_size, "chunk_size"))
     n_chunks = -(-n_points // cs)
     if func_kwargs is None:
         func_kwargs = {}
     if not isinstance(func_kwargs, Mapping) or not all(isinstance(k, str) for k in func_kwargs):
-        raise ValueError(
-            f"func_kwargs must be None or a dict with string keys, got {func_kwargs!r}"
-        )
+        raise ValueError(f"func_kwargs must be None or a dict with string keys, got "
+                         f"{func_kwargs!r}")
     func_kwargs = dict(func_kwargs)
     if metadata is not None and not isinstance(metadata, Mapping):
         raise ValueError(f"metadata must be None or a dict, got {type(metadata).__qualname__}")
@@ -700,17 +666,9 @@ def run_sweep(
                 st.flush()
     if st is not None:
         st.finish()
-    return SweepResult(
-        outputs=asm.arrays,
-        points=cols,
-        metadata=identity["metadata"],
-        n_chunks=n_chunks,
-        n_resumed=n_resumed,
-        chunk_size=cs,
-        identity_hash=identity_hash,
-        identity=identity,
-        path=st.path if st is not None else None,
-        wall_time=time.perf_counter() - t0,
-        compute_time=compute_time,
-        executor=spec.label,
-    )
+    return SweepResult(outputs=asm.arrays, points=cols, metadata=identity["metadata"],
+                       n_chunks=n_chunks, n_resumed=n_resumed, chunk_size=cs,
+                       identity_hash=identity_hash, identity=identity,
+                       path=st.path if st is not None else None,
+                       wall_time=time.perf_counter() - t0, compute_time=compute_time,
+                       executor=spec.label)
