@@ -98,13 +98,8 @@ def jsonable(obj: Any, where: str, *, arrays: str) -> Any:
             raise ValueError(f"{where} holds an array of dtype {obj.dtype}; allowed: "
                              f"{_JSON_ALLOWED}")
         if arrays == "digest":
-            return {
-                "__ndarray__": {
-                    "dtype": obj.dtype.str,
-                    "shape": list(obj.shape),
-                    "sha256": _array_digest(obj),
-                }
-            }
+            return {"__ndarray__": {"dtype": obj.dtype.str, "shape": list(obj.shape),
+                                    "sha256": _array_digest(obj)}}
         return jsonable(obj.tolist(), where, arrays=arrays)
     if isinstance(obj, Mapping):
         out = {}
@@ -119,13 +114,9 @@ def jsonable(obj: Any, where: str, *, arrays: str) -> Any:
         return os.fspath(obj)
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
         cls = type(obj)
-        return {
-            "__dataclass__": f"{cls.__module__}.{cls.__qualname__}",
-            "fields": {
-                f.name: jsonable(getattr(obj, f.name), f"{where}.{f.name}", arrays=arrays)
-                for f in dataclasses.fields(obj)
-            },
-        }
+        return {"__dataclass__": f"{cls.__module__}.{cls.__qualname__}",
+                "fields": {f.name: jsonable(getattr(obj, f.name), f"{where}.{f.name}",
+                                            arrays=arrays) for f in dataclasses.fields(obj)}}
     raise ValueError(f"{where} holds an object of type {type(obj).__qualname__} that cannot be "
                      f"recorded as JSON; allowed: {_JSON_ALLOWED}")
 
@@ -137,11 +128,10 @@ def canonical_json(obj: Any) -> str:
 def func_identity(func: Callable) -> Any:
     """Name `func` by module and qualified name (plus partial arguments)."""
     if isinstance(func, functools.partial):
-        return {
-            "partial": func_identity(func.func),
-            "args": jsonable(list(func.args), "func (partial args)", arrays="digest"),
-            "keywords": jsonable(dict(func.keywords), "func (partial keywords)", arrays="digest"),
-        }
+        return {"partial": func_identity(func.func),
+                "args": jsonable(list(func.args), "func (partial args)", arrays="digest"),
+                "keywords": jsonable(dict(func.keywords), "func (partial keywords)",
+                                     arrays="digest")}
     qualname = getattr(func, "__qualname__", None)
     module = getattr(func, "__module__", None)
     if qualname is None:  # a callable instance: name its class
@@ -158,24 +148,16 @@ def points_identity(cols: Mapping[str, np.ndarray]) -> dict[str, Any]:
         h.update(k.encode())
         h.update(_array_digest(cols[k]).encode())
     first = next(iter(cols.values()))
-    return {
-        "n": int(first.shape[0]),
-        "names": list(cols),
-        "dtypes": [cols[k].dtype.str for k in cols],
-        "sha256": h.hexdigest(),
-    }
+    return {"n": int(first.shape[0]), "names": list(cols),
+            "dtypes": [cols[k].dtype.str for k in cols], "sha256": h.hexdigest()}
 
 
 def sweep_identity(func, func_kwargs, metadata, cols, chunk_size) -> tuple[dict, str]:
     """The identity of a sweep and its SHA-256 (see the module docstring)."""
-    identity = {
-        "format": FORMAT,
-        "func": func_identity(func),
-        "func_kwargs": jsonable(func_kwargs, "func_kwargs", arrays="digest"),
-        "metadata": jsonable(dict(metadata or {}), "metadata", arrays="list"),
-        "points": points_identity(cols),
-        "chunk_size": chunk_size,
-    }
+    identity = {"format": FORMAT, "func": func_identity(func),
+                "func_kwargs": jsonable(func_kwargs, "func_kwargs", arrays="digest"),
+                "metadata": jsonable(dict(metadata or {}), "metadata", arrays="list"),
+                "points": points_identity(cols), "chunk_size": chunk_size}
     # Round-trip through JSON so the in-memory identity equals the stored one
     # (e.g. tuples become lists) and comparisons are exact.
     identity = json.loads(canonical_json(identity))
