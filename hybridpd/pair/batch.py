@@ -46,20 +46,9 @@ import numpy as np
 
 from hybridpd._jit import njit
 
-__all__ = [
-    "LABELS",
-    "STATUS_IMPACT",
-    "STATUS_NONFINITE",
-    "STATUS_STICK",
-    "STATUS_TIMEOUT",
-    "STATUS_UNRESOLVED",
-    "impact_map",
-    "iterate_map",
-    "map_labels",
-    "next_impact",
-    "pack_params",
-    "trace_once",
-]
+__all__ = ["LABELS", "STATUS_IMPACT", "STATUS_NONFINITE", "STATUS_STICK", "STATUS_TIMEOUT",
+           "STATUS_UNRESOLVED", "impact_map", "iterate_map", "map_labels", "next_impact",
+           "pack_params", "trace_once"]
 
 LABELS = ("converged", "not_converged", "diverged", "zeno_sticking", "unresolved")
 

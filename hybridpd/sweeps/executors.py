@@ -303,10 +303,8 @@ class _PoolBackend:
 
     def submit(self, tasks: Sequence[tuple[int, int, int]]) -> list[cf.Future]:
         """Submit chunks ``(index, start, stop)``; one future per chunk."""
-        return [
-            self.executor.submit(_run_chunk, self.func, _slice(self.cols, start, stop), self.kwargs)
-            for _, start, stop in tasks
-        ]
+        return [self.executor.submit(_run_chunk, self.func, _slice(self.cols, start, stop),
+                                     self.kwargs) for _, start, stop in tasks]
 
     def cancel(self, futures) -> set:
         # Queued chunks are dropped; running ones cannot be, so they are
@@ -340,17 +338,10 @@ class _DaskBackend:
         # One client.map call instead of a submit per chunk: a single message
         # to the scheduler, which matters with thousands of chunks.
         n = len(tasks)
-        return self.client.map(
-            _run_chunk_slice,
-            [self.func] * n,
-            [self.cols_future] * n,
-            start,
-            stop,
-            [self.kwargs] * n,
-            key=[f"hybridpd-sweep-{self.token}-{i}" for i in index],
-            pure=False,
-            retries=0,
-        )
+        return self.client.map(_run_chunk_slice, [self.func] * n, [self.cols_future] * n, start,
+                               stop, [self.kwargs] * n,
+                               key=[f"hybridpd-sweep-{self.token}-{i}" for i in index],
+                               pure=False, retries=0)
 
     def cancel(self, futures) -> set:
         futures = list(futures)
@@ -387,15 +378,11 @@ class _ClusterBackend(_DaskBackend):
         if not tasks:
             return []
         n = len(tasks)
-        return self.client.map(
-            _run_chunk,
-            [self.func] * n,
-            [_slice(self.cols, start, stop) for _, start, stop in tasks],
-            [self.kwargs] * n,
-            key=[f"hybridpd-sweep-{self.token}-{i}" for i, _, _ in tasks],
-            pure=False,
-            retries=0,
-        )
+        return self.client.map(_run_chunk, [self.func] * n,
+                               [_slice(self.cols, start, stop) for _, start, stop in tasks],
+                               [self.kwargs] * n,
+                               key=[f"hybridpd-sweep-{self.token}-{i}" for i, _, _ in tasks],
+                               pure=False, retries=0)
 
     def close(self, abort: bool, futures=()) -> None:
         if abort:

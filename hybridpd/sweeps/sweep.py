@@ -62,20 +62,8 @@ from hybridpd.sweeps.npz import load_npz, save_npz
 from hybridpd.sweeps.progress import Progress
 from hybridpd.sweeps.store import FORMAT, ZarrStore, check_store_path, read_store, sweep_identity
 
-__all__ = [
-    "EXECUTORS",
-    "FORMAT",
-    "ChunkError",
-    "ExecutorSpec",
-    "SweepResult",
-    "default_chunk_size",
-    "grid_points",
-    "load_npz",
-    "load_sweep",
-    "resolve_executor",
-    "run_sweep",
-    "save_npz",
-]
+__all__ = ["EXECUTORS", "FORMAT", "ChunkError", "ExecutorSpec", "SweepResult", "default_chunk_size",
+           "grid_points", "load_npz", "load_sweep", "resolve_executor", "run_sweep", "save_npz"]
 
 # Default chunking: aim at ~256 chunks (enough for load balancing on a few
 # dozen workers, few enough that per-chunk overhead stays negligible), but
@@ -264,9 +252,8 @@ class _Assembler:
         schema = {k: (a.dtype, a.shape[1:]) for k, a in checked.items()}
         if self.schema is None:
             self.schema = schema
-            self.arrays = {
-                k: np.empty((self.n_points, *tr), dtype=dt) for k, (dt, tr) in schema.items()
-            }
+            self.arrays = {k: np.empty((self.n_points, *tr), dtype=dt)
+                           for k, (dt, tr) in schema.items()}
         elif schema != self.schema:
 
             def fmt(s):

@@ -96,19 +96,6 @@ from hybridpd.analysis.design.search import (
     robustness,
 )
 
-__all__ = [
-    "PLANT_STATUS",
-    "ComparisonRow",
-    "DesignMap",
-    "DesignResult",
-    "InfeasibleDesignError",
-    "OptimizerRun",
-    "RobustReport",
-    "RobustnessComparison",
-    "design",
-    "design_objective",
-    "robustness",
-    "robustness_comparison",
-    "shifted_amplitude",
-    "shifted_orbit",
-]
+__all__ = ["PLANT_STATUS", "ComparisonRow", "DesignMap", "DesignResult", "InfeasibleDesignError",
+           "OptimizerRun", "RobustReport", "RobustnessComparison", "design", "design_objective",
+           "robustness", "robustness_comparison", "shifted_amplitude", "shifted_orbit"]
