@@ -13,13 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hybridpd.plotting._common import (
-    legend_from_gids,
-    line_proxy,
-    patch_proxy,
-    register,
-    set_all,
-)
+from hybridpd.plotting._common import legend_from_gids, line_proxy, patch_proxy, register, set_all
 from hybridpd.plotting.style import DOUBLE, axis_label, house_figure, series, styled
 
 __all__ = ["VERDICT_STYLES", "plot_m2_study", "plot_param_study", "plot_rho_along_m2",

@@ -35,11 +35,7 @@ from hybridpd.analysis.continuation.events import (
     _test_fold,
     _Tracker,
 )
-from hybridpd.analysis.continuation.newton import (
-    _param_derivative,
-    _residual,
-    map_power_jacobian,
-)
+from hybridpd.analysis.continuation.newton import _param_derivative, _residual, map_power_jacobian
 from hybridpd.analysis.continuation.periodic import (
     PeriodicOrbit,
     _orbit_diagnostics,

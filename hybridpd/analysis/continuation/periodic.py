@@ -15,11 +15,7 @@ from hybridpd.analysis.continuation._common import (
     _scale,
     _section_point,
 )
-from hybridpd.analysis.continuation.newton import (
-    _newton,
-    _residual,
-    map_power_jacobian,
-)
+from hybridpd.analysis.continuation.newton import _newton, _residual, map_power_jacobian
 from hybridpd.analysis.continuation.trace import trace_map
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.impactmap import ImpactMap

@@ -91,10 +91,7 @@ from hybridpd.analysis.design.results import (
     OptimizerRun,
     RobustReport,
 )
-from hybridpd.analysis.design.search import (
-    design,
-    robustness,
-)
+from hybridpd.analysis.design.search import design, robustness
 
 __all__ = ["PLANT_STATUS", "ComparisonRow", "DesignMap", "DesignResult", "InfeasibleDesignError",
            "OptimizerRun", "RobustReport", "RobustnessComparison", "design", "design_objective",

@@ -9,9 +9,7 @@ from hybridpd._repr import compact_repr
 from hybridpd.analysis.design.objective import _f
 from hybridpd.analysis.design.results import DesignResult, InfeasibleDesignError, RobustReport
 from hybridpd.analysis.design.search import design, robustness
-from hybridpd.model import (
-    Case,
-)
+from hybridpd.model import Case
 
 
 @dataclass(frozen=True)

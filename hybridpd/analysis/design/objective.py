@@ -3,17 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from hybridpd.analysis.orbits import (
-    SymmetricOrbitResult,
-    symmetric_orbit,
-)
-from hybridpd.model import (
-    Case,
-    ImpactPair,
-    as_gains,
-    check_odd_order,
-    check_positive,
-)
+from hybridpd.analysis.orbits import SymmetricOrbitResult, symmetric_orbit
+from hybridpd.model import Case, ImpactPair, as_gains, check_odd_order, check_positive
 from hybridpd.pair import symbolic
 
 #: Codes of :attr:`RobustReport.status` (per plant of the uncertainty grid).

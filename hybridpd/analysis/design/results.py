@@ -7,13 +7,8 @@ import numpy as np
 
 from hybridpd._repr import compact_repr
 from hybridpd.analysis.design.objective import PLANT_STATUS, _f, _nested
-from hybridpd.analysis.orbits import (
-    SymmetricOrbitResult,
-)
-from hybridpd.model import (
-    Case,
-    PDGains,
-)
+from hybridpd.analysis.orbits import SymmetricOrbitResult
+from hybridpd.model import Case, PDGains
 
 
 @dataclass(frozen=True)

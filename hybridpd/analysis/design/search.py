@@ -23,11 +23,7 @@ from hybridpd.analysis.design.results import (
     OptimizerRun,
     RobustReport,
 )
-from hybridpd.analysis.orbits import (
-    REASONS,
-    symmetric_orbit,
-    symmetric_orbits,
-)
+from hybridpd.analysis.orbits import REASONS, symmetric_orbit, symmetric_orbits
 from hybridpd.model import (
     Case,
     ImpactPair,

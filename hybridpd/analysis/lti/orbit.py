@@ -19,14 +19,7 @@ from hybridpd.analysis.lti.section_map import LTIImpactMap, _chain_jacobian
 from hybridpd.analysis.orbits import _END_RTOL, _HYPERBOLIC_TOL, REASONS
 from hybridpd.hybrid.events import EV_CROSSING, EV_GRAZING, EV_START, lti_flow
 from hybridpd.loop import ClosedLoop, closed_loop
-from hybridpd.model import (
-    Case,
-    ImpactPair,
-    Reference,
-    check_int,
-    check_odd_order,
-    check_positive,
-)
+from hybridpd.model import Case, ImpactPair, Reference, check_int, check_odd_order, check_positive
 
 __all__ = ["LTI_REASONS", "LTIOrbitResult", "lti_symmetric_orbit"]
 

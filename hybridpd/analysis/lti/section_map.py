@@ -26,13 +26,7 @@ from hybridpd.analysis.lti.flight import (
 )
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
 from hybridpd.analysis.orbits import _HYPERBOLIC_TOL
-from hybridpd.hybrid.events import (
-    EV_GRAZING,
-    EV_NONE,
-    EV_NONFINITE,
-    EV_START,
-    EV_STEP_LIMIT,
-)
+from hybridpd.hybrid.events import EV_GRAZING, EV_NONE, EV_NONFINITE, EV_START, EV_STEP_LIMIT
 from hybridpd.loop import ClosedLoop, closed_loop
 from hybridpd.model import Case, ImpactPair, Reference, check_positive
 
