@@ -30,18 +30,8 @@ from hybridpd._repr import compact_repr
 from hybridpd.analysis.continuation import find_periodic_orbit
 from hybridpd.analysis.impactmap import ImpactMap
 
-__all__ = [
-    "DIVERGED",
-    "NO_CONVERGENCE",
-    "OFF_SECTION_LABEL",
-    "OUTCOMES",
-    "STICKING",
-    "UNRESOLVED",
-    "Attractor",
-    "CycleCatalog",
-    "outcome",
-    "paper_distance2",
-]
+__all__ = ["DIVERGED", "NO_CONVERGENCE", "OFF_SECTION_LABEL", "OUTCOMES", "STICKING", "UNRESOLVED",
+           "Attractor", "CycleCatalog", "outcome", "paper_distance2"]
 
 NO_CONVERGENCE = -1
 DIVERGED = -2

@@ -53,13 +53,7 @@ from hybridpd._jit import njit
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
 from hybridpd.hybrid.automaton import HybridAutomaton, ZenoOptions, run_hybrid
 
-__all__ = [
-    "MAP_STATUS",
-    "MapResult",
-    "Section",
-    "SectionMap",
-    "exosystem",
-]
+__all__ = ["MAP_STATUS", "MapResult", "Section", "SectionMap", "exosystem"]
 
 #: Codes of :attr:`MapResult.status`.
 MAP_STATUS = {0: "returned", 1: "jump_limit", 2: "zeno", 3: "nonfinite", 4: "step_limit",

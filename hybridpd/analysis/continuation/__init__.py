@@ -69,25 +69,7 @@ from hybridpd.analysis.continuation.switching import BranchSwitch, branch_map, s
 from hybridpd.analysis.continuation.symmetric import continue_symmetric
 from hybridpd.analysis.continuation.trace import ImpactStep, MapTrace, trace_map
 
-__all__ = [
-    "DESIGN_PARAMETERS",
-    "EVENT_KINDS",
-    "PARAMETERS",
-    "SYMMETRIC_PARAMETERS",
-    "BifurcationEvent",
-    "Branch",
-    "BranchSwitch",
-    "ImpactStep",
-    "MapTrace",
-    "PeriodicOrbit",
-    "branch_map",
-    "continue_orbit",
-    "continue_symmetric",
-    "design_xm",
-    "find_periodic_orbit",
-    "load_branch",
-    "map_power_jacobian",
-    "plot_branch",
-    "switch_branch",
-    "trace_map",
-]
+__all__ = ["DESIGN_PARAMETERS", "EVENT_KINDS", "PARAMETERS", "SYMMETRIC_PARAMETERS",
+           "BifurcationEvent", "Branch", "BranchSwitch", "ImpactStep", "MapTrace", "PeriodicOrbit",
+           "branch_map", "continue_orbit", "continue_symmetric", "design_xm", "find_periodic_orbit",
+           "load_branch", "map_power_jacobian", "plot_branch", "switch_branch", "trace_map"]

@@ -104,14 +104,5 @@ from hybridpd.analysis.lti.section_map import (  # noqa: F401
     _chain_jacobian,
 )
 
-__all__ = [
-    "LTI_REASONS",
-    "LTIImpactMap",
-    "LTIJacobian",
-    "LTIMapResult",
-    "LTIOrbitResult",
-    "filtered_pd",
-    "filtered_pid",
-    "lead_lag",
-    "lti_symmetric_orbit",
-]
+__all__ = ["LTI_REASONS", "LTIImpactMap", "LTIJacobian", "LTIMapResult", "LTIOrbitResult",
+           "filtered_pd", "filtered_pid", "lead_lag", "lti_symmetric_orbit"]
