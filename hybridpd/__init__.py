@@ -95,8 +95,7 @@ _NAMES = {
     "section_basin": "hybridpd.sweeps.section_basins",
     # design, figures, the paper
     "design": "hybridpd.analysis.design",
-    "plot_file": "hybridpd.plotting.files",
-}
+    "plot_file": "hybridpd.plotting.files"}
 
 # ``reproduce`` is both a subpackage and its main function: the package is callable (it runs
 # :func:`hybridpd.reproduce.reproduce`), so ``hp.reproduce(...)`` works whichever Python binds.

@@ -38,8 +38,7 @@ MOVED_MODULES = {
     "hybridpd.samples": "hybridpd.hybrid.samples",
     "hybridpd.sweep": "hybridpd.sweeps.sweep",
     "hybridpd.symbolic": "hybridpd.pair.symbolic",
-    "hybridpd.analysis.continuation.branchio": "hybridpd.analysis.continuation.events",
-}
+    "hybridpd.analysis.continuation.branchio": "hybridpd.analysis.continuation.events"}
 
 
 def _message(old: str, new: str) -> str:

@@ -56,8 +56,7 @@ def _interpret_budget() -> float:
         v = float(raw)
     except ValueError:
         raise ValueError(
-            f"HYBRIDPD_INTERPRET_SECONDS must be a number of seconds >= 0, got {raw!r}"
-        ) from None
+            f"HYBRIDPD_INTERPRET_SECONDS must be a number of seconds >= 0, got {raw!r}") from None
     return max(0.0, v)  # nan and negatives: always compile
 
 

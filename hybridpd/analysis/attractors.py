@@ -45,8 +45,7 @@ OUTCOMES = {
     DIVERGED: ("diverged", "diverged"),
     STICKING: ("sticking", "sticking"),
     UNRESOLVED: ("unresolved", "unresolved flight"),
-    OFF_SECTION_LABEL: ("off_section", "off the section"),
-}
+    OFF_SECTION_LABEL: ("off_section", "off the section")}
 
 # (dx1, dy1, dy2, dphi) = C (dphi, dz1, dz2, dz4): the paper's criterion coordinates
 _C = np.array([[0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 1, 0], [1, 0, 0, 0]], float)

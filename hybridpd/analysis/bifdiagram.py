@@ -190,8 +190,7 @@ class BifurcationDiagram:
             "status": [int(s) for s in self.status], "iterations": self.iterations,
             "keep": self.keep, "follow": self.follow, "initial": lst(self.initial),
             "case": self.case, "fixed": dict(self.fixed), "design": self.design,
-            "settings": dict(self.settings), "counts": self.counts(),
-        }
+            "settings": dict(self.settings), "counts": self.counts()}
 
     def save(self, path) -> None:
         """Write to ``.npz`` (arrays, and the metadata as JSON)."""

@@ -50,8 +50,7 @@ REASONS = {
     2: "no solution: xm = 0",
     3: "viability violated: extra contact between the impacts",
     4: "viability violated: the masses stick after the impact (zero rebound, force pressing)",
-    5: "viability undecided: contact location did not resolve",
-}
+    5: "viability undecided: contact location did not resolve"}
 
 _HYPERBOLIC_TOL = 1e-9
 _END_RTOL = 1e-7   # a contact this close to n T / 2 (relative) is the orbit's own impact
@@ -257,8 +256,7 @@ def symmetric_orbits(kp, kv, *, mu, e, L, omega, m2=1.0, x10=1.0, n=1, case="col
         multipliers=mult, spectral_radius=rho, stable=stable, hyperbolic=hyper,
         viability_margin=marg.reshape(shape), violation_time=t_c.reshape(shape),
         violation_wall=w_c.reshape(shape), violation_x1=x_c.reshape(shape),
-        fixed_point=fixed, DP=DP, candidate=cand,
-    )
+        fixed_point=fixed, DP=DP, candidate=cand)
 
 
 @dataclass(frozen=True)
@@ -377,8 +375,7 @@ class SymmetricOrbitResult:
             "spectral_radius": f(self.spectral_radius),
             "stable": self.stable, "hyperbolic": self.hyperbolic,
             "viability_margin": f(self.viability_margin), "grazing": bool(self.grazing),
-            "violation": self.violation,
-        }
+            "violation": self.violation}
 
 
 def symmetric_orbit(pair: ImpactPair, gains: PDGains, omega: float, *, x10: float = 1.0,
@@ -454,5 +451,4 @@ def symmetric_orbit(pair: ImpactPair, gains: PDGains, omega: float, *, x10: floa
         fixed_point=np.asarray(r.fixed_point, float).reshape(4), DP=DP, blocks=blocks,
         multipliers=mult, spectral_radius=rho, stable=stable, hyperbolic=hyper,
         viability_margin=margin, grazing=bool(np.isfinite(margin) and abs(margin) < 1e-6),
-        violation=violation,
-    )
+        violation=violation)

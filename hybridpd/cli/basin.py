@@ -137,8 +137,7 @@ def run(args) -> int:
                             "y1": float(fp[2] + fp[3]), "y2": float(fp[2])},
             "converged_fraction": b.converged_fraction, "spectral_radius": orb.spectral_radius,
             "stable": orb.stable, "certified_radius": mapper.certified_radius,
-            "attractor_labels": ab.labels.tolist(), **ab.to_dict(),
-        }))
+            "attractor_labels": ab.labels.tolist(), **ab.to_dict()}))
         return 0
     print(f"{args.case} basin, e = {args.e:g}, kp = {args.kp:g}, kv = {args.kv:g} "
           f"(slice phi = phi* = {fp[0]:.6g}, y2 = y2* = {fp[2]:.6g})")

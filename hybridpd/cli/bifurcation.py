@@ -170,8 +170,7 @@ def run(args) -> int:
             "xm": [None if not np.isfinite(x) else float(x) for x in d.xm],
             "counts": d.counts(), "fixed": d.fixed, "case": d.case,
             "iterations": d.iterations, "keep": d.keep, "follow": d.follow,
-            "out": str(args.out), "plot": args.plot, "branch": branch_note,
-        }))
+            "out": str(args.out), "plot": args.plot, "branch": branch_note}))
         return 0
     counts = ", ".join(f"{n} {c}" for c, n in d.counts().items() if n)
     print(f"{args.case} bifurcation diagram in {name} [{lo:g}, {hi:g}] ({num} values, last "

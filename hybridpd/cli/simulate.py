@@ -86,8 +86,7 @@ _FAILED = {
     "simultaneous_contact": "contacts closing at one instant whose joint impact (the "
                             "multi-contact LCP) has no solution or a degenerate one",
     "diverged": "the state grew past the divergence bound (an unstable loop?)",
-    "nonfinite": "the state overflowed",
-}
+    "nonfinite": "the state overflowed"}
 
 
 def _agree(a, b, rtol=1e-6):

@@ -91,12 +91,10 @@ class ImpactPairTrajectory:
                 {"t": float(t), "contact": 0, "wall": int(w), "pre": [float(v) for v in p],
                  "post": [float(v) for v in q], "grazing": bool(g)}
                 for t, w, p, q, g in zip(self.impact_times, self.walls, self.pre, self.post,
-                                         self.grazing)
-            ],
+                                         self.grazing)],
             "sticking": [[float(a), float(b), 0] for a, b in self.sticking],
             "termination": self.termination.name.lower(),
-            "t_final": float(self.t_final),
-        }
+            "t_final": float(self.t_final)}
 
 
 class ControlledImpactPair:
@@ -236,5 +234,4 @@ class ControlledImpactPair:
             post=np.asarray(jt.post, float)[wall_jump, :4].reshape(-1, 4),
             grazing=(kind[wall_jump] == "grazing").astype(bool),
             sticking=sticking, sticking_walls=sticking_walls,
-            termination=traj.termination, t_final=traj.t_final, hybrid=traj,
-        )
+            termination=traj.termination, t_final=traj.t_final, hybrid=traj)

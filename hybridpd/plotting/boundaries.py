@@ -25,8 +25,7 @@ KIND_STYLES = {
     "period_doubling": dict(color="#CC79A7", linestyle=":", linewidth=2.0,
                             label="period doubling: a multiplier at -1"),
     "neimark_sacker": dict(color="#009E73", linestyle="-.", linewidth=1.6,
-                           label="Neimark-Sacker: a complex pair on the unit circle"),
-}
+                           label="Neimark-Sacker: a complex pair on the unit circle")}
 
 #: Marker and legend label of each codimension-2 kind (others: a plus sign).
 CODIM2_STYLES = {
@@ -37,8 +36,7 @@ CODIM2_STYLES = {
     "fold+period_doubling": dict(marker="h", label="fold meets period doubling"),
     "resonance_1_1": dict(marker="^", label="1:1 resonance (pair at +1)"),
     "resonance_1_2": dict(marker="v", label="1:2 resonance (pair at -1)"),
-    "grazing+grazing": dict(marker="X", label="two turning points graze at once"),
-}
+    "grazing+grazing": dict(marker="X", label="two turning points graze at once")}
 
 
 @styled

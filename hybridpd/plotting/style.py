@@ -54,8 +54,7 @@ _UNITS = {
     "e": "$e$ (1)", "omega": r"$\omega$ (rad/time)", "L": "$L$ (length)",
     "x10": "$x_{10}$ (length)", "xm": "$x_m$ (length)", "t": "$t$ (time)",
     "x1": "$x_1$ (length)", "y1": "$y_1$ (length/time)", "x2": "$x_2$ (length)",
-    "y2": "$y_2$ (length/time)", "n": "$n$ (1)",
-}
+    "y2": "$y_2$ (length/time)", "n": "$n$ (1)"}
 
 
 def axis_label(name: str) -> str:

@@ -27,8 +27,7 @@ STATEMENTS = {
     3: "The range of admissible gains is large for the collocated case.",
     4: "The basins of attraction have a similar size in both cases.",
     5: "Uncertainties on the physical parameters will be an obstacle to the non-collocated "
-       "control, due to the smallness of its admissible gain regions.",
-}
+       "control, due to the smallness of its admissible gain regions."}
 
 #: "Much smaller": non-collocated / collocated share of the same gain box below this, every e.
 MUCH_SMALLER = 0.2

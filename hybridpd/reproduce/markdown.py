@@ -75,8 +75,7 @@ CAPTIONS = {
         "exists, and exists and is stable, against mu; bottom: the (mu, kv) plane at "
         "kp = 10 m2."),
     "gamma_study": (
-        "As the mu study, against gamma = L / x10."),
-}
+        "As the mu study, against gamma = L / x10.")}
 
 
 def _intro(d, w):
@@ -237,8 +236,7 @@ _CAVEATS = {
     4: "Areas are compared on one window per convention; a basin touching the capped "
        "window's edge gives only a lower bound, and the distance to the basin boundary is "
        "the window-free measure.",
-    5: "Sampled robustness over a small uncertainty box at e = 0.5 only.",
-}
+    5: "Sampled robustness over a small uncertainty box at e = 0.5 only."}
 
 
 def _conclusion(con, d, w):

@@ -77,9 +77,7 @@ SCHEMA = {
             "type": "object", "required": ["id", "statement", "verdict", "evidence",
                                            "resolution_check"],
             "properties": {"verdict": _VERDICT, "resolution_check": _RESOLUTION}}},
-        "timings": {"type": "object", "additionalProperties": {"type": "number"}},
-    },
-}
+        "timings": {"type": "object", "additionalProperties": {"type": "number"}}}}
 
 _TYPES = {"object": dict, "array": list, "string": str, "boolean": bool, "null": type(None)}
 
@@ -332,8 +330,7 @@ def build_summary(*, settings, mode, study, studies, runs, timings, figures=()) 
                        "basin_window_growths": settings.basin_extensions,
                        "check_scale": settings.check_scale},
         "figures": [str(f) for f in figures],
-        "timings": timings,
-    }
+        "timings": timings}
     return _clean(out)
 
 

@@ -247,8 +247,7 @@ class AttractorBasin:
                 "long_name": "the paper's label", "flag_values": list(range(len(LABELS))),
                 "flag_meanings": " ".join(LABELS)}),
             "iterations": (dims, b.iterations,
-                           {"long_name": "iterations of the impact map actually run"}),
-        }
+                           {"long_name": "iterations of the impact map actually run"})}
         coords = {n: (n, np.asarray(getattr(self, n)), axis_attrs(n)) for n in dims}
         attrs = {"kind": "attractor_basin", **encode_attrs({
             "attractors": [a.to_dict() for a in self.attractors],

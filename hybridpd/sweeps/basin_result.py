@@ -114,8 +114,7 @@ class BasinResult:
                                            "flag_values": list(range(len(names))),
                                            "flag_meanings": " ".join(names)}),
             "iterations": (dims, self.iterations,
-                           {"long_name": "iterations of the impact map actually run"}),
-        }
+                           {"long_name": "iterations of the impact map actually run"})}
         coords = {n: (n, np.asarray(getattr(self, n)), axis_attrs(n)) for n in dims}
         attrs = {"kind": "basin", "converged_fraction": self.converged_fraction,
                  "fixed_point": [float(v) for v in self.fixed_point],

@@ -220,8 +220,7 @@ def _basin_result(mapper, xs, ys, lab, its) -> BasinResult:
         "case": m.case.value, "kp": m.gains.kp, "kv": m.gains.kv, "mu": m.pair.mu,
         "e": m.pair.e, "L": m.pair.L, "m2": m.pair.m2, "omega": m.reference.omega,
         "xm": m.reference.xm, "n_iter": mapper.n_iter, "criterion": mapper.criterion,
-        "certified_radius": mapper.certified_radius,
-    }
+        "certified_radius": mapper.certified_radius}
     meta.update(mapper.conventions)
     return BasinResult(xs, ys, lab, its, mapper.fixed_point.copy(), frac, meta)
 

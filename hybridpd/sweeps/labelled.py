@@ -49,8 +49,7 @@ UNITS: dict[str, tuple[str, str]] = {
     "xm": ("length", "amplitude of the reference xd = xm cos(omega t)"),
     "x1": ("length", "primary-mass position at the impact"),
     "y1": ("length/time", "primary-mass velocity at the impact"),
-    "spectral_radius": ("1", "largest modulus of the eigenvalues of DP"),
-}
+    "spectral_radius": ("1", "largest modulus of the eigenvalues of DP")}
 
 
 def axis_attrs(name: str) -> dict[str, str]:

@@ -132,8 +132,7 @@ class ModelBasin:
             "criterion_label": (dims, self.criterion_labels, {
                 "long_name": "label against the orbit", "flag_values": list(range(len(LABELS))),
                 "flag_meanings": " ".join(LABELS)}),
-            "iterations": (dims, self.iterations, {"long_name": "iterations of the map run"}),
-        }
+            "iterations": (dims, self.iterations, {"long_name": "iterations of the map run"})}
         coords = {self.y_name: (self.y_name, self.y), self.x_name: (self.x_name, self.x)}
         attrs = {"kind": "model_basin", "model": self.source, "x_name": self.x_name,
                  "y_name": self.y_name, **encode_attrs({

@@ -233,8 +233,7 @@ class ModelRegionMap:
             "section_point2": ((*dims, "coordinate"), one(self.section_point2),
                                {"long_name": "section point of a second orbit"}),
             "signature2": ((*dims, "jump"), one(self.signature2),
-                           {"long_name": "impact signature of a second orbit"}),
-        }
+                           {"long_name": "impact signature of a second orbit"})}
         fixed = {"model": self.source, **{f"section_{k}": v for k, v in self.spec.items()}}
         attrs = {"kind": "region_map", "case": f"{Path(self.source).name}",
                  "model_kind": "model_region_map", "x_name": self.x_name,

@@ -94,8 +94,7 @@ class RegionMap:
             "exists": self.exists.tolist(), "stable": self.stable.tolist(),
             "spectral_radius": [[[None if not np.isfinite(v) else float(v) for v in row]
                                  for row in plane] for plane in rho],
-            "reason": self.reason.tolist(), "reasons": {str(k): v for k, v in REASONS.items()},
-        }
+            "reason": self.reason.tolist(), "reasons": {str(k): v for k, v in REASONS.items()}}
 
     def to_dataset(self):
         """The map as an :class:`xarray.Dataset` with dimensions ``(e, y_name, x_name)``.
@@ -119,8 +118,7 @@ class RegionMap:
             "reason": (dims, self.reason, {
                 "long_name": "why no orbit exists (0: it exists)", "flag_values": codes,
                 "flag_meanings": " ".join(re.sub(r"\W+", "_", REASONS[c]).strip("_")
-                                          for c in codes)}),
-        }
+                                          for c in codes)})}
         attrs = {"kind": "region_map", "case": self.case, "x_name": self.x_name,
                  "y_name": self.y_name, "fixed_names": " ".join(self.fixed),
                  **encode_attrs(self.fixed)}

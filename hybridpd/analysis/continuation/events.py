@@ -170,8 +170,7 @@ class Branch:
             "min_impact_speed": [_f(v) for v in self.min_impact_speed],
             "xm": [_f(v) for v in self.xm],
             "events": [ev.to_dict() for ev in self.events],
-            "termination": self.termination, "n_rejected": int(self.n_rejected),
-        }
+            "termination": self.termination, "n_rejected": int(self.n_rejected)}
 
 
 @dataclass
@@ -410,8 +409,7 @@ def _branch_from_points(pts, evs, name, P0, k, method, termination, rejected, *,
         patterns=tuple(pt.signature for pt in pts), events=evs, termination=termination,
         family="periodic" if method != "closed_form" else "symmetric", method=method,
         case=case, fixed=fixed, n_rejected=rejected,
-        newton_iterations=np.array([pt.newton_its for pt in pts]),
-    )
+        newton_iterations=np.array([pt.newton_its for pt in pts]))
 
 
 # ----------------------------------------------------------------------------------------

@@ -93,8 +93,7 @@ class PeriodicOrbit(_Orbit):
             "flight_times": [[st.tau for st in it] for it in self.pattern],
             "n_impacts": self.n_impacts, "margin": _f(self.margin),
             "min_impact_speed": _f(self.min_impact_speed), "grazing": self.grazing,
-            "sticking": self.sticking, "parameters": dict(self.parameters),
-        }
+            "sticking": self.sticking, "parameters": dict(self.parameters)}
 
 
 def _orbit_diagnostics(P: ImpactMap, s: np.ndarray, k: int, jacobian: str, fd_step: float,
@@ -225,5 +224,4 @@ def _make_orbit(P, res, k, jacobian, fd_step, margin_samples, graze_tol) -> Peri
         spectral_radius=rho, stable=stable, hyperbolic=hyper,
         pattern=pattern, walls=tuple(tuple(st.wall for st in p) for p in pattern),
         n_impacts=sum(len(p) for p in pattern), margin=margin, min_impact_speed=vmin,
-        grazing=grazing, sticking=sticking, parameters=_fixed_parameters(P),
-    )
+        grazing=grazing, sticking=sticking, parameters=_fixed_parameters(P))

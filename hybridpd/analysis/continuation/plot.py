@@ -11,8 +11,7 @@ _EVENT_STYLE = {
     "neimark_sacker": ("*", "tab:green"),
     "grazing": ("v", "black"),
     "stability_change": ("o", "tab:orange"),
-    "existence": ("x", "tab:gray"),
-}
+    "existence": ("x", "tab:gray")}
 
 
 def plot_branch(branch: Branch, ax=None, quantity="spectral_radius", *, events: bool = True,

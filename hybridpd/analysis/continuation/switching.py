@@ -139,8 +139,7 @@ class BranchSwitch:
             "start_parameters": [float(p) for p in self.start_parameters],
             "amplitude": float(self.amplitude), "period": int(self.period),
             "branches": [b.to_dict() for b in self.branches], "design": self.design,
-            "reason": self.reason,
-        }
+            "reason": self.reason}
 
 
 def _design_of(branch: Branch):

@@ -13,8 +13,7 @@ PLANT_STATUS = {
     1: "no symmetric orbit with the designed xm (no positive root x10)",
     2: "the shifted orbit does not exist (viability violated or no solution)",
     3: "the shifted orbit is unstable",
-    4: "the shifted orbit is stable but x10 is outside the tolerance",
-}
+    4: "the shifted orbit is stable but x10 is outside the tolerance"}
 
 _OBJECTIVES = ("min", "sum")
 _SPACINGS = ("log", "linear")

@@ -209,8 +209,7 @@ class RobustReport:
             "x10": _nested(self.x10), "spectral_radius": _nested(self.spectral_radius),
             "viability_margin": _nested(self.viability_margin),
             "status": self.status.tolist(),
-            "status_codes": {str(k): v for k, v in PLANT_STATUS.items()},
-        }
+            "status_codes": {str(k): v for k, v in PLANT_STATUS.items()}}
 
 
 @dataclass(frozen=True)
@@ -306,8 +305,7 @@ class DesignResult:
             "viability_weight": float(self.viability_weight),
             "multipliers": [[float(z.real), float(z.imag)] for z in o.multipliers],
             "exists": bool(o.exists), "stable": bool(o.stable),
-            "robust": self.robust is not None,
-        }
+            "robust": self.robust is not None}
         d.update({k: v for k, v in self.spec.items()})
         if self.robust is not None:
             r = self.robust
@@ -317,16 +315,14 @@ class DesignResult:
                 "worst_objective": _f(r.worst_objective),
                 "worst_viability_margin": _f(r.worst_viability_margin),
                 "worst_x10_error": _f(r.worst_x10_error),
-                "worst_spectral_radius_case": dict(r.worst_spectral_radius_case),
-            })
+                "worst_spectral_radius_case": dict(r.worst_spectral_radius_case)})
             if self.validation is not None:
                 v = self.validation
                 d["validation"] = {
                     "grid": [len(v.e_values), len(v.mu_values)], "ok": bool(v.ok),
                     "worst_spectral_radius": _f(v.worst_spectral_radius),
                     "worst_case": dict(v.worst_case), "worst_objective": _f(v.worst_objective),
-                    "worst_x10_error": _f(v.worst_x10_error),
-                }
+                    "worst_x10_error": _f(v.worst_x10_error)}
         d["elapsed"] = float(self.elapsed)
         return d
 

@@ -190,8 +190,7 @@ def _report(pb: _Problem, xm, ev, e_values, mu_values, shape) -> RobustReport:
         worst_spectral_radius_case=case_of(ir),
         worst_viability_margin=float(np.nanmin(g["nu"])) if np.any(np.isfinite(g["nu"]))
         else float("nan"),
-        worst_x10_error=float(np.max(g["err"])) if all_orbits else float("nan"),
-    )
+        worst_x10_error=float(np.max(g["err"])) if all_orbits else float("nan"))
 
 
 def _robust_scores(pb: _Problem, kp, kv, xm, nominal_J):

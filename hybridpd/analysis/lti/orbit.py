@@ -214,8 +214,7 @@ class LTIOrbitResult:
             "spectral_radius": f(self.spectral_radius), "stable": self.stable,
             "hyperbolic": self.hyperbolic, "viability_margin": f(self.viability_margin),
             "grazing": bool(self.grazing), "violation": self.violation,
-            "DP_fd_error": f(self.DP_fd_error),
-        }
+            "DP_fd_error": f(self.DP_fd_error)}
 
 
 def _viability_margin(A, z0, tau, L, nsamp):

@@ -29,8 +29,7 @@ def _horner(u, coef):
 def _damped_pair(a, D, t):
     """Return ``(DCh, DSh)`` arrays for broadcast float inputs (see :func:`dch`)."""
     a, D, t = np.broadcast_arrays(
-        np.asarray(a, dtype=float), np.asarray(D, dtype=float), np.asarray(t, dtype=float)
-    )
+        np.asarray(a, dtype=float), np.asarray(D, dtype=float), np.asarray(t, dtype=float))
     with np.errstate(all="ignore"):
         u = D * t * t
         small = np.abs(u) <= _SERIES_U

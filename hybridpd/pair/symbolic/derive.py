@@ -154,8 +154,7 @@ def _symbols():
         z2=sp.Symbol("z_2", real=True),
         z4=sp.Symbol("z_4", real=True),
         xm=sp.Symbol("x_m", positive=True),
-        sig=sp.Symbol("sigma", real=True),
-    )
+        sig=sp.Symbol("sigma", real=True))
     return d
 
 

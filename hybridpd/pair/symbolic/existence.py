@@ -203,5 +203,4 @@ def symmetric_orbit(*, kp, kv, m2=1.0, mu, e, L, w, x10, n=1,
         case=case, kp=b(kp), kv=b(kv), m2=b(m2), mu=b(mu), e=b(e), L=b(L), w=b(w), x10=b(x10),
         n=b(nf), C=b(C), S=b(S), xm=b(xm), sn=b(sn), cs=b(cs), phi0=b(phi0), T=b(T),
         tau=b(nf * T / 2), x20=b(x10 - L), v=b(v), y2_pre=b(y2m), y2_post=b(y2p),
-        R=b(virtual_restitution(mu, e)), det=b(det), singular=b(singular),
-    )
+        R=b(virtual_restitution(mu, e)), det=b(det), singular=b(singular))
