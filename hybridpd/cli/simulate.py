@@ -229,7 +229,6 @@ def _run_pair(args) -> int:
     return 0
 
 
-
 def trajectory_record(result: dict, state, t0, t_final, dofs, contacts, *, samples=2000,
                       title=None, parameters=None) -> dict:
     """The ``simulate --out`` JSON document: the ``--json`` result plus dense samples.

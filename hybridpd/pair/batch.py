@@ -161,7 +161,6 @@ def _eval(params, case, phi0, x10, y10, x20, y20, tau, dmax):
     return x1, y1, x2, y2, a2, a3, M2, M3
 
 
-
 @njit(cache=True)
 def turning_margins(params, case, phi0, x1, y1, x2, y2, tau, nsamp, approached=False):
     """The two smallest ``(L - |z3|)/L`` at interior turning points of ``z3`` on ``(0, tau)``.

@@ -58,7 +58,6 @@ __all__ = ["LABELS", "BasinResult", "ImpactMapper", "basin_of_attraction", "load
            "section_grid"]
 
 
-
 class ImpactMapper(BasinMapper):
     """Map a section point to a label by iterating the impact map (Attractors.jl's mapper).
 

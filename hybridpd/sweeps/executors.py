@@ -126,8 +126,6 @@ def _check_positive_int(value: Any, name: str) -> int:
     return int(value)
 
 
-
-
 def _cpu_count() -> int:
     # sched_getaffinity honours CPU pinning (taskset, some containers);
     # os.cpu_count() counts the whole machine.
@@ -516,7 +514,6 @@ def _compute_futures(backend, bounds, pending, on_result, timeout) -> None:
         failed = False
     finally:
         backend.close(abort=failed, futures=list(index_of))
-
 
 
 def compute(spec: ExecutorSpec, func: Callable, cols: dict, kwargs: dict, pending: Sequence[int],

@@ -109,7 +109,6 @@ def default_chunk_size(n_points: int) -> int:
     return min(n, min(_MAX_CHUNK, max(_MIN_CHUNK, -(-n // _TARGET_CHUNKS))))
 
 
-
 # --------------------------------------------------------------------------
 # Points
 # --------------------------------------------------------------------------
@@ -211,7 +210,6 @@ def _normalize_points(points: Any, names: Sequence[str] | None,
     return out
 
 
-
 class _Assembler:
     """Places chunk outputs into preallocated arrays, checking consistency."""
 
@@ -266,7 +264,6 @@ class _Assembler:
             self.arrays[k][start:stop] = a
         self.done.add(i)
         return checked
-
 
 
 @dataclass

@@ -28,9 +28,6 @@ def _nested(a):
     return [[_f(v) for v in row] for row in np.asarray(a, float)]
 
 
-
-
-
 def design_objective(exists, stable, spectral_radius, viability_margin, *,
                      viability_weight: float = 1.0, objective: str = "min") -> np.ndarray:
     """The scalar design objective (maximised), vectorised; see the module docstring.
