@@ -469,7 +469,7 @@ def bifurcation_diagram(pair: ImpactPair, gains, omega: float, parameter: str, v
             raise ValueError(f"{nm} must be > 0, got {val!r}")
     chaos_tol = check_finite("chaos_tol", chaos_tol)
     cols, xms = _setup(pair, gains, omega, name, v, x10, int(n), xm, case)
-    s_init = _initial(initial, cols, xms, x10, int(n), case)
+    s_init = _initial(initial, cols, x10, int(n), case)
     M = v.size
     pts = np.full((M, keep, 4), np.nan)
     code = np.full(M, CLASSES.index("undefined"), dtype=np.int64)
@@ -492,9 +492,8 @@ def bifurcation_diagram(pair: ImpactPair, gains, omega: float, parameter: str, v
         last = orbit[done]
         final[i] = last
         pts[i] = orbit[iterations + 1 - keep:]
-        code[i], per[i], lyap[i] = _classify(P, orbit, done, st, keep, iterations, escape,
-                                             max_period, period_tol, chaos_tol, lyapunov,
-                                             fd_step)
+        code[i], per[i], lyap[i] = _classify(P, orbit, st, keep, iterations, escape, max_period,
+                                             period_tol, chaos_tol, lyapunov, fd_step)
         if follow and np.all(np.isfinite(last)) and last[3] > 0 and st == 0 \
                 and CLASSES[code[i]] != "diverged":
             cur = last.copy()
@@ -528,7 +527,7 @@ def _ints(**kw):
     return out
 
 
-def _initial(initial, cols, xms, x10, n, case):
+def _initial(initial, cols, x10, n, case):
     if initial is not None:
         s = np.asarray(initial, float)
         if s.shape != (4,) or not np.all(np.isfinite(s)) or s[3] <= 0:
@@ -545,8 +544,8 @@ def _initial(initial, cols, xms, x10, n, case):
     return s
 
 
-def _classify(P, orbit, done, st, keep, iterations, escape, max_period, period_tol,
-              chaos_tol, lyapunov, fd_step):
+def _classify(P, orbit, st, keep, iterations, escape, max_period, period_tol, chaos_tol,
+              lyapunov, fd_step):
     """(class code, period, exponents) of one run."""
     nan4 = np.full(4, np.nan)
     if st != 0:

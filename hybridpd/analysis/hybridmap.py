@@ -572,12 +572,12 @@ class SectionMap(PoincareMap):
         DP = None
         if jacobian:
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-                DP, tangent = self._jacobian(s, z0, bufs, nb, z_hit)
+                DP, tangent = self._jacobian(s, bufs, nb, z_hit)
             grazing = grazing or tangent
         return MapResult(img, True, "returned", t0, t_hit, z_hit, mode_final, jumps, grazing,
                          DP)
 
-    def _jacobian(self, s, z0, bufs, nb, z_hit) -> np.ndarray:
+    def _jacobian(self, s, bufs, nb, z_hit) -> np.ndarray:
         sec = self.section
         ha = sec.automaton
         n = ha.n_states

@@ -62,7 +62,7 @@ def patch_proxy(**kw):
     return Patch(**kw)
 
 
-def _proxy_of(a, g):
+def _proxy_of(a):
     """A legend handle copying a drawn artist's style (for artists not registered)."""
     from matplotlib.collections import LineCollection
     from matplotlib.lines import Line2D
@@ -92,7 +92,7 @@ def legend_handles(axes) -> list:
         for a in ax.get_children():
             g = a.get_gid() if hasattr(a, "get_gid") else None
             if g and g not in seen:
-                seen[g] = reg.get(g) or _proxy_of(a, g)
+                seen[g] = reg.get(g) or _proxy_of(a)
     return list(seen.items())
 
 

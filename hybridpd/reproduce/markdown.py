@@ -8,7 +8,6 @@ from __future__ import annotations
 
 __all__ = ["CAPTIONS", "render"]
 
-_Q = {"exists": "existence alone", "stability": "stability alone", "both": "exists and stable"}
 _CASE = {"collocated": "collocated", "noncollocated": "non-collocated"}
 
 

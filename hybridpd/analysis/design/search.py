@@ -435,13 +435,13 @@ def design(case="collocated", *, mu, e, omega, L=None, gamma=None, x10=1.0, m2=1
     for J_best, kp_best, kv_best in candidates:
         if J_best <= 0:
             break
-        res = _finish(pb, kp_best, kv_best, J_best, dmap, runs, validation_grid, t_start)
+        res = _finish(pb, kp_best, kv_best, dmap, runs, validation_grid, t_start)
         if res is not None:
             return res
     raise _infeasible(pb, dmap, r, J, obj)
 
 
-def _finish(pb, kp, kv, J, dmap, runs, validation_grid, t_start):
+def _finish(pb, kp, kv, dmap, runs, validation_grid, t_start):
     pair = ImpactPair(pb.mu, pb.e, pb.L, pb.m2)
     gains = PDGains(kp, kv)
     orb = symmetric_orbit(pair, gains, pb.omega, x10=pb.x10, n=pb.n, case=pb.case)
