@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hybridpd.plotting.style import SERIES
+from hybridpd.plotting.style import SERIES, house_figure
 
 #: Series colours (Okabe-Ito), in the order of :data:`~hybridpd.plotting.style.SERIES`.
 _COLORS = tuple(s["color"] for s in SERIES)
@@ -17,13 +17,16 @@ _COLORS = tuple(s["color"] for s in SERIES)
 _KEY = "_hybridpd_legend"
 
 
-def figure(ax, **kw):
+def figure(ax, house=None, **kw):
     # A bare Figure (no pyplot) renders headless and leaves no global figure state behind.
     if ax is not None:
         return ax.figure, ax
-    from matplotlib.figure import Figure
+    if house is not None:  # (width, height) of a figure in the house style
+        fig = house_figure(*house)
+    else:
+        from matplotlib.figure import Figure
 
-    fig = Figure(**kw)
+        fig = Figure(**kw)
     return fig, fig.add_subplot(1, 1, 1)
 
 

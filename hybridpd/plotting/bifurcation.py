@@ -4,8 +4,9 @@ from __future__ import annotations
 import numpy as np
 
 from hybridpd.analysis.bifdiagram import COORDINATES, section_coordinate
+from hybridpd.analysis.continuation.plot import _grow
 from hybridpd.plotting._common import _COLORS, figure
-from hybridpd.plotting.style import DOUBLE, house_figure, styled
+from hybridpd.plotting.style import DOUBLE, styled
 
 __all__ = ["PARAMETER_LABELS", "bifurcation_legend", "plot_bifurcation"]
 
@@ -55,14 +56,6 @@ def _branch_cycles(branch):
             r = P.iterate(s, k - 1)
             out[i, 1:] = r[1:]
     return out, L
-
-
-def _pieces(mask):
-    """Extend a mask by one point on each side so that solid and dashed pieces connect."""
-    m = mask.copy()
-    m[1:] |= mask[:-1]
-    m[:-1] |= mask[1:]
-    return m
 
 
 def _title(diagram):
@@ -137,11 +130,7 @@ def plot_bifurcation(diagram, ax=None, coordinate: str = "z1", branches=(), *,
     """
     if coordinate not in COORDINATES:
         raise ValueError(f"coordinate must be one of {COORDINATES}, got {coordinate!r}")
-    if ax is None:
-        fig = house_figure(DOUBLE, 4.2)
-        ax = fig.add_subplot(1, 1, 1)
-    else:
-        fig, ax = figure(ax)
+    fig, ax = figure(ax, house=(DOUBLE, 4.2))
     y = diagram.coordinate(coordinate)
     x = np.repeat(diagram.values[:, None], y.shape[1], axis=1)
     ok = np.isfinite(y)
@@ -214,7 +203,7 @@ def _draw_branch(ax, br, coordinate, style, name, events, seen):
     for m, ls, lab in ((stable, "-", "stable"), (unstable, "--", "unstable")):
         if not m.any():
             continue
-        mm = _pieces(m) & br.viable
+        mm = _grow(m) & br.viable
         text = f"{name}, {lab}"
         for q in range(yc.shape[1]):
             ax.plot(p, np.where(mm, yc[:, q], np.nan), ls=ls, color=c, lw=1.4, zorder=3,

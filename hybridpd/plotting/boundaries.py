@@ -10,7 +10,7 @@ e.g. one per restitution coefficient as in Figs 4-5).
 from __future__ import annotations
 
 from hybridpd.plotting._common import figure
-from hybridpd.plotting.style import SINGLE, axis_label, house_figure, styled
+from hybridpd.plotting.style import SINGLE, axis_label, styled
 
 __all__ = ["CODIM2_STYLES", "KIND_STYLES", "draw_boundaries"]
 
@@ -75,11 +75,7 @@ def draw_boundaries(ax, result, *, color=None, codim2: bool = True, legend: bool
     >>> [t.get_text().split(":")[0] for t in fig.axes[0].get_legend().get_texts()][:2]
     ['fold / branch point', 'Neimark-Sacker']
     """
-    if ax is None:
-        fig = house_figure(SINGLE, 3.6)
-        ax = fig.add_subplot(1, 1, 1)
-    else:
-        fig, ax = figure(ax)
+    fig, ax = figure(ax, house=(SINGLE, 3.6))
     curves = getattr(result, "curves", result)
     seen, done = set(), set()
     for c in curves:
