@@ -14,7 +14,6 @@ runs it on an existing Dask cluster). The result converts to a labelled xarray D
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,7 +26,7 @@ from hybridpd.analysis.model_orbits import SectionSpec, solve_at
 from hybridpd.analysis.periodic import SectionMapper, find_orbit
 from hybridpd.sweeps.attractor_basins import format_percent
 from hybridpd.sweeps.labelled import decode_attrs, encode_attrs, load_result, save_result
-from hybridpd.sweeps.model_regions import template_of
+from hybridpd.sweeps.model_regions import _grid_spec, template_of
 
 __all__ = ["ModelBasin", "load_model_basin", "model_basin"]
 
@@ -166,18 +165,12 @@ def load_model_basin(path) -> ModelBasin:
 
 
 def _grid(name, spec, coords):
-    try:
-        key, lo, hi, num = spec
-        lo, hi, numf = float(lo), float(hi), float(num)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be (COORDINATE, MIN, MAX, NUM), got {spec!r}") from None
-    if key not in coords:
-        raise ValueError(f"{name}: {key!r} is no section coordinate; they are {list(coords)}")
-    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-        raise ValueError(f"{name} ({key}): MIN < MAX must be finite, got {lo:g}, {hi:g}")
-    if numf != int(numf) or numf < 2:
-        raise ValueError(f"{name} ({key}): NUM must be an integer >= 2, got {num!r}")
-    return str(key), (lo, hi, int(numf))
+    def check(key):
+        if key not in coords:
+            raise ValueError(f"{name}: {key!r} is no section coordinate; they are "
+                             f"{list(coords)}")
+
+    return _grid_spec(name, spec, "COORDINATE", check)
 
 
 def _orbit_name(label, period, n_periods):

@@ -71,18 +71,25 @@ def template_of(model) -> ModelTemplate:
                      f"{type(model).__name__}")
 
 
-def _axis(name, spec, template):
+def _grid_spec(name, spec, what, check):
+    """``(key, (lo, hi, num))`` of ``spec = (KEY, MIN, MAX, NUM)``: ``check(key)`` refuses an
+    unknown key, ``what`` names KEY in the messages."""
     try:
         key, lo, hi, num = spec
         lo, hi, numf = float(lo), float(hi), float(num)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be (KEY, MIN, MAX, NUM), got {spec!r}") from None
-    template.check(key)
+        raise ValueError(f"{name} must be ({what}, MIN, MAX, NUM), got {spec!r}") from None
+    check(key)
     if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
         raise ValueError(f"{name} ({key}): MIN < MAX must be finite, got {lo:g}, {hi:g}")
     if numf != int(numf) or numf < 2:
         raise ValueError(f"{name} ({key}): NUM must be an integer >= 2, got {num!r}")
-    return str(key), np.linspace(lo, hi, int(numf))
+    return str(key), (lo, hi, int(numf))
+
+
+def _axis(name, spec, template):
+    key, (lo, hi, num) = _grid_spec(name, spec, "KEY", template.check)
+    return key, np.linspace(lo, hi, num)
 
 
 @dataclass(frozen=True, eq=False)
