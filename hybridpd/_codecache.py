@@ -25,6 +25,7 @@ are skipped.
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import re
@@ -106,10 +107,8 @@ def _locate() -> tuple[Path | None, str | None]:
         pass  # cannot be created (read-only home, a file in the way): try the fallback
     d = _fallback()
     try:
-        try:
+        with contextlib.suppress(FileExistsError):
             os.mkdir(d, 0o700)
-        except FileExistsError:
-            pass
         # someone else may have created it first: it must be ours and closed to everybody else
         if _usable(d, 0o077):
             return d, None
@@ -168,17 +167,13 @@ def _write_atomic(path: Path, text: str) -> None:
             os.fsync(f.fileno())
         os.replace(tmp, path)
     except BaseException:
-        try:
+        with contextlib.suppress(OSError):
             os.unlink(tmp)
-        except OSError:
-            pass
         raise
     for old in path.parent.glob(f"{path.name.rsplit('-', 1)[0]}-*.py"):
         if old != path:  # stale entries of the same name
-            try:
+            with contextlib.suppress(OSError):
                 old.unlink()
-            except OSError:
-                pass
 
 
 def _read_entry(path: Path) -> str:
@@ -249,8 +244,6 @@ def load(name: str, key: str, generate) -> dict:
                           digest=hashlib.sha256(body.encode()).hexdigest()) + body
     namespace = _execute(text, name, key, f"<generated {name}>")
     if path is not None:
-        try:
+        with contextlib.suppress(OSError):  # read-only or full disk: the code still works
             _write_atomic(path, text)
-        except OSError:
-            pass  # read-only or full disk: the code still works for this process
     return namespace
