@@ -150,11 +150,9 @@ class ControlledImpactPair:
             R[3, :] = v
             return R, r
 
-        walls = []
-        for wall, name in ((+1, "wall+"), (-1, "wall-")):
-            walls.append(Guard(name, c=-wall * gap, d=L, direction=-1, reset=(E, zero),
-                               target="free", zeno_target=f"stick{name[-1]}",
-                               zeno_reset=plastic(wall)))
+        walls = [Guard(name, c=-wall * gap, d=L, direction=-1, reset=(E, zero), target="free",
+                       zeno_target=f"stick{name[-1]}", zeno_reset=plastic(wall))
+                 for wall, name in ((+1, "wall+"), (-1, "wall-"))]
         free = Mode("free", cl.A, guards=tuple(walls))
         A_stick = cl.sticking_A()
         # Right wall: stuck while U <= 0 (g = -U >= 0); left wall: while U >= 0. The release

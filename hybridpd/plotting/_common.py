@@ -111,9 +111,7 @@ def legend_from_gids(fig, axes, *, loc="outside lower center", ncol=3, **kw):
 
 def param_line(params: dict) -> str:
     """``mu = .., gamma = .., omega = .., n = .., m2 = ..`` in mathtext."""
-    parts = []
-    for key, sym in (("mu", r"$\mu$"), ("gamma", r"$\gamma$"), ("omega", r"$\omega$"),
-                     ("n", "$n$"), ("m2", "$m_2$"), ("x10", "$x_{10}$")):
-        if key in params and params[key] is not None:
-            parts.append(f"{sym} = {params[key]:g}")
-    return ", ".join(parts)
+    symbols = (("mu", r"$\mu$"), ("gamma", r"$\gamma$"), ("omega", r"$\omega$"), ("n", "$n$"),
+               ("m2", "$m_2$"), ("x10", "$x_{10}$"))
+    return ", ".join(f"{sym} = {params[key]:g}" for key, sym in symbols
+                     if params.get(key) is not None)

@@ -173,9 +173,8 @@ def m2_study(settings: Settings, *, log=None) -> M2Study:
             r = symmetric_orbits(P["kp"], P["kv"], m2=rho_grid, e=e, case=case, **common)
             rho[(case, e)] = np.where(r.exists, r.spectral_radius, np.nan)
     grid = np.logspace(math.log10(lo), math.log10(hi), settings.m2_verdicts)
-    axes = []
-    for g in (settings.verdict_grid, settings.check_num(settings.verdict_grid)):
-        axes.append((np.linspace(0.1, settings.gains[0], g), np.linspace(0.1, settings.gains[1], g)))
+    axes = [(np.linspace(0.1, settings.gains[0], g), np.linspace(0.1, settings.gains[1], g))
+            for g in (settings.verdict_grid, settings.check_num(settings.verdict_grid))]
     verdicts = {k: [] for k in range(1, 6)}
     checked = {k: [] for k in range(1, 6)}
     evidence = {k: [] for k in range(1, 6)}

@@ -189,11 +189,9 @@ class RobustReport:
 
     def failures(self) -> list:
         """``[(e, mu, status text), ...]`` for every failing plant of the grid."""
-        out = []
-        for i, j in zip(*np.nonzero(self.status != 0)):
-            out.append((float(self.e_values[i]), float(self.mu_values[j]),
-                        PLANT_STATUS[int(self.status[i, j])]))
-        return out
+        return [(float(self.e_values[i]), float(self.mu_values[j]),
+                 PLANT_STATUS[int(self.status[i, j])])
+                for i, j in zip(*np.nonzero(self.status != 0))]
 
     def to_dict(self) -> dict:
         """JSON-ready summary (grid arrays as nested lists, NaN as ``None``)."""

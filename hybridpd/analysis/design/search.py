@@ -484,9 +484,8 @@ def _robustness(pb, kp, kv, xm, e_values, mu_values) -> RobustReport:
 
 
 def _infeasible(pb, dmap, r, J, obj):
-    counts = {}
-    for code, cnt in zip(*np.unique(r.reason, return_counts=True)):
-        counts[REASONS[int(code)]] = int(cnt)
+    counts = {REASONS[int(code)]: int(cnt)
+              for code, cnt in zip(*np.unique(r.reason, return_counts=True))}
     n_unstable = int(np.sum(r.exists & ~r.stable))
     if n_unstable:
         counts["exists but unstable"] = n_unstable
