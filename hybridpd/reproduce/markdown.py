@@ -101,14 +101,10 @@ def _verdict_table(d, w):
       "*unresolved*. The rules are written down in CONVENTIONS.md (\"Verdict rules\").\n")
     w("| # | paper's statement | verdict | grids (verdicts) |")
     w("|---|---|---|---|")
-    for con in d["conclusions"]:
-        rc = con["resolution_check"]
-        w(f"| {con['id']} | {con['statement']} | **{con['verdict']}** | "
-          f"{_grid(rc['grids'][0])} ({rc['verdicts'][0]}), {_grid(rc['grids'][1])} "
-          f"({rc['verdicts'][1]}) |")
-    for r in d.get("remarks", []):
-        rc = r["resolution_check"]
-        w(f"| mu | {r['statement']} | **{r['verdict']}** | {_grid(rc['grids'][0])} "
+    rows = [(c["id"], c) for c in d["conclusions"]] + [("mu", r) for r in d.get("remarks", [])]
+    for ident, c in rows:
+        rc = c["resolution_check"]
+        w(f"| {ident} | {c['statement']} | **{c['verdict']}** | {_grid(rc['grids'][0])} "
           f"({rc['verdicts'][0]}), {_grid(rc['grids'][1])} ({rc['verdicts'][1]}) |")
     w("")
 
