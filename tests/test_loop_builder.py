@@ -148,3 +148,20 @@ def test_zero_order_hold_equals_python_control(k, m):
     assert a.dt == b.dt == 0.01
     with pytest.raises(ValueError, match="shapes"):
         Controller(np.eye(2), np.ones((3, m)), np.ones((1, 2)), np.ones((1, m)))
+
+
+def test_loading_model_files_imports_no_python_control():
+    """Building a model (PD or sampled PID) writes the loop out: python-control stays unloaded."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1] / "examples" / "models"
+    code = ("import sys, hybridpd as hp\n"
+            f"for f in ({str(root / 'drivetrain.toml')!r}, {str(root / 'robot_joint.toml')!r}):\n"
+            "    hp.load_model(f)\n"
+            "print(sorted(m for m in ('control', 'sympy', 'matplotlib') if m in sys.modules))\n")
+    out = subprocess.run([sys.executable, "-c", code], check=False, capture_output=True,
+                         text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[]", out.stdout
