@@ -524,6 +524,15 @@ def sine_reference(reference, name: str = "reference", m2: float | None = None) 
     """``reference`` if it is the impact pair's (one sine, no offset), else ``ValueError``.
 
     ``m2`` given: a set ``feedforward`` must be the pair's ``m2`` (law (3)).
+
+    Examples
+    --------
+    >>> sine_reference(Reference(1.0, 5.0)).period == Reference(1.0, 5.0).period
+    True
+    >>> sine_reference(Reference.constant(0.2))
+    Traceback (most recent call last):
+    ...
+    ValueError: reference: the impact pair takes one sine xm cos(omega t) with no offset, got Reference(xm=(), omega=(), offset=0.2, feedforward=None)
     """
     if not isinstance(reference, Reference):
         raise ValueError(f"{name} must be a Reference, got {type(reference).__name__}")
@@ -545,7 +554,13 @@ def _is_pd_form(value) -> bool:
 def pd_values(value, name: str = "gains") -> tuple:
     """``(kp, kv)`` as finite floats from ``PDGains``, a pair or a mapping with keys exactly
     ``kp, kv``; ``ValueError`` naming ``name`` otherwise. Signs are not checked here (a
-    mechanical loop may use ``kv = 0``; :class:`PDGains` requires both positive)."""
+    mechanical loop may use ``kv = 0``; :class:`PDGains` requires both positive).
+
+    Examples
+    --------
+    >>> pd_values({"kp": 10, "kv": 0})
+    (10.0, 0.0)
+    """
     if isinstance(value, PDGains):
         return value.kp, value.kv
     if isinstance(value, Mapping):
