@@ -284,8 +284,10 @@ def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_it
     reason = {"converged": "converged", "singular": "singular", "max_iter": "max_iter",
               "line_search": "line search failed"}.get(res.status)
     F = res.residual
-    if res.status == "jacobian":
-        reason, F = eq.undefined(), None
+    if res.status == "jacobian":    # the map failed where its Jacobian was asked for again:
+        its = len(res.history) + 1  # that iteration ends, the next one reports it
+        reason, F = eq.undefined() if its <= max_iter else "max_iter", None
+        its = min(its, max_iter)
     elif res.converged and res.iterations == max_iter:
         reason = "max_iter"     # converged by the last step: this module's loop never saw it
     return _make_orbit(P, res.x, k, reason, its, F, periods=periods, min_return=min_return,
