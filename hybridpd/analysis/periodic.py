@@ -3,10 +3,13 @@
 Built on :class:`~hybridpd.analysis.hybridmap.SectionMap` (the map ``P`` on a guard's section,
 with ``DP`` from exact flows and saltation matrices):
 
-* :func:`find_orbit` solves ``P^k(s) = s`` by damped Newton (``DP^k - I`` from the saltation
-  chain, or central finite differences), for any impact sequence: whatever the automaton does
-  between two firings of the section's guard (other contacts, sticking, sampling instants,
-  mode switches) is part of ``P``. The phase residual is wrapped to ``[-T/2, T/2)``.
+* :func:`find_orbit` solves ``P^k(s) = s`` by the package's damped Newton
+  (:func:`~hybridpd.analysis.pathfollow.newton`) with Broyden updates (``DP^k - I`` from the
+  saltation chain, or central finite differences, only at the start and where an updated step
+  fails: on an orbit with many jumps one costs tens of map applications), for any impact
+  sequence: whatever the automaton does between two firings of the section's guard (other
+  contacts, sticking, sampling instants, mode switches) is part of ``P``. The phase residual
+  is wrapped to ``[-T/2, T/2)``.
 * :class:`PeriodicOrbit` holds the fixed point, the impact sequence, the Floquet multipliers
   (eigenvalues of ``DP^k``), the spectral radius and the stability verdict;
   :func:`measured_contraction` estimates the spectral radius independently, from iterated
