@@ -415,13 +415,17 @@ def _step(cur, prev_u, h, tangent, stop, direction, method, correct, make_point,
     return (None, rejected, h, tangent), res, why
 
 
-def illinois(evaluate, ftest, fa, fb, pa, pb, *, size, tol, max_iter):
+def illinois(evaluate, ftest, fa, fb, pa, pb, *, size, tol, max_iter, ftol=0.0,
+             bisect_every=3):
     """Root of ``ftest(evaluate(theta))`` on ``[0, 1]`` with ``f(0) = fa``, ``f(1) = fb``:
     the package's one bracketing root step (Illinois, a safeguarded regula falsi).
 
     ``evaluate(theta)`` returns a point or None (then the bracket is bisected instead).
-    ``size`` converts a ``theta`` interval to a length (stop below ``tol``). Returns
-    ``(point, f, located)`` with the best bracket end; ``pa``, ``pb`` are the end points.
+    ``size`` converts a ``theta`` interval to a length (stop below ``tol``); a point with
+    ``|f| < ftol`` is also a root. Every ``bisect_every``-th step bisects (0: never), which
+    keeps the bracket shrinking where the test function is not smooth; a smooth one (a
+    boundary tracer's) converges in fewer evaluations without. Returns ``(point, f,
+    located)`` with the best bracket end; ``pa``, ``pb`` are the end points.
     """
     a, b = 0.0, 1.0
     side = 0
@@ -432,7 +436,7 @@ def illinois(evaluate, ftest, fa, fb, pa, pb, *, size, tol, max_iter):
         theta = b - fb * (b - a) / (fb - fa) if fb != fa else 0.5 * (a + b)
         # keep the regula-falsi point inside the bracket and bisect every third iteration so
         # that the bracket shrinks geometrically even when the test function is not smooth
-        if not (a < theta < b) or it % 3 == 2:
+        if not (a < theta < b) or (bisect_every and it % bisect_every == bisect_every - 1):
             theta = 0.5 * (a + b)
         pt = evaluate(theta)
         fc = ftest(pt) if pt is not None else np.nan
@@ -444,7 +448,7 @@ def illinois(evaluate, ftest, fa, fb, pa, pb, *, size, tol, max_iter):
                 return best[0], best[1], False
         if abs(fc) < abs(best[1]):
             best = (pt, fc)
-        if fc == 0.0:
+        if fc == 0.0 or abs(fc) < ftol:
             return pt, fc, True
         if (fc > 0) == (fb > 0):
             b, fb = theta, fc
