@@ -1,12 +1,13 @@
-"""The closed loop between impacts, built with python-control.
+"""The closed loop between impacts: one builder for the impact pair and every mechanical model.
 
-The plant (two masses, input force ``U`` on ``m2``), the controller acting on the tracking
-error of ``x2`` (collocated) or ``x1`` (non-collocated), the feed-forward ``m2 xd''`` and the
-reference exosystem are joined with :func:`control.interconnect` (named signals) into one
-autonomous :class:`control.StateSpace`. For a pure PD the same matrices are also written out
-directly (``method="auto"``, the default), so that the PD paths never import python-control;
-the tests check both constructions against each other. Between impacts the closed loop is linear and
-time-invariant; the hybrid layer only reads its matrices (:class:`ClosedLoop`).
+A loop joins a linear plant ``x' = Ap x + bp U`` with measured outputs ``y = cy . x`` and
+``y' = cyd . x``, the reference exosystem (:class:`hybridpd.model.Reference`), a controller
+acting on the tracking error, and the feed-forward ``m_ff xd''``. Between impacts the result is
+one autonomous LTI system. :func:`loop_matrices` writes its matrices out directly (no
+python-control import, so loading a model stays cheap); :func:`interconnect_matrices` builds
+the same system with :func:`control.interconnect` from named signals, and the tests check the
+two against each other. :func:`closed_loop` applies them to the impact pair;
+:func:`hybridpd.mechanics.mechanical_loop` to any mechanical model.
 
 Sign conventions
 ----------------
@@ -15,25 +16,120 @@ Sign conventions
 * Tracking error, as in python-control's ``r - y``: ``err = xd - x`` (and ``err_dot = xd' - y``).
   The PD law (3) ``U = m2 xd'' - kv (y - xd') - kp (x - xd)`` is the controller
   ``U_fb = kp err + kv err_dot`` plus the feed-forward ``m2 xd''``.
-* A general controller is any proper python-control LTI system (``StateSpace`` or
-  ``TransferFunction``) from ``err`` (1 input) — or from ``[err, err_dot]`` (2 inputs) —
-  to the feedback force ``U_fb`` (1 output). The feed-forward is always added.
-* Closed-loop state order: ``[x1, y1, x2, y2, pc, ps, c_1, ..., c_k]`` (controller states last).
+* A general controller is any proper LTI system (:class:`Controller`, or a python-control
+  ``StateSpace`` / ``TransferFunction``) from ``err`` (1 input) or ``[err, err_dot]``
+  (2 inputs) to the feedback force ``U_fb`` (1 output).
+* Closed-loop state order: ``[plant..., exosystem..., c_1, ..., c_k]`` (controller states
+  last); for the pair ``[x1, y1, x2, y2, pc, ps, c_1, ..., c_k]``.
 """
 from __future__ import annotations
 
 import functools
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from hybridpd._repr import compact_repr
-from hybridpd.model import Case, ImpactPair, PDGains, Reference, as_gains
+from hybridpd.model import Case, ImpactPair, PDGains, Reference, pd_values, sine_reference
 
-__all__ = ["ClosedLoop", "closed_loop", "pd_controller"]
+__all__ = ["ClosedLoop", "Controller", "as_controller", "closed_loop", "interconnect_matrices",
+           "loop_matrices", "pd_controller"]
 
 MECH_STATES = ("x1", "y1", "x2", "y2")
 EXO_STATES = ("pc", "ps")
+
+
+@dataclass(frozen=True, eq=False)  # array fields: identity semantics
+class Controller:
+    """A linear controller from the tracking error to the feedback force, as matrices.
+
+    ``c' = A c + B e`` (continuous, ``dt = 0``) or ``c[k+1] = A c[k] + B e[k]`` (sampled with
+    period ``dt``), and ``u_fb = C c + D e``, with ``e = err`` (1 input) or ``[err, err_dot]``
+    (2 inputs).
+
+    Attributes
+    ----------
+    A, B, C, D : ndarray
+        Shapes ``(k, k)``, ``(k, m)``, ``(1, k)``, ``(1, m)`` with ``m`` in ``{1, 2}``.
+    dt : float
+        Sampling period (0: continuous-time).
+    gains : tuple of float or None
+        ``(kp, kv)`` when the controller was given as PD gains.
+
+    Examples
+    --------
+    >>> c = as_controller((10.0, 20.0))
+    >>> c.D, c.n_states, c.gains
+    (array([[10., 20.]]), 0, (10.0, 20.0))
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    dt: float = 0.0
+    gains: tuple | None = None
+    __repr__ = compact_repr
+
+    def __post_init__(self):
+        mats = [np.atleast_2d(np.asarray(m, dtype=float)) for m in (self.A, self.B, self.C,
+                                                                      self.D)]
+        A, B, C, D = mats
+        k, m = A.shape[0] if A.size else 0, D.shape[1]
+        try:
+            A, B, C = A.reshape(k, k), B.reshape(k, m), C.reshape(1, k)
+        except ValueError:
+            raise ValueError(f"controller A, B, C must have shapes (k, k), (k, m), (1, k) with m "
+                             f"= {m} inputs; got {A.shape}, {B.shape}, {C.shape}") from None
+        if D.shape[0] != 1 or m not in (1, 2):
+            raise ValueError(f"controller D must have shape (1, 1) or (1, 2) (inputs err[, "
+                             f"err_dot]), got {D.shape}")
+        if not all(np.all(np.isfinite(x)) for x in (A, B, C, D)):
+            raise ValueError("controller matrices must be finite")
+        if not (np.isfinite(self.dt) and self.dt >= 0):
+            raise ValueError(f"controller dt must be >= 0 (0: continuous), got {self.dt!r}")
+        for name, x in zip("ABCD", (A, B, C, D)):
+            object.__setattr__(self, name, x)
+        object.__setattr__(self, "dt", float(self.dt))
+
+    @property
+    def n_states(self) -> int:
+        """Number ``k`` of controller states."""
+        return self.A.shape[0]
+
+    @property
+    def n_inputs(self) -> int:
+        """1 (``err``) or 2 (``err``, ``err_dot``)."""
+        return self.D.shape[1]
+
+    @property
+    def state_names(self) -> tuple:
+        """``("c1", ..., "ck")``."""
+        return tuple(f"c{i + 1}" for i in range(self.n_states))
+
+    def sample(self, dt: float) -> Controller:
+        """The zero-order-hold discretisation with period ``dt > 0`` (a continuous controller
+        only): ``[[Ad, Bd], [0, I]] = expm([[A, B], [0, 0]] dt)``, ``C`` and ``D`` unchanged."""
+        from scipy.linalg import expm
+
+        if self.dt:
+            raise ValueError(f"dt: the controller is already sampled (dt = {self.dt!r})")
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be > 0 (sampling period), got {dt!r}")
+        k, m = self.B.shape
+        Z = np.zeros((k + m, k + m))
+        Z[:k, :k], Z[:k, k:] = self.A, self.B
+        E = expm(Z * dt)
+        return Controller(E[:k, :k], E[:k, k:], self.C, self.D, float(dt), self.gains)
+
+    def to_ss(self, name: str = "ctrl"):
+        """The controller as a python-control ``StateSpace`` with named signals."""
+        import control as ct
+
+        inputs = ["err", "err_dot"][:self.n_inputs]
+        return ct.ss(self.A, self.B, self.C, self.D, self.dt, inputs=inputs, outputs=["u_fb"],
+                     states=list(self.state_names), name=name)
 
 
 def pd_controller(kp: float, kv: float, name: str = "pd"):
@@ -42,75 +138,207 @@ def pd_controller(kp: float, kv: float, name: str = "pd"):
     ``U_fb = kp * err + kv * err_dot``. A pure PD is improper as a transfer function from
     ``err`` alone, hence the two inputs (the full state is measured).
     """
-    import control as ct
-
     g = PDGains(kp, kv)
-    return ct.ss(np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)), [[g.kp, g.kv]],
-                 inputs=["err", "err_dot"], outputs=["u_fb"], name=name)
+    return Controller(*_static(g.kp, g.kv)).to_ss(name)
 
 
-def _as_controller(controller):
-    """``(python-control StateSpace from err[/err_dot] to u_fb, PDGains or None)``."""
-    gains = as_gains(controller, strict=False)
-    if gains is not None:
-        return pd_controller(gains.kp, gains.kv), gains
-    if not type(controller).__module__.startswith("control."):
-        _bad_controller(controller)
+def _static(kp, kv):
+    return np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)), np.array([[kp, kv]])
+
+
+def as_controller(controller, name: str = "controller", *, sampled: bool = True) -> Controller:
+    """Normalise a controller: PD gains, a :class:`Controller` or a python-control LTI system.
+
+    Parameters
+    ----------
+    controller : PDGains, (kp, kv), {"kp": .., "kv": ..}, Controller, StateSpace or TransferFunction
+        PD gains (finite; the pair's :class:`PDGains` alone requires them positive) or a
+        proper LTI system from ``err`` or ``[err, err_dot]`` to ``u_fb``.
+    name : str
+        Parameter name used in error messages.
+    sampled : bool
+        Whether a discrete-time controller (``dt > 0``) is accepted.
+
+    Returns
+    -------
+    Controller
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``: a malformed gain pair or mapping, an improper or non-finite system,
+        wrong input/output counts, or a discrete controller where ``sampled`` is False.
+
+    Examples
+    --------
+    >>> import control as ct
+    >>> as_controller({"kp": 10, "kv": 0}).D          # a P controller, kv = 0 allowed here
+    array([[10.,  0.]])
+    >>> c = as_controller(ct.tf([20, 10], [1e-3, 1]))  # a filtered PD from err alone
+    >>> c.n_states, c.n_inputs, c.gains
+    (1, 1, None)
+    """
+    if isinstance(controller, Controller):
+        ctrl = controller
+    elif isinstance(controller, (PDGains, Mapping, tuple, list, np.ndarray)):
+        kp, kv = pd_values(controller, name)
+        ctrl = Controller(*_static(kp, kv), gains=(kp, kv))
+    elif type(controller).__module__.startswith("control."):
+        ctrl = _from_python_control(controller, name)
+    else:
+        raise ValueError(
+            f"{name} must be PDGains, a (kp, kv) pair, a mapping with keys exactly kp, kv, a "
+            f"Controller or a python-control StateSpace/TransferFunction; got "
+            f"{type(controller).__name__}")
+    if ctrl.dt and not sampled:
+        raise ValueError(f"{name} must be continuous-time (dt = 0), got dt = {ctrl.dt!r}")
+    return ctrl
+
+
+def _from_python_control(controller, name):
     import control as ct
 
-    if isinstance(controller, (ct.StateSpace, ct.TransferFunction)):
-        try:
-            sys = ct.ss(controller)
-        except ValueError as exc:  # improper transfer functions cannot be realised
-            raise ValueError(
-                "controller must be a proper LTI system from the tracking error to the force "
-                f"(an improper PD 'kp + kv s' must be given as PDGains or pd_controller): {exc}"
-            ) from None
-        if sys.isdtime(strict=True):
-            raise ValueError("controller must be continuous-time (dt = 0)")
-        if sys.noutputs != 1 or sys.ninputs not in (1, 2):
-            raise ValueError(
-                "controller must have 1 output (force) and 1 input (err) or 2 inputs "
-                f"(err, err_dot); got {sys.ninputs} inputs, {sys.noutputs} outputs"
-            )
-        mats = [np.asarray(m, float) for m in (sys.A, sys.B, sys.C, sys.D)]
-        if not all(np.all(np.isfinite(m)) for m in mats):
-            raise ValueError("controller matrices must be finite")
-        inputs = ["err"] if sys.ninputs == 1 else ["err", "err_dot"]
-        states = [f"c{i + 1}" for i in range(sys.nstates)]
-        sys = ct.ss(*mats, inputs=inputs, outputs=["u_fb"], states=states, name="ctrl")
-        return sys, None
-    _bad_controller(controller)
+    if not isinstance(controller, (ct.StateSpace, ct.TransferFunction)):
+        raise ValueError(f"{name} must be a python-control StateSpace or TransferFunction, got "
+                         f"{type(controller).__name__}")
+    try:
+        sys = ct.ss(controller)
+    except ValueError as exc:  # improper transfer functions cannot be realised
+        raise ValueError(
+            f"{name} must be a proper LTI system from the tracking error to the force (an "
+            f"improper PD 'kp + kv s' must be given as gains (kp, kv)): {exc}") from None
+    if sys.noutputs != 1 or sys.ninputs not in (1, 2):
+        raise ValueError(f"{name} must have 1 output (force) and 1 input (err) or 2 inputs "
+                         f"(err, err_dot); got {sys.ninputs} inputs, {sys.noutputs} outputs")
+    mats = [np.asarray(m, float) for m in (sys.A, sys.B, sys.C, sys.D)]
+    if not all(np.all(np.isfinite(m)) for m in mats):
+        raise ValueError(f"{name} matrices must be finite")
+    if sys.dt is True:
+        raise ValueError(f"{name} dt must be a number (sampling period), not True")
+    return Controller(*mats, dt=0.0 if sys.dt in (None, 0) else float(sys.dt))
 
 
-def _bad_controller(controller):
-    raise ValueError(
-        "controller must be PDGains, a (kp, kv) pair, a mapping with keys exactly kp, kv, or a "
-        f"python-control StateSpace/TransferFunction; got {type(controller).__name__}"
-    )
+def _signal_rows(n_plant, cy, cyd, exo_C, N):
+    """Rows over the loop state of ``xd, xd', xd'', y, y'``; shape ``(5, N)``."""
+    R = np.zeros((5, N))
+    ne = exo_C.shape[1]
+    R[:3, n_plant:n_plant + ne] = exo_C
+    R[3, :n_plant] = cy
+    R[4, :n_plant] = cyd
+    return R
 
 
-def _pd_matrices(pair: ImpactPair, gains: PDGains, reference: Reference, case: Case):
-    """``(A, force)`` of the PD closed loop written out from (3)-(8) (no python-control).
+def loop_matrices(Ap, bp, cy, cyd, reference: Reference, ctrl: Controller, feedforward: float):
+    """``(A, force)`` of the continuous closed loop, written out from the block equations.
 
-    ``U = m2 xd'' - kv (y - xd') - kp (x - xd)`` with ``xd = pc``, ``xd' = -w ps``,
-    ``xd'' = -w^2 pc``. The test suite checks these against :func:`control.interconnect`.
+    Parameters
+    ----------
+    Ap : ndarray, shape (p, p)
+        Plant flow without control; ``bp`` (shape ``(p,)``) is where the force ``U`` enters.
+    cy, cyd : ndarray, shape (p,)
+        The measured position and velocity, ``y = cy . x`` and ``y' = cyd . x``.
+    reference : Reference
+    ctrl : Controller
+        Continuous-time.
+    feedforward : float
+        ``m_ff`` in ``U = m_ff xd'' + u_fb``.
+
+    Returns
+    -------
+    A : ndarray, shape (N, N)
+        Flow of ``[plant, exosystem, controller]``, ``N = p + len(reference.exo_names) + k``.
+    force : ndarray, shape (N,)
+        ``U = force @ state``.
+
+    Examples
+    --------
+    A unit mass on a spring, position measured, PD (10, 2), constant set-point 1:
+
+    >>> Ap = np.array([[0.0, 1.0], [-1.0, 0.0]])
+    >>> A, force = loop_matrices(Ap, np.array([0.0, 1.0]), np.array([1.0, 0.0]),
+    ...                          np.array([0.0, 1.0]), Reference.constant(1.0),
+    ...                          as_controller((10.0, 2.0)), 0.0)
+    >>> force                      # U = 10 (r - x) - 2 v
+    array([-10.,  -2.,  10.])
+    >>> A[1]                       # v' = -x + U
+    array([-11.,  -2.,  10.])
     """
-    kp, kv, m2, w = gains.kp, gains.kv, pair.m2, reference.omega
-    force = np.zeros(6)
-    ix, iy = (2, 3) if case is Case.COLLOCATED else (0, 1)
-    force[ix], force[iy] = -kp, -kv
-    force[4], force[5] = kp - m2 * w * w, -kv * w
-    A = np.zeros((6, 6))
-    A[0, 1] = A[2, 3] = 1.0
-    A[3] = force / m2
-    A[4, 5], A[5, 4] = -w, w
+    exo_A, exo_C = reference.exo_matrices()
+    p, ne, k = Ap.shape[0], exo_A.shape[0], ctrl.n_states
+    N = p + ne + k
+    xd, vd, ad, y, yd = _signal_rows(p, cy, cyd, exo_C, N)
+    E = np.vstack([xd - y, vd - yd])[:ctrl.n_inputs]
+    S = np.zeros((k, N))
+    S[:, p + ne:] = np.eye(k)
+    force = feedforward * ad + (ctrl.C @ S)[0] + (ctrl.D @ E)[0]
+    A = np.zeros((N, N))
+    A[:p, :p] = Ap
+    A[:p] += np.outer(bp, force)
+    A[p:p + ne, p:p + ne] = exo_A
+    A[p + ne:] = ctrl.A @ S + ctrl.B @ E
     return A, force
+
+
+def interconnect_matrices(Ap, bp, cy, cyd, reference: Reference, ctrl: Controller,
+                          feedforward: float):
+    """The same ``(A, force)`` as :func:`loop_matrices`, built by :func:`control.interconnect`.
+
+    The blocks (plant, exosystem, controller, feed-forward gain, summing junctions) are joined
+    by signal name; the states are put back in the order ``[plant, exosystem, controller]``.
+
+    Examples
+    --------
+    >>> Ap = np.array([[0.0, 1.0], [-1.0, 0.0]])
+    >>> args = (Ap, np.array([0.0, 1.0]), np.array([1.0, 0.0]), np.array([0.0, 1.0]),
+    ...         Reference.sine(1.0, 2.0), as_controller((10.0, 2.0)), 1.0)
+    >>> np.allclose(interconnect_matrices(*args)[0], loop_matrices(*args)[0])
+    True
+    """
+    import control as ct
+
+    p = Ap.shape[0]
+    exo_A, exo_C = reference.exo_matrices()
+    xs = [f"x{i}" for i in range(p)]
+    plant = ct.ss(Ap, np.reshape(bp, (p, 1)), np.vstack([np.eye(p), cy, cyd]),
+                  np.zeros((p + 2, 1)), states=xs, inputs=["U"], outputs=xs + ["y", "y_dot"],
+                  name="plant")
+    # A dummy input (ignored): python-control cannot build a system without inputs.
+    exo = ct.ss(exo_A, np.zeros((exo_A.shape[0], 1)), exo_C, np.zeros((3, 1)),
+                states=list(reference.exo_names), inputs=["exo_unused"],
+                outputs=["xd", "vd", "ad"], name="exo")
+    ff = ct.ss(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), [[feedforward]],
+               inputs=["ad"], outputs=["u_ff"], name="ff")
+    c = ctrl.to_ss()
+    blocks = [plant, exo, c, ff,
+              ct.summing_junction(inputs=["xd", "-y"], output="err", name="sum_err"),
+              ct.summing_junction(inputs=["u_fb", "u_ff"], output="U", name="sum_u")]
+    ignore = ["exo.vd", "plant.y_dot"]
+    if ctrl.n_inputs == 2:
+        blocks.append(ct.summing_junction(inputs=["vd", "-y_dot"], output="err_dot",
+                                          name="sum_err_dot"))
+        ignore = []
+    outs = xs + ["U"]
+    sys = ct.interconnect(blocks, inplist=[], outlist=outs, outputs=outs, name="closed_loop",
+                          ignore_outputs=ignore, ignore_inputs=["exo_unused"])
+    labels = list(sys.state_labels)
+    order = ([f"plant_{s}" for s in xs] + [f"exo_{s}" for s in reference.exo_names]
+             + [f"ctrl_{s}" for s in ctrl.state_names])
+    perm = [labels.index(s) for s in order]
+    return (np.asarray(sys.A, float)[np.ix_(perm, perm)],
+            np.asarray(sys.C, float)[-1, perm].copy())
+
+
+def _pair_plant(pair: ImpactPair, case: Case):
+    Ap = np.zeros((4, 4))
+    Ap[0, 1] = Ap[2, 3] = 1.0
+    bp = np.array([0.0, 0.0, 0.0, 1.0 / pair.m2])
+    ix = 2 if case is Case.COLLOCATED else 0
+    return Ap, bp, np.eye(4)[ix], np.eye(4)[ix + 1]
 
 
 @dataclass(frozen=True)
 class ClosedLoop:
-    """The linear closed loop between impacts.
+    """The linear closed loop of the impact pair between impacts.
 
     Attributes
     ----------
@@ -130,10 +358,6 @@ class ClosedLoop:
         Names of the ``n`` states in order.
     controller : object
         The controller as given (PDGains for a PD).
-    sys : control.StateSpace
-        The interconnected autonomous system (no inputs; outputs ``x1, y1, x2, y2, U``),
-        built with :func:`control.interconnect` on first access when the loop was assembled
-        by the PD fast path.
     """
 
     pair: ImpactPair
@@ -144,17 +368,19 @@ class ClosedLoop:
     force: np.ndarray = field(repr=False)
     state_names: tuple
     controller: object = field(default=None, repr=False)
-    _sys: object = field(default=None, repr=False, compare=False)
 
     __repr__ = compact_repr
 
     @functools.cached_property
     def sys(self):
-        """The python-control interconnection (see the class docstring)."""
-        if self._sys is not None:
-            return self._sys
-        return closed_loop(self.pair, self.controller, self.reference, self.case,
-                           method="interconnect")._sys
+        """The loop as an autonomous python-control ``StateSpace`` (outputs
+        ``x1, y1, x2, y2, U``), built on first access."""
+        import control as ct
+
+        C = np.vstack([np.eye(4, self.n_states), self.force])
+        return ct.ss(self.A, np.zeros((self.n_states, 0)), C, np.zeros((5, 0)),
+                     states=list(self.state_names), outputs=list(MECH_STATES) + ["U"],
+                     name="closed_loop")
 
     @property
     def n_states(self) -> int:
@@ -189,19 +415,20 @@ class ClosedLoop:
 
 def closed_loop(pair: ImpactPair, controller, reference: Reference, case="collocated", *,
                 method: str = "auto") -> ClosedLoop:
-    """Interconnect plant, controller, feed-forward and exosystem with python-control.
+    """Join plant, controller, feed-forward ``m2 xd''`` and exosystem of the impact pair.
 
     Parameters
     ----------
     pair : ImpactPair
-    controller : PDGains, (kp, kv), {"kp": .., "kv": ..}, or python-control LTI system
-        See the module docstring for the signal conventions.
+    controller : PDGains, (kp, kv), {"kp": .., "kv": ..}, Controller, or python-control LTI system
+        See the module docstring for the signal conventions; continuous-time.
     reference : Reference
+        One sine, no offset.
     case : {"collocated", "noncollocated"}
     method : {"auto", "interconnect"}
-        ``"auto"`` writes a PD loop's matrices out directly (no python-control import; the
-        tests check them against the interconnection) and interconnects any other
-        controller; ``"interconnect"`` always uses :func:`control.interconnect`.
+        ``"auto"`` writes the matrices out directly (:func:`loop_matrices`, no python-control
+        import); ``"interconnect"`` uses :func:`control.interconnect`
+        (:func:`interconnect_matrices`). The tests check the two against each other.
 
     Returns
     -------
@@ -218,60 +445,19 @@ def closed_loop(pair: ImpactPair, controller, reference: Reference, case="colloc
     """
     if not isinstance(pair, ImpactPair):
         raise ValueError(f"pair must be an ImpactPair, got {type(pair).__name__}")
-    if not isinstance(reference, Reference):
-        raise ValueError(f"reference must be a Reference, got {type(reference).__name__}")
+    sine_reference(reference, "reference", pair.m2)
     case = Case.parse(case)
     if method not in ("auto", "interconnect"):
         raise ValueError(f"method must be 'auto' or 'interconnect', got {method!r}")
-    gains = as_gains(controller, "controller", strict=False)
-    if gains is not None and method == "auto":
-        A, force = _pd_matrices(pair, gains, reference, case)
-        return ClosedLoop(pair=pair, reference=reference, case=case, gains=gains, A=A,
-                          force=force, state_names=MECH_STATES + EXO_STATES, controller=gains)
-    import control as ct
-
-    ctrl, gains = _as_controller(controller)
-    m2, w = pair.m2, reference.omega
-
-    plant = ct.ss(
-        [[0, 1, 0, 0], [0, 0, 0, 0], [0, 0, 0, 1], [0, 0, 0, 0]],
-        [[0], [0], [0], [1.0 / m2]],
-        np.eye(4), np.zeros((4, 1)),
-        states=list(MECH_STATES), inputs=["U"], outputs=list(MECH_STATES), name="plant",
-    )
-    exo = ct.ss(
-        [[0, -w], [w, 0]], np.zeros((2, 0)),
-        [[1, 0], [0, -w], [-w * w, 0]], np.zeros((3, 0)),
-        states=list(EXO_STATES), outputs=["xd", "vd", "ad"], name="exo",
-    )
-    ff = ct.ss(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), [[m2]],
-               inputs=["ad"], outputs=["u_ff"], name="ff")
-    xs, ys = ("x2", "y2") if case is Case.COLLOCATED else ("x1", "y1")
-    blocks = [
-        plant, exo, ctrl, ff,
-        ct.summing_junction(inputs=["xd", "-" + xs], output="err", name="sum_err"),
-        ct.summing_junction(inputs=["u_fb", "u_ff"], output="U", name="sum_u"),
-    ]
-    if ctrl.ninputs == 2:
-        blocks.append(
-            ct.summing_junction(inputs=["vd", "-" + ys], output="err_dot", name="sum_err_dot"))
-    # A 1-input controller leaves the velocity reference unused; that is intended.
-    ignore = [] if ctrl.ninputs == 2 else ["exo.vd"]
-    sys = ct.interconnect(blocks, inplist=[], outlist=list(MECH_STATES) + ["U"],
-                          outputs=list(MECH_STATES) + ["U"], name="closed_loop",
-                          ignore_outputs=ignore)
-
-    # interconnect prefixes states with the subsystem name; put them in canonical order.
-    labels = list(sys.state_labels)
-    ctrl_labels = [s for s in labels if s.startswith(ctrl.name + "_")]
-    wanted = [f"plant_{s}" for s in MECH_STATES] + [f"exo_{s}" for s in EXO_STATES] + ctrl_labels
-    perm = [labels.index(s) for s in wanted]
-    A = np.asarray(sys.A, float)[np.ix_(perm, perm)]
-    C = np.asarray(sys.C, float)[:, perm]
-    sys = ct.ss(A, np.zeros((A.shape[0], 0)), C, np.zeros((C.shape[0], 0)),
-                states=list(MECH_STATES + EXO_STATES) + [s.split("_", 1)[1] for s in ctrl_labels],
-                outputs=list(MECH_STATES) + ["U"], name="closed_loop")
-    names = tuple(sys.state_labels)
+    ctrl = as_controller(controller, "controller", sampled=False)
+    gains = None
+    if ctrl.gains is not None:
+        try:
+            gains = PDGains(*ctrl.gains)
+        except ValueError as exc:
+            raise ValueError(f"controller: {exc}") from None
+    build = loop_matrices if method == "auto" else interconnect_matrices
+    A, force = build(*_pair_plant(pair, case), reference, ctrl, pair.m2)
     return ClosedLoop(pair=pair, reference=reference, case=case, gains=gains, A=A,
-                      force=C[4].copy(), state_names=names,
-                      controller=controller if gains is None else gains, _sys=sys)
+                      force=force, state_names=MECH_STATES + EXO_STATES + ctrl.state_names,
+                      controller=controller if gains is None else gains)

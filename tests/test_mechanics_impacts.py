@@ -195,3 +195,25 @@ def test_held_contact_takes_part_in_the_impact():
     z_post, target, names = ma.resolver()("stick0+", "contact1+", 0.1, z)
     np.testing.assert_allclose(z_post[ma.layout["v"]], [0.5, 0.5, 1.0], atol=1e-13)
     assert target == "stick0+" and names == ["contact1+"]
+
+
+def test_section_map_reports_a_joint_impact_instead_of_a_sequential_one():
+    """The section map applies jumps one at a time; where the simulation would take a joint
+    impact (two stops reached together) the map says so rather than give another answer."""
+    from hybridpd.analysis.hybridmap import SectionMap
+    from hybridpd.analysis.sections import mechanical_section
+
+    ma = _free_chain([[1.0, 0.2], [0.2, 1.0]], [Contact([1, 0], hi=0.5, restitution=0.5),
+                                               Contact([0, 1], hi=0.5, restitution=0.5)])
+    sec = mechanical_section(ma, contact=0, wall=1)
+    P = SectionMap(sec, t_max=5.0)
+    z_at = np.r_[_x0([0.5, 0.5], [1.0, 1.0]), 0.0]      # both stops reached at once
+    r = P.apply(sec.from_state(z_at, 0.0))
+    assert not r.ok and r.status == "simultaneous"
+    z_apart = np.r_[_x0([0.5, 0.3], [1.0, 1.0]), 0.0]   # the second one 0.2 later
+    r = SectionMap(sec, t_max=5.0).apply(sec.from_state(z_apart, 0.0))
+    assert r.status != "simultaneous"
+    assert SectionMap(sec, t_max=5.0, simtol=None).apply(
+        sec.from_state(z_at, 0.0)).status != "simultaneous"
+    with pytest.raises(ValueError, match="simtol"):
+        SectionMap(sec, simtol=-1.0)

@@ -155,18 +155,27 @@ def _point(r, s, p) -> FamilyPoint:
                        bool(st.stable), r.signature, r.t_hit - r.t_start)
 
 
-def _tests(pt: FamilyPoint) -> dict:
-    I = np.eye(pt.DP.shape[0])
+def _ns_count(pt: FamilyPoint) -> int:
+    """Non-real multipliers outside the unit circle."""
     m = pt.multipliers
-    nonreal_out = int(np.sum((np.abs(m.imag) > _NONREAL * np.maximum(1, np.abs(m)))
-                             & (np.abs(m) > 1)))
-    return {"fold": float(np.linalg.det(pt.DP - I)),
-            "period_doubling": float(np.linalg.det(pt.DP + I)),
-            "neimark_sacker": nonreal_out, "stability_change": pt.spectral_radius - 1.0}
+    return int(np.sum((np.abs(m.imag) > _NONREAL * np.maximum(1, np.abs(m))) & (np.abs(m) > 1)))
+
+
+def _ns_test(pt: FamilyPoint) -> float:
+    """``|lambda| - 1`` of the non-real multiplier nearest the circle (NaN if none)."""
+    m = pt.multipliers[np.abs(pt.multipliers.imag) > _NONREAL]
+    return float(np.min(np.abs(m)) - 1.0) if m.size else math.nan
+
+
+#: Test functions of the located kinds (their roots are the events).
+_TESTS = {"fold": lambda pt: float(np.linalg.det(pt.DP - np.eye(pt.DP.shape[0]))),
+          "period_doubling": lambda pt: float(np.linalg.det(pt.DP + np.eye(pt.DP.shape[0]))),
+          "stability_change": lambda pt: pt.spectral_radius - 1.0,
+          "neimark_sacker": _ns_test}
 
 
 def _events(a: FamilyPoint, b: FamilyPoint, index: int) -> list:
-    ta, tb = _tests(a), _tests(b)
+    """Sign changes of the test functions between two points, linearly interpolated."""
     out = []
 
     def lin(fa, fb):
@@ -174,18 +183,15 @@ def _events(a: FamilyPoint, b: FamilyPoint, index: int) -> list:
         return a.p + th * (b.p - a.p)
 
     for kind in ("fold", "period_doubling", "stability_change"):
-        fa, fb = ta[kind], tb[kind]
+        fa, fb = _TESTS[kind](a), _TESTS[kind](b)
         if np.isfinite(fa) and np.isfinite(fb) and fa * fb < 0:
             out.append(FamilyEvent(kind, index, lin(fa, fb)))
-    if ta["neimark_sacker"] != tb["neimark_sacker"]:
-        def ns(pt):   # |lambda| - 1 of the non-real multiplier nearest the circle
-            m = pt.multipliers[np.abs(pt.multipliers.imag) > _NONREAL]
-            return float(np.min(np.abs(m)) - 1.0) if m.size else math.nan
-        fa, fb = ns(a), ns(b)
+    na, nb = _ns_count(a), _ns_count(b)
+    if na != nb:
+        fa, fb = _ns_test(a), _ns_test(b)
         pe = lin(fa, fb) if np.isfinite(fa) and np.isfinite(fb) else 0.5 * (a.p + b.p)
         out.append(FamilyEvent("neimark_sacker", index, pe,
-                               f"complex multipliers outside: {ta['neimark_sacker']} -> "
-                               f"{tb['neimark_sacker']}"))
+                               f"complex multipliers outside: {na} -> {nb}"))
     if a.signature != b.signature:
         out.append(FamilyEvent("sequence_change", index, 0.5 * (a.p + b.p),
                                f"{len(a.signature)} -> {len(b.signature)} jumps per period"))
@@ -352,17 +358,6 @@ class _Path:
     def unwrap(self, cur, new):
         if self.make(new.u[-1]).section.has_phase:
             new.u[0] = cur.u[0] + self.make(new.u[-1]).wrap(new.u[:-1] - cur.u[:-1])[0]
-
-
-def _ns_test(pt):
-    m = pt.multipliers[np.abs(pt.multipliers.imag) > _NONREAL]
-    return float(np.min(np.abs(m)) - 1.0) if m.size else math.nan
-
-
-_TESTS = {"fold": lambda pt: float(np.linalg.det(pt.DP - np.eye(pt.DP.shape[0]))),
-          "period_doubling": lambda pt: float(np.linalg.det(pt.DP + np.eye(pt.DP.shape[0]))),
-          "stability_change": lambda pt: pt.spectral_radius - 1.0,
-          "neimark_sacker": _ns_test}
 
 
 def _locate(path, correct, a, b, ev, max_iter=40) -> FamilyEvent:

@@ -51,15 +51,16 @@ from scipy.linalg import expm
 from hybridpd._deprecated import moved_names
 from hybridpd._jit import njit
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
+from hybridpd.hybrid._kernel import _other_active
 from hybridpd.hybrid.automaton import HybridAutomaton, ZenoOptions, run_hybrid
 
 __all__ = ["MAP_STATUS", "MapResult", "Section", "SectionMap", "exosystem"]
 
 #: Codes of :attr:`MapResult.status`.
 MAP_STATUS = {0: "returned", 1: "jump_limit", 2: "zeno", 3: "nonfinite", 4: "step_limit",
-              6: "end_time", 7: "bad_start"}
+              6: "end_time", 7: "bad_start", 8: "simultaneous"}
 ST_RETURNED, ST_JUMP_LIMIT, ST_ZENO, ST_NONFINITE, ST_STEP_LIMIT = 0, 1, 2, 3, 4
-ST_END_TIME, ST_BAD_START = 6, 7
+ST_END_TIME, ST_BAD_START, ST_SIMULTANEOUS = 6, 7, 8
 _ON_GUARD_RTOL = 1e-9      # |g| below this (relative) at a pending event: on that guard
 
 
@@ -334,6 +335,17 @@ class Section:
 # the compiled return kernel
 # ----------------------------------------------------------------------------------------
 @njit(cache=True)
+def _any_joint(G, ng, h, groups, jt, jg, jsrc, jkind, jpre, nb, simtol):
+    """Whether one of the first ``nb`` recorded jumps is joint (see ``SectionMap.simtol``)."""
+    for q in range(nb):
+        m, g = jsrc[q], jg[q]
+        if jkind[q] != 3 and groups[m, g] != 0 and _other_active(
+                G[m], ng[m], groups[m], g, jpre[q], h[m], simtol * (1.0 + abs(jt[q]))):
+            return True
+    return False
+
+
+@njit(cache=True)
 def _pending_guard(w, mode, gc, gdir, ng):
     """The unique guard of ``mode`` on which the pending state ``w`` sits, or -1 / -2 (ties)."""
     found = -1
@@ -428,6 +440,12 @@ class SectionMap(PoincareMap):
     zeno : ZenoOptions, optional
         Accumulation rules (default the automaton's own, ``section.automaton.zeno``, which
         its simulations use too); ``tail_tol`` included.
+    simtol : float or None
+        Guards of one simultaneity group (a mechanical model's impacts) that close within
+        ``simtol (1 + |t|)`` of each other take one joint jump in a simulation; the map
+        applies jumps one at a time, so where that happens :meth:`apply` reports status
+        ``"simultaneous"`` (no image) instead of a sequential answer. ``None`` skips the check.
+        The compiled iterations of basins do not check.
 
     Examples
     --------
@@ -443,7 +461,8 @@ class SectionMap(PoincareMap):
     """
 
     def __init__(self, section: Section, *, t_max: float | None = None, max_jumps: int = 10_000,
-                 max_steps: int = 10_000_000, zeno: ZenoOptions | None = None):
+                 max_steps: int = 10_000_000, zeno: ZenoOptions | None = None,
+                 simtol: float | None = 1e-12):
         if not isinstance(section, Section):
             raise ValueError(f"section must be a Section, got {type(section).__name__}")
         self.section = section
@@ -463,17 +482,22 @@ class SectionMap(PoincareMap):
         if not isinstance(zeno, ZenoOptions):
             raise ValueError("zeno must be a ZenoOptions instance")
         self.zeno = zeno
+        if simtol is not None and not (math.isfinite(float(simtol)) and float(simtol) >= 0):
+            raise ValueError(f"simtol must be >= 0 or None, got {simtol!r}")
+        self.simtol = None if simtol is None else float(simtol)
         ha = section.automaton
         pk = ha.packed
         M, GM = pk.ng.shape[0], pk.G.shape[1]
         N1 = ha.n_states + 1
         gc = np.zeros((M, GM, N1))
         gdir = np.zeros((M, GM))
+        self._groups = np.zeros((M, GM), np.int64)
         for mi, m in enumerate(ha.modes):
             for gi, g in enumerate(m.guards):
                 gc[mi, gi, :-1] = g.c
                 gc[mi, gi, -1] = g.d
                 gdir[mi, gi] = g.direction
+                self._groups[mi, gi] = g.group
         dt_min = pk.h * 1e-9 if zeno.dt_min is None else np.full(M, float(zeno.dt_min))
         self._kernel_args = (
             pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs, pk.gsum, pk.cnorm, pk.prio,
@@ -559,6 +583,8 @@ class SectionMap(PoincareMap):
                        kinds[int(jkind[q])]) for q in range(nb))
         z_hit = w[:n].copy()
         t_hit = float(fc[0])
+        if self._joint_jump(bufs, nb):     # the sequential answer is not the model's
+            st = ST_SIMULTANEOUS
         mode_final = mn[int(ic[0])] if st != ST_RETURNED else sec.mode
         if st != ST_RETURNED:
             return MapResult(np.full(self.dim, np.nan), False, MAP_STATUS[st], t0, t_hit,
@@ -576,6 +602,15 @@ class SectionMap(PoincareMap):
             grazing = grazing or tangent
         return MapResult(img, True, "returned", t0, t_hit, z_hit, mode_final, jumps, grazing,
                          DP)
+
+    def _joint_jump(self, bufs, nb) -> bool:
+        """Whether one of the first ``nb`` jumps fired while another guard of its group was
+        on its guard or closing onto it within ``simtol (1 + |t|)`` (the simulation's rule)."""
+        if self.simtol is None or not self._groups.any():
+            return False
+        ka = self._kernel_args                 # h, ..., G (index 5), ..., ng (index 10)
+        return _any_joint(ka[5], ka[10], ka[0], self._groups, bufs[3], bufs[5], bufs[6],
+                          bufs[8], bufs[9], int(nb), self.simtol)
 
     def _jacobian(self, s, bufs, nb, z_hit) -> np.ndarray:
         sec = self.section

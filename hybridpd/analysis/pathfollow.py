@@ -5,8 +5,9 @@ solution of ``F(u) = P^k(s; p) - s = 0`` by natural or pseudo-arclength steps (p
 folds). Its callers (:func:`hybridpd.analysis.hybridcont.continue_family` for any automaton,
 :func:`hybridpd.analysis.continuation.continue_orbit` for the impact pair) give the map
 through ``F``, ``Fs``, ``Fp`` and ``make_point`` and their events through ``detect``.
-:func:`newton` (damped) is the Newton method of the correctors and of the pair's orbit
-search; :func:`illinois` the bracketing root step of event location.
+:func:`newton` (damped; with Broyden updates for
+:func:`~hybridpd.analysis.periodic.find_orbit`) is the Newton method of the correctors and of
+the orbit searches; :func:`illinois` the bracketing root step of event location.
 """
 from __future__ import annotations
 
@@ -21,8 +22,26 @@ _MAX_HALVINGS = 60         # bound on step halvings in one continuation step
 
 @dataclass
 class NewtonResult:
-    """Outcome of :func:`newton`: the last iterate, whether and why it stopped, the residual
-    history, the iterations and the last full step's size."""
+    """Outcome of :func:`newton`.
+
+    Attributes
+    ----------
+    x : ndarray
+        The last iterate.
+    converged : bool
+    reason, status : str
+        Why it stopped, in words and as one of ``"converged"``, ``"undefined"`` (at the
+        start), ``"jacobian"`` (``jac`` raised), ``"singular"``, ``"line_search"``,
+        ``"max_iter"``.
+    history : list of float
+        The residual norm at the start and after every accepted step.
+    iterations : int
+        Accepted steps (plus the failed one where the line search failed).
+    step : float
+        ``|dx|_inf`` of the last full Newton step.
+    residual : ndarray or None
+        The residual at ``x``.
+    """
 
     x: np.ndarray
     converged: bool
@@ -30,58 +49,136 @@ class NewtonResult:
     history: list
     iterations: int
     step: float
+    residual: np.ndarray | None = None
+    status: str = ""
 
 
-def newton(resid, jac, x0, *, tol, max_iter, scale, min_lambda=2.0 ** -12):
-    """Damped Newton with backtracking on ``||F||_inf``.
+def _max_abs(_x, r):
+    return float(np.max(np.abs(r)))
 
-    ``resid(x)`` returns the residual or None where undefined; ``jac(x)`` the Jacobian (may
-    raise). Converged when ``||F|| <= tol * scale(x)``, or when a full Newton step is itself
-    below ``tol * scale(x)`` (the residual then sits at its rounding floor, which exceeds
-    ``tol`` for strongly unstable orbits whose multipliers amplify rounding).
+
+def newton(resid, jac, x0, *, tol, max_iter, scale=lambda _x: 1.0, norm=_max_abs,
+           broyden=False, difference=np.subtract, canonical=None, min_lambda=2.0 ** -12,
+           step_test=True):
+    """Damped Newton with backtracking on the residual norm; optionally Broyden updates.
+
+    Converged when ``norm(x, F) <= tol * scale(x)``, or (``step_test``) when a full Newton
+    step is itself below ``tol * scale(x)`` (the residual then sits at its rounding floor,
+    which exceeds ``tol`` for strongly unstable orbits whose multipliers amplify rounding).
+
+    Parameters
+    ----------
+    resid, jac : callable
+        ``resid(x)``: the residual, ndarray ``(d,)``, or None where undefined (such trial
+        points are rejected); ``jac(x)``: its Jacobian ``(d, d)`` (may raise RuntimeError,
+        ValueError or LinAlgError).
+    x0 : array_like, shape (d,)
+    tol, max_iter : float, int
+        Tolerance on ``norm`` (times ``scale``); bound on Newton steps.
+    scale, norm : callable, optional
+        ``scale(x)`` multiplies ``tol`` (default 1); ``norm(x, F)`` (default ``|F|_inf``).
+    broyden : bool
+        Rank-one (Broyden) updates of the Jacobian after each step; ``jac`` is evaluated at
+        the start and again only where a step along the updated Jacobian fails (much cheaper
+        where one ``jac`` costs many evaluations of ``resid``; still superlinear).
+    difference, canonical : callable, optional
+        ``difference(a, b)``: the step ``a - b`` of the Broyden secant (e.g. with a phase
+        wrapped); ``canonical(x)``: the representative of every accepted iterate (e.g. a
+        phase reduced to ``[0, T)``).
+    min_lambda : float
+        Smallest damping factor of the line search (the factors are ``1, 1/2, ...``).
+    step_test : bool
+        Accept a full Newton step below ``tol * scale(x)`` as convergence.
+
+    Returns
+    -------
+    NewtonResult
+
+    Examples
+    --------
+    >>> from hybridpd.analysis.pathfollow import newton
+    >>> res = newton(lambda x: x ** 2 - 2.0, lambda x: np.diag(2 * x), [1.0], tol=1e-14,
+    ...              max_iter=20)
+    >>> res.converged, round(float(res.x[0]), 12)
+    (True, 1.414213562373)
     """
     x = np.array(x0, dtype=float)
     r = resid(x)
     if r is None:
-        return NewtonResult(x, False, "map undefined at the initial point", [], 0, np.nan)
-    nr = float(np.max(np.abs(r)))
+        return NewtonResult(x, False, "map undefined at the initial point", [], 0, np.nan,
+                            None, "undefined")
+    nr = norm(x, r)
     hist = [nr]
     last = np.nan
+    J = None
+
+    def out(ok, reason, its, status):
+        return NewtonResult(x, ok, reason, hist, its, last, r, status)
+
     for it in range(1, max_iter + 1):
         if nr <= tol * scale(x):
-            return NewtonResult(x, True, "residual below tol", hist, it - 1, last)
-        try:
-            J = jac(x)
-            dx = np.linalg.solve(J, -r)
-        except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:
-            return NewtonResult(x, False, f"Jacobian failed: {exc}", hist, it - 1, last)
-        if not np.all(np.isfinite(dx)):
-            return NewtonResult(x, False, "singular Jacobian", hist, it - 1, last)
-        last = float(np.max(np.abs(dx)))
-        lam = 1.0
-        accepted = False
-        while lam >= min_lambda:
-            xn = x + lam * dx
-            rn = resid(xn)
-            if rn is not None:
-                nrn = float(np.max(np.abs(rn)))
-                if nrn <= (1.0 - 1e-4 * lam) * nr:
-                    accepted = True
-                    break
-            lam *= 0.5
-        if not accepted:
-            if last <= tol * scale(x):
-                return NewtonResult(x, True, "Newton step below tol (residual at rounding "
-                                    "floor)", hist, it, last)
-            return NewtonResult(x, False, "line search failed (no decrease of the residual)",
-                                hist, it, last)
-        x, r, nr = xn, rn, nrn
+            return out(True, "residual below tol", it - 1, "converged")
+        retry = False
+        while True:
+            fresh = J is None
+            try:
+                J = jac(x) if fresh else J
+            except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:
+                return out(False, f"Jacobian failed: {exc}", it - 1, "jacobian")
+            if retry:
+                # ``x`` may have been made canonical since ``r`` was evaluated: the residual
+                # of the point the new Jacobian belongs to
+                rx = resid(x)
+                r = r if rx is None else rx
+            try:
+                dx = np.linalg.solve(J, -r)
+                failed = None if np.all(np.isfinite(dx)) else ("singular Jacobian", it - 1)
+            except np.linalg.LinAlgError as exc:
+                failed = (f"Jacobian failed: {exc}", it - 1)
+            if failed is None:
+                last = float(np.max(np.abs(dx)))
+                trial = _line_search(resid, norm, x, dx, nr, min_lambda)
+                if trial is None:
+                    failed = ("line search failed (no decrease of the residual)", it)
+            if failed is None or fresh:
+                break
+            J, retry = None, True      # the updated Jacobian failed: the true one, again
+        if failed is not None:
+            if failed[1] == it and step_test and last <= tol * scale(x):
+                return out(True, "Newton step below tol (residual at rounding floor)", it,
+                           "converged")
+            return out(False, *failed, "line_search" if failed[1] == it else "singular")
+        xn, rn, nr, lam = trial
+        if broyden:
+            d = difference(xn, x)
+            dd = float(d @ d)
+            if dd > 0:
+                J = J + np.outer((rn - r) - J @ d, d) / dd
+        else:
+            J = None
+        x = xn if canonical is None else canonical(xn)
+        r = rn
         hist.append(nr)
-        if lam == 1.0 and last <= tol * scale(x):
-            return NewtonResult(x, True, "Newton step below tol", hist, it, last)
+        if step_test and lam == 1.0 and last <= tol * scale(x):
+            return out(True, "Newton step below tol", it, "converged")
     if nr <= tol * scale(x):
-        return NewtonResult(x, True, "residual below tol", hist, max_iter, last)
-    return NewtonResult(x, False, f"max_iter = {max_iter} reached", hist, max_iter, last)
+        return out(True, "residual below tol", max_iter, "converged")
+    return out(False, f"max_iter = {max_iter} reached", max_iter, "max_iter")
+
+
+def _line_search(resid, norm, x, dx, nr, min_lambda):
+    """``(x_new, F_new, norm_new, lambda)`` of the first damped step that decreases the
+    norm enough (Armijo), or None."""
+    lam = 1.0
+    while lam >= min_lambda:
+        xn = x + lam * dx
+        rn = resid(xn)
+        if rn is not None:
+            nrn = norm(xn, rn)
+            if nrn <= (1.0 - 1e-4 * lam) * nr:
+                return xn, rn, nrn, lam
+        lam *= 0.5
+    return None
 
 
 def corrector(F, Fs, Fp, *, tol, max_iter, scale):
@@ -318,13 +415,17 @@ def _step(cur, prev_u, h, tangent, stop, direction, method, correct, make_point,
     return (None, rejected, h, tangent), res, why
 
 
-def illinois(evaluate, ftest, fa, fb, pa, pb, *, size, tol, max_iter):
+def illinois(evaluate, ftest, fa, fb, pa, pb, *, size, tol, max_iter, ftol=0.0,
+             bisect_every=3):
     """Root of ``ftest(evaluate(theta))`` on ``[0, 1]`` with ``f(0) = fa``, ``f(1) = fb``:
     the package's one bracketing root step (Illinois, a safeguarded regula falsi).
 
     ``evaluate(theta)`` returns a point or None (then the bracket is bisected instead).
-    ``size`` converts a ``theta`` interval to a length (stop below ``tol``). Returns
-    ``(point, f, located)`` with the best bracket end; ``pa``, ``pb`` are the end points.
+    ``size`` converts a ``theta`` interval to a length (stop below ``tol``); a point with
+    ``|f| < ftol`` is also a root. Every ``bisect_every``-th step bisects (0: never), which
+    keeps the bracket shrinking where the test function is not smooth; a smooth one (a
+    boundary tracer's) converges in fewer evaluations without. Returns ``(point, f,
+    located)`` with the best bracket end; ``pa``, ``pb`` are the end points.
     """
     a, b = 0.0, 1.0
     side = 0
@@ -335,7 +436,7 @@ def illinois(evaluate, ftest, fa, fb, pa, pb, *, size, tol, max_iter):
         theta = b - fb * (b - a) / (fb - fa) if fb != fa else 0.5 * (a + b)
         # keep the regula-falsi point inside the bracket and bisect every third iteration so
         # that the bracket shrinks geometrically even when the test function is not smooth
-        if not (a < theta < b) or it % 3 == 2:
+        if not (a < theta < b) or (bisect_every and it % bisect_every == bisect_every - 1):
             theta = 0.5 * (a + b)
         pt = evaluate(theta)
         fc = ftest(pt) if pt is not None else np.nan
@@ -347,7 +448,7 @@ def illinois(evaluate, ftest, fa, fb, pa, pb, *, size, tol, max_iter):
                 return best[0], best[1], False
         if abs(fc) < abs(best[1]):
             best = (pt, fc)
-        if fc == 0.0:
+        if fc == 0.0 or abs(fc) < ftol:
             return pt, fc, True
         if (fc > 0) == (fb > 0):
             b, fb = theta, fc

@@ -3,10 +3,13 @@
 Built on :class:`~hybridpd.analysis.hybridmap.SectionMap` (the map ``P`` on a guard's section,
 with ``DP`` from exact flows and saltation matrices):
 
-* :func:`find_orbit` solves ``P^k(s) = s`` by damped Newton (``DP^k - I`` from the saltation
-  chain, or central finite differences), for any impact sequence: whatever the automaton does
-  between two firings of the section's guard (other contacts, sticking, sampling instants,
-  mode switches) is part of ``P``. The phase residual is wrapped to ``[-T/2, T/2)``.
+* :func:`find_orbit` solves ``P^k(s) = s`` by the package's damped Newton
+  (:func:`~hybridpd.analysis.pathfollow.newton`) with Broyden updates (``DP^k - I`` from the
+  saltation chain, or central finite differences, only at the start and where an updated step
+  fails: on an orbit with many jumps one costs tens of map applications), for any impact
+  sequence: whatever the automaton does between two firings of the section's guard (other
+  contacts, sticking, sampling instants, mode switches) is part of ``P``. The phase residual
+  is wrapped to ``[-T/2, T/2)``.
 * :class:`PeriodicOrbit` holds the fixed point, the impact sequence, the Floquet multipliers
   (eigenvalues of ``DP^k``), the spectral radius and the stability verdict;
   :func:`measured_contraction` estimates the spectral radius independently, from iterated
@@ -37,6 +40,7 @@ from hybridpd.analysis.hybridmap import (
     _to_return,
 )
 from hybridpd.analysis.labels import OFF_SECTION
+from hybridpd.analysis.pathfollow import newton
 
 __all__ = [
     "ORBIT_REFUSALS",
@@ -157,43 +161,6 @@ _FAST_RETURN_HINT = ("the section's guard fires again within one burst of impact
                      "command line --event release) or raise the period")
 
 
-def _resid(P: SectionMap, s, k, jac):
-    """``(F, J, MapResult)`` of ``P^k(s) - s``; ``(None, None, r_or_status)`` where undefined.
-
-    Never raises for a finite ``s``: a run the map cannot complete, or a Jacobian that is not
-    finite, is a result (the caller reports why Newton stopped).
-    """
-    if not np.all(np.isfinite(s)):
-        return None, None, "nonfinite_point"
-    try:
-        r = P.apply(s, k, jacobian=jac == "exact")
-        if not r.ok:
-            return None, None, r
-        F = P.section.wrap(r.s - s)
-        J = None
-        if jac == "exact":
-            J = r.DP - np.eye(P.dim)
-        if jac == "fd" or (J is not None and not np.all(np.isfinite(J))):
-            # no saltation matrix somewhere on the way (a tangential jump): the simulated
-            # map's differences still give Newton a direction
-            J = P.jacobian_fd(s, k) - np.eye(P.dim)
-    except (ValueError, RuntimeError, FloatingPointError, np.linalg.LinAlgError) as exc:
-        return None, None, f"{type(exc).__name__}: {exc}"
-    if not np.all(np.isfinite(F)) or (J is not None and not np.all(np.isfinite(J))):
-        return None, None, "nonfinite_jacobian" if np.all(np.isfinite(F)) else "nonfinite"
-    return F, J, r
-
-
-def _residual_norm(P, s, F):
-    """``|F|`` relative to the solver's scales: the phase against ``max(1, T)``, the other
-    coordinates against ``max(1, |s|_inf)`` of those coordinates."""
-    if P.section.has_phase:
-        rest = _scale(s[1:]) if s.size > 1 else 1.0
-        tail = float(np.max(np.abs(F[1:]))) / rest if F.size > 1 else 0.0
-        return max(abs(float(F[0])) / max(1.0, P.section.period), tail)
-    return float(np.max(np.abs(F))) / _scale(s)
-
-
 def _commensurate(T, dt, m_max=64):
     """Smallest ``m <= m_max`` with ``m T / dt`` a whole number (relative 1e-9), or 0."""
     for m in range(1, int(m_max) + 1):
@@ -303,83 +270,105 @@ def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_it
                              f"the sampling period {float(sampling_period):g} and the reference "
                              f"period {T:g} have no common multiple m T (m <= 64): the "
                              "sampling clock never returns with the phase")
-    F, J, r = _resid(P, s, k, jacobian)
-    if F is not None and r.t_hit - r.t_start < min_return:
+    eq = _OrbitEquation(P, k, jacobian, min_return)
+    F, _, r = eq.run(s, True)
+    if F is None:
+        return _no_orbit(P, s, k, eq.undefined(), 1, F)
+    if r.t_hit - r.t_start < min_return:
         return _no_orbit(P, s, k, "fast_return", 0, F,
                          f"P^{k} returns {r.t_hit - r.t_start:.3g} after the start "
                          f"(< min_return = {min_return:.3g}): {_FAST_RETURN_HINT}")
-    (reason, s, F, r), it = _newton(P, s, k, jacobian, tol, int(max_iter), F, J, r,
-                                    min_return)
-    return _make_orbit(P, s, k, reason, it, F, r, periods=periods, min_return=min_return,
+    max_iter = int(max_iter)
+    res = newton(eq.resid, eq.jac, s, tol=tol, max_iter=max_iter, norm=eq.norm, broyden=True,
+                 difference=eq.difference, canonical=eq.canonical, min_lambda=2.0 ** -29,
+                 step_test=False)
+    # the counts and words of this module: an iteration is one test of the residual
+    its = min(len(res.history), max_iter)
+    reason = {"converged": "converged", "singular": "singular", "max_iter": "max_iter",
+              "line_search": "line search failed"}.get(res.status)
+    F = res.residual
+    if res.status == "jacobian":    # the map failed where its Jacobian was asked for again:
+        its = len(res.history) + 1  # that iteration ends, the next one reports it
+        reason, F = eq.undefined() if its <= max_iter else "max_iter", None
+        its = min(its, max_iter)
+    elif res.converged and res.iterations == max_iter:
+        reason = "max_iter"     # converged by the last step: this module's loop never saw it
+    return _make_orbit(P, res.x, k, reason, its, F, periods=periods, min_return=min_return,
                        verify=verify, jacobian=jacobian)
 
 
-def _newton(P, s, k, jacobian, tol, max_iter, F, J, r, min_return=0.0):
-    """Damped Newton with Broyden updates; ``((reason, s, F, r), iterations)``. Never raises.
+class _OrbitEquation:
+    """``F(s) = P^k(s) - s`` (phase wrapped), its Jacobian and norm for
+    :func:`~hybridpd.analysis.pathfollow.newton`. Never raises for a finite ``s``: a run the
+    map cannot complete, or a Jacobian that is not finite, is a result.
 
-    The Jacobian (exact or finite differences, ``jacobian``) is evaluated at the start and
-    again only where a step along the Broyden-updated one fails: for orbits with many jumps
-    one evaluation costs tens of map applications, and near a solution the rank-one updates
-    keep the convergence superlinear. A trial point whose return comes sooner than
-    ``min_return`` is rejected like one where the map is undefined: the points that return to
-    themselves at once (a tangential reopening) are zeros of ``P(s) - s`` that attract Newton
-    but are no orbits.
+    The latest run is kept: Newton asks for the residual and the Jacobian at one point in
+    turn, and one exact run gives both. A trial point whose return comes sooner than
+    ``min_return`` is rejected like one where the map is undefined: the points that return
+    to themselves at once (a tangential reopening) are zeros of ``F`` but no orbits.
     """
-    reason = "max_iter"
-    it = 0
-    fresh = True
-    for it in range(1, max_iter + 1):
-        if F is None:
-            reason = f"map undefined: {r.status if isinstance(r, MapResult) else r}"
-            break
-        nF = _residual_norm(P, s, F)
-        if nF <= tol:
-            reason = "converged"
-            break
-        step = _damped_step(P, s, k, J, F, nF, min_return)
-        if step is None and not fresh:
-            F, J, r = _resid(P, s, k, jacobian)
-            fresh = True
-            if F is None:
-                continue
-            step = _damped_step(P, s, k, J, F, nF, min_return)
-        if step is None:
-            reason = "singular" if _solve(J, F) is None else "line search failed"
-            break
-        s_new, F_new, r_new = step
-        d = P.section.wrap(s_new - s)
-        dd = float(d @ d)
-        if dd > 0:
-            J = J + np.outer((F_new - F) - J @ d, d) / dd
-        fresh = False
-        s, F, r = s_new, F_new, r_new
-        if P.section.has_phase:
-            s[0] %= P.section.period
-    return (reason, s, F, r), it
 
+    def __init__(self, P, k, jacobian, min_return):
+        self.P, self.k, self.jacobian, self.min_return = P, k, jacobian, min_return
+        self.last = (None, None, None, None)
 
-def _solve(J, F):
-    try:
-        ds = -np.linalg.solve(J, F)
-    except np.linalg.LinAlgError:
-        return None
-    return ds if np.all(np.isfinite(ds)) else None
+    def run(self, s, jac):
+        """``(F, J, MapResult)``, ``J`` only with ``jac``; ``(None, None, r_or_status)``
+        where undefined."""
+        if self.last[0] != s.tobytes() or (jac and self.last[2] is None):
+            self.last = (s.tobytes(),) + self._run(s, self.jacobian if jac else "none")
+        return self.last[1:]
 
+    def _run(self, s, jac):
+        P = self.P
+        if not np.all(np.isfinite(s)):
+            return None, None, "nonfinite_point"
+        try:
+            r = P.apply(s, self.k, jacobian=jac == "exact")
+            if not r.ok:
+                return None, None, r
+            F = P.section.wrap(r.s - s)
+            J = r.DP - np.eye(P.dim) if jac == "exact" else None
+            if jac == "fd" or (J is not None and not np.all(np.isfinite(J))):
+                # no saltation matrix somewhere on the way (a tangential jump): the
+                # simulated map's differences still give Newton a direction
+                J = P.jacobian_fd(s, self.k) - np.eye(P.dim)
+        except (ValueError, RuntimeError, FloatingPointError, np.linalg.LinAlgError) as exc:
+            return None, None, f"{type(exc).__name__}: {exc}"
+        if not np.all(np.isfinite(F)) or (J is not None and not np.all(np.isfinite(J))):
+            return None, None, "nonfinite_jacobian" if np.all(np.isfinite(F)) else "nonfinite"
+        return F, J, r
 
-def _damped_step(P, s, k, J, F, nF, min_return=0.0):
-    """``(s_new, F_new, r_new)`` of a backtracking step along Newton's direction, or None."""
-    ds = _solve(J, F)
-    if ds is None:
-        return None
-    lam = 1.0
-    for _ in range(30):
-        s_new = s + lam * ds
-        F_new, _, r_new = _resid(P, s_new, k, "none")
-        if F_new is not None and r_new.t_hit - r_new.t_start >= min_return and \
-                _residual_norm(P, s_new, F_new) < (1 - 1e-4 * lam) * nF:
-            return s_new, F_new, r_new
-        lam *= 0.5
-    return None
+    def resid(self, s):
+        F, _, r = self.run(s, False)
+        return None if F is None or r.t_hit - r.t_start < self.min_return else F
+
+    def jac(self, s):
+        J = self.run(s, True)[1]
+        if J is None:
+            raise RuntimeError(self.undefined())
+        return J
+
+    def norm(self, s, F):
+        """``|F|`` relative to the solver's scales: the phase against ``max(1, T)``, the
+        other coordinates against ``max(1, |s|_inf)`` of those coordinates."""
+        if self.P.section.has_phase:
+            rest = _scale(s[1:]) if s.size > 1 else 1.0
+            tail = float(np.max(np.abs(F[1:]))) / rest if F.size > 1 else 0.0
+            return max(abs(float(F[0])) / max(1.0, self.P.section.period), tail)
+        return float(np.max(np.abs(F))) / _scale(s)
+
+    def difference(self, a, b):
+        return self.P.section.wrap(a - b)
+
+    def canonical(self, s):
+        if self.P.section.has_phase:
+            s[0] %= self.P.section.period
+        return s
+
+    def undefined(self) -> str:
+        r = self.last[3]
+        return f"map undefined: {r.status if isinstance(r, MapResult) else r}"
 
 
 def _no_orbit(P, s, k, reason, it, F, detail="") -> PeriodicOrbit:
@@ -390,12 +379,12 @@ def _no_orbit(P, s, k, reason, it, F, detail="") -> PeriodicOrbit:
                          P.section.to_state(s)[0], P.section.names, detail=detail)
 
 
-def _make_orbit(P, s, k, reason, it, F, r, *, periods=None, min_return=0.0,
+def _make_orbit(P, s, k, reason, it, F, *, periods=None, min_return=0.0,
                 verify=True, jacobian="exact") -> PeriodicOrbit:
     ok = reason == "converged"
-    if not isinstance(r, MapResult) or not r.ok:
+    if F is None:
         return _no_orbit(P, s, k, reason, it, F)
-    res = float(np.max(np.abs(F))) if F is not None else math.nan
+    res = float(np.max(np.abs(F)))
     dim = P.dim
     exact = jacobian == "exact"
     try:

@@ -193,7 +193,8 @@ class Tracer:
 
         a, b = (ua, tva), (ub, tvb)
         best, _f, _ok = illinois(evaluate, lambda q: float(mfun(q[1])[0]), fa, fb, a, b,
-                                 size=1.0, tol=1e-13, max_iter=_MAX_ILLINOIS)
+                                 size=1.0, tol=1e-13, max_iter=_MAX_ILLINOIS, ftol=1e-13,
+                                 bisect_every=0)
         return None if failed and (best is a or best is b) else best
 
     def edge_point(self, ua, ub):

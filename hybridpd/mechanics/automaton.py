@@ -552,19 +552,26 @@ class _GuardTable(Mapping):
 
     def __init__(self, ha):
         self._ha = ha
+        self._cache = {}   # guard name -> GuardInfo: a trajectory asks once per jump
 
     def __getitem__(self, key):
         try:
             _, gname = key
         except (TypeError, ValueError):
             raise KeyError(key) from None
+        info = self._cache.get(gname)
+        if info is not None:
+            return info
         if gname == "sample":
-            return GuardInfo("sample", -1, 0)
-        m = _GUARD_RE.match(str(gname))
-        if m is None:
-            raise KeyError(key)
-        return GuardInfo(_GUARD_KIND[m.group(1)], int(m.group(2)),
-                         1 if m.group(3) == "+" else -1)
+            info = GuardInfo("sample", -1, 0)
+        else:
+            m = _GUARD_RE.match(str(gname))
+            if m is None:
+                raise KeyError(key)
+            info = GuardInfo(_GUARD_KIND[m.group(1)], int(m.group(2)),
+                             1 if m.group(3) == "+" else -1)
+        self._cache[gname] = info
+        return info
 
     def _items(self):
         out = []

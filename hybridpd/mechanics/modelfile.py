@@ -55,6 +55,7 @@ from pathlib import Path
 import numpy as np
 
 from hybridpd._repr import compact_repr
+from hybridpd.loop import Controller
 from hybridpd.mechanics.automaton import MechanicalAutomaton, build_automaton
 from hybridpd.mechanics.contacts import Contact
 from hybridpd.mechanics.loop import Reference, mechanical_loop
@@ -332,8 +333,6 @@ def _reference(t) -> Reference:
 
 
 def _controller(t, system):
-    import control as ct
-
     _check_keys("controller", t, _TABLES["controller"])
     kind = t.get("type")
     if kind not in _CTRL_KEYS:
@@ -362,7 +361,8 @@ def _controller(t, system):
     if kind == "pd":
         kp = float(_array("controller.kp", t["kp"], ()))
         kv = float(_array("controller.kv", t["kv"], ()))
-        sysc = ct.ss(np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)), [[kp, kv]], dt)
+        sysc = Controller(np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)),
+                          np.array([[kp, kv]]), dt)
     elif kind == "pid":
         sysc = _pid(t, dt)
     elif kind == "tf":
@@ -374,6 +374,8 @@ def _controller(t, system):
         if np.trim_zeros(num, "f").size > den.size:
             raise ValueError("controller.num: improper transfer function (degree of num > "
                              "degree of den) cannot be realised")
+        import control as ct  # deferred import: python-control realises transfer functions
+
         sysc = ct.tf(num, den, dt)
     else:
         D = np.atleast_2d(_array("controller.D", t["D"]))
@@ -392,14 +394,12 @@ def _controller(t, system):
                 raise ValueError(f"controller.C: must have shape (1, {k}), got {C.shape}")
         else:
             A, B, C = np.zeros((0, 0)), np.zeros((0, m)), np.zeros((1, 0))
-        sysc = ct.ss(A, B, C, D, dt)
+        sysc = Controller(A, np.asarray(B, float), C, D, dt)
     return sysc, measure, measure_v, delay
 
 
 def _pid(t, dt):
     """The PID of a model file as a state-space controller from ``[err, err_dot]``."""
-    import control as ct
-
     g = {k: float(_array(f"controller.{k}", t.get(k, 0.0), ())) for k in
          ("kp", "ki", "kd", "filter_time")}
     if g["filter_time"] < 0:
@@ -420,8 +420,8 @@ def _pid(t, dt):
         D[1] = g["kd"]
     k = len(A)
     Am = np.diag([a[0] for a in A]) if k else np.zeros((0, 0))
-    sysc = ct.ss(Am, np.array(B).reshape(k, 2), np.array(C).reshape(1, k), [D])
-    return sysc.sample(dt, method="zoh") if dt else sysc
+    sysc = Controller(Am, np.array(B).reshape(k, 2), np.array(C).reshape(1, k), np.array([D]))
+    return sysc.sample(dt) if dt else sysc
 
 
 def _measured(t, key, system):

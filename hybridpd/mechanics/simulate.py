@@ -265,11 +265,17 @@ def _wrap(model, traj) -> MechanicalTrajectory:
     # sticking intervals per contact: opened by a jump into a mode that holds the contact,
     # closed by one into a mode that does not
     spans, opened = [], {}
-    held = dict(model.modes[traj.segments.mode[0]].stick) if len(traj.segments) else {}
-    for k, wall in held.items():
+    held_in = {}                                   # mode name -> {contact: wall}
+
+    def held(mode):
+        if mode not in held_in:
+            held_in[mode] = dict(model.modes[mode].stick)
+        return held_in[mode]
+
+    for k, wall in (held(traj.segments.mode[0]) if len(traj.segments) else {}).items():
         opened[k] = (traj.t0, wall)
     for i in range(stop):
-        after = dict(model.modes[jt.target[i]].stick)
+        after = held(jt.target[i])
         t = float(jt.t[i])
         for k in list(opened):
             if k not in after:
