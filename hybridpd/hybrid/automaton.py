@@ -89,7 +89,7 @@ from hybridpd.hybrid._kernel import (  # noqa: F401 (the kernel helpers keep the
     run_hybrid,
     run_hybrid_ex,
 )
-from hybridpd.hybrid._store import ModeStore, reset_matrix
+from hybridpd.hybrid._store import ModeStore
 from hybridpd.hybrid.events import K_DEFAULT, THETA_DEFAULT
 from hybridpd.hybrid.modes import Guard, Mode, TerminationCause, ZenoOptions
 from hybridpd.hybrid.trajectory import (
@@ -123,8 +123,6 @@ __all__ = [
 _INTERP_MAX_STEPS = 2000
 _INTERP_JUMPS = 64
 
-
-_reset_matrix = reset_matrix          # the old private name
 
 
 def _check_modes(modes) -> tuple:
