@@ -577,9 +577,9 @@ class SectionMap(PoincareMap):
         if st == ST_BAD_START:
             return MapResult(np.full(self.dim, np.nan), False, MAP_STATUS[st], t0, t0, z0,
                              sec.mode, (), False)
-        gname = lambda m, g: ha.modes[m].guards[g].name
+        modes = ha.modes                  # assembled afresh on every access
         kinds = {1: "crossing", 2: "grazing", 3: "zeno"}
-        jumps = tuple((float(jt[q]), mn[jsrc[q]], gname(jsrc[q], jg[q]), mn[jdst[q]],
+        jumps = tuple((float(jt[q]), mn[jsrc[q]], modes[jsrc[q]].guards[jg[q]].name, mn[jdst[q]],
                        kinds[int(jkind[q])]) for q in range(nb))
         z_hit = w[:n].copy()
         t_hit = float(fc[0])
@@ -590,7 +590,7 @@ class SectionMap(PoincareMap):
             return MapResult(np.full(self.dim, np.nan), False, MAP_STATUS[st], t0, t_hit,
                              z_hit, mode_final, jumps, any(j[4] == "grazing" for j in jumps))
         img = sec.from_state(z_hit, t_hit)
-        m = ha.modes[sec.mode_index]
+        m = modes[sec.mode_index]
         f_hit = m.A @ z_hit + m.b
         scale = np.abs(sec.c) @ np.abs(f_hit) + 1e-300
         grazing = (any(j[4] == "grazing" for j in jumps)
@@ -624,22 +624,23 @@ class SectionMap(PoincareMap):
         tangent = False
         tgrad = []        # d t_jump / d z0 of every jump so far
         burst = _accumulating(bufs, nb)
+        modes, pk = ha.modes, ha.packed   # both are assembled afresh on every access
         for m in range(nb + 1):
             # flows of the segments at jump count m, then jump m + 1 (table index m)
             while q < nseg and sj[q] == m:
                 tau = st1[q] - st0[q]
                 if tau > 0.0:
-                    Z = expm(ha.modes[smode[q]].A * tau) @ Z
+                    Z = expm(modes[smode[q]].A * tau) @ Z
                 q += 1
             if m == nb:
                 break
-            Z, tg, tan = self._jump(m, bufs, Z, tgrad, jt)
+            Z, tg, tan = self._jump(m, bufs, Z, tgrad, jt, modes, pk)
             tgrad.append(tg)
             # the closing speed of a burst ending in an accumulation shrinks to zero by design
             # (the more so the shorter the unresolved tail, ZenoOptions.tail_tol): its
             # impacts are no tangential touch of the orbit
             tangent = tangent or (tan and not burst[m])
-        mode = ha.modes[sec.mode_index]
+        mode = modes[sec.mode_index]
         f = mode.A @ z_hit + mode.b
         cf = sec.c @ f
         dtau = -(sec.c @ Z) / cf
@@ -652,7 +653,7 @@ class SectionMap(PoincareMap):
         row[0] += 1.0
         return np.vstack([row, Dy]), tangent
 
-    def _jump(self, q, bufs, Z, tgrad, jt):
+    def _jump(self, q, bufs, Z, tgrad, jt, modes, pk):
         """Sensitivity after jump ``q``: ``(Z+, d t_q / d z0, tangential)``.
 
         A guard crossing gets its saltation matrix. A Zeno switch at the estimated
@@ -661,13 +662,11 @@ class SectionMap(PoincareMap):
         an immediate accumulation) gets ``Z+ = R_z Z + (R_z f- - f+) dt_inf``, with ``dt_inf``
         from the impact-time sensitivities: the derivative of the simulated map.
         """
-        ha = self.section.automaton
-        pk = ha.packed
-        n = ha.n_states
+        n = self.section.automaton.n_states
         jg, jsrc, jdst, jkind, jpre, jpost = (bufs[5], bufs[6], bufs[7], bufs[8], bufs[9],
                                               bufs[10])
         src, dst, g = int(jsrc[q]), int(jdst[q]), int(jg[q])
-        ms, md = ha.modes[src], ha.modes[dst]
+        ms, md = modes[src], modes[dst]
         zm, zp = jpre[q, :n], jpost[q, :n]
         fm = ms.A @ zm + ms.b
         fp = md.A @ zp + md.b
@@ -676,7 +675,7 @@ class SectionMap(PoincareMap):
             tg = self._zeno_time_gradient(q, jt, jg, jsrc, jkind, tgrad, n)
             return Rz @ Z + np.outer(Rz @ fm - fp, tg), tg, False
         R = pk.Rh[src, g, :n, :n]
-        c = ha.modes[src].guards[g].c
+        c = ms.guards[g].c
         cf = c @ fm
         tangent = abs(cf) <= 1e-9 * (np.abs(c) @ np.abs(fm)) or jkind[q] == 2
         tg = -(c @ Z) / cf
