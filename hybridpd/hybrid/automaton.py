@@ -300,12 +300,15 @@ class HybridAutomaton:
         ValueError
             If more than ``max_modes`` modes would be built.
         """
-        r = 0
+        # names before _mat_upto are built already: the frequent call on a complete automaton
+        # (every access to modes, mode_names, packed) costs nothing
+        r = getattr(self, "_mat_upto", 0)
         while r < len(self._res_names):
             name = self._res_names[r]
             if name not in self._index:
                 self._build(name)
             r += 1
+        self._mat_upto = r
         return len(self._names)
 
     @property
