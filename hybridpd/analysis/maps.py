@@ -192,8 +192,11 @@ class PoincareMap(abc.ABC):
 
         def central(hrel):
             H = self._fd_steps(s, hrel * sc)
-            S = np.concatenate([s + np.diag(H), s - np.diag(H), s[None, :]])
+            # the centre is needed only for a one-sided difference
+            S = np.concatenate([s + np.diag(H), s - np.diag(H)] + [s[None, :]] * one_sided)
             img, ok = self.apply_many(S, k)
+            if ok[:2 * m].all():
+                return self.wrap(img[:m] - img[m:2 * m]).T / (2 * H)
             J = np.empty((m, m))
             for j in range(m):
                 if ok[j] and ok[m + j]:
