@@ -9,9 +9,10 @@ Signals and sign conventions (as in :mod:`hybridpd.loop` for the impact pair)
 * Reference ``xd`` from an exosystem (:class:`hybridpd.model.Reference`, the same class as
   the impact pair's): ``offset + sum_i a_i cos(w_i t)`` in absolute time, each sine generated
   by ``pc' = -w ps``, ``ps' = w pc`` (``pc = a cos w t``).
-* Tracking error ``err = xd - y``, ``err_dot = xd' - y'``; the controller is a proper
-  python-control LTI system from ``err`` (1 input) or ``[err, err_dot]`` (2 inputs) to the
-  feedback force ``u_fb`` (:func:`hybridpd.loop.as_controller`). A PD is the static gain
+* Tracking error ``err = xd - y``, ``err_dot = xd' - y'``; the controller is a proper linear
+  system (PD gains, a ``Controller`` or a python-control system) from ``err`` (1 input) or
+  ``[err, err_dot]`` (2 inputs) to the feedback force ``u_fb``
+  (:func:`hybridpd.loop.as_controller`). A PD is the static gain
   ``[kp, kv]`` on ``[err, err_dot]`` (any finite gains, ``kv = 0`` included).
 * Control force ``u = feedforward * xd'' + u_fb`` (``reference.feedforward``, ``None`` = 0),
   applied along ``B``.
