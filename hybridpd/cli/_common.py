@@ -247,6 +247,22 @@ def save_figure(fig, path) -> None:
         fig.savefig(path, dpi=300)
 
 
+def check_pair_command(args, pair_options) -> tuple:
+    """Check an impact-pair command (no ``--model``): the pair's options are all given and the
+    output paths are well formed. Returns the clearance ``(L, x10)``; runs before anything is
+    computed.
+    """
+    missing = [f"--{k}" for k in pair_options if getattr(args, k) is None]
+    if args.L is None and args.gamma is None:
+        missing.append("--L or --gamma")
+    if missing:
+        raise UsageError(f"the following arguments are required: {', '.join(missing)} "
+                         "(or give --model FILE.toml)")
+    check_out(args.out)
+    check_image(args.plot)
+    return clearance(args)
+
+
 def check_model_command(args, pair_options, hint: str, axes: str | None = None) -> None:
     """Refuse impact-pair options and malformed output paths of a ``--model`` command.
 

@@ -8,10 +8,8 @@ from hybridpd.cli._common import (
     add_model_section,
     add_plant,
     add_sweep,
-    check_image,
     check_model_command,
-    check_out,
-    clearance,
+    check_pair_command,
     command,
     executor_of,
     progress_wanted,
@@ -80,17 +78,9 @@ def run(args) -> int:
         return _run_model(args)
     if args.x is not None or args.y is not None or args.set:
         raise UsageError("--x, --y and --set need --model FILE.toml")
-    missing = [f"--{k}" for k in _PAIR if getattr(args, k) is None]
-    if args.L is None and args.gamma is None:
-        missing.append("--L or --gamma")
-    if missing:
-        raise UsageError(f"the following arguments are required: {', '.join(missing)} "
-                         "(or give --model FILE.toml)")
+    L, x10 = check_pair_command(args, _PAIR)
     if args.iterations is None:
         args.iterations = 1500
-    check_out(args.out)
-    check_image(args.plot)
-    L, x10 = clearance(args)
     orb = symmetric_orbit(ImpactPair(args.mu, args.e, L, args.m2), PDGains(args.kp, args.kv),
                           args.omega, x10=x10, n=args.n, case=args.case)
     if not orb.exists:

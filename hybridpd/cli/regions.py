@@ -3,20 +3,7 @@ from __future__ import annotations
 
 import json
 
-from hybridpd.cli._common import (
-    UsageError,
-    add_model_section,
-    add_plant,
-    add_sweep,
-    check_image,
-    check_model_command,
-    check_out,
-    clearance,
-    command,
-    executor_of,
-    progress_wanted,
-    save_figure,
-)
+from hybridpd.cli import _common as cli
 
 DESCRIPTION = ("Maps, on a grid of PD gains (kp, kv) and for each restitution "
                "coefficient e, where the symmetric orbit exists (with viability) and "
@@ -30,14 +17,14 @@ _PAIR = ("case", "mu", "omega", "e", "kp", "kv")
 
 
 def register(sub):
-    p = command(sub, "regions", help="existence/stability regions over (kp, kv)",
+    p = cli.command(sub, "regions", help="existence/stability regions over (kp, kv)",
                 description=DESCRIPTION,
                 example=("hybridpd regions --case collocated --mu 0.1 --e 0.1 0.5 0.9"
                          " --gamma 0.75 --omega 5 --kp 0.1 50 200 --kv 0.1 50 200 "
                          "--out regions.nc --plot regions.png\n  hybridpd regions --model "
                          "examples/models/drivetrain.toml --x controller.kp 5 60 40 --y "
                          "controller.kv 1 20 40 --event release --out dt.nc --plot dt.png"))
-    add_plant(p, xm=False, gamma=True, required=False)
+    cli.add_plant(p, xm=False, gamma=True, required=False)
     p.add_argument("--e", type=float, nargs="+", default=None,
                    help="one or more restitution coefficients in [0, 1]")
     p.add_argument("--n", type=int, default=1,
@@ -46,7 +33,7 @@ def register(sub):
                    help="grid axis: NUM points from MIN to MAX")
     p.add_argument("--kv", type=float, nargs=3, default=None, metavar=("MIN", "MAX", "NUM"),
                    help="grid axis: NUM points from MIN to MAX")
-    add_model_section(p)
+    cli.add_model_section(p)
     p.add_argument("--x", nargs=4, default=None, metavar=("KEY", "MIN", "MAX", "NUM"),
                    help="--model: grid axis over the file's entry KEY (a dotted path such as "
                         "controller.kp, contact.0.restitution, system.masses.2)")
@@ -54,7 +41,7 @@ def register(sub):
                    help="--model: second grid axis (as --x)")
     p.add_argument("--tile", type=int, default=8,
                    help="--model: side of the square tiles of cells (one task each)")
-    add_sweep(p, what="the region map (one panel per e)")
+    cli.add_sweep(p, what="the region map (one panel per e)")
     p.set_defaults(func=run)
 
 
@@ -62,34 +49,26 @@ def run(args) -> int:
     if args.model is not None:
         return _run_model(args)
     if args.x is not None or args.y is not None:
-        raise UsageError("--x and --y need --model FILE.toml (the pair's axes are --kp, --kv)")
-    missing = [f"--{k}" for k in _PAIR if getattr(args, k) is None]
-    if args.L is None and args.gamma is None:
-        missing.append("--L or --gamma")
-    if missing:
-        raise UsageError(f"the following arguments are required: {', '.join(missing)} "
-                         "(or give --model FILE.toml)")
+        raise cli.UsageError("--x and --y need --model FILE.toml (the pair's axes are --kp, --kv)")
+    L, x10 = cli.check_pair_command(args, _PAIR)
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.regions import region_map
 
-    check_out(args.out)
-    check_image(args.plot)
-    L, x10 = clearance(args)
     for nm in ("kp", "kv"):
         num = getattr(args, nm)[2]
         if num != int(num):
             raise ValueError(f"--{nm} NUM must be an integer, got {num:g}")
     rm = region_map(args.case, x=("kp", *args.kp), y=("kv", *args.kv), e=args.e, mu=args.mu,
                     omega=args.omega, L=L, x10=x10, m2=args.m2, n=args.n,
-                    executor=executor_of(args), max_workers=args.workers,
-                    store=args.store, progress=progress_wanted(args))
+                    executor=cli.executor_of(args), max_workers=args.workers,
+                    store=args.store, progress=cli.progress_wanted(args))
     if args.out:
         rm.save(args.out)
     if args.plot:
         # deferred import: loaded only when this runs, for start-up time
         from hybridpd.plotting.regions import plot_region_panels
 
-        save_figure(plot_region_panels(rm), args.plot)
+        cli.save_figure(plot_region_panels(rm), args.plot)
     if args.json:
         print(json.dumps(rm.to_dict()))
         return 0
@@ -104,12 +83,12 @@ def _run_model(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.model_regions import model_region_map
 
-    check_model_command(args, _PAIR, "sweep the file's entries with --x KEY and --y KEY", "KEY")
+    cli.check_model_command(args, _PAIR, "sweep the file's entries with --x KEY and --y KEY", "KEY")
     rm = model_region_map(args.model, tuple(args.x), tuple(args.y), contact=args.contact,
                           wall=args.wall, event=args.event, period=args.period,
-                          periods=args.periods, tile=args.tile, executor=executor_of(args),
+                          periods=args.periods, tile=args.tile, executor=cli.executor_of(args),
                           max_workers=args.workers, store=args.store,
-                          progress=progress_wanted(args))
+                          progress=cli.progress_wanted(args))
     if args.out:
         rm.save(args.out)
     if args.plot:
@@ -117,7 +96,7 @@ def _run_model(args) -> int:
         from hybridpd.plotting.regions import plot_region_panels
         from hybridpd.sweeps.regions import RegionMap
 
-        save_figure(plot_region_panels(RegionMap.from_dataset(rm.to_dataset())), args.plot)
+        cli.save_figure(plot_region_panels(RegionMap.from_dataset(rm.to_dataset())), args.plot)
     if args.json:
         print(json.dumps(rm.to_dict()))
         return 0
