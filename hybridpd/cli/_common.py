@@ -247,10 +247,10 @@ def save_figure(fig, path) -> None:
         fig.savefig(path, dpi=300)
 
 
-def check_pair_command(args, pair_options) -> tuple:
-    """Check an impact-pair command (no ``--model``): the pair's options are all given and the
-    output paths are well formed. Returns the clearance ``(L, x10)``; runs before anything is
-    computed.
+def check_pair_command(args, pair_options, outputs: bool = True) -> tuple:
+    """Check an impact-pair command (no ``--model``): the pair's options are all given and,
+    with ``outputs``, the output paths ``--out`` and ``--plot`` are well formed. Returns the
+    clearance ``(L, x10)``; runs before anything is computed.
     """
     missing = [f"--{k}" for k in pair_options if getattr(args, k) is None]
     if args.L is None and args.gamma is None:
@@ -258,8 +258,9 @@ def check_pair_command(args, pair_options) -> tuple:
     if missing:
         raise UsageError(f"the following arguments are required: {', '.join(missing)} "
                          "(or give --model FILE.toml)")
-    check_out(args.out)
-    check_image(args.plot)
+    if outputs:
+        check_out(args.out)
+        check_image(args.plot)
     return clearance(args)
 
 

@@ -5,7 +5,7 @@ import json
 
 import numpy as np
 
-from hybridpd.cli._common import JSON_HELP, UsageError, add_plant, clearance, command
+from hybridpd.cli._common import JSON_HELP, UsageError, add_plant, check_pair_command, command
 
 # the pair options: required without --model, not used with it
 _PAIR = ("case", "mu", "omega", "e", "kp", "kv")
@@ -57,17 +57,11 @@ def register(sub):
 def run(args) -> int:
     if args.model is not None:
         return _run_model(args)
-    missing = [f"--{k}" for k in _PAIR if getattr(args, k) is None]
-    if args.L is None and args.gamma is None:
-        missing.append("--L or --gamma")
-    if missing:
-        raise UsageError(f"the following arguments are required: {', '.join(missing)} "
-                         "(or give --model FILE.toml)")
+    L, x10 = check_pair_command(args, _PAIR, outputs=False)
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.orbits import symmetric_orbit
     from hybridpd.model import ImpactPair, PDGains
 
-    L, x10 = clearance(args)
     orb = symmetric_orbit(ImpactPair(args.mu, args.e, L, args.m2), PDGains(args.kp, args.kv),
                           args.omega, x10=x10, n=args.n, case=args.case)
     d = orb.to_dict()
