@@ -149,13 +149,8 @@ class OrbitSearch:
 
 def _same_orbit(P, a: PeriodicOrbit, s) -> bool:
     """Whether section point `s` lies on the cycle of orbit `a` (within 1e-6 relative)."""
-    pts = [a.s]
-    for _ in range(a.period - 1):
-        r = P.apply(pts[-1])
-        if not r.ok:
-            break
-        pts.append(r.s)
-    for p in pts:
+    pts = P.iterate(a.s, a.period - 1)
+    for p in pts[np.all(np.isfinite(pts), axis=1)]:
         d = P.section.wrap(np.asarray(s) - p)
         if np.max(np.abs(d)) <= 1e-6 * max(1.0, float(np.max(np.abs(p)))):
             return True

@@ -499,6 +499,12 @@ def measured_contraction(P: SectionMap, s, period: int = 1, *, n_iter: int = 40,
 _CONVERGED, _NOT_CONVERGED, _DIVERGED, _ZENO_STICKING, _UNRESOLVED = 0, 1, 2, 3, 4
 
 
+def _n_finite(rows) -> int:
+    """Number of leading finite rows (``iterate`` fills the rows after a failure with NaN)."""
+    bad = ~np.all(np.isfinite(rows), axis=1)
+    return int(np.argmax(bad)) if bad.any() else len(rows)
+
+
 @njit(cache=True)
 def _coords(w, t, C, T, out):
     m = C.shape[0]
@@ -646,13 +652,8 @@ class SectionMapper(BasinMapper):
         self.period = int(period)
         self._limits(n_iter, criterion, escape)
         # the cycle's points on the section: P^k fixes each of them (k returns per period)
-        cyc = [self.fixed_point]
-        for _ in range(self.period - 1):
-            r = P.apply(cyc[-1])
-            if not r.ok:
-                break
-            cyc.append(r.s)
-        self.cycle = np.ascontiguousarray(cyc)
+        cyc = P.iterate(self.fixed_point, self.period - 1)
+        self.cycle = np.ascontiguousarray(cyc[:_n_finite(cyc)])
         K = len(cyc)
         self.cert_Q = np.tile(np.eye(P.dim), (K, 1, 1))
         self.cert_r2 = np.zeros(K)
