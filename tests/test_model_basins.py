@@ -3,18 +3,12 @@
 import json
 
 import numpy as np
+from _pair_model import PAIR, PAIR_TOML
 
 from hybridpd.analysis.model_orbits import SectionSpec
 from hybridpd.cli import main
 from hybridpd.mechanics.params import ModelTemplate
 from hybridpd.sweeps.model_basins import load_model_basin, model_basin
-
-PAIR = {
-    "system": {"dofs": ["x1", "x2"], "masses": [0.1, 1.0], "input": [0.0, 1.0]},
-    "contact": [{"between": ["x1", "x2"], "lo": -0.75, "hi": 0.75, "restitution": 0.5}],
-    "controller": {"type": "pd", "kp": 10.0, "kv": 20.0, "measure": "x2"},
-    "reference": {"type": "sine", "amplitude": 0.4, "omega": 5.0, "feedforward_mass": 1.0},
-    "initial": {"q": [0.3, 0.0], "v": [0.5, 0.0]}}
 
 
 def test_pair_file_basin_labels_confirmed_by_iterating_the_map(tmp_path, capsys):
@@ -49,30 +43,7 @@ def test_pair_file_basin_labels_confirmed_by_iterating_the_map(tmp_path, capsys)
 
 def test_basin_cli_with_a_model_file(tmp_path, capsys):
     f = tmp_path / "pair.toml"
-    f.write_text("""
-[system]
-dofs = ["x1", "x2"]
-masses = [0.1, 1.0]
-input = [0.0, 1.0]
-[[contact]]
-between = ["x1", "x2"]
-lo = -0.75
-hi = 0.75
-restitution = 0.5
-[controller]
-type = "pd"
-kp = 10.0
-kv = 20.0
-measure = "x2"
-[reference]
-type = "sine"
-amplitude = 0.4
-omega = 5.0
-feedforward_mass = 1.0
-[initial]
-q = [0.3, 0.0]
-v = [0.5, 0.0]
-""")
+    f.write_text(PAIR_TOML)
     assert main(["basin", "--model", str(f), "--x", "x2", "-0.5", "0.5", "3", "--y",
                  "x1_dot", "0", "2", "3", "--set", "controller.kp", "12", "--iterations",
                  "100", "--json", "--quiet"]) == 0

@@ -5,6 +5,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _pair_model import PAIR
 
 from hybridpd.analysis.model_orbits import OrbitSearch, SectionSpec, signature_table
 from hybridpd.cli import main
@@ -18,14 +19,6 @@ from hybridpd.sweeps.model_regions import (
 )
 
 MODELS = Path(__file__).resolve().parents[1] / "examples" / "models"
-
-PAIR = {
-    "system": {"dofs": ["x1", "x2"], "masses": [0.1, 1.0], "input": [0.0, 1.0]},
-    "contact": [{"between": ["x1", "x2"], "lo": -0.75, "hi": 0.75, "restitution": 0.5}],
-    "controller": {"type": "pd", "kp": 10.0, "kv": 20.0, "measure": "x2"},
-    "reference": {"type": "sine", "amplitude": 0.4, "omega": 5.0, "feedforward_mass": 1.0},
-    "initial": {"q": [0.3, 0.0], "v": [0.5, 0.0]}}
-
 
 def test_dotted_paths_address_every_number_and_refuse_the_rest():
     t = ModelTemplate.load(MODELS / "drivetrain.toml")
