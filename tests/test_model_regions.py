@@ -20,6 +20,18 @@ from hybridpd.sweeps.model_regions import (
 
 MODELS = Path(__file__).resolve().parents[1] / "examples" / "models"
 
+def _cell_orbits(rm, tpl):
+    """Per cell of a (kp, kv) map: the gains, the model, its section and the reported orbit's
+    state and time on the section."""
+    spec = SectionSpec(**rm.spec)
+    for iy, kv in enumerate(rm.y):
+        for ix, kp in enumerate(rm.x):
+            model = tpl.model({"controller.kp": kp, "controller.kv": kv})
+            sec = spec.section_map(model).section
+            z, t0 = sec.to_state(rm.section_point[iy, ix])
+            yield kp, kv, model, sec, z, t0
+
+
 def test_dotted_paths_address_every_number_and_refuse_the_rest():
     t = ModelTemplate.load(MODELS / "drivetrain.toml")
     paths = t.paths
@@ -87,18 +99,12 @@ def test_pair_file_region_map_orbits_confirmed_by_solve_ivp(tmp_path):
                           progress=False, tile=2)
     assert rm.status.shape == (3, 3) and rm.exists.all(), rm.summary()
     assert set(np.unique(rm.status)) <= {0, 1}
-    tpl = ModelTemplate(PAIR)
-    spec = SectionSpec(**rm.spec)
-    for iy, kv in enumerate(rm.y):
-        for ix, kp in enumerate(rm.x):
-            model = tpl.model({"controller.kp": kp, "controller.kv": kv})
-            sec = spec.section_map(model).section
-            z, t0 = sec.to_state(rm.section_point[iy, ix])
-            t1, pre = _naive_return(model, kp, kv, z, t0, sec.period, 1)
-            np.testing.assert_allclose(t1 - t0, sec.period, rtol=1e-8,
-                                       err_msg=f"return time at kp={kp}, kv={kv}")
-            np.testing.assert_allclose(pre, z[:4], rtol=1e-6, atol=1e-7,
-                                       err_msg=f"solve_ivp does not return at kp={kp}, kv={kv}")
+    for kp, kv, model, sec, z, t0 in _cell_orbits(rm, ModelTemplate(PAIR)):
+        t1, pre = _naive_return(model, kp, kv, z, t0, sec.period, 1)
+        np.testing.assert_allclose(t1 - t0, sec.period, rtol=1e-8,
+                                   err_msg=f"return time at kp={kp}, kv={kv}")
+        np.testing.assert_allclose(pre, z[:4], rtol=1e-6, atol=1e-7,
+                                   err_msg=f"solve_ivp does not return at kp={kp}, kv={kv}")
     # the pair's file format: the pair's reader and the plot command take it
     path = rm.save(tmp_path / "pair.nc")
     back = load_model_region_map(path)
@@ -123,21 +129,15 @@ def test_robot_joint_release_map_every_orbit_returns_after_one_period(tmp_path, 
     d = json.loads(capsys.readouterr().out)
     assert d["counts"]["stable"] + d["counts"]["unstable"] == 6, d["counts"]
     rm = load_model_region_map(out)
-    tpl = ModelTemplate.load(f)
-    spec = SectionSpec(**rm.spec)
-    for iy, kv in enumerate(rm.y):
-        for ix, kp in enumerate(rm.x):
-            model = tpl.model({"controller.kp": kp, "controller.kv": kv})
-            sec = spec.section_map(model).section
-            z, t0 = sec.to_state(rm.section_point[iy, ix])
-            T = sec.period
-            tr = simulate_state(model.automaton, z, (t0, t0 + T * (1 + 1e-6)), mode=sec.mode)
-            J = tr.hybrid.jumps
-            hits = [i for i in range(len(J)) if J.guard[i] == sec.guard
-                    and abs(J.t[i] - t0 - T) < 1e-6 * T]
-            assert hits, f"no release one period later at kp={kp}, kv={kv}"
-            np.testing.assert_allclose(J.pre[hits[0]], z, rtol=1e-7, atol=1e-8,
-                                       err_msg=f"no return after one period at kp={kp}, kv={kv}")
+    for kp, kv, model, sec, z, t0 in _cell_orbits(rm, ModelTemplate.load(f)):
+        T = sec.period
+        tr = simulate_state(model.automaton, z, (t0, t0 + T * (1 + 1e-6)), mode=sec.mode)
+        J = tr.hybrid.jumps
+        hits = [i for i in range(len(J)) if J.guard[i] == sec.guard
+                and abs(J.t[i] - t0 - T) < 1e-6 * T]
+        assert hits, f"no release one period later at kp={kp}, kv={kv}"
+        np.testing.assert_allclose(J.pre[hits[0]], z, rtol=1e-7, atol=1e-8,
+                                   err_msg=f"no return after one period at kp={kp}, kv={kv}")
 
 
 def test_two_orbits_in_a_cell_are_both_kept():
