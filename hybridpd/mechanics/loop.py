@@ -125,6 +125,15 @@ class MechanicalLoop:
         """True for a sampled-data (discrete controller) loop."""
         return self.dt > 0
 
+    @property
+    def clocks(self) -> tuple:
+        """``((index, dt), ...)``: the state index of every sampling clock and its period.
+
+        Each clock is the time since its controller's last sample, ``(t - t0) mod dt`` for a
+        run started at ``t0`` (the first sample is taken at ``t0``); empty when continuous.
+        """
+        return ((int(self.layout["clock"]), float(self.dt)),) if self.sampled else ()
+
     def initial_state(self, q0, v0, t0: float = 0.0, controller_state=None) -> np.ndarray:
         """Full state at ``t0``: exosystem set from ``t0``, controller states (default 0).
 
