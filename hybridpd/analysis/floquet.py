@@ -51,7 +51,7 @@ class Stability:
     hyperbolic: bool
 
 
-def stability(DP, tol: float = _HYPERBOLIC_TOL) -> Stability:
+def stability(DP, tol: float = _HYPERBOLIC_TOL, structural_zeros: int = 0) -> Stability:
     """Multipliers, spectral radius, stability and hyperbolicity of a Jacobian.
 
     Parameters
@@ -61,6 +61,13 @@ def stability(DP, tol: float = _HYPERBOLIC_TOL) -> Stability:
     tol : float, optional
         Distance from the unit circle below which a multiplier makes the fixed point
         non-hyperbolic.
+    structural_zeros : int
+        Number of multipliers that vanish by construction of the section's coordinates and
+        are not multipliers of the motion: a sampled-data controller's held force at a
+        section point is overwritten at its next sample, so ``DP`` has rank ``d - 1`` per
+        sampled controller. The smallest ones, each within ``1e-9 max(1, |DP|)`` of 0, are
+        left out: the rest are the multipliers of the stroboscopic period map (plant and
+        controller states).
 
     Returns
     -------
@@ -78,11 +85,20 @@ def stability(DP, tol: float = _HYPERBOLIC_TOL) -> Stability:
     >>> st = hp.stability(np.diag([0.5, -0.25]))
     >>> float(st.spectral_radius), st.stable, st.hyperbolic
     (0.5, True, True)
+    >>> hp.stability(np.diag([0.5, -0.25, 0.0]), structural_zeros=1).multipliers.size
+    2
     """
     DP = np.asarray(DP, float)
     if DP.ndim != 2 or DP.shape[0] != DP.shape[1] or not np.all(np.isfinite(DP)):
         raise ValueError(f"DP must be a finite square matrix, got shape {DP.shape}")
     ev = np.linalg.eigvals(DP)
     ev = ev[np.argsort(-np.abs(ev))]
+    if isinstance(structural_zeros, bool) or int(structural_zeros) != structural_zeros or \
+            not 0 <= structural_zeros < len(ev):
+        raise ValueError(f"structural_zeros must be an int in [0, {len(ev)}), got "
+                         f"{structural_zeros!r}")
+    zero = 1e-9 * max(1.0, float(np.linalg.norm(DP, np.inf)))
+    drop = int(np.sum(np.abs(ev[len(ev) - int(structural_zeros):]) <= zero))
+    ev = ev[:len(ev) - drop]
     rho = float(np.abs(ev[0]))
     return Stability(ev, rho, rho < 1.0, bool(np.all(np.abs(np.abs(ev) - 1.0) > tol)))

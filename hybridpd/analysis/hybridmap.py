@@ -12,6 +12,14 @@ coordinates ``s`` are:
   at time ``t`` equal to ``expm(E t) e0`` for the exosystem's state ``e0`` at ``t = 0``. For the
   impact pair (CONVENTIONS.md: ``xd = xm cos(w t)``, ``e0 = [xm, 0]``) this is the paper's
   ``phi``. A constant exosystem (a set-point) has no phase: it is held at ``e0``.
+* **Sampling clocks** (a sampled-data controller's time since its last sample, ``(t - t_s)
+  mod dt`` for samples at ``t_s + j dt``) are functions of the time, not coordinates, when
+  the phase determines them: the section's period is then the common period ``Tc = m T`` of
+  the reference and every sampling period (``m <= 64``), ``phi = t mod Tc``, and each clock is
+  set from ``phi``. The section is then a chart of the set that the motion really visits (the
+  sampling grid's offset to the reference is conserved by every run, so a clock coordinate
+  would only add a multiplier that is exactly 1). Without a common period the clocks stay
+  coordinates and :attr:`Section.sampling_commensurate` is False.
 * ``y = C z`` (the remaining coordinates): linear functionals of the non-exosystem states, by
   default all of them except the *pivot* (the state with the largest ``|c_i|``, the first of
   ties), which the guard equation determines. Any other choice is given as the rows ``C``
@@ -53,8 +61,9 @@ from hybridpd._jit import njit
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
 from hybridpd.hybrid._kernel import _other_active
 from hybridpd.hybrid.automaton import HybridAutomaton, ZenoOptions, run_hybrid
+from hybridpd.model import check_finite
 
-__all__ = ["MAP_STATUS", "MapResult", "Section", "SectionMap", "exosystem"]
+__all__ = ["MAP_STATUS", "MapResult", "Section", "SectionMap", "common_multiple", "exosystem"]
 
 #: Codes of :attr:`MapResult.status`.
 MAP_STATUS = {0: "returned", 1: "jump_limit", 2: "zeno", 3: "nonfinite", 4: "step_limit",
@@ -131,6 +140,23 @@ def _exo_period(E) -> float | None:
     return 2.0 * math.pi / float(w.max())
 
 
+def common_multiple(T: float, dts, m_max: int = 64, rtol: float = 1e-9) -> int:
+    """Smallest ``m <= m_max`` with ``m T / dt`` a whole number (relative ``rtol``) for every
+    ``dt`` of `dts`, or 0 if there is none.
+
+    Examples
+    --------
+    >>> common_multiple(1.0, [0.001, 0.25]), common_multiple(1.0, [0.3]), common_multiple(1.0, [0.7])
+    (1, 3, 7)
+    >>> common_multiple(float(np.pi), [0.001])
+    0
+    """
+    for m in range(1, int(m_max) + 1):
+        if all(abs(q - round(q)) <= rtol * max(1.0, q) for q in (m * T / dt for dt in dts)):
+            return m
+    return 0
+
+
 # ----------------------------------------------------------------------------------------
 # the section
 # ----------------------------------------------------------------------------------------
@@ -156,6 +182,25 @@ class Section:
         pivot).
     names : sequence of str, optional
         Names of the ``y`` coordinates.
+    clocks : sequence of (int, float), optional
+        ``(state index, dt)`` of every sampling clock (a state with ``s' = 1`` reset by
+        ``s -> s - dt`` at its samples); with a periodic exosystem they are set from the phase
+        (module docstring).
+    sample_time : float
+        A time at which every clock reads 0 (a common sampling instant, e.g. the run's start).
+
+    Attributes
+    ----------
+    period : float or None
+        Period of the phase coordinate: the reference period ``T``, or the common period
+        ``m T`` of the reference and the sampling clocks.
+    reference_period : float or None
+        The exosystem's own period ``T``.
+    clocks : tuple of (int, float)
+        The clocks set from the phase (empty when they are coordinates).
+    sampling_commensurate : bool
+        False when sampling clocks and the reference have no common period ``m T`` with
+        ``m <= 64`` (then the clocks are coordinates and no periodic orbit exists).
 
     Examples
     --------
@@ -167,18 +212,19 @@ class Section:
     """
 
     def __init__(self, automaton: HybridAutomaton, mode: str, guard: str, *, exo_state=None,
-                 reference=None, exo=None, period=None, coords=None, names=None):
+                 reference=None, exo=None, period=None, coords=None, names=None, clocks=None,
+                 sample_time: float = 0.0):
         if not isinstance(automaton, HybridAutomaton):
             raise ValueError(f"automaton must be a HybridAutomaton, got {type(automaton).__name__}")
         self.automaton = automaton
         self.mode = str(mode)
         self.mode_index = automaton.mode_index(self.mode)
-        gnames = [g.name for g in automaton.modes[self.mode_index].guards]
+        gnames = [g.name for g in automaton.mode(self.mode).guards]
         if guard not in gnames:
             raise ValueError(f"guard must be one of {gnames} (mode {mode!r}), got {guard!r}")
         self.guard = guard
         self.guard_index = gnames.index(guard)
-        g = automaton.modes[self.mode_index].guards[self.guard_index]
+        g = automaton.mode(self.mode).guards[self.guard_index]
         n = automaton.n_states
         self.c, self.d, self.direction = g.c.copy(), float(g.d), int(g.direction)
         if exo is None:
@@ -187,15 +233,22 @@ class Section:
             exo = tuple(int(i) for i in exo)
             if len(set(exo)) != len(exo) or any(not 0 <= i < n for i in exo):
                 raise ValueError(f"exo must be distinct state indices in [0, {n}), got {exo}")
-            E = automaton.modes[0].A[np.ix_(exo, exo)]
+            E = automaton.mode(self.mode).A[np.ix_(exo, exo)]
         self.exo = tuple(exo)
         self.E = np.asarray(E, float)
         if period is None:
             period = _exo_period(self.E)
         elif not (float(period) > 0 and math.isfinite(float(period))):
             raise ValueError(f"period must be finite and > 0, got {period!r}")
-        self.period = None if period is None else float(period)
-        self.free = tuple(i for i in range(n) if i not in self.exo)
+        self.reference_period = None if period is None else float(period)
+        self.period = self.reference_period
+        self.sample_time = check_finite("sample_time", sample_time)
+        self.clocks, self.sampling_commensurate = self._clocks(clocks)
+        if self.clocks:
+            self.period = self.reference_period * common_multiple(
+                self.reference_period, [dt for _, dt in self.clocks])
+        held = {i for i, _ in self.clocks}
+        self.free = tuple(i for i in range(n) if i not in self.exo and i not in held)
         self.e0 = self._exo_state(exo_state, reference)
         self._eig = None
         self.C, self.names = self._coords(coords, names)
@@ -205,6 +258,41 @@ class Section:
             raise ValueError("coords: with the guard row they must determine the "
                              "non-exosystem state (the matrix [C; c] is singular)")
         self._Minv = np.linalg.inv(M)
+
+    def _clocks(self, clocks) -> tuple:
+        """``(clocks set from the phase, commensurate)`` (class docstring)."""
+        self._clock_spec = ()
+        if clocks is None:
+            return (), True
+        n = self.automaton.n_states
+        out = []
+        for item in clocks:
+            try:
+                i, dt = int(item[0]), float(item[1])
+            except (TypeError, ValueError, IndexError):
+                raise ValueError(f"clocks must be pairs (state index, dt), got {item!r}") from None
+            if not 0 <= i < n or i in self.exo:
+                raise ValueError(f"clocks: state index must be in [0, {n}) and not an "
+                                 f"exosystem state, got {i}")
+            if not (dt > 0 and math.isfinite(dt)):
+                raise ValueError(f"clocks: dt must be finite and > 0, got {dt!r}")
+            out.append((i, dt))
+        self._clock_spec = tuple(out)
+        if not out or self.reference_period is None:
+            return (), True     # no phase: a clock is a state like any other
+        if not common_multiple(self.reference_period, [dt for _, dt in out]):
+            return (), False
+        if any(self.c[i] for i, _ in out):
+            raise ValueError("clocks: the section's guard involves a sampling clock (a "
+                             "section on the samples): the clock cannot be set from the phase")
+        return tuple(out), True
+
+    def nearest_commensurate_dt(self) -> dict:
+        """``{dt: T / round(T / dt)}``: for each sampling period, the nearest one that divides
+        the reference period ``T`` (empty without clocks or phase)."""
+        T = self.reference_period
+        dts = [dt for _, dt in self._clock_spec] if T else []
+        return {dt: T / max(1, round(T / dt)) for dt in dts}
 
     def _exo_state(self, exo_state, reference):
         k = len(self.exo)
@@ -247,6 +335,8 @@ class Section:
                                  f"got shape {C.shape}")
             if self.exo and np.any(C[:, list(self.exo)]):
                 raise ValueError("coords must vanish on the exosystem states")
+            if self.clocks and np.any(C[:, [i for i, _ in self.clocks]]):
+                raise ValueError("coords must vanish on the sampling clocks (set from phi)")
             default = tuple(f"y{i}" for i in range(C.shape[0]))
         names = default if names is None else tuple(str(v) for v in names)
         if len(names) != C.shape[0]:
@@ -292,12 +382,15 @@ class Section:
         z = np.zeros(self.automaton.n_states)
         ex = list(self.exo)
         z[ex] = self.exo_at(t)
+        for i, dt in self.clocks:
+            z[i] = (t - self.sample_time) % dt
         rhs = np.append(y, -self.d - self.c[ex] @ z[ex])
         z[list(self.free)] = self._Minv @ rhs
         return z, t
 
     def from_state(self, z, t=0.0) -> np.ndarray:
-        """Section coordinates of a full state ``z`` at time ``t`` (``phi = t mod T``)."""
+        """Section coordinates of a full state ``z`` at time ``t`` (``phi = t mod T``; the
+        sampling clocks set from the phase are not read)."""
         z = np.asarray(z, float)
         y = self.C @ z
         return np.concatenate([[float(t) % self.period], y]) if self.has_phase else y
@@ -315,6 +408,8 @@ class Section:
             dexo = self.E @ z[ex]
             J[ex, 0] = dexo
             J[fr, 0] = self._Minv[:, -1] * (-(self.c[ex] @ dexo))
+            for i, _ in self.clocks:
+                J[i, 0] = 1.0          # a later start is a later point of the sampling grid
         return J
 
     def wrap(self, ds) -> np.ndarray:
@@ -327,7 +422,7 @@ class Section:
 
     def fires(self, z) -> float:
         """``direction * c . f(z)``: positive where the flow fires the guard."""
-        m = self.automaton.modes[self.mode_index]
+        m = self.automaton.mode(self.mode)
         return float(self.direction * (self.c @ (m.A @ z + m.b)))
 
 

@@ -83,9 +83,13 @@ class SectionSpec:
         if wall not in walls:
             raise ValueError(f"wall must be one of {walls} for contact {self.contact}, got "
                              f"{wall!r}")
-        sec = mechanical_section(ma, int(self.contact), wall, event=self.event)
-        T = sec.period if sec.has_phase else 1.0
-        return SectionMap(sec, t_max=self.t_max * self.period * T, max_jumps=5000)
+        sec = mechanical_section(ma, int(self.contact), wall, event=self.event,
+                                 sample_time=model.t0)
+        T = sec.reference_period if sec.has_phase else 1.0
+        t_max = self.t_max * self.period * T
+        if sec.has_phase:
+            t_max = max(t_max, 2.0 * self.period * sec.period)
+        return SectionMap(sec, t_max=t_max, max_jumps=5000)
 
     def sampling_period(self, model):
         dt = float(getattr(model.automaton.loop, "dt", 0.0) or 0.0)
@@ -228,7 +232,7 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
         attempt(np.asarray(s, float))
     detail = ""
     if simulate and not any(o.stable for o in found):
-        T = P.section.period if P.section.has_phase else 1.0
+        T = P.section.reference_period if P.section.has_phase else 1.0
         try:
             g = _guess_from_simulation(model, P.section, spec.transient * T)
         except ValueError as exc:
@@ -297,7 +301,7 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period: i
     if wall not in walls:
         raise ValueError(f"wall must be one of {walls} for contact {contact} (its bounds), "
                          f"got {wall!r}")
-    sec = mechanical_section(ma, int(contact), wall, event=event)
+    sec = mechanical_section(ma, int(contact), wall, event=event, sample_time=model.t0)
     P = SectionMap(sec, **dict(map_options or {}))
     if guess is None:
         guess = _guess_from_simulation(model, sec, transient)
@@ -314,7 +318,7 @@ def _guess_from_simulation(model, sec, transient):
     from hybridpd.mechanics.simulate import simulate
 
     if transient is None:
-        transient = 50.0 * sec.period if sec.has_phase else 200.0
+        transient = 50.0 * sec.reference_period if sec.has_phase else 200.0
     if not (float(transient) > 0 and math.isfinite(float(transient))):
         raise ValueError(f"transient must be finite and > 0, got {transient!r}")
     tr = simulate(model.automaton, model.x0, (model.t0, model.t0 + float(transient)))

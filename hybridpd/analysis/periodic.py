@@ -255,21 +255,31 @@ def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_it
                                 or periods < 1):
         raise ValueError(f"periods must be None or an int >= 1, got {periods!r}")
     sec = P.section
-    T = sec.period if sec.has_phase else None
+    T = sec.reference_period if sec.has_phase else None
     if min_return is None:
         min_return = T / 20.0 if T else 0.0
     elif not (float(min_return) >= 0 and math.isfinite(float(min_return))):
         raise ValueError(f"min_return must be finite and >= 0, got {min_return!r}")
     k = int(period)
     s = sec.check_point(s0).copy()
-    if sampling_period is not None and T:
+    if not sec.sampling_commensurate:
+        near = "; ".join(f"dt = {dt:g} -> {d:.10g} (T / {round(sec.reference_period / d)})"
+                         for dt, d in sec.nearest_commensurate_dt().items())
+        return _no_orbit(P, s, k, "sampling_incommensurate", 0, None,
+                         f"the sampling periods and the reference period T = "
+                         f"{sec.reference_period:.10g} have no common multiple m T (m <= 64): "
+                         f"the sampling instants never return with the phase, so no motion "
+                         f"repeats. The nearest sampling periods that divide T: {near}")
+    if sampling_period is not None and T and not sec.clocks:
         if not (float(sampling_period) > 0 and math.isfinite(float(sampling_period))):
             raise ValueError(f"sampling_period must be finite and > 0, got {sampling_period!r}")
         if not _commensurate(T, float(sampling_period)):
+            d = T / max(1, round(T / float(sampling_period)))
             return _no_orbit(P, s, k, "sampling_incommensurate", 0, None,
                              f"the sampling period {float(sampling_period):g} and the reference "
                              f"period {T:g} have no common multiple m T (m <= 64): the "
-                             "sampling clock never returns with the phase")
+                             f"sampling clock never returns with the phase; the nearest "
+                             f"sampling period that divides T is {d:.10g} (T / {round(T / d)})")
     eq = _OrbitEquation(P, k, jacobian, min_return)
     F, _, r = eq.run(s, True)
     if F is None:
@@ -395,7 +405,7 @@ def _make_orbit(P, s, k, reason, it, F, *, periods=None, min_return=0.0,
     if not rr.ok:
         return _no_orbit(P, s, k, f"map undefined: {rr.status}", it, F)
     if np.all(np.isfinite(DP)):
-        st = stability(DP)
+        st = stability(DP, structural_zeros=len(P.section.clocks))
         mult, rho, stab, hyp = st.multipliers, st.spectral_radius, st.stable, st.hyperbolic
     else:
         mult, rho, stab, hyp = np.full(dim, np.nan + 0j), math.nan, False, False
@@ -412,7 +422,7 @@ def _make_orbit(P, s, k, reason, it, F, *, periods=None, min_return=0.0,
 def _validate(P, s, k, rr, t_per, periods, min_return, verify):
     """``(reason, m, detail, return_error)`` for a Newton solution (module rules)."""
     sec = P.section
-    T = sec.period if sec.has_phase else None
+    T = sec.reference_period if sec.has_phase else None
     scale_t = T if T else max(1.0, abs(rr.t_start))
     if not t_per > 1e-9 * scale_t:
         return "degenerate_return", 0, (f"P^{k} returns {t_per:.3g} after the start: the "

@@ -37,7 +37,8 @@ def impact_pair_section(system, wall: int = 1) -> Section:
 
 
 def mechanical_section(model, contact: int = 0, wall: int = 1, *, period=None,
-                       mode: str | None = None, event: str = "impact") -> Section:
+                       mode: str | None = None, event: str = "impact",
+                       sample_time: float = 0.0) -> Section:
     """The section of a contact of a mechanical automaton (:mod:`hybridpd.mechanics`).
 
     ``event="impact"``: pre-impact states of rigid contact ``contact`` on its ``wall`` bound
@@ -59,6 +60,11 @@ def mechanical_section(model, contact: int = 0, wall: int = 1, *, period=None,
         Common period of a sum-of-sines reference.
     mode : str, optional
         Mode of the section (default the free mode).
+    sample_time : float
+        A sampling instant of a sampled-data loop (the run's start time ``t0``: the first
+        sample is taken there). The sampling clocks are then set from the phase, which has the
+        common period of the reference and the sampling periods (see
+        :class:`~hybridpd.analysis.hybridmap.Section`).
     """
     if wall not in (1, -1):
         raise ValueError(f"wall must be +1 or -1, got {wall!r}")
@@ -84,6 +90,6 @@ def mechanical_section(model, contact: int = 0, wall: int = 1, *, period=None,
         if max(omegas) - min(omegas) > 1e-12 * max(omegas):
             raise ValueError("the reference has several frequencies: give period=")
         period = 2 * math.pi / omegas[0]
-    sec = Section(model.automaton, mode, name, exo=exo, period=period,
-                  exo_state=ref.exo_state(0.0))
-    return sec
+    clocks = getattr(model.loop, "clocks", ())
+    return Section(model.automaton, mode, name, exo=exo, period=period,
+                   exo_state=ref.exo_state(0.0), clocks=clocks or None, sample_time=sample_time)
