@@ -188,6 +188,15 @@ class Section:
         (module docstring).
     sample_time : float
         A time at which every clock reads 0 (a common sampling instant, e.g. the run's start).
+    constraints : sequence of (array_like, float[, str]), optional
+        ``(row, value, name)``: affine equalities ``row . z = value`` that every point of the
+        section satisfies besides the guard (e.g. a held contact's gap and normal velocity in
+        a sticking mode). The states they determine are no coordinates: the coordinates are a
+        chart of the section, so no choice of them leaves it.
+    bounds : sequence of (array_like, float, float, str), optional
+        ``(row, lo, hi, name)``: the admissible set ``lo <= row . z <= hi`` (e.g. every
+        contact's gap within its bounds; ``None`` for a missing bound), checked by
+        :meth:`violations`.
 
     Attributes
     ----------
@@ -201,6 +210,8 @@ class Section:
     sampling_commensurate : bool
         False when sampling clocks and the reference have no common period ``m T`` with
         ``m <= 64`` (then the clocks are coordinates and no periodic orbit exists).
+    fixed : tuple of str
+        The states that the guard and the constraints determine (no coordinates).
 
     Examples
     --------
@@ -213,7 +224,7 @@ class Section:
 
     def __init__(self, automaton: HybridAutomaton, mode: str, guard: str, *, exo_state=None,
                  reference=None, exo=None, period=None, coords=None, names=None, clocks=None,
-                 sample_time: float = 0.0):
+                 sample_time: float = 0.0, constraints=None, bounds=None):
         if not isinstance(automaton, HybridAutomaton):
             raise ValueError(f"automaton must be a HybridAutomaton, got {type(automaton).__name__}")
         self.automaton = automaton
@@ -251,12 +262,17 @@ class Section:
         self.free = tuple(i for i in range(n) if i not in self.exo and i not in held)
         self.e0 = self._exo_state(exo_state, reference)
         self._eig = None
+        self.constraints = self._constraints(constraints)
+        self.bounds = self._bounds(bounds)
+        # the guard and the constraints: rows that every section point satisfies
+        self._rows = np.vstack([self.c[None, :]] + [r[None, :] for r, _, _ in self.constraints])
+        self._values = np.array([-self.d] + [v for _, v, _ in self.constraints])
         self.C, self.names = self._coords(coords, names)
-        cf = self.c[list(self.free)]
-        M = np.vstack([self.C[:, self.free], cf[None, :]])
+        M = np.vstack([self.C[:, self.free], self._rows[:, self.free]])
         if not np.linalg.cond(M) < 1e12:
-            raise ValueError("coords: with the guard row they must determine the "
-                             "non-exosystem state (the matrix [C; c] is singular)")
+            raise ValueError("coords: with the guard row (and the constraints) they must "
+                             "determine the non-exosystem state (the matrix [C; c] is "
+                             "singular)")
         self._Minv = np.linalg.inv(M)
 
     def _clocks(self, clocks) -> tuple:
@@ -316,22 +332,76 @@ class Section:
                              "t = 0) or reference=(state, time)")
         return np.zeros(0)
 
+    def _constraints(self, constraints) -> tuple:
+        """``((row, value, name), ...)``: affine equalities of every section point."""
+        n = self.automaton.n_states
+        out = []
+        for i, item in enumerate(constraints or ()):
+            try:
+                row, value = np.asarray(item[0], float).reshape(-1), float(item[1])
+                name = str(item[2]) if len(item) > 2 else f"constraint {i}"
+            except (TypeError, ValueError, IndexError):
+                raise ValueError(f"constraints must be (row, value[, name]), got {item!r}") \
+                    from None
+            if row.shape != (n,) or not np.all(np.isfinite(row)) or not math.isfinite(value):
+                raise ValueError(f"constraints: {name}: the row must be {n} finite numbers "
+                                 "and the value finite")
+            out.append((row, value, name))
+        return tuple(out)
+
+    def _bounds(self, bounds) -> tuple:
+        """``((row, lo, hi, name), ...)``: the admissible set ``lo <= row . z <= hi``."""
+        n = self.automaton.n_states
+        out = []
+        for item in bounds or ():
+            try:
+                row, lo, hi, name = item
+                row = np.asarray(row, float).reshape(-1)
+                lo = -math.inf if lo is None else float(lo)
+                hi = math.inf if hi is None else float(hi)
+            except (TypeError, ValueError):
+                raise ValueError(f"bounds must be (row, lo, hi, name), got {item!r}") from None
+            if row.shape != (n,) or not lo < hi:
+                raise ValueError(f"bounds: {name}: the row must have {n} entries and lo < hi")
+            out.append((row, lo, hi, str(name)))
+        return tuple(out)
+
+    def _pivots(self) -> list:
+        """One state per row of ``[c; constraints]`` that the rows determine: Gaussian
+        elimination with partial pivoting over the free states, rows in order (the guard's
+        largest coefficient first, as for a section without constraints)."""
+        fr = list(self.free)
+        R = self._rows[:, fr].copy()
+        piv = []
+        for r in range(R.shape[0]):
+            cand = [j for j in range(len(fr)) if j not in piv]
+            a = np.abs(R[r, cand])
+            if not cand or not a.max() > 1e-12 * max(1.0, np.abs(self._rows[r]).max()):
+                what = "the guard" if r == 0 else f"constraint {self.constraints[r - 1][2]!r}"
+                raise ValueError(f"{what} involves only exosystem states or states that the "
+                                 "other rows fix: no section")
+            j = cand[int(np.argmax(a))]
+            piv.append(j)
+            for q in range(r + 1, R.shape[0]):
+                R[q] -= R[q, j] / R[r, j] * R[r]
+        return [fr[j] for j in piv]
+
     def _coords(self, coords, names):
         n = self.automaton.n_states
         sn = self.automaton.state_names
+        m = len(self.free) - self._rows.shape[0]
         if coords is None:
-            cf = np.abs(self.c[list(self.free)])
-            if not np.any(cf):
-                raise ValueError("the guard involves only exosystem states: no section")
-            pivot = self.free[int(np.argmax(cf))]
-            keep = [i for i in self.free if i != pivot]
+            pivots = set(self._pivots())
+            keep = [i for i in self.free if i not in pivots]
             C = np.zeros((len(keep), n))
             C[np.arange(len(keep)), keep] = 1.0
             default = tuple(sn[i] for i in keep)
+            self.fixed = tuple(sn[i] for i in sorted(pivots))
         else:
+            self.fixed = ()
             C = np.atleast_2d(np.asarray(coords, float))
-            if C.shape != (len(self.free) - 1, n) or not np.all(np.isfinite(C)):
-                raise ValueError(f"coords must be a finite ({len(self.free) - 1}, {n}) matrix, "
+            if C.shape != (m, n) or not np.all(np.isfinite(C)):
+                raise ValueError(f"coords must be a finite ({m}, {n}) matrix, "
                                  f"got shape {C.shape}")
             if self.exo and np.any(C[:, list(self.exo)]):
                 raise ValueError("coords must vanish on the exosystem states")
@@ -384,7 +454,7 @@ class Section:
         z[ex] = self.exo_at(t)
         for i, dt in self.clocks:
             z[i] = (t - self.sample_time) % dt
-        rhs = np.append(y, -self.d - self.c[ex] @ z[ex])
+        rhs = np.append(y, self._values - self._rows[:, ex] @ z[ex])
         z[list(self.free)] = self._Minv @ rhs
         return z, t
 
@@ -402,12 +472,13 @@ class Section:
         J = np.zeros((n, self.dim))
         off = 1 if self.has_phase else 0
         fr = list(self.free)
-        J[np.ix_(fr, range(off, self.dim))] = self._Minv[:, :-1]
+        m = self.C.shape[0]
+        J[np.ix_(fr, range(off, self.dim))] = self._Minv[:, :m]
         if self.has_phase:
             ex = list(self.exo)
             dexo = self.E @ z[ex]
             J[ex, 0] = dexo
-            J[fr, 0] = self._Minv[:, -1] * (-(self.c[ex] @ dexo))
+            J[fr, 0] = self._Minv[:, m:] @ (-(self._rows[:, ex] @ dexo))
             for i, _ in self.clocks:
                 J[i, 0] = 1.0          # a later start is a later point of the sampling grid
         return J
@@ -419,6 +490,30 @@ class Section:
             T = self.period
             ds[..., 0] = (ds[..., 0] + 0.5 * T) % T - 0.5 * T
         return ds
+
+    def violations(self, z, rtol: float = 1e-9) -> tuple:
+        """Names of the bounds (admissible set) that the full state ``z`` violates, beyond
+        ``rtol (1 + |bound|)``."""
+        z = np.asarray(z, float)
+        out = []
+        for row, lo, hi, name in self.bounds:
+            g = float(row @ z)
+            if g < lo - rtol * (1 + abs(lo)) or g > hi + rtol * (1 + abs(hi)):
+                out.append(name)
+        return tuple(out)
+
+    def fixed_by(self, state: str) -> str:
+        """Why the state ``state`` is no coordinate: the guard or constraint that fixes it
+        (empty if it is a coordinate or unknown)."""
+        names = self.automaton.state_names
+        if state not in names or state in self.names:
+            return ""
+        i = names.index(state)
+        if i in self.exo or i in {j for j, _ in self.clocks}:
+            return "it is set by the phase phi"
+        hits = [self.guard] if self.c[i] else []
+        hits += [name for row, _, name in self.constraints if row[i]]
+        return "fixed by " + (" and ".join(hits) if hits else "the section's equations")
 
     def fires(self, z) -> float:
         """``direction * c . f(z)``: positive where the flow fires the guard."""

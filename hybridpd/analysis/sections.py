@@ -14,7 +14,7 @@ import numpy as np
 
 from hybridpd.analysis.hybridmap import Section
 
-__all__ = ["impact_pair_section", "mechanical_section"]
+__all__ = ["contact_bounds", "held_constraints", "impact_pair_section", "mechanical_section"]
 
 
 def impact_pair_section(system, wall: int = 1) -> Section:
@@ -92,4 +92,43 @@ def mechanical_section(model, contact: int = 0, wall: int = 1, *, period=None,
         period = 2 * math.pi / omegas[0]
     clocks = getattr(model.loop, "clocks", ())
     return Section(model.automaton, mode, name, exo=exo, period=period,
-                   exo_state=ref.exo_state(0.0), clocks=clocks or None, sample_time=sample_time)
+                   exo_state=ref.exo_state(0.0), clocks=clocks or None, sample_time=sample_time,
+                   constraints=held_constraints(model, mode), bounds=contact_bounds(model))
+
+
+def _contact_label(model, k) -> str:
+    c = model.contacts[k]
+    return f"contact {k}" + (f" ({c.name})" if c.name else "")
+
+
+def held_constraints(model, mode: str) -> tuple:
+    """``((row, value, name), ...)``: the equalities of the contacts held in `mode`, gap at
+    its bound and zero normal velocity (see :class:`~hybridpd.analysis.hybridmap.Section`)."""
+    try:
+        info = model.modes[mode]
+    except KeyError:
+        raise ValueError(f"mode {mode!r} is no mode of the model") from None
+    lay = model.layout
+    out = []
+    for k, wall in info.stick:
+        c = model.contacts[k]
+        bound = c.hi if wall > 0 else c.lo
+        vrow = np.zeros(model.gap_rows.shape[1])
+        vrow[lay["v"]] = c.normal
+        what = _contact_label(model, k)
+        out.append((model.gap_rows[k].copy(), float(bound),
+                    f"{what} held: gap = {'hi' if wall > 0 else 'lo'} = {bound:g}"))
+        out.append((vrow, 0.0, f"{what} held: no relative velocity"))
+    return tuple(out)
+
+
+def contact_bounds(model) -> tuple:
+    """``((row, lo, hi, name), ...)``: every contact's gap within its bounds (the admissible
+    states of a mechanical model)."""
+    out = []
+    for k, c in enumerate(model.contacts):
+        lo = "" if c.lo is None else f"{c.lo:g} <= "
+        hi = "" if c.hi is None else f" <= {c.hi:g}"
+        out.append((model.gap_rows[k].copy(), c.lo, c.hi,
+                    f"{_contact_label(model, k)}: {lo}gap{hi}"))
+    return tuple(out)
