@@ -7,13 +7,14 @@ import numpy as np
 import pytest
 from _pair_model import PAIR
 
-from hybridpd.analysis.model_orbits import OrbitSearch, SectionSpec, signature_table
+from hybridpd.analysis.model_orbits import OrbitSearch, SectionSpec
 from hybridpd.cli import main
 from hybridpd.mechanics.naive import naive_mechanical
 from hybridpd.mechanics.params import ModelTemplate, check_path, numeric_paths, set_values
 from hybridpd.mechanics.simulate import simulate_state
 from hybridpd.sweeps.model_regions import (
     _Cells,
+    _Context,
     load_model_region_map,
     model_region_map,
 )
@@ -141,25 +142,35 @@ def test_robot_joint_release_map_every_orbit_returns_after_one_period(tmp_path, 
 
 
 def test_two_orbits_in_a_cell_are_both_kept():
-    class _O:      # the fields of PeriodicOrbit that the bookkeeping reads
-        def __init__(self, s, stable, rho, sig):
-            self.s, self.stable, self.spectral_radius, self.signature = \
-                np.array(s, float), stable, rho, sig
+    tpl = ModelTemplate(PAIR)
+    spec = {k: getattr(SectionSpec(), k) for k in SectionSpec.__dataclass_fields__}
+    ctx = _Context(tpl, spec, "")
+    n = ctx.model.automaton.automaton.n_states
 
-    table = signature_table(ModelTemplate(PAIR).model().automaton.automaton)
+    class _O:      # the fields of PeriodicOrbit that the bookkeeping reads
+        def __init__(self, z, stable, rho, sig):
+            self.z = np.array(z, float)
+            self.s = ctx.chart.from_state(self.z, 0.25)
+            self.stable, self.spectral_radius, self.signature = stable, rho, sig
+            self.period, self.mode = len(sig) // 2 or 1, "free"
+
     sig_a = (("contact0+", "crossing"), ("contact0-", "crossing"))
-    sig_b = (("contact0+", "crossing"),) * 3
-    cells = _Cells(1, 2)
-    cells.put(0, OrbitSearch(1, (_O([1, 2], False, 1.5, sig_a),), 2), table)
+    sig_b = (("contact0+", "crossing"),) * 4
+    za, zb = np.arange(n) + 1.0, np.arange(n) + 3.0
+    cells = _Cells(1, ctx.chart.dim, n)
+    cells.put(0, OrbitSearch(1, (_O(za, False, 1.5, sig_a),), 2), ctx)
     assert cells.a["n_orbits"][0] == 1 and cells.a["status"][0] == 1
-    assert cells.add(0, OrbitSearch(0, (_O([3, 4], True, 0.5, sig_b),), 1), table)
+    assert cells.add(0, OrbitSearch(0, (_O(zb, True, 0.5, sig_b),), 1), ctx)
     a = cells.a
     assert a["n_orbits"][0] == 2 and a["status"][0] == 0 and a["status2"][0] == 1
-    np.testing.assert_allclose(a["s"][0], [3, 4], rtol=0)
-    np.testing.assert_allclose(a["s2"][0], [1, 2], rtol=0)
+    np.testing.assert_allclose(a["z"][0], zb, rtol=0)
+    np.testing.assert_allclose(a["z2"][0], za, rtol=0)
+    np.testing.assert_allclose(a["s"][0], ctx.chart.from_state(zb, 0.25), rtol=0)
     np.testing.assert_allclose([a["rho"][0], a["rho2"][0]], [0.5, 1.5], rtol=0)
-    assert cells.signature_of(0, "sig", table) == sig_b
-    assert cells.signature_of(0, "sig2", table) == sig_a
+    assert [a["k"][0], a["k2"][0]] == [2, 1]
+    seeds = cells.seeds_of(0, ctx)
+    assert [sd.signature for sd in seeds] == [sig_b, sig_a]
+    assert [sd.mode for sd in seeds] == ["free", "free"] and seeds[0].period == 2
     assert a["attempts"][0] == 3
 
 

@@ -64,7 +64,10 @@ class _StroboscopicMap:
         """Flow over ``t_len`` under the held force ``u``, with every impact on the way."""
         t = 0.0
         for _ in range(1000):
-            gap = lambda tau: self._flow(x, u, tau)[0] - self._flow(x, u, tau)[2]
+            def gap(tau, x=x):
+                y = self._flow(x, u, tau)
+                return y[0] - y[2]
+
             grid = np.linspace(t, t_len, 33)
             vals = [gap(tau - t) for tau in grid]
             hit = None
@@ -73,7 +76,8 @@ class _StroboscopicMap:
                     # from inside (|gap| < L) to the wall or beyond: a state that starts on
                     # the wall after an impact moves inward and is no crossing
                     if bound * (vals[i - 1] - bound) < 0 <= bound * (vals[i] - bound):
-                        tau = brentq(lambda s, b=bound: gap(s - t) - b, grid[i - 1], grid[i],
+                        tau = brentq(lambda s, b=bound, g=gap, t0=t: g(s - t0) - b,
+                                     grid[i - 1], grid[i],
                                      xtol=1e-15, rtol=1e-15)
                         hit = tau if hit is None else min(hit, tau)
                 if hit is not None:
@@ -199,7 +203,7 @@ def test_sampling_clock_is_no_section_coordinate():
     sec = mechanical_section(model.automaton, 0, 1)
     assert sec.names == ("phi", "x1_dot", "x2", "x2_dot", "h0")
     assert sec.period == pytest.approx(T) and sec.clocks
-    z, t = sec.to_state(np.array([0.3 * sec.period, 3.0, 0.25, -1.5, -7.0]))
+    z, _ = sec.to_state(np.array([0.3 * sec.period, 3.0, 0.25, -1.5, -7.0]))
     np.testing.assert_allclose(z[-1], (0.3 * T) % (T / 50), rtol=1e-12, atol=1e-15)
 
 

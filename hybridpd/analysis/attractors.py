@@ -30,7 +30,8 @@ from hybridpd._repr import compact_repr
 from hybridpd.analysis.continuation import find_periodic_orbit
 from hybridpd.analysis.impactmap import ImpactMap
 
-__all__ = ["DIVERGED", "NO_CONVERGENCE", "OFF_SECTION_LABEL", "OUTCOMES", "STICKING", "UNRESOLVED",
+__all__ = ["DIVERGED", "INADMISSIBLE_LABEL", "NO_CONVERGENCE", "OFF_SECTION_LABEL", "OUTCOMES",
+           "STICKING", "UNRESOLVED",
            "Attractor", "CycleCatalog", "outcome", "paper_distance2"]
 
 NO_CONVERGENCE = -1
@@ -38,6 +39,7 @@ DIVERGED = -2
 STICKING = -3
 UNRESOLVED = -4
 OFF_SECTION_LABEL = -5
+INADMISSIBLE_LABEL = -6
 
 #: Negative label -> (kind, short name). The name of ``no_convergence`` gets the iteration count.
 OUTCOMES = {
@@ -45,7 +47,8 @@ OUTCOMES = {
     DIVERGED: ("diverged", "diverged"),
     STICKING: ("sticking", "sticking"),
     UNRESOLVED: ("unresolved", "unresolved flight"),
-    OFF_SECTION_LABEL: ("off_section", "off the section")}
+    OFF_SECTION_LABEL: ("off_section", "off the section"),
+    INADMISSIBLE_LABEL: ("inadmissible", "inadmissible (a gap beyond its bounds)")}
 
 # (dx1, dy1, dy2, dphi) = C (dphi, dz1, dz2, dz4): the paper's criterion coordinates
 _C = np.array([[0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 1, 0], [1, 0, 0, 0]], float)

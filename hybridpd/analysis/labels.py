@@ -16,10 +16,15 @@ and returns one of these labels; basins are the thin layer that applies a mapper
     An iteration bound inside one return was hit.
 ``off_section``
     The point is not on the section (for the impact pair: ``z4 = y1 - y2 <= 0``).
+``inadmissible``
+    The point's state lies outside the admissible set (a contact's gap beyond its bounds):
+    it is never iterated.
 """
 from __future__ import annotations
 
-__all__ = ["LABELS", "OFF_SECTION"]
+__all__ = ["INADMISSIBLE", "LABELS", "OFF_SECTION"]
 
-LABELS = ("converged", "not_converged", "diverged", "zeno_sticking", "unresolved", "off_section")
+LABELS = ("converged", "not_converged", "diverged", "zeno_sticking", "unresolved", "off_section",
+          "inadmissible")
 OFF_SECTION = 5
+INADMISSIBLE = 6

@@ -14,17 +14,31 @@ Status codes (:data:`STATUS`) say per parameter point what was found, or why not
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from hybridpd._repr import compact_repr
 from hybridpd.analysis.hybridmap import SectionMap
+from hybridpd.analysis.maps import minimal_period
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
 from hybridpd.analysis.sections import mechanical_section
 
-__all__ = ["FAMILY_DISTANCE", "STATUS", "OrbitSearch", "SectionSpec", "orbit_from_model",
-           "orbit_status", "other_family", "signature_codes", "signature_table", "solve_at"]
+__all__ = [
+    "FAMILY_DISTANCE",
+    "STATUS",
+    "OrbitSearch",
+    "SectionSpec",
+    "Seed",
+    "SimulatedReturns",
+    "orbit_from_model",
+    "orbit_status",
+    "other_family",
+    "signature_codes",
+    "signature_table",
+    "simulated_returns",
+    "solve_at",
+]
 
 #: Status of a parameter point: an orbit found (stable / unstable) or why none was.
 STATUS = {0: "stable", 1: "unstable", 2: "not_converged", 3: "degenerate_return",
@@ -36,43 +50,58 @@ _KINDS = ("crossing", "grazing", "zeno")
 
 @dataclass(frozen=True)
 class SectionSpec:
-    """Which section and which orbits: contact ``contact`` (0-based), bound ``wall`` (``+1``
-    hi, ``-1`` lo, None: hi if it has one), ``event`` (``"impact"`` or ``"release"``),
-    ``period`` returns per orbit (``k`` of ``P^k``), ``periods`` reference periods per orbit
-    (None: any), Newton's ``tol`` and ``max_iter``, the seeding simulation's ``transient``
-    (reference periods), the bound ``t_max`` on one map application (reference periods
-    per return) and the ``jacobian`` of Newton and of the multipliers (``"fd"``: central
-    differences of the simulated map, ``"exact"``: the saltation chain)."""
+    """Which section and which orbits.
+
+    ``contact`` (0-based) and its bound ``wall`` (``+1`` hi, ``-1`` lo, None: hi if it has
+    one); ``event`` (``"impact"`` or ``"release"``); ``mode``, the mode in which the
+    section's guard fires (None: the one a simulation of the model shows, e.g.
+    ``"stick0+1+"`` when contact 0 releases while contact 1 is held); ``period``, the returns
+    per orbit (``k`` of ``P^k``), or ``"auto"``: the neighbours' ``k``, then ``k = 1`` and
+    every ``k <= max_period`` after which the simulated motion returns with whole reference
+    periods; ``periods`` reference periods per orbit (None: any); Newton's ``tol`` and
+    ``max_iter``; the seeding simulation's ``transient`` (reference periods); the bound
+    ``t_max`` on one map application (reference periods per return); the ``jacobian`` of
+    Newton and of the multipliers (``"fd"``: central differences of the simulated map,
+    ``"exact"``: the saltation chain).
+    """
 
     contact: int = 0
     wall: int | None = None
     event: str = "impact"
-    period: int = 1
+    period: int | str = "auto"
     periods: int | None = None
     tol: float = 1e-10
     max_iter: int = 25
     transient: float = 30.0
     t_max: float = 20.0
     jacobian: str = "exact"
+    mode: str | None = None
+    max_period: int = 4
 
     def __post_init__(self):
         if self.event not in ("impact", "release"):
             raise ValueError(f"event must be 'impact' or 'release', got {self.event!r}")
-        if isinstance(self.period, bool) or int(self.period) != self.period or self.period < 1:
-            raise ValueError(f"period must be an int >= 1, got {self.period!r}")
+        if self.period != "auto" and (isinstance(self.period, (bool, str))
+                                      or int(self.period) != self.period or self.period < 1):
+            raise ValueError(f"period must be an int >= 1 or 'auto', got {self.period!r}")
+        if isinstance(self.max_period, bool) or int(self.max_period) != self.max_period or \
+                not 1 <= self.max_period <= 64:
+            raise ValueError(f"max_period must be an int in [1, 64], got {self.max_period!r}")
         if self.periods is not None and (int(self.periods) != self.periods or self.periods < 1):
             raise ValueError(f"periods must be None or an int >= 1, got {self.periods!r}")
         if self.jacobian not in ("exact", "fd"):
             raise ValueError(f"jacobian must be 'exact' or 'fd', got {self.jacobian!r}")
         if self.wall not in (None, 1, -1):
             raise ValueError(f"wall must be +1, -1 or None, got {self.wall!r}")
+        if self.mode is not None and not isinstance(self.mode, str):
+            raise ValueError(f"mode must be a mode name or None, got {self.mode!r}")
         for name in ("tol", "transient", "t_max"):
             v = getattr(self, name)
             if not (math.isfinite(float(v)) and float(v) > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {v!r}")
 
-    def section_map(self, model) -> SectionMap:
-        """The map ``P`` of this section of `model` (ValueError for a bad contact/wall)."""
+    def _where(self, model) -> tuple:
+        """``(contact, wall)`` checked against the model."""
         ma = model.automaton
         n = len(ma.contacts)
         if isinstance(self.contact, bool) or int(self.contact) != self.contact or \
@@ -83,12 +112,30 @@ class SectionSpec:
         if wall not in walls:
             raise ValueError(f"wall must be one of {walls} for contact {self.contact}, got "
                              f"{wall!r}")
-        sec = mechanical_section(ma, int(self.contact), wall, event=self.event,
-                                 sample_time=model.t0)
+        return int(self.contact), wall
+
+    def guard(self, model) -> str:
+        """Name of the section's guard (``contact0+``, ``release1-``, ``enter2+``)."""
+        k, wall = self._where(model)
+        c = model.automaton.contacts[k]
+        if self.event == "release":
+            if not c.rigid:
+                raise ValueError(f"event 'release': contact {k} is compliant (no sticking)")
+            return model.automaton.guard_name(k, wall, "release")
+        return model.automaton.guard_name(k, wall, "impact" if c.rigid else "enter")
+
+    def section_map(self, model, mode: str | None = None) -> SectionMap:
+        """The map ``P`` of this section of `model` in `mode` (default ``self.mode``, else
+        the free mode for impacts and the mode holding the contact alone for releases);
+        ValueError for a bad contact, wall or mode."""
+        k, wall = self._where(model)
+        sec = mechanical_section(model.automaton, k, wall, event=self.event,
+                                 mode=mode or self.mode, sample_time=model.t0)
         T = sec.reference_period if sec.has_phase else 1.0
-        t_max = self.t_max * self.period * T
+        kmax = self.max_period if self.period == "auto" else int(self.period)
+        t_max = self.t_max * kmax * T
         if sec.has_phase:
-            t_max = max(t_max, 2.0 * self.period * sec.period)
+            t_max = max(t_max, 2.0 * kmax * sec.period)
         return SectionMap(sec, t_max=t_max, max_jumps=5000)
 
     def sampling_period(self, model):
@@ -109,9 +156,20 @@ def orbit_status(po: PeriodicOrbit) -> int:
 
 
 def signature_table(automaton) -> tuple:
-    """All ``(guard, kind)`` pairs a signature of `automaton` can hold, in a fixed order."""
-    names = sorted({g.name for m in automaton.modes for g in m.guards})
-    return tuple((g, k) for g in names for k in _KINDS)
+    """All ``(guard, kind)`` pairs a signature of `automaton` can hold, in a fixed order.
+
+    For a mechanical automaton the guard names follow from its contacts and its free mode
+    (no other mode is built); for any other automaton every mode's guards are read.
+    """
+    contacts = getattr(automaton, "contacts", None)
+    if contacts is None:
+        names = {g.name for m in automaton.modes for g in m.guards}
+    else:
+        names = {g.name for g in automaton.automaton.mode(automaton.free_mode).guards}
+        for k, c in enumerate(contacts):
+            for wall, _ in c.bounds:
+                names.add(automaton.guard_name(k, wall, "release" if c.rigid else "leave"))
+    return tuple((g, k) for g in sorted(names) for k in _KINDS)
 
 
 def signature_codes(signature, table, length: int) -> np.ndarray:
@@ -176,8 +234,211 @@ def other_family(s, sig, s_ref, sig_ref, wrap=None) -> bool:
     return float(np.max(np.abs(d))) > FAMILY_DISTANCE * max(1.0, float(np.max(np.abs(s_ref))))
 
 
-def _far(P, orbit, seed) -> bool:
-    return other_family(seed[0], seed[1], orbit.s, orbit.signature, P.section.wrap)
+@dataclass(frozen=True, eq=False)
+class Seed:
+    """A starting point for Newton: an orbit's full pre-jump state ``z`` (shape ``(n,)``) at
+    time ``t`` on the section, its impact ``signature``, returns per period ``period`` and the
+    section's ``mode`` (empty: the spec's). Full states serve every section mode's chart."""
+
+    z: np.ndarray
+    t: float
+    signature: tuple = ()
+    period: int = 1
+    mode: str = ""
+
+    @classmethod
+    def of(cls, po: PeriodicOrbit, P) -> Seed:
+        """The seed of an orbit found on the map `P`."""
+        t = float(po.s[0]) if P.section.has_phase else 0.0
+        return cls(np.asarray(po.z, float).copy(), t, tuple(po.signature), int(po.period),
+                   P.section.mode)
+
+    def point(self, P) -> np.ndarray:
+        """The seed in `P`'s section coordinates."""
+        return P.section.from_state(self.z, self.t)
+
+    def distance(self, ref: Seed, period: float | None = None) -> float:
+        """Largest difference of the full states and of the times (wrapped to
+        ``[-period/2, period/2)`` when the section has a phase of that period), relative to
+        ``max(1, |ref.z|)``."""
+        dt = self.t - ref.t
+        if period:
+            dt = (dt + 0.5 * period) % period - 0.5 * period
+        d = np.append(self.z - ref.z, dt)
+        return float(np.max(np.abs(d))) / max(1.0, float(np.max(np.abs(ref.z))))
+
+    def other_family(self, ref: Seed, period: float | None = None) -> bool:
+        """Another family than `ref`: another mode, period or signature (their common part:
+        a stored signature may be cut), or more than :data:`FAMILY_DISTANCE` away (full
+        states, times)."""
+        n = min(len(self.signature), len(ref.signature))
+        if (self.mode, self.period, tuple(self.signature[:n])) != \
+                (ref.mode, ref.period, tuple(ref.signature[:n])):
+            return True
+        return self.distance(ref, period) > FAMILY_DISTANCE
+
+
+@dataclass(frozen=True)
+class SimulatedReturns:
+    """What a simulation shows of a section: where to start Newton, and with which ``k``.
+
+    Attributes
+    ----------
+    mode : str
+        The mode of the last crossing of the section's guard that starts a burst.
+    candidates : tuple of (int, ndarray)
+        ``(k, section point)`` to try, in order.
+    text : str
+        What the simulation showed, in words (for messages).
+    """
+
+    mode: str
+    candidates: tuple
+    text: str
+
+
+def _crossings(tr, guard):
+    """Indices of the jumps of `guard` (any mode) that start a burst: a crossing after a jump
+    of another guard (rebounds of one burst return within it)."""
+    J = tr.jumps
+    return [i for i in range(len(J)) if J.guard[i] == guard and J.kind[i] == "crossing"
+            and (i == 0 or J.guard[i - 1] != guard)]
+
+
+def simulated_returns(model, spec: SectionSpec, transient: float | None = None
+                      ) -> SimulatedReturns:
+    """Simulate `model` from its initial state and read the section's crossings.
+
+    The section's mode is ``spec.mode`` or the mode of the last crossing; with
+    ``spec.period = "auto"`` the candidates are every ``k <= spec.max_period`` after which the
+    last crossing comes a whole number of reference periods after an earlier one (within
+    ``1e-3 T``), the ones that also return close to the same state (``1e-3`` relative) first,
+    then ``k = 1``; otherwise ``spec.period`` alone.
+
+    Raises
+    ------
+    ValueError
+        No crossing of the guard within the transient (the message says what the simulation
+        did cross).
+    """
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.mechanics.simulate import simulate
+
+    guard = spec.guard(model)
+    P0 = spec.section_map(model)
+    T = P0.section.reference_period if P0.section.has_phase else 1.0
+    span = float(spec.transient * T if transient is None else transient)
+    if not (span > 0 and math.isfinite(span)):
+        raise ValueError(f"transient must be finite and > 0, got {transient!r}")
+    tr = simulate(model.automaton, model.x0, (model.t0, model.t0 + span)).hybrid
+    J = tr.jumps
+    hits = _crossings(tr, guard)
+    hits = [i for i in hits if spec.mode is None or J.source[i] == spec.mode]
+    if not hits:
+        seen = {}
+        for i in range(len(J)):
+            if J.kind[i] == "crossing":
+                seen[(J.guard[i], J.source[i])] = seen.get((J.guard[i], J.source[i]), 0) + 1
+        top = ", ".join(f"{g} in {m} x {c}" for (g, m), c in
+                        sorted(seen.items(), key=lambda t: -t[1])[:6]) or "no jump"
+        where = f" in mode {spec.mode}" if spec.mode else ""
+        raise ValueError(f"guess: the motion does not cross the section ({guard}{where}) within "
+                         f"the transient of {span:g} (simulated from the file's initial state; "
+                         f"its crossings: {top}); choose another contact or event, a longer "
+                         "--transient, or give --guess")
+    mode = J.source[hits[-1]]
+    hits = [i for i in hits if J.source[i] == mode]
+    P = spec.section_map(model, mode)
+    pts = [P.section.from_state(J.pre[i], J.t[i]) for i in hits]
+    text = (f"the simulation ({span:g} time units from the file's initial state) crosses "
+            f"{guard} in mode {mode} {len(hits)} times")
+    if spec.period != "auto":
+        return SimulatedReturns(mode, ((int(spec.period), pts[-1]),), text)
+    scale = max(1.0, float(np.max(np.abs(pts[-1]))))
+    close, whole, notes = [], [], []
+    for k in range(1, min(spec.max_period, len(hits) - 1) + 1):
+        gap = J.t[hits[-1]] - J.t[hits[-1 - k]]
+        m = round(gap / T)
+        dist = float(np.max(np.abs(P.section.wrap(pts[-1] - pts[-1 - k])))) / scale
+        notes.append(f"after {k}: {gap / T:.4g} T, distance {dist:.2g}")
+        if m >= 1 and abs(gap - m * T) <= 1e-3 * T:
+            (close if dist <= 1e-3 else whole).append((dist, k))
+    order = sorted(k for _, k in close) + [1] + [k for _, k in sorted(whole)]
+    ks = list(dict.fromkeys(order))[:3]
+    if notes:
+        text += "; returns " + "; ".join(notes)
+    return SimulatedReturns(mode, tuple((k, pts[-1]) for k in ks), text)
+
+
+def _guess_from_simulation(model, sec, transient):
+    """The section point of the last crossing of `sec`'s guard in its mode (a simulation of
+    ``transient`` time units from the file's initial state)."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.mechanics.simulate import simulate
+
+    if transient is None:
+        transient = 50.0 * sec.reference_period if sec.has_phase else 200.0
+    if not (float(transient) > 0 and math.isfinite(float(transient))):
+        raise ValueError(f"transient must be finite and > 0, got {transient!r}")
+    tr = simulate(model.automaton, model.x0, (model.t0, model.t0 + float(transient))).hybrid
+    J = tr.jumps
+    hits = [i for i in _crossings(tr, sec.guard) if J.source[i] == sec.mode]
+    if not hits:
+        raise ValueError(f"guess: no crossing of the section ({sec.guard} in mode {sec.mode}) "
+                         f"within the transient of {float(transient):g}; give --guess")
+    i = hits[-1]
+    return sec.from_state(J.pre[i], J.t[i])
+
+
+def _minimal(P, po, options):
+    """`po` as an orbit of its minimal period: a search on ``P^k`` may land on a fixed point
+    of ``P^d`` with ``d`` dividing ``k``."""
+    if not po.converged or po.period == 1:
+        return po
+    d = minimal_period(P, po.s, po.period)
+    if d == po.period:
+        return po
+    short = find_orbit(P, po.s, d, **options)
+    return short if short.converged else po
+
+
+class _Search:
+    """Newton runs of one :func:`solve_at` call: maps per mode, orbits found, what was tried."""
+
+    def __init__(self, model, spec):
+        self.model, self.spec = model, spec
+        self.maps, self.found, self.tried = {}, [], []
+        self.attempts, self.last = 0, None
+        self.dt = spec.sampling_period(model)
+
+    def map(self, mode=""):
+        mode = mode or self.spec.mode or ""
+        if mode not in self.maps:
+            self.maps[mode] = self.spec.section_map(self.model, mode or None)
+        return self.maps[mode]
+
+    def attempt(self, P, s0, k, why):
+        self.attempts += 1
+        sp = self.spec
+        po = _minimal(P, find_orbit(P, s0, k, tol=sp.tol, max_iter=sp.max_iter,
+                                    periods=sp.periods, sampling_period=self.dt,
+                                    jacobian=sp.jacobian),
+                      dict(tol=sp.tol, max_iter=sp.max_iter, sampling_period=self.dt,
+                           jacobian=sp.jacobian))
+        self.last = po
+        self.tried.append(f"{why}: period {k} in mode {P.section.mode}: "
+                          f"{po.reason if not po.converged else 'orbit'}")
+        if po.converged and not any(o.mode == po.mode and o.period == po.period and
+                                    _same_orbit(self.maps[o.mode], o, po.s)
+                                    for o, _ in self.found):
+            self.found.append((po, Seed.of(po, P)))
+        return po
+
+
+def _as_seed(seed) -> Seed:
+    if isinstance(seed, Seed):
+        return seed
+    raise ValueError(f"seeds must be Seed instances, got {type(seed).__name__}")
 
 
 def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
@@ -188,74 +449,74 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
     ----------
     model : MechanicalModel
     spec : SectionSpec
-    seeds : sequence of (s, signature)
-        Section points (and impact signatures) of orbits at neighbouring parameter values.
-        The first is tried; each further one only if it is no seed of an orbit found already
-        (another signature, or more than 5 % away): so a connected family costs one Newton
-        run per point, and two families meeting are both reported.
+    seeds : sequence of Seed
+        Orbits at neighbouring parameter values (:meth:`Seed.of`). The first is tried (with
+        its own ``k`` and section mode when ``spec.period`` is ``"auto"``); each further one
+        only if it is no seed of an orbit found already (:meth:`Seed.other_family`): so a
+        connected family costs one Newton run per point, and two families meeting are both
+        reported.
     simulate : bool
         Also seed from a simulation of the model (``spec.transient`` reference periods from
-        its initial state) when the seeds give no orbit or only unstable ones.
-    known : sequence of (s, signature)
+        its initial state) when the seeds give no orbit or only unstable ones: the section's
+        mode and the candidate ``k`` come from it (:func:`simulated_returns`).
+    known : sequence of Seed
         Orbits already known here: seeds of their families are skipped and only new orbits
         are returned.
 
     Returns
     -------
     OrbitSearch
-        Never raises for a valid model and section: failures are statuses.
+        Never raises for a valid model and section: failures are statuses, and ``detail``
+        says what was tried and what the simulation showed.
     """
-    P = spec.section_map(model)
-    dt = spec.sampling_period(model)
-    found: list[PeriodicOrbit] = []
-    attempts = 0
-    last = None
-
-    def attempt(s0):
-        nonlocal attempts, last
-        attempts += 1
-        po = find_orbit(P, s0, spec.period, tol=spec.tol, max_iter=spec.max_iter,
-                        periods=spec.periods, sampling_period=dt, jacobian=spec.jacobian)
-        last = po
-        if po.converged and not any(_same_orbit(P, o, po.s) for o in found):
-            found.append(po)
-        return po
-
-    wrap = P.section.wrap
-    for s, sig in seeds:
-        if found and not all(_far(P, o, (s, sig)) for o in found):
+    run = _Search(model, spec)
+    known = [_as_seed(k) for k in known]
+    for seed in map(_as_seed, seeds):
+        P = run.map(seed.mode)
+        T = P.section.period
+        if run.found and not all(seed.other_family(sd, T) for _, sd in run.found):
             continue
-        if any(not other_family(s, sig, ks, ksig, wrap) for ks, ksig in known):
+        if any(not seed.other_family(k, T) for k in known):
             continue
-        if np.asarray(s).shape != (P.dim,) or not np.all(np.isfinite(s)):
+        s0 = seed.point(P)
+        if not np.all(np.isfinite(s0)):
             continue
-        attempt(np.asarray(s, float))
+        k = seed.period if spec.period == "auto" else int(spec.period)
+        run.attempt(P, s0, k, "a neighbour's orbit")
     detail = ""
-    if simulate and not any(o.stable for o in found):
-        T = P.section.reference_period if P.section.has_phase else 1.0
+    if simulate and not any(po.stable for po, _ in run.found):
         try:
-            g = _guess_from_simulation(model, P.section, spec.transient * T)
+            sim = simulated_returns(model, spec)
         except ValueError as exc:
             detail = str(exc)
-            if not found and last is None:
-                return OrbitSearch(_CODE["no_section_crossing"], (), attempts, detail)
+            if not run.found and run.last is None:
+                return OrbitSearch(_CODE["no_section_crossing"], (), run.attempts, detail)
         else:
-            attempt(g)
-    found = [o for o in found
-             if all(np.max(np.abs(wrap(o.s - np.asarray(ks)))) >
-                    1e-6 * max(1.0, float(np.max(np.abs(o.s)))) for ks, _ in known)]
+            P = run.map(sim.mode)
+            for k, s0 in sim.candidates:
+                po = run.attempt(P, s0, k, "the simulation")
+                if po.converged and po.stable:
+                    break
+            detail = sim.text
+    found = [po for po, sd in run.found
+             if all(sd.distance(k, run.map(sd.mode).section.period) > 1e-6 for k in known)]
     found.sort(key=lambda o: (not o.stable, o.spectral_radius))
     if found:
-        return OrbitSearch(orbit_status(found[0]), tuple(found), attempts)
-    if last is None:
-        return OrbitSearch(_CODE["not_converged"], (), attempts, detail or "no seed")
-    return OrbitSearch(orbit_status(last), (), attempts, last.detail or last.reason)
+        return OrbitSearch(orbit_status(found[0]), tuple(found), run.attempts)
+    tried = "; ".join(run.tried) or "nothing (no seed)"
+    if run.last is None:
+        return OrbitSearch(_CODE["not_converged"], (), run.attempts,
+                           f"tried {tried}" + (f"; {detail}" if detail else ""))
+    why = run.last.detail or run.last.reason
+    return OrbitSearch(orbit_status(run.last), (), run.attempts,
+                       f"{why} (tried {tried}" + (f"; {detail})" if detail else ")"))
 
 
-def orbit_from_model(model, contact: int = 0, wall: int | None = None, period: int = 1, *,
+def orbit_from_model(model, contact: int = 0, wall: int | None = None, period="auto", *,
                      guess=None, transient: float | None = None, tol: float = 1e-11,
                      event: str = "impact", map_options: dict | None = None,
-                     periods: int | None = None, min_return: float | None = None) -> tuple:
+                     periods: int | None = None, min_return: float | None = None,
+                     mode: str | None = None, max_period: int = 4) -> tuple:
     """A periodic orbit of a mechanical model on the section of one of its contacts.
 
     Parameters
@@ -266,12 +527,14 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period: i
         0-based contact index (file order).
     wall : {+1, -1}, optional
         Bound of the contact (default ``hi`` if the contact has one, else ``lo``).
-    period : int
-        Number of returns to the section per period (``k`` of ``P^k``).
+    period : int or "auto"
+        Number of returns to the section per period (``k`` of ``P^k``); ``"auto"``: ``k = 1``
+        and every ``k <= max_period`` after which a simulation of the model returns with whole
+        reference periods (see :func:`simulated_returns`); the orbit's ``period`` says which.
     guess : array_like, optional
-        Section point (coordinates of :func:`~hybridpd.analysis.sections.mechanical_section`).
-        Default: simulate from the file's initial state for ``transient`` and take the last
-        pre-impact state on the section.
+        Section point (coordinates of :func:`~hybridpd.analysis.sections.mechanical_section`
+        in `mode`). Default: simulate from the file's initial state for ``transient`` and take
+        the last crossing of the section (in whichever mode it happens).
     transient : float, optional
         Time of that simulation (default 50 reference periods, or 200 time units).
     tol : float
@@ -284,50 +547,60 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period: i
     periods, min_return : optional
         As in :func:`find_orbit`. A sampled-data controller's ``dt`` is checked against the
         reference period (``sampling_incommensurate``).
+    mode : str, optional
+        The mode in which the section's guard fires (default: where the simulation crosses
+        it; with a ``guess``, the free mode for impacts and the mode holding the contact alone
+        for releases).
+    max_period : int
+        Largest ``k`` that ``period="auto"`` tries.
 
     Returns
     -------
     (PeriodicOrbit, SectionMap)
-        The orbit (``converged = False`` with the reason where there is none) and the map.
+        The orbit (``converged = False`` with the reason, and what was tried in ``detail``,
+        where there is none) and the map of its section.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> import hybridpd
+    >>> f = Path(hybridpd.__file__).parents[1] / "examples" / "models" / "gear_train.toml"
+    >>> po, P = orbit_from_model(hybridpd.load_model(f), 0, event="release")
+    >>> po.converged, po.mode, po.period
+    (True, 'stick0+1+', 1)
     """
-    ma = model.automaton
-    if isinstance(contact, bool) or int(contact) != contact or \
-            not 0 <= int(contact) < len(ma.contacts):
-        raise ValueError(f"contact must be an index in [0, {len(ma.contacts)}), got {contact!r}")
-    c = ma.contacts[int(contact)]
-    walls = [w for w, _ in c.bounds]
-    if wall is None:
-        wall = 1 if 1 in walls else -1
-    if wall not in walls:
-        raise ValueError(f"wall must be one of {walls} for contact {contact} (its bounds), "
-                         f"got {wall!r}")
-    sec = mechanical_section(ma, int(contact), wall, event=event, sample_time=model.t0)
-    P = SectionMap(sec, **dict(map_options or {}))
+    spec = SectionSpec(contact=contact, wall=wall, event=event, period=period,
+                       periods=periods, tol=tol, mode=mode, max_period=max_period)
     if guess is None:
-        guess = _guess_from_simulation(model, sec, transient)
-    s0 = np.asarray(guess, float)
+        sim = simulated_returns(model, spec, transient if transient is not None else
+                                _default_transient(model, spec))
+        cands, sec_mode, text = sim.candidates, sim.mode, sim.text
+    else:
+        ks = (1, *range(2, spec.max_period + 1)) if period == "auto" else (int(period),)
+        cands, sec_mode, text = tuple((k, guess) for k in ks[:3]), mode, ""
+    s0 = cands[0][1]
+    sec = spec.section_map(model, sec_mode).section
+    P = SectionMap(sec, **dict(map_options or {}))
+    s0 = np.asarray(s0, float)
     if s0.shape != (sec.dim,):
         raise ValueError(f"guess must have {sec.dim} numbers {sec.names}, got {s0.size}")
-    dt = float(getattr(ma.loop, "dt", 0.0) or 0.0)
-    return find_orbit(P, s0, period, tol=tol, periods=periods, min_return=min_return,
-                      sampling_period=dt if dt > 0 else None), P
+    dt = spec.sampling_period(model)
+    tried, po = [], None
+    for k, s in cands:
+        po = _minimal(P, find_orbit(P, np.asarray(s, float), k, tol=tol, periods=periods,
+                                    min_return=min_return, sampling_period=dt),
+                      dict(tol=tol, min_return=min_return, sampling_period=dt))
+        tried.append(f"period {k}: {'orbit' if po.converged else po.reason}")
+        if po.converged:
+            return po, P
+        if po.reason in ("sampling_incommensurate",):
+            break
+    if len(tried) > 1 or text:
+        po = replace(po, detail=(po.detail + "; " if po.detail else "") +
+                     f"tried {', '.join(tried)}" + (f"; {text}" if text else ""))
+    return po, P
 
 
-def _guess_from_simulation(model, sec, transient):
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.mechanics.simulate import simulate
-
-    if transient is None:
-        transient = 50.0 * sec.reference_period if sec.has_phase else 200.0
-    if not (float(transient) > 0 and math.isfinite(float(transient))):
-        raise ValueError(f"transient must be finite and > 0, got {transient!r}")
-    tr = simulate(model.automaton, model.x0, (model.t0, model.t0 + float(transient)))
-    J = tr.hybrid.jumps
-    # the first firing of a burst (after a jump of another guard): the start of a pattern
-    hits = [i for i in range(len(J)) if J.source[i] == sec.mode and J.guard[i] == sec.guard
-            and J.kind[i] == "crossing" and (i == 0 or J.guard[i - 1] != sec.guard)]
-    if not hits:
-        raise ValueError(f"guess: no impact on the section ({sec.guard} in mode {sec.mode}) "
-                         f"within the transient of {float(transient):g}; give --guess")
-    i = hits[-1]
-    return sec.from_state(J.pre[i], J.t[i])
+def _default_transient(model, spec):
+    sec = spec.section_map(model).section
+    return 50.0 * sec.reference_period if sec.has_phase else 200.0

@@ -96,6 +96,9 @@ class PeriodicOrbit:
     return_error : float
         Relative distance between the section point and where an independent simulation of
         one period returns (NaN where not checked).
+    mode : str
+        The section's mode (e.g. ``"stick0+1+"``: the contacts held where the section's guard
+        fires).
 
     Examples
     --------
@@ -130,6 +133,7 @@ class PeriodicOrbit:
     n_periods: int = 0
     detail: str = ""
     return_error: float = math.nan
+    mode: str = ""
     __repr__ = compact_repr
 
     def to_dict(self) -> dict:
@@ -145,7 +149,7 @@ class PeriodicOrbit:
             "spectral_radius": f(self.spectral_radius), "stable": bool(self.stable),
             "hyperbolic": bool(self.hyperbolic), "grazing": bool(self.grazing),
             "n_periods": int(self.n_periods), "detail": self.detail,
-            "return_error": f(self.return_error),
+            "return_error": f(self.return_error), "mode": self.mode,
         }
 
 
@@ -386,7 +390,8 @@ def _no_orbit(P, s, k, reason, it, F, detail="") -> PeriodicOrbit:
     res = float(np.max(np.abs(F))) if F is not None else math.nan
     return PeriodicOrbit(s, k, False, reason, it, res, math.nan, (), np.full((dim, dim), np.nan),
                          np.full(dim, np.nan + 0j), math.nan, False, False, False,
-                         P.section.to_state(s)[0], P.section.names, detail=detail)
+                         P.section.to_state(s)[0], P.section.names, detail=detail,
+                         mode=P.section.mode)
 
 
 def _make_orbit(P, s, k, reason, it, F, *, periods=None, min_return=0.0,
@@ -416,7 +421,8 @@ def _make_orbit(P, s, k, reason, it, F, *, periods=None, min_return=0.0,
         ok = reason == "converged"
     return PeriodicOrbit(s, k, ok, reason, it, res, t_per, rr.signature, DP, mult, rho,
                          bool(stab and ok), bool(hyp), rr.grazing, P.section.to_state(s)[0],
-                         P.section.names, n_periods=m, detail=detail, return_error=err)
+                         P.section.names, n_periods=m, detail=detail, return_error=err,
+                         mode=P.section.mode)
 
 
 def _validate(P, s, k, rr, t_per, periods, min_return, verify):

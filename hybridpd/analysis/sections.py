@@ -14,7 +14,8 @@ import numpy as np
 
 from hybridpd.analysis.hybridmap import Section
 
-__all__ = ["contact_bounds", "held_constraints", "impact_pair_section", "mechanical_section"]
+__all__ = ["contact_bounds", "held_constraints", "impact_pair_section", "mechanical_section",
+           "mode_code", "mode_name"]
 
 
 def impact_pair_section(system, wall: int = 1) -> Section:
@@ -132,3 +133,41 @@ def contact_bounds(model) -> tuple:
         out.append((model.gap_rows[k].copy(), c.lo, c.hi,
                     f"{_contact_label(model, k)}: {lo}gap{hi}"))
     return tuple(out)
+
+
+def mode_code(model, mode: str) -> int:
+    """A mechanical automaton's mode as an integer: one base-3 digit per contact (0 free,
+    1 held or engaged at ``hi``, 2 at ``lo``), contact 0 the least significant; ``-1`` for
+    more than 39 contacts (the code would not fit in 64 bits)."""
+    if len(model.contacts) > 39:
+        return -1
+    info = model.modes[mode]
+    digits = [0] * len(model.contacts)
+    for j, w in enumerate(info.config):
+        digits[j] = 0 if w == 0 else (1 if w > 0 else 2)
+    for k, w in info.stick:
+        digits[k] = 1 if w > 0 else 2
+    return int(sum(d * 3 ** j for j, d in enumerate(digits)))
+
+
+def mode_name(model, code: int) -> str:
+    """Inverse of :func:`mode_code` (``""`` for ``-1``)."""
+    code = int(code)
+    if code < 0:
+        return ""
+    stick, config = [], [0] * len(model.contacts)
+    for j, c in enumerate(model.contacts):
+        d = code % 3
+        code //= 3
+        if d:
+            w = 1 if d == 1 else -1
+            if c.rigid:
+                stick.append((j, w))
+            else:
+                config[j] = w
+    base = "free" if not stick else "stick" + "".join(
+        f"{k}{'+' if w > 0 else '-'}" for k, w in stick)
+    eng = [f"c{j}{'+' if w > 0 else '-'}" for j, w in enumerate(config) if w]
+    name = base + ("/" + ",".join(eng) if eng else "")
+    model.modes[name]            # KeyError for a code that names no mode
+    return name

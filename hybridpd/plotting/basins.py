@@ -11,6 +11,7 @@ import numpy as np
 
 from hybridpd.analysis.attractors import (
     DIVERGED,
+    INADMISSIBLE_LABEL,
     NO_CONVERGENCE,
     OFF_SECTION_LABEL,
     STICKING,
@@ -27,16 +28,17 @@ __all__ = ["basin_colors", "basin_hatches", "basin_title", "plot_basin"]
 _SYMMETRIC = "#0072B2"
 _PERIODIC = ("#E69F00", "#009E73", "#CC79A7", "#F0E442")
 _OUTCOME_COLORS = {NO_CONVERGENCE: "#999999", DIVERGED: "#D55E00", STICKING: "#56B4E9",
-                   UNRESOLVED: "#000000", OFF_SECTION_LABEL: "#FFFFFF"}
+                   UNRESOLVED: "#000000", OFF_SECTION_LABEL: "#FFFFFF",
+                   INADMISSIBLE_LABEL: "#FFFFFF"}
 _MARKERS = ("D", "o", "s", "^", "v", "P")
 # the paper's labels as attractor codes (a BasinResult has no attractor identification)
 _FROM_PAPER = {0: 0, 1: NO_CONVERGENCE, 2: DIVERGED, 3: STICKING, 4: UNRESOLVED,
-               5: OFF_SECTION_LABEL}
+               5: OFF_SECTION_LABEL, 6: INADMISSIBLE_LABEL}
 
 
 _PERIODIC_HATCHES = ("////", "\\\\\\\\", "||||", "----", "oo")
 _OUTCOME_HATCHES = {NO_CONVERGENCE: "....", DIVERGED: "xxxx", STICKING: "++++",
-                    UNRESOLVED: "OO", OFF_SECTION_LABEL: "///"}
+                    UNRESOLVED: "OO", OFF_SECTION_LABEL: "///", INADMISSIBLE_LABEL: "xx"}
 
 
 def basin_hatches(labels) -> dict:

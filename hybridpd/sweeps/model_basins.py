@@ -27,11 +27,12 @@ from hybridpd.analysis.periodic import SectionMapper, find_orbit
 from hybridpd.sweeps.attractor_basins import format_percent
 from hybridpd.sweeps.labelled import decode_attrs, encode_attrs, load_result, save_result
 from hybridpd.sweeps.model_regions import _grid_spec, template_of
+from hybridpd.sweeps.section_basins import off_section_axis
 
 __all__ = ["ModelBasin", "load_model_basin", "model_basin"]
 
 # paper label -> outcome code (converged handled apart)
-_OUTCOME_OF = {1: -1, 2: -2, 3: -3, 4: -4, 5: -5}
+_OUTCOME_OF = {1: -1, 2: -2, 3: -3, 4: -4, 5: -5, 6: -6}
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,9 +78,10 @@ class ModelBasin:
     __repr__ = compact_repr
 
     def fraction(self, label: int) -> float:
-        """Share of the on-section grid with ``label`` (of the whole grid for off-section)."""
-        on = self.labels != -5
-        whole = self.labels.size if label == -5 else int(on.sum())
+        """Share of the on-section, admissible grid with ``label`` (of the whole grid for
+        the off-section and inadmissible labels, ``-5`` and ``-6``)."""
+        on = (self.labels != -5) & (self.labels != -6)
+        whole = self.labels.size if label in (-5, -6) else int(on.sum())
         return float((self.labels == label).sum() / whole) if whole else 0.0
 
     def area(self, label: int) -> float:
@@ -92,17 +94,19 @@ class ModelBasin:
         lines = [(f"{Path(self.source).name}: slice {self.x_name} in [{self.x[0]:g}, "
                  f"{self.x[-1]:g}], {self.y_name} in [{self.y[0]:g}, {self.y[-1]:g}] "
                  f"({len(self.x)} x {len(self.y)} points)")]
-        on = int((self.labels != -5).sum())
+        on = int(((self.labels != -5) & (self.labels != -6)).sum())
         for a in self.attractors:
             n = int((self.labels == a["label"]).sum())
-            whole = self.labels.size if a["label"] == -5 else on
+            whole = self.labels.size if a["label"] in (-5, -6) else on
             pct = format_percent(n, whole) if whole else "0 %"
             extra = ""
             if a.get("period"):
                 stab = "stable" if a["stable"] else "unstable"
                 extra = f"; {stab}, spectral radius {a['spectral_radius']:.4g}"
-            lines.append(f"{a['name']}: {pct} of the "
-                         f"{'window' if a['label'] == -5 else 'on-section grid'}, area "
+            where = "window" if a["label"] in (-5, -6) else "on-section, admissible grid"
+            if a["label"] == -6:
+                extra = f" ({n} points, not iterated)"
+            lines.append(f"{a['name']}: {pct} of the {where}, area "
                          f"{self.area(a['label']):.4g}{extra}")
         return lines
 
@@ -164,11 +168,10 @@ def load_model_basin(path) -> ModelBasin:
     return load_result(ModelBasin, path)
 
 
-def _grid(name, spec, coords):
+def _grid(name, spec, sec):
     def check(key):
-        if key not in coords:
-            raise ValueError(f"{name}: {key!r} is no section coordinate; they are "
-                             f"{list(coords)}")
+        if key not in sec.names:
+            raise ValueError(off_section_axis(name, key, sec))
 
     return _grid_spec(name, spec, "COORDINATE", check)
 
@@ -203,7 +206,7 @@ def _find_attractor(P, s, max_period, known, n_transient=200):
 
 
 def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
-                wall: int | None = None, event: str = "impact", period: int = 1,
+                wall: int | None = None, event: str = "impact", period="auto",
                 periods: int | None = None, n_iter: int = 300, criterion: float = 1e-3,
                 max_period: int = 4, max_attractors: int = 4, executor="serial",
                 max_workers=None, progress: bool = False) -> ModelBasin:
@@ -248,10 +251,10 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
         raise ValueError(f"no periodic orbit of this section to take the basin of "
                          f"({res.detail})")
     po = res.orbits[0]
-    P = spec.section_map(m)
+    P = spec.section_map(m, po.mode)
     names = P.section.names
-    xn, xg = _grid("x", x, names)
-    yn, yg = _grid("y", y, names)
+    xn, xg = _grid("x", x, P.section)
+    yn, yg = _grid("y", y, P.section)
     if xn == yn:
         raise ValueError(f"x and y must be different coordinates, both are {xn!r}")
     mapper = SectionMapper(P, po.s, period=po.period, n_iter=n_iter, criterion=criterion)
@@ -287,6 +290,7 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
     meta = {"values": dict(values or {}), "spec": {f: getattr(spec, f) for f in
                                                     ("contact", "wall", "event", "period",
                                                      "periods")},
-            "n_iter": int(n_iter), "criterion": float(criterion)}
+            "n_iter": int(n_iter), "criterion": float(criterion), "section_mode": po.mode,
+            "inadmissible": int(b.metadata.get("inadmissible", 0))}
     return ModelBasin(template.source, xn, yn, b.x1, b.y1, lab, tuple(atts), crit,
                       b.iterations, po.s.copy(), tuple(names), meta)

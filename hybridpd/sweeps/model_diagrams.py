@@ -2,8 +2,8 @@
 
 :func:`model_diagram` sweeps one entry of a model file (a dotted path,
 :mod:`hybridpd.mechanics.params`) over ``N`` values; at each value it simulates the model from
-its initial state for a transient, takes the last crossing of the chosen section, iterates
-the section map ``P^k`` ``iterations`` times and keeps the last ``keep`` section points. Each
+its initial state for a transient, takes the last crossing of the chosen section (in the
+mode where the motion crosses it), iterates the section map ``P^k`` ``iterations`` times and keeps the last ``keep`` section points. Each
 value is classified: ``periodic`` with the smallest period ``p`` (applications of ``P^k``)
 after which the kept points repeat (to ``1e-6`` relative), ``not_periodic`` (no period up to
 ``max_period``: quasi-periodic or chaotic), or ``undefined`` (the map stopped: no crossing,
@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from hybridpd._repr import compact_repr
-from hybridpd.analysis.model_orbits import SectionSpec, _guess_from_simulation
+from hybridpd.analysis.model_orbits import SectionSpec, simulated_returns
 from hybridpd.mechanics.params import ModelTemplate
 from hybridpd.sweeps.labelled import decode_attrs, encode_attrs, load_result, save_result
 from hybridpd.sweeps.model_regions import template_of
@@ -132,24 +132,30 @@ def _detect_period(pts, wrap, max_period):
     return 0
 
 
-def _diagram_chunk(chunk, *, data, source, name, spec, iterations, keep, max_period, dim):
+def _diagram_chunk(chunk, *, data, source, name, spec, iterations, keep, max_period, dim,
+                   main_mode=""):
     """Values of one chunk (module-level: runs in worker processes)."""
     template = ModelTemplate(data, source)
     sspec = SectionSpec(**spec)
+    chart = sspec.section_map(template.model(), main_mode or None).section
     m = len(chunk["value"])
     pts = np.full((m, keep, dim), np.nan)
     code = np.full(m, 2, np.int64)
     period = np.zeros(m, np.int64)
+    k = 1 if sspec.period == "auto" else int(sspec.period)
     for i in range(m):
         try:
             model = template.model({name: chunk["value"][i]})
-            P = sspec.section_map(model)
-            T = P.section.period if P.section.has_phase else 1.0
-            s = _guess_from_simulation(model, P.section, sspec.transient * T)
+            sim = simulated_returns(model, sspec)
+            P = sspec.section_map(model, sim.mode)
+            s = sim.candidates[0][1]
         except ValueError:
             continue
-        it = P.iterate(s, iterations, sspec.period)
+        it = P.iterate(s, iterations, k)
         tail = it[-keep:]
+        if P.section.mode != chart.mode:       # the diagram's chart: that of the main mode
+            tail = np.array([chart.from_state(*P.section.to_state(q)) if np.all(np.isfinite(q))
+                             else np.full(dim, np.nan) for q in tail])
         pts[i] = tail
         if np.all(np.isfinite(tail)):
             period[i] = _detect_period(tail, P.section.wrap, max_period)
@@ -158,7 +164,7 @@ def _diagram_chunk(chunk, *, data, source, name, spec, iterations, keep, max_per
 
 
 def model_diagram(model, param, *, contact: int = 0, wall: int | None = None,
-                  event: str = "impact", period: int = 1, iterations: int = 300,
+                  event: str = "impact", period="auto", iterations: int = 300,
                   keep: int = 50, max_period: int = 16, executor="serial", max_workers=None,
                   store=None, progress: bool = True) -> ModelDiagram:
     """A brute-force bifurcation diagram of a model file in one numeric entry.
@@ -169,7 +175,8 @@ def model_diagram(model, param, *, contact: int = 0, wall: int | None = None,
     param : (str, float, float, int)
         ``(KEY, MIN, MAX, NUM)``: a dotted path and its values.
     contact, wall, event, period
-        The section (``period``: the diagram iterates ``P^k``).
+        The section, in whichever mode the motion crosses it at each value (``period``: the
+        diagram iterates ``P^k``; ``"auto"`` iterates ``P`` and detects the period).
     iterations, keep, max_period
         Iterations per value, points kept, largest period detected.
     executor, max_workers, store, progress
@@ -191,7 +198,11 @@ def model_diagram(model, param, *, contact: int = 0, wall: int | None = None,
     if not 1 <= int(max_period) < keep:
         raise ValueError(f"max_period must be in [1, keep), got {max_period!r}")
     spec = SectionSpec(contact=contact, wall=wall, event=event, period=period)
-    P = spec.section_map(template.model())
+    base = template.model()
+    try:
+        P = spec.section_map(base, simulated_returns(base, spec).mode)
+    except ValueError:
+        P = spec.section_map(base)
     specd = {k: getattr(spec, k) for k in spec.__dataclass_fields__}
     res = run_sweep(_diagram_chunk, {"value": values}, chunk_size=max(1, len(values) // 16),
                     executor=executor, max_workers=max_workers, store=store,
@@ -199,7 +210,7 @@ def model_diagram(model, param, *, contact: int = 0, wall: int | None = None,
                     func_kwargs={"data": template.data, "source": template.source,
                                  "name": name, "spec": specd, "iterations": int(iterations),
                                  "keep": int(keep), "max_period": int(max_period),
-                                 "dim": P.dim},
+                                 "dim": P.dim, "main_mode": P.section.mode},
                     metadata={"kind": "model_diagram", "version": 1})
     o = res.outputs
     meta = {"spec": specd, "iterations": int(iterations), "keep": int(keep),

@@ -37,11 +37,13 @@ from hybridpd.analysis.model_orbits import (
     STATUS,
     OrbitSearch,
     SectionSpec,
-    other_family,
+    Seed,
     signature_codes,
     signature_table,
+    simulated_returns,
     solve_at,
 )
+from hybridpd.analysis.sections import mode_code, mode_name
 from hybridpd.mechanics.params import ModelTemplate
 from hybridpd.sweeps.labelled import (
     axis_attrs,
@@ -118,6 +120,15 @@ class ModelRegionMap:
     section_point, section_point2 : ndarray, shape (ny, nx, dim)
     signature, signature2 : ndarray of int16, shape (ny, nx, 48)
         Impact signatures as codes into ``sig_table`` (``-1`` padding, ``-2`` cut).
+    period, period2 : ndarray of int, shape (ny, nx)
+        Returns to the section per period of the first and second orbit (``k``; 0: none).
+    mode, mode2 : ndarray of int, shape (ny, nx)
+        The section's mode of each orbit (:func:`~hybridpd.analysis.sections.mode_code`;
+        ``metadata["modes"]`` names the codes present; -1: none).
+    section_state, section_state2 : ndarray, shape (ny, nx, n)
+        Full pre-jump state of each orbit at its section point (``metadata["state_names"]``).
+    section_time, section_time2 : ndarray, shape (ny, nx)
+        Its time (the phase ``phi``).
     status2 : ndarray of int, shape (ny, nx)
         Status of the second orbit (``-1`` where there is none).
     n_orbits : ndarray of int, shape (ny, nx)
@@ -146,7 +157,27 @@ class ModelRegionMap:
     signature2: np.ndarray = field(repr=False)
     attempts: np.ndarray = field(repr=False)
     metadata: dict = field(default_factory=dict)
+    period: np.ndarray | None = field(default=None, repr=False)
+    period2: np.ndarray | None = field(default=None, repr=False)
+    mode: np.ndarray | None = field(default=None, repr=False)
+    mode2: np.ndarray | None = field(default=None, repr=False)
+    section_state: np.ndarray | None = field(default=None, repr=False)
+    section_time: np.ndarray | None = field(default=None, repr=False)
+    section_state2: np.ndarray | None = field(default=None, repr=False)
+    section_time2: np.ndarray | None = field(default=None, repr=False)
     __repr__ = compact_repr
+
+    def __post_init__(self):
+        sh = self.status.shape
+        defaults = {"period": np.where(self.n_orbits > 0, 1, 0),
+                    "period2": np.where(self.status2 >= 0, 1, 0),
+                    "mode": np.full(sh, -1), "mode2": np.full(sh, -1),
+                    "section_time": np.full(sh, np.nan), "section_time2": np.full(sh, np.nan),
+                    "section_state": np.full((*sh, 0), np.nan),
+                    "section_state2": np.full((*sh, 0), np.nan)}
+        for k, v in defaults.items():
+            if getattr(self, k) is None:
+                object.__setattr__(self, k, v)
 
     @property
     def exists(self) -> np.ndarray:
@@ -174,9 +205,14 @@ class ModelRegionMap:
         head = (f"{Path(self.source).name}: periodic orbits of contact {self.spec['contact']}"
                 f" ({self.spec['event']}, k = {self.spec['period']}) on {self.x_name} x "
                 f"{self.y_name} = {len(self.x)} x {len(self.y)}")
+        ks = {int(k): int(np.sum(self.period[self.exists] == k))
+              for k in np.unique(self.period[self.exists])}
         lines = [head,
                  "  " + ", ".join(parts),
                  f"  cells with two or more orbits: {int(np.sum(self.n_orbits > 1))}"]
+        if ks:
+            lines.append("  returns to the section per period (k): " + ", ".join(
+                f"k = {k}: {c} cells" for k, c in sorted(ks.items())))
         sigs = {}
         for iy, ix in zip(*np.nonzero(self.exists)):
             s = self.signature_of(iy, ix)
@@ -240,7 +276,23 @@ class ModelRegionMap:
             "section_point2": ((*dims, "coordinate"), one(self.section_point2),
                                {"long_name": "section point of a second orbit"}),
             "signature2": ((*dims, "jump"), one(self.signature2),
-                           {"long_name": "impact signature of a second orbit"})}
+                           {"long_name": "impact signature of a second orbit"}),
+            "period": (dims, one(self.period), {"long_name": "returns to the section per "
+                                                              "period of the orbit (0: none)"}),
+            "period2": (dims, one(self.period2), {"long_name": "returns per period of a "
+                                                                "second orbit"}),
+            "section_mode": (dims, one(self.mode), {"long_name": "mode of the section "
+                                                                 "(codes named in metadata)"}),
+            "section_mode2": (dims, one(self.mode2), {"long_name": "mode of the section of a "
+                                                                   "second orbit"}),
+            "section_time": (dims, one(self.section_time), {"long_name": "time of the "
+                                                                         "section point"}),
+            "section_time2": (dims, one(self.section_time2), {"long_name": "time of the "
+                                                                           "second orbit"}),
+            "section_state": ((*dims, "state"), one(self.section_state),
+                              {"long_name": "full state at the section point"}),
+            "section_state2": ((*dims, "state"), one(self.section_state2),
+                               {"long_name": "full state at the second orbit's point"})}
         fixed = {"model": self.source, **{f"section_{k}": v for k, v in self.spec.items()}}
         attrs = {"kind": "region_map", "case": f"{Path(self.source).name}",
                  "model_kind": "model_region_map", "x_name": self.x_name,
@@ -265,7 +317,11 @@ class ModelRegionMap:
                    v("n_orbits").astype(np.int64), v("status2").astype(np.int64),
                    v("spectral_radius2"), v("section_point2"),
                    v("signature2").astype(np.int16), v("attempts").astype(np.int64),
-                   dict(a.get("metadata") or {}))
+                   dict(a.get("metadata") or {}),
+                   *(v(k).astype(np.int64) if k in ds else None
+                     for k in ("period", "period2", "section_mode", "section_mode2")),
+                   *(v(k) if k in ds else None for k in ("section_state", "section_time",
+                                                         "section_state2", "section_time2")))
 
     def save(self, path) -> Path:
         """Write to ``.nc`` or ``.zarr`` (by suffix)."""
@@ -305,58 +361,95 @@ def _tile_order(nx, ny, tile):
 
 class _Cells:
     """Per-cell results as arrays (the sweep's outputs): :meth:`put` a search, :meth:`add`
-    the new orbits of a later search."""
+    the new orbits of a later search. Each orbit keeps its section point in the map's chart
+    (``s``), its full state and time (``z``, ``t``), its returns per period (``k``) and its
+    section's mode (``mode``, :func:`~hybridpd.analysis.sections.mode_code`)."""
 
-    _SLOTS = (("status", "rho", "s", "sig"), ("status2", "rho2", "s2", "sig2"))
+    _SLOTS = (("status", "rho", "s", "sig", "z", "t", "k", "mode"),
+              ("status2", "rho2", "s2", "sig2", "z2", "t2", "k2", "mode2"))
 
-    def __init__(self, m, dim):
-        self.a = {"status": np.full(m, 2, np.int64), "rho": np.full(m, np.nan),
-                  "s": np.full((m, dim), np.nan), "sig": np.full((m, _SIG_LEN), -1, np.int16),
-                  "n_orbits": np.zeros(m, np.int64), "status2": np.full(m, -1, np.int64),
-                  "rho2": np.full(m, np.nan), "s2": np.full((m, dim), np.nan),
-                  "sig2": np.full((m, _SIG_LEN), -1, np.int16),
-                  "attempts": np.zeros(m, np.int64)}
+    def __init__(self, m, dim, n):
+        self.a = {"n_orbits": np.zeros(m, np.int64), "attempts": np.zeros(m, np.int64)}
+        for j, names in enumerate(self._SLOTS):
+            st, rho, s, sig, z, t, k, mode = names
+            self.a.update({st: np.full(m, 2 if j == 0 else -1, np.int64),
+                           rho: np.full(m, np.nan), s: np.full((m, dim), np.nan),
+                           sig: np.full((m, _SIG_LEN), -1, np.int16),
+                           z: np.full((m, n), np.nan), t: np.full(m, np.nan),
+                           k: np.zeros(m, np.int64), mode: np.full(m, -1, np.int64)})
         self.orbits = {}
 
-    def _store(self, p, slot, o, table):
-        st, rho, s, sig = self._SLOTS[slot]
+    def _store(self, p, slot, o, seed, ctx):
+        st, rho, s, sig, z, t, k, mode = self._SLOTS[slot]
         self.a[st][p] = 0 if o.stable else 1
-        self.a[rho][p], self.a[s][p] = o.spectral_radius, o.s
-        self.a[sig][p] = signature_codes(o.signature, table, _SIG_LEN)
+        self.a[rho][p] = o.spectral_radius
+        self.a[s][p] = ctx.chart.from_state(seed.z, seed.t)
+        self.a[sig][p] = signature_codes(o.signature, ctx.table, _SIG_LEN)
+        self.a[z][p], self.a[t][p], self.a[k][p] = seed.z, seed.t, seed.period
+        self.a[mode][p] = mode_code(ctx.model.automaton, seed.mode)
 
-    def put(self, p, res, table):
+    def _seeds(self, res, ctx):
+        return [Seed.of(o, ctx.maps(o.mode)) for o in res.orbits]
+
+    def put(self, p, res, ctx):
         self.a["status"][p] = res.status
         self.a["attempts"][p] += res.attempts
         self.a["n_orbits"][p] = len(res.orbits)
-        self.orbits[p] = [(o.s.copy(), tuple(o.signature)) for o in res.orbits]
-        for j, o in enumerate(res.orbits[:2]):
-            self._store(p, j, o, table)
+        seeds = self._seeds(res, ctx)
+        self.orbits[p] = seeds
+        for j, (o, sd) in enumerate(zip(res.orbits[:2], seeds)):
+            self._store(p, j, o, sd, ctx)
 
-    def add(self, p, res, table) -> bool:
+    def add(self, p, res, ctx) -> bool:
         """Merge the new orbits of `res` (searched with this cell's orbits as ``known``)."""
         if not res.orbits:
             self.a["attempts"][p] += res.attempts
             return False
         if self.a["n_orbits"][p] == 0:
-            self.put(p, res, table)
+            self.put(p, res, ctx)
             return True
         self.a["attempts"][p] += res.attempts
-        new = list(res.orbits)
-        if new[0].stable and self.a["status"][p] != 0:
+        new = list(zip(res.orbits, self._seeds(res, ctx)))
+        if new[0][0].stable and self.a["status"][p] != 0:
             # a stable orbit comes first: the old first orbit moves to the second slot
-            for k in ("status", "rho", "s", "sig"):
-                self.a[k + "2"][p] = self.a[k][p]
-            self._store(p, 0, new.pop(0), table)
+            for a, b in zip(*self._SLOTS):
+                self.a[b][p] = self.a[a][p]
+            self._store(p, 0, *new.pop(0), ctx)
         elif self.a["status2"][p] < 0:
-            self._store(p, 1, new[0], table)
+            self._store(p, 1, *new[0], ctx)
         self.a["n_orbits"][p] += len(res.orbits)
-        self.orbits[p] = self.orbits[p] + [(o.s.copy(), tuple(o.signature))
-                                           for o in res.orbits]
+        self.orbits[p] = self.orbits[p] + [sd for _, sd in zip(res.orbits, self._seeds(res,
+                                                                                         ctx))]
         return True
 
-    def signature_of(self, p, key, table):
-        """The signature held in ``a[key][p]`` as ``(guard, kind)`` pairs."""
-        return tuple(table[c] for c in self.a[key][p] if c >= 0)
+    def seeds_of(self, p, ctx) -> list:
+        """The stored orbits of cell `p` as seeds (repair rounds)."""
+        out = []
+        for names in self._SLOTS:
+            _, _, _, sig, z, t, k, mode = names
+            if np.all(np.isfinite(self.a[z][p])):
+                codes = self.a[sig][p]
+                out.append(Seed(self.a[z][p].copy(), float(self.a[t][p]),
+                                tuple(ctx.table[c] for c in codes if c >= 0),
+                                int(self.a[k][p]), mode_name(ctx.model.automaton, self.a[mode][p])))
+        return out
+
+
+class _Context:
+    """What a tile needs besides its points: the model at the file's values, the map's chart,
+    the signature table and the section maps per mode (for seeds)."""
+
+    def __init__(self, template, spec, main_mode):
+        self.model = template.model()
+        self.spec = SectionSpec(**spec)
+        self.chart = self.spec.section_map(self.model, main_mode or None).section
+        self.table = signature_table(self.model.automaton)
+        self._maps = {}
+
+    def maps(self, mode):
+        if mode not in self._maps:
+            self._maps[mode] = self.spec.section_map(self.model, mode or None)
+        return self._maps[mode]
 
 
 def _solve_cell(template, values, spec, seeds, simulate, known=()):
@@ -367,14 +460,13 @@ def _solve_cell(template, values, spec, seeds, simulate, known=()):
     return solve_at(model, spec, seeds, simulate=simulate, known=known)
 
 
-def _tile_chunk(chunk, *, data, source, x_name, y_name, spec, dim):
+def _tile_chunk(chunk, *, data, source, x_name, y_name, spec, dim, n, main_mode):
     """One tile (module-level: runs in worker processes): continuation in visiting order."""
     template = ModelTemplate(data, source)
-    sspec = SectionSpec(**spec)
-    table = signature_table(template.model().automaton.automaton)
+    ctx = _Context(template, spec, main_mode)
     ix, iy = chunk["ix"].astype(int), chunk["iy"].astype(int)
     m = len(ix)
-    cells = _Cells(m, dim)
+    cells = _Cells(m, dim, n)
     where = {(int(iy[p]), int(ix[p])): p for p in range(m)}
     for p in range(m):
         seeds = []
@@ -382,26 +474,23 @@ def _tile_chunk(chunk, *, data, source, x_name, y_name, spec, dim):
             q = where.get((iy[p] + dy, ix[p] + dx))
             if q is not None and q < p:
                 seeds += cells.orbits.get(q, [])
-        res = _solve_cell(template, {x_name: chunk["x"][p], y_name: chunk["y"][p]}, sspec,
+        res = _solve_cell(template, {x_name: chunk["x"][p], y_name: chunk["y"][p]}, ctx.spec,
                           seeds, True)
-        cells.put(p, res, table)
+        cells.put(p, res, ctx)
     return cells.a
 
 
-def _repair(out, order, nx, ny, template, x_name, y_name, xs, ys, spec, table, rounds):
+def _repair(out, order, nx, ny, template, x_name, y_name, xs, ys, ctx, rounds):
     """Rounds of retries from every neighbour's orbits (module docstring). Returns the cells
     (grid order) and the number of cells that gained an orbit."""
-    sspec = SectionSpec(**spec)
     m = nx * ny
-    cells = _Cells(m, out["s"].shape[1])
+    cells = _Cells(m, out["s"].shape[1], out["z"].shape[1])
     inv = np.empty(m, int)
     inv[order] = np.arange(m)
     for k in cells.a:       # grid order (flat iy * nx + ix)
         cells.a[k] = out[k][inv].copy()
     for p in range(m):
-        cells.orbits[p] = [(cells.a[s][p].copy(), cells.signature_of(p, sig, table))
-                           for s, sig in (("s", "sig"), ("s2", "sig2"))
-                           if np.all(np.isfinite(cells.a[s][p]))]
+        cells.orbits[p] = cells.seeds_of(p, ctx)
     changed_total = 0
     todo = range(m)
     for _ in range(int(rounds)):
@@ -412,12 +501,12 @@ def _repair(out, order, nx, ny, template, x_name, y_name, xs, ys, spec, table, r
             seeds = [o for dy, dx in _NEIGH
                      if 0 <= iy + dy < ny and 0 <= ix + dx < nx
                      for o in cells.orbits[(iy + dy) * nx + ix + dx]
-                     if all(other_family(*o, *k) for k in own)]
+                     if all(o.other_family(k, ctx.maps(k.mode).section.period) for k in own)]
             if not seeds:
                 continue
-            res = _solve_cell(template, {x_name: xs[ix], y_name: ys[iy]}, sspec, seeds,
+            res = _solve_cell(template, {x_name: xs[ix], y_name: ys[iy]}, ctx.spec, seeds,
                               False, own)
-            if cells.add(p, res, table):
+            if cells.add(p, res, ctx):
                 changed.add(p)
         changed_total += len(changed)
         if not changed:
@@ -428,7 +517,7 @@ def _repair(out, order, nx, ny, template, x_name, y_name, xs, ys, spec, table, r
 
 
 def model_region_map(model, x, y, *, contact: int = 0, wall: int | None = None,
-                     event: str = "impact", period: int = 1, periods: int | None = None,
+                     event: str = "impact", period="auto", periods: int | None = None,
                      tile: int = 8, repair_rounds: int = 20, executor="serial",
                      max_workers=None, store=None, progress: bool = True,
                      options: dict | None = None) -> ModelRegionMap:
@@ -444,8 +533,10 @@ def model_region_map(model, x, y, *, contact: int = 0, wall: int | None = None,
     contact, wall, event, period, periods
         The section and the orbits sought (:class:`~hybridpd.analysis.model_orbits.
         SectionSpec`): contact ``contact``'s impacts (``event="impact"``) or sticking
-        releases (``"release"``), ``period`` returns per orbit, ``periods`` reference periods
-        per orbit (None: any whole number).
+        releases (``"release"``), in whichever mode the motion crosses them;
+        ``period`` returns per orbit (``"auto"``: the neighbours', then what a simulation
+        shows, up to ``options["max_period"]``, default 4; each cell records its ``k``),
+        ``periods`` reference periods per orbit (None: any whole number).
     tile : int
         Side of the square tiles (sweep chunks) in cells.
     repair_rounds : int
@@ -491,7 +582,11 @@ def model_region_map(model, x, y, *, contact: int = 0, wall: int | None = None,
     if isinstance(tile, bool) or int(tile) != tile or tile < 1:
         raise ValueError(f"tile must be an int >= 1, got {tile!r}")
     base = template.model()
-    P = spec.section_map(base)
+    try:        # the map's chart: the mode where the motion crosses the section at the file's
+        main_mode = simulated_returns(base, spec).mode      # values (else the default one)
+    except ValueError:
+        main_mode = spec.mode or ""
+    P = spec.section_map(base, main_mode or None)
     specd = {k: getattr(spec, k) for k in spec.__dataclass_fields__}
     nx, ny = len(xs), len(ys)
     order = _tile_order(nx, ny, int(tile))
@@ -503,19 +598,24 @@ def model_region_map(model, x, y, *, contact: int = 0, wall: int | None = None,
                     label=f"region map of {Path(template.source).name}",
                     func_kwargs={"data": template.data, "source": template.source,
                                  "x_name": x_name, "y_name": y_name, "spec": specd,
-                                 "dim": P.dim},
-                    metadata={"kind": "model_region_map", "version": 1})
-    table = signature_table(base.automaton.automaton)
-    a, n_rep = _repair(res.outputs, order, nx, ny, template, x_name, y_name, xs, ys, specd,
-                       table, repair_rounds)
+                                 "dim": P.dim, "n": base.automaton.automaton.n_states,
+                                 "main_mode": main_mode},
+                    metadata={"kind": "model_region_map", "version": 2})
+    ctx = _Context(template, specd, main_mode)
+    a, n_rep = _repair(res.outputs, order, nx, ny, template, x_name, y_name, xs, ys, ctx,
+                       repair_rounds)
     sh = (ny, nx)
     c = base.automaton.contacts[int(contact)]
+    codes = sorted({int(v) for v in np.concatenate([a["mode"], a["mode2"]]) if v >= 0})
     meta = {"repaired_cells": int(n_rep), "executor": res.executor,
             "restitution": float(c.restitution) if getattr(c, "rigid", False) and
-            c.restitution is not None else math.nan}
+            c.restitution is not None else math.nan, "chart_mode": P.section.mode,
+            "modes": {str(v): mode_name(base.automaton, v) for v in codes},
+            "state_names": list(base.automaton.state_names)}
+    grid = {k: a[k].reshape(*sh, *a[k].shape[1:]) for k in a}
     return ModelRegionMap(template.source, x_name, y_name, xs, ys, specd, P.section.names,
-                          table, a["status"].reshape(sh), a["rho"].reshape(sh),
-                          a["s"].reshape(*sh, -1), a["sig"].reshape(*sh, -1),
-                          a["n_orbits"].reshape(sh), a["status2"].reshape(sh),
-                          a["rho2"].reshape(sh), a["s2"].reshape(*sh, -1),
-                          a["sig2"].reshape(*sh, -1), a["attempts"].reshape(sh), meta)
+                          ctx.table, grid["status"], grid["rho"], grid["s"], grid["sig"],
+                          grid["n_orbits"], grid["status2"], grid["rho2"], grid["s2"],
+                          grid["sig2"], grid["attempts"], meta, grid["k"], grid["k2"],
+                          grid["mode"], grid["mode2"], grid["z"], grid["t"], grid["z2"],
+                          grid["t2"])

@@ -11,13 +11,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridpd.analysis.labels import OFF_SECTION
+from hybridpd.analysis.labels import INADMISSIBLE, OFF_SECTION
 from hybridpd.analysis.periodic import SectionMapper
 from hybridpd.model import check_axis
 from hybridpd.sweeps.basin_result import BasinResult
 from hybridpd.sweeps.sweep import run_sweep
 
-__all__ = ["section_basin"]
+__all__ = ["off_section_axis", "section_basin"]
+
+
+def off_section_axis(what: str, name: str, sec) -> str:
+    """The message refusing ``name`` as a slice axis of section `sec`: a state the section
+    fixes (moving it would leave the section: the constraint is named) or no state at all."""
+    why = sec.fixed_by(name) if hasattr(sec, "fixed_by") else ""
+    if why:
+        return (f"{what}: {name!r} is no coordinate of this section ({why}); a slice along it "
+                f"would leave the section. The section's coordinates are {list(sec.names)}")
+    return f"{what}: {name!r} is no section coordinate; they are {list(sec.names)}"
 
 
 def section_basin(mapper: SectionMapper, axis_x, axis_y, x, y, *, executor="serial",
@@ -43,7 +53,10 @@ def section_basin(mapper: SectionMapper, axis_x, axis_y, x, y, *, executor="seri
     -------
     BasinResult
         ``x1``/``y1`` hold the ``x``/``y`` axes, ``labels`` has shape ``(ny, nx)``;
-        ``metadata["axes"]`` names the coordinates.
+        ``metadata["axes"]`` names the coordinates. Points whose state lies outside the
+        section's admissible set (:meth:`~hybridpd.analysis.hybridmap.Section.violations`:
+        a contact's gap beyond its bounds) are labelled ``inadmissible`` and never iterated
+        (``metadata["inadmissible"]`` counts them); ``fraction`` is of the others.
 
     Raises
     ------
@@ -62,34 +75,45 @@ def section_basin(mapper: SectionMapper, axis_x, axis_y, x, y, *, executor="seri
     (2, 3)
     """
     names = mapper.map.section.names
-    ix, iy = (_axis_index(a, names) for a in (axis_x, axis_y))
+    ix, iy = (_axis_index(a, mapper.map.section) for a in (axis_x, axis_y))
     if ix == iy:
         raise ValueError("axis_x and axis_y must differ")
     xs, ys = check_axis("x", x), check_axis("y", y)
     X, Y = np.meshgrid(xs, ys)
     pts = np.tile(mapper.fixed_point, (X.size, 1))
     pts[:, ix], pts[:, iy] = X.ravel(), Y.ravel()
-    if executor == "serial":
-        lab, its = mapper.labels(pts)
+    sec = mapper.map.section
+    # states outside the admissible set (a gap beyond its bounds) are never iterated
+    bad = np.array([bool(sec.violations(sec.to_state(p)[0])) for p in pts]) if sec.bounds \
+        else np.zeros(len(pts), bool)
+    lab = np.full(len(pts), INADMISSIBLE, np.int64)
+    its = np.zeros(len(pts), np.int64)
+    todo = pts[~bad]
+    if not len(todo):
+        pass
+    elif executor == "serial":
+        lab[~bad], its[~bad] = mapper.labels(todo)
     else:
-        res = run_sweep(_label_chunk, pts, names=[f"s{i}" for i in range(pts.shape[1])],
+        res = run_sweep(_label_chunk, todo, names=[f"s{i}" for i in range(pts.shape[1])],
                         chunk_size=chunk_size, executor=executor, max_workers=max_workers,
                         progress=progress, func_kwargs={"mapper": _PickledMapper.of(mapper)},
                         metadata={"kind": "section_basin"})
-        lab, its = res.outputs["label"], res.outputs["iterations"]
+        lab[~bad], its[~bad] = res.outputs["label"], res.outputs["iterations"]
     lab = lab.reshape(Y.shape)
-    on = lab != OFF_SECTION
+    on = (lab != OFF_SECTION) & (lab != INADMISSIBLE)
     frac = float((lab[on] == 0).mean()) if np.any(on) else 0.0
     meta = {"axes": [names[ix], names[iy]], "coordinates": list(names),
             "n_iter": mapper.n_iter, "criterion": mapper.criterion,
-            "certified_radius": mapper.certified_radius, "period": mapper.period}
+            "certified_radius": mapper.certified_radius, "period": mapper.period,
+            "inadmissible": int(bad.sum())}
     return BasinResult(xs, ys, lab, its.reshape(Y.shape), mapper.fixed_point.copy(), frac, meta)
 
 
-def _axis_index(a, names) -> int:
+def _axis_index(a, sec) -> int:
+    names = sec.names
     if isinstance(a, str):
         if a not in names:
-            raise ValueError(f"axis must be one of {names}, got {a!r}")
+            raise ValueError(off_section_axis("axis", a, sec))
         return names.index(a)
     if isinstance(a, bool) or int(a) != a or not 0 <= int(a) < len(names):
         raise ValueError(f"axis must be an index in [0, {len(names)}) or a name, got {a!r}")
