@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 
 from hybridpd.cli._common import (
@@ -12,6 +11,8 @@ from hybridpd.cli._common import (
     check_image,
     check_out,
     executor_of,
+    print_json,
+    require,
     save_figure,
 )
 
@@ -32,7 +33,12 @@ product of the Jacobians DP along the iterates.
 The reference amplitude xm follows the design at every value: the one that puts the
 primary mass on the order-N symmetric orbit of amplitude x10 (gamma = L / x10, see the
 conventions (CONVENTIONS.md)). Every parameter other than the swept one must be given (m2 and x10
-default to 1); the swept one must not be.
+default to 1); the swept one must not be. The diagram is written to --out as .npz.
+
+With --model FILE.toml the map is the model's section map (--contact, --wall, --event,
+--period) and --param sweeps any numeric entry of the file, named by its dotted TOML path
+(controller.kp, contact.0.restitution, system.masses.2, reference.omega, ...; --list-params
+prints them with their values); the diagram is written to --out as .nc or .zarr.
 """
 
 _EPILOG = """\
@@ -40,6 +46,8 @@ example (the paper's parameters, kv swept, following):
   hybridpd bifurcation --case collocated --mu 0.1 --e 0.1 --gamma 0.75 --omega 5 --n 1 \\
       --kp 10 --param kv 10 35 200 --iterations 1000 --keep 100 --follow \\
       --out kv.npz --plot kv.png
+  hybridpd bifurcation --model examples/models/robot_joint_pd.toml --event release \\
+      --param controller.kv 0.5 12 60 --out kv.nc --plot kv.png
 """
 
 
@@ -59,9 +67,10 @@ def register(sub):
     p.add_argument("--kv", type=float, help="velocity gain (> 0)")
     p.add_argument("--x10", type=float, default=1.0,
                    help="primary-mass amplitude of the design (> 0), default 1")
-    p.add_argument("--param", nargs=4, required=True, metavar=("NAME", "MIN", "MAX", "NUM"),
-                   help=f"swept parameter, one of {', '.join(SWEEPABLE)}, from MIN to MAX "
-                   "(MIN < MAX) in NUM >= 2 values")
+    p.add_argument("--param", nargs=4, default=None, metavar=("NAME", "MIN", "MAX", "NUM"),
+                   help=f"swept parameter (required), from MIN to MAX (MIN < MAX) in NUM >= 2 "
+                   f"values: for the impact pair one of {', '.join(SWEEPABLE)}; with --model "
+                   "a dotted path of the file (see --list-params)")
     p.add_argument("--iterations", type=int, default=1000,
                    help="iterations of P per value (default 1000)")
     p.add_argument("--keep", type=int, default=100,
@@ -73,15 +82,19 @@ def register(sub):
                    "displaced by 1e-3 in z1)")
     p.add_argument("--max-period", type=int, default=32,
                    help="largest period detected (default 32)")
-    p.add_argument("--out", required=True, help="write the diagram (.npz)")
+    p.add_argument("--out", default=None, metavar="FILE",
+                   help="write the diagram (required): impact pair .npz; --model .nc or .zarr "
+                   "(by suffix); draw it later with 'hybridpd plot FILE'")
     p.add_argument("--plot", default=None, metavar="IMAGE",
                    help="also draw the diagram (.png, .pdf or .svg)")
     p.add_argument("--coordinate", default="z1",
                    choices=["phi", "z1", "z2", "z4", "x1", "y1", "x2", "y2"],
                    help="section coordinate on the plot's y axis (default z1)")
     p.add_argument("--json", action="store_true",
-                   help="print a JSON summary (classes, periods, exponents, cycles) on stdout")
-    add_model_section(p, period_help="the diagram iterates P^k")
+                   help="print a JSON summary (classes, periods, exponents, cycles) on stdout "
+                   "instead of the text (strict JSON: null for a number that is not finite)")
+    add_model_section(p, period_help="the diagram iterates P^k",
+                      uses="--param KEY MIN MAX NUM sweeps one of them")
     add_executor(p, default="serial")
     p.set_defaults(func=run)
 
@@ -110,6 +123,7 @@ def _sweep(args):
 
 
 def run(args) -> int:
+    require(args, "param", "out")
     if args.model is not None:
         return _run_model(args)
     if args.case is None:
@@ -163,14 +177,14 @@ def run(args) -> int:
                     args.plot)
     if args.json:
         lya = [None if not np.isfinite(x) else float(x) for x in d.lyapunov]
-        print(json.dumps({
+        print_json({
             "parameter": name, "values": values.tolist(), "classification": d.classification,
             "period": [int(k) for k in d.period], "lyapunov": lya,
             "cycles": [d.cycle(i).tolist() for i in range(len(d))],
             "xm": [None if not np.isfinite(x) else float(x) for x in d.xm],
             "counts": d.counts(), "fixed": d.fixed, "case": d.case,
             "iterations": d.iterations, "keep": d.keep, "follow": d.follow,
-            "out": str(args.out), "plot": args.plot, "branch": branch_note}))
+            "out": str(args.out), "plot": args.plot, "branch": branch_note})
         return 0
     counts = ", ".join(f"{n} {c}" for c, n in d.counts().items() if n)
     print(f"{args.case} bifurcation diagram in {name} [{lo:g}, {hi:g}] ({num} values, last "
@@ -207,6 +221,9 @@ def _run_model(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.model_diagrams import model_diagram
 
+    if args.periods is not None:
+        raise UsageError("--periods: the diagram iterates P^k (--period); it does not select "
+                         "orbits by their reference periods")
     given = [f"--{k}" for k in ("case", *_REQUIRED, "m2") if getattr(args, k) is not None]
     if given:
         raise UsageError(f"{', '.join(given)}: impact-pair options, not used with --model "
@@ -224,7 +241,7 @@ def _run_model(args) -> int:
 
         save_figure(plot_model_diagram(d), args.plot)
     if args.json:
-        print(json.dumps(dict(d.to_dict(), out=str(args.out), plot=args.plot)))
+        print_json(dict(d.to_dict(), out=str(args.out), plot=args.plot))
         return 0
     print(d.summary())
     print(f"  wrote {args.out}" + (f" and {args.plot}" if args.plot else ""))
