@@ -167,12 +167,12 @@ def run(args) -> int:
         d = pair_diagram(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name, values,
                          executor=executor, max_workers=args.workers, **opts)
     d.save(args.out)
-    branch_note = None
+    branch = None
     if args.plot:
         # deferred import: loaded only when this runs, for start-up time
         from hybridpd.plotting.bifurcation import plot_bifurcation
 
-        branches, branch_note = _symmetric_branch(pair, v0, name, hi, args)
+        branches, branch = _symmetric_branch(pair, v0, name, hi, args)
         save_figure(plot_bifurcation(d, coordinate=args.coordinate, branches=branches),
                     args.plot)
     if args.json:
@@ -184,7 +184,7 @@ def run(args) -> int:
             "xm": [None if not np.isfinite(x) else float(x) for x in d.xm],
             "counts": d.counts(), "fixed": d.fixed, "case": d.case,
             "iterations": d.iterations, "keep": d.keep, "follow": d.follow,
-            "out": str(args.out), "plot": args.plot, "branch": branch_note})
+            "out": str(args.out), "plot": args.plot, "branch": branch})
         return 0
     counts = ", ".join(f"{n} {c}" for c, n in d.counts().items() if n)
     print(f"{args.case} bifurcation diagram in {name} [{lo:g}, {hi:g}] ({num} values, last "
@@ -195,15 +195,17 @@ def run(args) -> int:
         if any(k > 1 for k in periods):
             print("  (period k: the kept section points repeat every k applications of P, "
                   "i.e. k impacts per cycle; the paper's symmetric orbit has period 1)")
-    if branch_note:
-        print(f"  {branch_note}")
+    if branch:
+        print(f"  {branch['note']}")
     print(f"  wrote {args.out}" + (f" and {args.plot}" if args.plot else ""))
     return 0
 
 
 def _symmetric_branch(pair, v0, name, stop, args):
     """The symmetric orbit continued over the sweep (drawn over the diagram, stable solid,
-    unstable dashed), and a line saying what was drawn or why not."""
+    unstable dashed), and what was drawn: ``{"drawn", "points", "termination", "note"}``
+    (``termination``: why the continuation stopped, with the parameter value; ``note``: a
+    line saying what was drawn or why not)."""
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.continuation import continue_symmetric
     from hybridpd.model import PDGains
@@ -212,9 +214,11 @@ def _symmetric_branch(pair, v0, name, stop, args):
         br = continue_symmetric(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name,
                                 stop, x10=args.x10, n=args.n, case=args.case)
     except ValueError as exc:
-        return (), f"no continued branch drawn: {exc}"
-    return [br], (f"continued symmetric branch drawn ({len(br)} points, stopped: "
-                  f"{br.termination})")
+        return (), {"drawn": False, "points": 0, "termination": None,
+                    "note": f"no continued branch drawn: {exc}"}
+    return [br], {"drawn": True, "points": len(br), "termination": br.termination,
+                  "note": (f"continued symmetric branch drawn ({len(br)} points, stopped: "
+                           f"{br.termination})")}
 
 
 def _run_model(args) -> int:
