@@ -161,6 +161,25 @@ def model_of(args):
     return template.model(values)
 
 
+def controllers_of(args) -> str:
+    """The controllers of ``--model`` (with the ``--set`` values) in words, for titles and
+    for the ``controllers`` entry of a result's metadata (figures drawn later name them)."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.mechanics.params import ModelTemplate
+    from hybridpd.plotting._common import describe_controllers
+
+    return describe_controllers(ModelTemplate.load(args.model).with_values(set_values(args)))
+
+
+def stamp_controllers(result, args):
+    """A copy of the (dataclass) `result` whose ``metadata`` also names the controllers of
+    ``--model``, so that a figure drawn from its file later names them too."""
+    import dataclasses
+
+    return dataclasses.replace(result, metadata={"controllers": controllers_of(args),
+                                                 **result.metadata})
+
+
 def list_params(args) -> int:
     """``--list-params``: the numeric entries of ``--model`` (dotted path and value), one per
     line, or one JSON object ``{"model": FILE, "parameters": {path: value}}``."""

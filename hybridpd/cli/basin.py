@@ -15,6 +15,7 @@ from hybridpd.cli._common import (
     progress_wanted,
     save_figure,
     set_values,
+    stamp_controllers,
 )
 
 # the pair options: required without --model, not used with it
@@ -160,6 +161,7 @@ def _run_model(args) -> int:
                      n_iter=300 if args.iterations is None else args.iterations,
                      max_period=args.max_period, executor=executor_of(args),
                      max_workers=args.workers, progress=progress_wanted(args))
+    mb = stamp_controllers(mb, args)
     if args.out:
         mb.save(args.out)
     if args.plot:

@@ -14,6 +14,7 @@ from hybridpd.cli._common import (
     print_json,
     require,
     save_figure,
+    stamp_controllers,
 )
 
 #: Parameters the command can sweep (``--param NAME``).
@@ -238,6 +239,7 @@ def _run_model(args) -> int:
                       event=args.event, period=args.period, iterations=args.iterations,
                       keep=args.keep, max_period=min(args.max_period, args.keep - 1),
                       executor=executor_of(args), max_workers=args.workers, progress=False)
+    d = stamp_controllers(d, args)
     d.save(args.out)
     if args.plot:
         # deferred import: loaded only when this runs, for start-up time

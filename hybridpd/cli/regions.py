@@ -88,6 +88,7 @@ def _run_model(args) -> int:
                           periods=args.periods, tile=args.tile, executor=cli.executor_of(args),
                           max_workers=args.workers, store=args.store,
                           progress=cli.progress_wanted(args))
+    rm = cli.stamp_controllers(rm, args)
     if args.out:
         rm.save(args.out)
     if args.plot:

@@ -22,11 +22,13 @@ from hybridpd.cli._common import (
     check_image,
     check_out,
     command,
+    controllers_of,
     dumps_json,
     model_of,
     print_json,
     require,
     save_figure,
+    set_values,
 )
 
 # the pair options: required without --model, forbidden with it
@@ -197,8 +199,14 @@ def _run_model(args) -> int:
     d = traj.to_dict()
     contacts = [{"name": c.name, "normal": [float(w) for w in c.normal],
                  "lo": c.lo, "hi": c.hi} for c in model.contacts]
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.plotting._common import model_title
+
+    controllers = controllers_of(args)
     _write(args, d, traj.mechanical, model.t0, traj.t_final, model.system.dofs, contacts,
-           title=str(model.source), parameters={"model": str(model.source)})
+           title=model_title(model.source, {"controllers": controllers}),
+           parameters={"model": str(model.source), "controllers": controllers,
+                       **set_values(args)})
     status = stop_status(d["termination"], traj.t_final)
     if args.json:
         print_json(d)
