@@ -108,7 +108,8 @@ class FamilyBranch:
         Why it stopped, in words, with the parameter value: e.g. ``"step below min_step =
         1e-05 at p = 0.8123: corrector failed: map undefined: grazing (Newton: line search
         failed ...)"`` (the map could not be applied at the points Newton tried: a grazing
-        contact, no return within ``t_max``, ...), ``"max_steps = 200 reached at p = ..."``,
+        contact, no return within ``t_max``, ...), ``"max_steps = 200 accepted points reached
+        at p = ..."``,
         ``"reached the end value p = ..."``.
     """
 
@@ -317,17 +318,20 @@ def continue_family(builder, s0, p0: float, p_end: float, *, period: int = 1, se
             if locate and ev.kind in _TESTS:
                 ev = _locate(path, correct, pts[i], pts[i + 1], ev)
             events.append(ev)
-    reason = _reason(termination, pts[-1].u[-1], p_end, lo, hi)
+    reason = _reason(termination, pts[-1].u[-1], p_end, lo, hi, int(max_steps))
     for key, short in (("reached", "reached"), ("max_steps", "max_steps"),
                        ("step below", "min_step")):
         termination = short if termination.startswith(key) else termination
     return FamilyBranch([q.fam for q in pts], events, termination, method, k, reason)
 
 
-def _reason(termination: str, p_last: float, p_end: float, lo: float, hi: float) -> str:
+def _reason(termination: str, p_last: float, p_end: float, lo: float, hi: float,
+            max_steps: int) -> str:
     """The path follower's `termination` as a sentence that names where the branch ended."""
     if termination.startswith("reached"):
         return f"reached the end value p = {p_end:.10g}"
+    if termination.startswith("max_steps"):
+        return f"max_steps = {max_steps} accepted points reached at p = {p_last:.10g}"
     if termination.startswith("turned back"):
         return (f"{termination} [{lo:.10g}, {hi:.10g}] at p = {p_last:.10g} (the branch "
                 "passed a fold)")
