@@ -13,6 +13,11 @@ from hybridpd.plotting._common import describe_controllers, model_title
 from hybridpd.plotting.files import plot_file
 from hybridpd.plotting.style import DOUBLE, MAX_HEIGHT, MIN_FONT
 
+try:
+    import tomllib
+except ModuleNotFoundError:     # Python 3.10
+    import tomli as tomllib
+
 MODELS = Path(__file__).resolve().parents[1] / "examples" / "models"
 
 #: the example drivetrain's plant under a continuous PID on the motor
@@ -52,8 +57,7 @@ def _all_text(fig) -> str:
 
 
 def test_controllers_described_from_the_model_file():
-    import tomllib
-
+    
     with open(MODELS / "robot_joint.toml", "rb") as fh:
         data = tomllib.load(fh)
     assert describe_controllers(data) == "sampled PID on motor (dt = 0.001)"
