@@ -218,7 +218,7 @@ def test_simulate_stopped_at_the_jump_limit_exits_5_pair_and_model(capsys):
 def test_a_sampled_models_orbit_prints_a_summary_of_its_jumps(capsys):
     argv = ["orbit", "--model", ROBOT, "--set", "reference.omega", repr(2 * math.pi / 3),
             "--event", "release"]
-    rc, out, _ = _run([*argv, "--json"], capsys)
+    _, out, _ = _run([*argv, "--json"], capsys)
     seq = strict(out)["impact_sequence"]
     assert len(seq) > 3000                   # a sampling instant every 1 ms of a 3 s period
     _, out, _ = _run(argv, capsys)
