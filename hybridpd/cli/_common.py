@@ -153,6 +153,7 @@ def model_of(args):
 
     values = set_values(args)
     if not values:
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.mechanics.modelfile import load_model
 
         return load_model(args.model)

@@ -76,6 +76,8 @@ def register(sub):
 def run(args) -> int:
     if args.model is not None:
         return _run_model(args)
+    if args.set or args.full_sequence:
+        raise UsageError("--set and --full-sequence need --model FILE.toml")
     L, x10 = check_pair_command(args, _PAIR, outputs=False)
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.orbits import symmetric_orbit

@@ -181,6 +181,9 @@ def run(args) -> int:
             raise UsageError(f"--model: cannot be combined with the impact-pair options "
                              f"({', '.join(given)})")
         return _run_model(args)
+    if args.set:
+        raise UsageError("--set needs --model FILE.toml (the impact pair's parameters are "
+                         "its options)")
     if args.m2 is None:
         args.m2 = 1.0
     missing = [f"--{k}" for k in _REQUIRED if getattr(args, k) is None]

@@ -173,6 +173,7 @@ def model_controllers(source, metadata: dict | None = None) -> str:
 
     try:
         if source is not None and Path(str(source)).is_file():
+            # deferred import: loaded only when this runs, for start-up time
             from hybridpd.mechanics.modelfile import read_model_file
 
             return describe_controllers(read_model_file(source)[0])
