@@ -49,6 +49,15 @@ __all__ = ["FAMILY_EVENTS", "FamilyBranch", "FamilyEvent", "FamilyPoint", "conti
 FAMILY_EVENTS = ("fold", "period_doubling", "neimark_sacker", "stability_change",
                  "sequence_change")
 _NONREAL = 1e-9
+#: What a :data:`~hybridpd.analysis.hybridmap.MAP_STATUS` means where the map is undefined.
+_UNDEFINED = {
+    "bad_start": "the flow does not cross the section at the trial point",
+    "jump_limit": "more than max_jumps jumps before the return",
+    "end_time": "no return to the section within t_max",
+    "zeno": "an accumulation of jumps on the way",
+    "nonfinite": "the state overflowed on the way",
+    "step_limit": "more than max_steps flow steps before the return",
+    "simultaneous": "a joint impact of several contacts on the way"}
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,6 +104,13 @@ class FamilyBranch:
         ``"start failed: <reason>"``.
     method : str
     period : int
+    reason : str
+        Why it stopped, in words, with the parameter value: e.g. ``"step below min_step =
+        1e-05 at p = 0.8123: corrector failed: map undefined: grazing (Newton: line search
+        failed ...)"`` (the map could not be applied at the points Newton tried: a grazing
+        contact, no return within ``t_max``, ...), ``"max_steps = 200 accepted points reached
+        at p = ..."``,
+        ``"reached the end value p = ..."``.
     """
 
     points: list
@@ -102,6 +118,7 @@ class FamilyBranch:
     termination: str
     method: str
     period: int
+    reason: str = ""
     __repr__ = compact_repr
 
     @property
@@ -119,7 +136,7 @@ class FamilyBranch:
         return {"p": self.p.tolist(), "spectral_radius": self.spectral_radius.tolist(),
                 "stable": [bool(q.stable) for q in self.points],
                 "events": [e.to_dict() for e in self.events], "termination": self.termination,
-                "method": self.method, "period": self.period}
+                "reason": self.reason, "method": self.method, "period": self.period}
 
 
 def _map_factory(builder, section, map_options):
@@ -258,6 +275,8 @@ def continue_family(builder, s0, p0: float, p_end: float, *, period: int = 1, se
     >>> br = hp.continue_family(build, [7.7, 1.66], 0.8, 0.82, section=sec, step=0.01)
     >>> br.termination, round(br.points[-1].p, 6), bool(br.points[-1].stable)
     ('reached', 0.82, True)
+    >>> br.reason
+    'reached the end value p = 0.82'
     """
     if method not in ("arclength", "natural"):
         raise ValueError(f"method must be 'arclength' or 'natural', got {method!r}")
@@ -277,16 +296,20 @@ def continue_family(builder, s0, p0: float, p_end: float, *, period: int = 1, se
     P = make(p0)
     first = find_orbit(P, s0, k, tol=tol)
     if not first.converged:
-        return FamilyBranch([], [], f"start failed: {first.reason}", method, k)
+        detail = f" ({first.detail})" if first.detail else ""
+        return FamilyBranch([], [], f"start failed: {first.reason}", method, k,
+                            f"no fixed point of P^{k} at p = {p0:.10g} to start from: "
+                            f"{first.reason}{detail}")
     path = _Path(make, k, fd_step * max(1.0, abs(p0)), P.dim)
     correct = corrector(path.F, path.Fs, path.Fp, tol=tol, max_iter=15,
-                        scale=lambda x: max(1.0, float(np.max(np.abs(x[:path.dim])))))
+                        scale=lambda x: max(1.0, float(np.max(np.abs(x[:path.dim])))),
+                        explain=path.explain)
     lo, hi = sorted((p0, p_end))
     pts, _evs, termination, _rej, _why = follow_path(
         path.point(np.append(first.s, p0)), p_end, F=path.F, Fs=path.Fs, Fp=path.Fp,
         make_point=path.point, correct=correct, method=method, step=step, min_step=min_step,
         max_step=max_step, max_steps=int(max_steps) - 1, k=k, lower_period=lambda u: minimal_period(make(u[-1]), u[:-1], k) < k,
-        unwrap=path.unwrap, tol=tol, grow=1.3,
+        unwrap=path.unwrap, tol=tol, grow=1.3, explain=path.explain,
         out_of_range=lambda p: None if lo - 1e-9 * span <= p <= hi + 1e-9 * span
         else "turned back: left the parameter range")
     events = []
@@ -295,10 +318,24 @@ def continue_family(builder, s0, p0: float, p_end: float, *, period: int = 1, se
             if locate and ev.kind in _TESTS:
                 ev = _locate(path, correct, pts[i], pts[i + 1], ev)
             events.append(ev)
+    reason = _reason(termination, pts[-1].u[-1], p_end, lo, hi, int(max_steps))
     for key, short in (("reached", "reached"), ("max_steps", "max_steps"),
                        ("step below", "min_step")):
         termination = short if termination.startswith(key) else termination
-    return FamilyBranch([q.fam for q in pts], events, termination, method, k)
+    return FamilyBranch([q.fam for q in pts], events, termination, method, k, reason)
+
+
+def _reason(termination: str, p_last: float, p_end: float, lo: float, hi: float,
+            max_steps: int) -> str:
+    """The path follower's `termination` as a sentence that names where the branch ended."""
+    if termination.startswith("reached"):
+        return f"reached the end value p = {p_end:.10g}"
+    if termination.startswith("max_steps"):
+        return f"max_steps = {max_steps} accepted points reached at p = {p_last:.10g}"
+    if termination.startswith("turned back"):
+        return (f"{termination} [{lo:.10g}, {hi:.10g}] at p = {p_last:.10g} (the branch "
+                "passed a fold)")
+    return termination
 
 
 @dataclass(eq=False)
@@ -317,6 +354,22 @@ class _Path:
     def __init__(self, make, k, hp, dim):
         self.make, self.k, self.hp, self.dim = make, k, hp, dim
         self._last = (None, None)
+        self._why = ""        # why the map was last undefined (see explain)
+
+    def explain(self) -> str:
+        """Why the map was undefined at a point evaluated since the previous call (``""`` if
+        it never was); forgets it."""
+        why, self._why = self._why, ""
+        return why
+
+    def _undefined(self, u, r) -> None:
+        if r.ok:
+            what = ("grazing (a tangential contact: no saltation matrix)" if r.grazing
+                    else "its Jacobian DP is not finite")
+        else:
+            what = r.status + (f" ({_UNDEFINED[r.status]})" if r.status in _UNDEFINED else "")
+            what += " after a grazing contact" if r.grazing else ""
+        self._why = f"map undefined: {what} at p = {u[-1]:.10g}"
 
     def _run(self, u):
         key = u.tobytes()
@@ -328,9 +381,13 @@ class _Path:
     def F(self, u):
         try:
             P, r = self._run(u)
-        except ValueError:            # not a section point
+        except ValueError as exc:     # not a section point
+            self._why = f"not a section point at p = {u[-1]:.10g}: {exc}"
             return None
-        return P.wrap(r.s - u[:-1]) if r.ok and np.all(np.isfinite(r.DP)) else None
+        if r.ok and np.all(np.isfinite(r.DP)):
+            return P.wrap(r.s - u[:-1])
+        self._undefined(u, r)
+        return None
 
     def Fs(self, u):
         P, r = self._run(u)
@@ -345,6 +402,7 @@ class _Path:
     def point(self, u, _its=0):
         P, r = self._run(u)
         if not r.ok or not np.all(np.isfinite(r.DP)):
+            self._undefined(u, r)
             return None
         s = u[:-1].copy()
         if P.section.has_phase:

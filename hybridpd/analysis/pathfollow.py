@@ -181,13 +181,27 @@ def _line_search(resid, norm, x, dx, nr, min_lambda):
     return None
 
 
-def corrector(F, Fs, Fp, *, tol, max_iter, scale):
+def corrector(F, Fs, Fp, *, tol, max_iter, scale, explain=None):
     """``correct(u_pred, normal)``: Newton on ``[F(u); normal . (u - u_pred)] = 0``.
 
     ``normal=None`` keeps ``p = u_pred[-1]`` fixed (Newton on ``s`` alone). ``scale(x)``
-    scales the tolerance (:func:`newton`). Returns ``(u, NewtonResult)``.
+    scales the tolerance (:func:`newton`). ``explain()``, if given, returns why ``F`` was
+    undefined at a point tried since its previous call (``""`` if it never was, e.g.
+    ``"map undefined: grazing"``); a failed correction's reason then leads with it, since
+    Newton itself only sees the undefined points as a failed line search. Returns
+    ``(u, NewtonResult)``.
     """
     def correct(u_pred, normal):
+        if explain is not None:
+            explain()             # forget the failures of earlier corrections
+        u, res = _correct(u_pred, normal)
+        if not res.converged and explain is not None:
+            why = explain()
+            if why:
+                res.reason = f"{why} (Newton: {res.reason})"
+        return u, res
+
+    def _correct(u_pred, normal):
         if normal is None:
             p = u_pred[-1]
             res = newton(lambda x: F(np.append(x, p)), lambda x: Fs(np.append(x, p)),
@@ -213,7 +227,7 @@ def _tangent(DP, fp):
 
 def follow_path(first, stop, *, F, Fs, Fp, make_point, correct, method="arclength", step,
                 min_step, max_step, max_steps, k=1, lower_period=None, unwrap=None,
-                detect=None, out_of_range=None, tol=1e-10, name="p", grow=1.5):
+                detect=None, out_of_range=None, tol=1e-10, name="p", grow=1.5, explain=None):
     """Continue from the accepted point ``first`` (its ``u``) towards ``p = stop``.
 
     ``method="natural"``: ``p`` steps by ``h`` (secant predictor through the last two
@@ -260,14 +274,19 @@ def follow_path(first, stop, *, F, Fs, Fp, make_point, correct, method="arclengt
         Parameter name in messages.
     grow : float
         Step growth factor after an easy correction (at most 3 Newton iterations).
+    explain : callable, optional
+        ``explain()``: why the map was undefined at a point tried since the previous call
+        (``""`` if it was not); names the cause when a corrected point has no Jacobian.
 
     Returns
     -------
     points : list
     events : list
     termination : str
-        ``"reached stop"``, ``"max_steps = N reached"``, ``"step below min_step = ... (why)"``
-        or the message of ``out_of_range``.
+        ``"reached stop"``, ``"max_steps = N reached at <name> = ..."``, ``"step below
+        min_step = ... at <name> = ...: <why>"`` (``why``: the corrector's failure at the
+        smallest step, e.g. ``"corrector failed: map undefined: grazing (Newton: ...)"``, or
+        why its answer was rejected) or the message of ``out_of_range``.
     rejected : int
         Rejected corrector attempts.
     stuck : str
@@ -276,7 +295,6 @@ def follow_path(first, stop, *, F, Fs, Fp, make_point, correct, method="arclengt
     pts = [first]
     evs = []
     rejected = 0
-    termination = f"max_steps = {max_steps} reached"
     direction = 1.0 if stop > first.u[-1] else -1.0
     h = min(step, max_step)
     d = first.u.size - 1
@@ -295,12 +313,12 @@ def follow_path(first, stop, *, F, Fs, Fp, make_point, correct, method="arclengt
     for _ in range(max_steps):
         cur = pts[-1]
         accepted, res, why = _step(cur, prev_u, h, tangent, stop, direction, method, correct,
-                                   make_point, k, lower_period, tol, min_step)
+                                   make_point, k, lower_period, tol, min_step, explain)
         rejected += accepted[1]
         accepted, h, tangent = accepted[0], accepted[2], accepted[3]
         if accepted is None:
             termination = (f"step below min_step = {min_step:g} at {name} = "
-                           f"{cur.u[-1]:.10g} ({why})")
+                           f"{cur.u[-1]:.10g}: {why}")
             break
         new = accepted
         its = res.iterations
@@ -342,11 +360,13 @@ def follow_path(first, stop, *, F, Fs, Fp, make_point, correct, method="arclengt
             h = min(grow * h, max_step)
         elif its >= 7:
             h = max(0.6 * h, min_step)
+    else:
+        termination = f"max_steps = {max_steps} reached at {name} = {pts[-1].u[-1]:.10g}"
     return pts, evs, termination, rejected, why if termination.startswith("step below") else ""
 
 
 def _step(cur, prev_u, h, tangent, stop, direction, method, correct, make_point, k,
-          lower_period, tol, min_step):
+          lower_period, tol, min_step, explain=None):
     """One accepted step from ``cur`` (halving ``h`` on failure): ``((point or None,
     rejected, h, tangent), NewtonResult, why)``."""
     rejected = 0
@@ -379,7 +399,7 @@ def _step(cur, prev_u, h, tangent, stop, direction, method, correct, make_point,
                 u, res = correct(u_pred, tangent)
         pt = None
         if not res.converged:
-            why = f"corrector: {res.reason}"
+            why = f"corrector failed: {res.reason}"
         else:
             sec = u - cur.u
             ns = float(np.linalg.norm(sec))
@@ -397,7 +417,9 @@ def _step(cur, prev_u, h, tangent, stop, direction, method, correct, make_point,
             else:
                 pt = make_point(u, res.iterations)
                 if pt is None:
-                    why = "Jacobian undefined at the corrected point"
+                    cause = explain() if explain is not None else ""
+                    why = "Jacobian undefined at the corrected point" + (
+                        f": {cause}" if cause else "")
         if pt is not None:
             return (pt, rejected, h, tangent), res, why
         rejected += 1

@@ -1,9 +1,12 @@
 """Command-line interface: ``hybridpd COMMAND``.
 
 Each command lives in its own module exposing ``register(subparsers)``; it validates its
-input through the library. A bad value prints one line on stderr and exits with status 2 (an
-infeasible design exits with 3). Machine-readable output (``--json``) goes to stdout as one
-JSON object; progress goes to stderr.
+input through the library. A bad value prints one line on stderr and exits with status 2; an
+infeasible design or a missing orbit exits with 3, a diverged run with 4 and a simulation
+stopped early by a bound of the run with 5 (:mod:`hybridpd.cli._common`). Machine-readable
+output (``--json``) goes to stdout as one strict JSON object (``null`` for a number that is
+not finite); progress goes to stderr. ``--list-params`` (commands taking ``--model``) lists
+a model file's parameters before anything else is checked.
 """
 from __future__ import annotations
 
@@ -11,7 +14,7 @@ import importlib
 import sys
 
 from hybridpd._version import __version__
-from hybridpd.cli._common import EXIT_BAD_INPUT, Parser, UsageError
+from hybridpd.cli._common import EXIT_BAD_INPUT, Parser, UsageError, list_params
 
 #: Command modules, in the order the help lists them.
 COMMANDS = ("simulate", "orbit", "regions", "basin", "boundaries", "bifurcation", "design",
@@ -30,7 +33,9 @@ Conventions: CONVENTIONS.md in the source distribution."""
 
 EPILOG = """\
 Run "hybridpd COMMAND --help" for a command's options and an example. Bad input prints one
-line and exits with status 2."""
+line and exits with status 2; "hybridpd orbit" exits with 3 when there is no orbit and 4 when
+the run diverged, "hybridpd simulate" with 4 or 5 when the run stopped before its end time
+(see their help). With --model FILE.toml, --list-params lists the file's parameters."""
 
 
 def build_parser() -> Parser:
@@ -47,6 +52,8 @@ def main(argv=None) -> int:
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
+        if getattr(args, "list_params", False):
+            return list_params(args)
         return int(args.func(args) or 0)
     except UsageError as exc:
         print(f"hybridpd: error: {_did_you_mean(str(exc))}", file=sys.stderr)

@@ -1,12 +1,25 @@
-"""Shared pieces of the command-line interface: the parser class, common options, errors."""
+"""Shared pieces of the command-line interface: the parser class, common options, errors,
+exit statuses and the strict JSON writer."""
 from __future__ import annotations
 
 import argparse
 import difflib
+import math
 import sys
 
+#: Exit statuses of the commands (documented in the README's command-line section).
+EXIT_OK = 0
 EXIT_BAD_INPUT = 2
+#: an infeasible design, or no periodic orbit (``hybridpd orbit``)
 EXIT_INFEASIBLE = 3
+EXIT_NO_ORBIT = 3
+#: the run diverged: the state or the map overflowed, grew past the divergence bound or went
+#: non-finite, or contacts closing at one instant had no joint impact (``simulate``)
+EXIT_DIVERGED = 4
+#: a simulation stopped before its end time at a bound of the run (``jump_limit``: the
+#: ``--max-impacts`` bound; ``step_limit``: the bound on flow steps; ``zeno``: an accumulation
+#: of jumps the automaton cannot continue past)
+EXIT_STOPPED_EARLY = 5
 
 
 class UsageError(Exception):
@@ -100,10 +113,105 @@ def add_plant(p, *, xm=True, gamma=False, required=True, L_required=True):
         p.add_argument("--xm", type=float, required=True, help="reference amplitude (>= 0)")
 
 
-def add_model_section(p, *, period_help="returns to the section per orbit (k of P^k)"):
-    """``--model`` and the options choosing a model file's section and orbits."""
+def add_model(p, *, uses: str):
+    """``--model FILE.toml`` and ``--list-params``; ``uses`` says how the command takes the
+    file's parameters (e.g. ``"--set KEY VALUE sets them"``)."""
     p.add_argument("--model", default=None, metavar="FILE.toml",
-                   help="mechanical model file (then the impact-pair options are not used)")
+                   help="mechanical model file (then the impact-pair options are not used). "
+                        "Its parameters are its numeric entries, named by dotted TOML paths "
+                        "(controller.kp, contact.0.restitution, system.masses.2, "
+                        f"reference.omega, ...): --list-params lists them; {uses}")
+    p.add_argument("--list-params", action="store_true",
+                   help="with --model FILE.toml: print the file's parameters (dotted paths) "
+                        "with their values, one per line (with --json: one object), and "
+                        "exit 0")
+
+
+def add_set(p):
+    """``--set KEY VALUE`` (repeatable): a model file's entries set before the run."""
+    p.add_argument("--set", nargs=2, action="append", default=None, metavar=("KEY", "VALUE"),
+                   help="--model: set the file's numeric entry KEY (a dotted path, see "
+                        "--list-params) to VALUE first; repeatable")
+
+
+def set_values(args) -> dict:
+    """``{path: value}`` of the ``--set`` options (ValueError for a VALUE that is no
+    number)."""
+    values = {}
+    for key, val in getattr(args, "set", None) or ():
+        try:
+            values[key] = float(val)
+        except ValueError:
+            raise ValueError(f"--set {key}: VALUE must be a number, got {val!r}") from None
+    return values
+
+
+def model_of(args):
+    """The model of ``--model`` with the ``--set`` values (each path checked first)."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.mechanics.params import ModelTemplate
+
+    values = set_values(args)
+    if not values:
+        # deferred import: loaded only when this runs, for start-up time
+        from hybridpd.mechanics.modelfile import load_model
+
+        return load_model(args.model)
+    template = ModelTemplate.load(args.model)
+    template.check(*values)
+    return template.model(values)
+
+
+def controllers_of(args) -> str:
+    """The controllers of ``--model`` (with the ``--set`` values) in words, for titles and
+    for the ``controllers`` entry of a result's metadata (figures drawn later name them)."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.mechanics.params import ModelTemplate
+    from hybridpd.plotting._common import describe_controllers
+
+    return describe_controllers(ModelTemplate.load(args.model).with_values(set_values(args)))
+
+
+def stamp_controllers(result, args):
+    """A copy of the (dataclass) `result` whose ``metadata`` also names the controllers of
+    ``--model``, so that a figure drawn from its file later names them too."""
+    import dataclasses
+
+    return dataclasses.replace(result, metadata={"controllers": controllers_of(args),
+                                                 **result.metadata})
+
+
+def list_params(args) -> int:
+    """``--list-params``: the numeric entries of ``--model`` (dotted path and value), one per
+    line, or one JSON object ``{"model": FILE, "parameters": {path: value}}``."""
+    if args.model is None:
+        raise UsageError("--list-params needs --model FILE.toml (the impact pair's "
+                         "parameters are its options: see --help)")
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.mechanics.params import ModelTemplate
+
+    paths = ModelTemplate.load(args.model).paths
+    if getattr(args, "json", False):
+        print_json({"model": str(args.model), "parameters": paths})
+        return EXIT_OK
+    for path, value in paths.items():
+        print(f"{path} = {value!r}")
+    return EXIT_OK
+
+
+def require(args, *names) -> None:
+    """Refuse (UsageError) missing options that argparse cannot require (they are optional
+    with ``--list-params``)."""
+    missing = [f"--{n.replace('_', '-')}" for n in names if getattr(args, n) is None]
+    if missing:
+        raise UsageError(f"the following arguments are required: {', '.join(missing)}")
+
+
+def add_model_section(p, *, period_help="returns to the section per orbit (k of P^k)",
+                      uses="--set KEY VALUE sets them"):
+    """``--model``, ``--list-params`` and the options choosing a model file's section and
+    orbits."""
+    add_model(p, uses=uses)
     p.add_argument("--contact", type=int, default=0,
                    help="--model: 0-based contact whose impacts (or releases) define the "
                         "section")
@@ -127,30 +235,81 @@ def clearance(args):
     return check_positive("gamma", args.gamma) * x10, x10
 
 
-def command(sub, name: str, *, help: str, description: str, example: str):
-    """A sub-command parser with a one-line ``help``, a paragraph and an example epilog."""
+def command(sub, name: str, *, help: str, description: str, example: str,
+            notes: str | None = None):
+    """A sub-command parser with a one-line ``help``, a paragraph and an example epilog
+    (followed by ``notes``, e.g. the exit statuses, kept as written)."""
     import textwrap
 
+    epilog = "example:\n  " + example + ("\n\n" + notes if notes else "")
     return sub.add_parser(name, help=help, description=textwrap.fill(description, 88),
-                          epilog="example:\n  " + example)
+                          epilog=epilog)
 
 
-JSON_HELP = "print one JSON object on stdout instead of the summary"
+JSON_HELP = ("print one JSON object on stdout instead of the summary (strict JSON: null for "
+             "a number that is not finite)")
 
 
-def add_sweep(p, out=(".nc", ".zarr", ".npz"), what="the result", store=True):
+def json_ready(obj):
+    """`obj` with every non-finite float replaced by None, NumPy scalars and arrays turned
+    into Python numbers and lists, tuples into lists: what strict JSON can hold.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> json_ready({"a": float("nan"), "b": np.array([1.0, np.inf]), "c": (np.int64(2),)})
+    {'a': None, 'b': [1.0, None], 'c': [2]}
+    """
+    if isinstance(obj, dict):
+        return {str(k): json_ready(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_ready(v) for v in obj]
+    if isinstance(obj, bool) or obj is None or isinstance(obj, str):
+        return obj
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, int):
+        return obj
+    tolist = getattr(obj, "tolist", None)   # NumPy scalars and arrays
+    if tolist is not None:
+        return json_ready(tolist())
+    if isinstance(obj, complex):
+        return [json_ready(obj.real), json_ready(obj.imag)]
+    return str(obj)
+
+
+def dumps_json(obj) -> str:
+    """Strict JSON text of `obj` (:func:`json_ready`; never NaN or Infinity)."""
+    import json
+
+    return json.dumps(json_ready(obj), allow_nan=False)
+
+
+def print_json(obj) -> None:
+    """``--json``: one strict JSON object on stdout (:func:`dumps_json`)."""
+    print(dumps_json(obj))
+
+
+def add_sweep(p, out=(".nc", ".zarr", ".npz"), what="the result", store=True,
+              model_out=(".nc", ".zarr")):
     add_executor(p, default="serial")
     if store:
         p.add_argument("--store", default=None, metavar="DIR.zarr",
                        help="write the sweep to this Zarr store as chunks finish; a rerun "
                             "with the same arguments resumes from it")
     p.add_argument("--out", default=None, metavar="FILE",
-                   help=f"write the result to this file ({', '.join(out)}, by suffix; "
-                        "draw it later with 'hybridpd plot FILE')")
+                   help=f"write the result to this file, by suffix (impact pair: "
+                        f"{_either(out)}; --model: {_either(model_out)}); draw it later with "
+                        "'hybridpd plot FILE'")
     p.add_argument("--plot", default=None, metavar="IMAGE",
                    help=f"draw {what} to this .png, .pdf or .svg")
     p.add_argument("--json", action="store_true", help=JSON_HELP)
     add_quiet(p)
+
+
+def _either(suffixes) -> str:
+    return suffixes[0] if len(suffixes) == 1 else (
+        ", ".join(suffixes[:-1]) + " or " + suffixes[-1])
 
 
 def add_executor(p, default="serial"):
@@ -228,8 +387,7 @@ def _check(path, flag, allowed):
     try:
         check_suffix(path, flag, allowed)
     except ValueError:
-        choice = allowed[0] if len(allowed) == 1 else (
-            ", ".join(allowed[:-1]) + " or " + allowed[-1])
+        choice = _either(allowed)
         raise ValueError(f"{flag} must end in {choice} (what this command writes), got "
                          f"{str(path)!r}") from None
     return path

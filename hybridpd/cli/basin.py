@@ -1,19 +1,21 @@
 """``hybridpd basin``."""
 from __future__ import annotations
 
-import json
-
 from hybridpd.cli._common import (
     UsageError,
     add_model_section,
     add_plant,
+    add_set,
     add_sweep,
     check_model_command,
     check_pair_command,
     command,
     executor_of,
+    print_json,
     progress_wanted,
     save_figure,
+    set_values,
+    stamp_controllers,
 )
 
 # the pair options: required without --model, not used with it
@@ -29,7 +31,10 @@ def register(sub):
                 description=DESCRIPTION,
                 example=("hybridpd basin --case collocated --mu 0.1 --e 0.5 --gamma "
                          "0.75 --omega 5 --kp 10 --kv 20 --x1 -3 5 100 --y1 -2 10 100"
-                         " --executor processes --out basin.npz --plot basin.png"))
+                         " --executor processes --out basin.npz --plot basin.png\n  hybridpd "
+                         "basin --model examples/models/drivetrain.toml --event release --set "
+                         "controller.kv 2 --x motor -1.5 1.5 31 --y motor_dot -6 6 31 --out "
+                         "basin.nc"))
     add_plant(p, xm=False, gamma=True, required=False)
     p.add_argument("--e", type=float, default=None,
                    help="restitution coefficient in [0, 1]")
@@ -44,9 +49,7 @@ def register(sub):
                    help="--model: grid over this section coordinate (e.g. motor, motor_dot)")
     p.add_argument("--y", nargs=4, default=None, metavar=("COORD", "MIN", "MAX", "NUM"),
                    help="--model: second grid axis (as --x)")
-    p.add_argument("--set", nargs=2, action="append", default=None, metavar=("KEY", "VALUE"),
-                   help="--model: set a numeric entry of the file (dotted path) first; "
-                        "repeatable")
+    add_set(p)
     p.add_argument("--x1", type=float, nargs=3, default=None, metavar=("MIN", "MAX", "NUM"),
                    help="slice window in x1 (default: the reproduction's, -3 x10 .. 5 x10, "
                         "41 points)")
@@ -119,7 +122,7 @@ def run(args) -> int:
         save_figure(plot_basin(ab), args.plot)
     fp = b.fixed_point
     if args.json:
-        print(json.dumps({
+        print_json({
             "x1": b.x1.tolist(), "y1": b.y1.tolist(), "labels": b.labels.tolist(),
             "label_names": list(LABELS),
             "fixed_point": {"phi": float(fp[0]), "z1": float(fp[1]), "z2": float(fp[2]),
@@ -127,7 +130,7 @@ def run(args) -> int:
                             "y1": float(fp[2] + fp[3]), "y2": float(fp[2])},
             "converged_fraction": b.converged_fraction, "spectral_radius": orb.spectral_radius,
             "stable": orb.stable, "certified_radius": mapper.certified_radius,
-            "attractor_labels": ab.labels.tolist(), **ab.to_dict()}))
+            "attractor_labels": ab.labels.tolist(), **ab.to_dict()})
         return 0
     print(f"{args.case} basin, e = {args.e:g}, kp = {args.kp:g}, kv = {args.kv:g} "
           f"(slice phi = phi* = {fp[0]:.6g}, y2 = y2* = {fp[2]:.6g})")
@@ -146,12 +149,7 @@ def _run_model(args) -> int:
     from hybridpd.sweeps.model_basins import model_basin
 
     check_model_command(args, _PAIR, "set the file's entries with --set KEY VALUE", "COORD")
-    values = {}
-    for key, val in args.set or ():
-        try:
-            values[key] = float(val)
-        except ValueError:
-            raise ValueError(f"--set {key}: VALUE must be a number, got {val!r}") from None
+    values = set_values(args)
     if values:
         # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.model_regions import template_of
@@ -163,6 +161,7 @@ def _run_model(args) -> int:
                      n_iter=300 if args.iterations is None else args.iterations,
                      max_period=args.max_period, executor=executor_of(args),
                      max_workers=args.workers, progress=progress_wanted(args))
+    mb = stamp_controllers(mb, args)
     if args.out:
         mb.save(args.out)
     if args.plot:
@@ -171,7 +170,7 @@ def _run_model(args) -> int:
 
         save_figure(plot_model_basin(mb), args.plot)
     if args.json:
-        print(json.dumps(mb.to_dict()))
+        print_json(mb.to_dict())
         return 0
     for line in mb.summary():
         print(line)

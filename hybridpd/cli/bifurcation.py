@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 
 from hybridpd.cli._common import (
@@ -12,7 +11,10 @@ from hybridpd.cli._common import (
     check_image,
     check_out,
     executor_of,
+    print_json,
+    require,
     save_figure,
+    stamp_controllers,
 )
 
 #: Parameters the command can sweep (``--param NAME``).
@@ -32,7 +34,12 @@ product of the Jacobians DP along the iterates.
 The reference amplitude xm follows the design at every value: the one that puts the
 primary mass on the order-N symmetric orbit of amplitude x10 (gamma = L / x10, see the
 conventions (CONVENTIONS.md)). Every parameter other than the swept one must be given (m2 and x10
-default to 1); the swept one must not be.
+default to 1); the swept one must not be. The diagram is written to --out as .npz.
+
+With --model FILE.toml the map is the model's section map (--contact, --wall, --event,
+--period) and --param sweeps any numeric entry of the file, named by its dotted TOML path
+(controller.kp, contact.0.restitution, system.masses.2, reference.omega, ...; --list-params
+prints them with their values); the diagram is written to --out as .nc or .zarr.
 """
 
 _EPILOG = """\
@@ -40,6 +47,8 @@ example (the paper's parameters, kv swept, following):
   hybridpd bifurcation --case collocated --mu 0.1 --e 0.1 --gamma 0.75 --omega 5 --n 1 \\
       --kp 10 --param kv 10 35 200 --iterations 1000 --keep 100 --follow \\
       --out kv.npz --plot kv.png
+  hybridpd bifurcation --model examples/models/robot_joint_pd.toml --event release \\
+      --param controller.kv 0.5 12 60 --out kv.nc --plot kv.png
 """
 
 
@@ -59,9 +68,10 @@ def register(sub):
     p.add_argument("--kv", type=float, help="velocity gain (> 0)")
     p.add_argument("--x10", type=float, default=1.0,
                    help="primary-mass amplitude of the design (> 0), default 1")
-    p.add_argument("--param", nargs=4, required=True, metavar=("NAME", "MIN", "MAX", "NUM"),
-                   help=f"swept parameter, one of {', '.join(SWEEPABLE)}, from MIN to MAX "
-                   "(MIN < MAX) in NUM >= 2 values")
+    p.add_argument("--param", nargs=4, default=None, metavar=("NAME", "MIN", "MAX", "NUM"),
+                   help=f"swept parameter (required), from MIN to MAX (MIN < MAX) in NUM >= 2 "
+                   f"values: for the impact pair one of {', '.join(SWEEPABLE)}; with --model "
+                   "a dotted path of the file (see --list-params)")
     p.add_argument("--iterations", type=int, default=1000,
                    help="iterations of P per value (default 1000)")
     p.add_argument("--keep", type=int, default=100,
@@ -73,15 +83,19 @@ def register(sub):
                    "displaced by 1e-3 in z1)")
     p.add_argument("--max-period", type=int, default=32,
                    help="largest period detected (default 32)")
-    p.add_argument("--out", required=True, help="write the diagram (.npz)")
+    p.add_argument("--out", default=None, metavar="FILE",
+                   help="write the diagram (required): impact pair .npz; --model .nc or .zarr "
+                   "(by suffix); draw it later with 'hybridpd plot FILE'")
     p.add_argument("--plot", default=None, metavar="IMAGE",
                    help="also draw the diagram (.png, .pdf or .svg)")
     p.add_argument("--coordinate", default="z1",
                    choices=["phi", "z1", "z2", "z4", "x1", "y1", "x2", "y2"],
                    help="section coordinate on the plot's y axis (default z1)")
     p.add_argument("--json", action="store_true",
-                   help="print a JSON summary (classes, periods, exponents, cycles) on stdout")
-    add_model_section(p, period_help="the diagram iterates P^k")
+                   help="print a JSON summary (classes, periods, exponents, cycles) on stdout "
+                   "instead of the text (strict JSON: null for a number that is not finite)")
+    add_model_section(p, period_help="the diagram iterates P^k",
+                      uses="--param KEY MIN MAX NUM sweeps one of them")
     add_executor(p, default="serial")
     p.set_defaults(func=run)
 
@@ -110,6 +124,7 @@ def _sweep(args):
 
 
 def run(args) -> int:
+    require(args, "param", "out")
     if args.model is not None:
         return _run_model(args)
     if args.case is None:
@@ -153,24 +168,24 @@ def run(args) -> int:
         d = pair_diagram(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name, values,
                          executor=executor, max_workers=args.workers, **opts)
     d.save(args.out)
-    branch_note = None
+    branch = None
     if args.plot:
         # deferred import: loaded only when this runs, for start-up time
         from hybridpd.plotting.bifurcation import plot_bifurcation
 
-        branches, branch_note = _symmetric_branch(pair, v0, name, hi, args)
+        branches, branch = _symmetric_branch(pair, v0, name, hi, args)
         save_figure(plot_bifurcation(d, coordinate=args.coordinate, branches=branches),
                     args.plot)
     if args.json:
         lya = [None if not np.isfinite(x) else float(x) for x in d.lyapunov]
-        print(json.dumps({
+        print_json({
             "parameter": name, "values": values.tolist(), "classification": d.classification,
             "period": [int(k) for k in d.period], "lyapunov": lya,
             "cycles": [d.cycle(i).tolist() for i in range(len(d))],
             "xm": [None if not np.isfinite(x) else float(x) for x in d.xm],
             "counts": d.counts(), "fixed": d.fixed, "case": d.case,
             "iterations": d.iterations, "keep": d.keep, "follow": d.follow,
-            "out": str(args.out), "plot": args.plot, "branch": branch_note}))
+            "out": str(args.out), "plot": args.plot, "branch": branch})
         return 0
     counts = ", ".join(f"{n} {c}" for c, n in d.counts().items() if n)
     print(f"{args.case} bifurcation diagram in {name} [{lo:g}, {hi:g}] ({num} values, last "
@@ -181,15 +196,17 @@ def run(args) -> int:
         if any(k > 1 for k in periods):
             print("  (period k: the kept section points repeat every k applications of P, "
                   "i.e. k impacts per cycle; the paper's symmetric orbit has period 1)")
-    if branch_note:
-        print(f"  {branch_note}")
+    if branch:
+        print(f"  {branch['note']}")
     print(f"  wrote {args.out}" + (f" and {args.plot}" if args.plot else ""))
     return 0
 
 
 def _symmetric_branch(pair, v0, name, stop, args):
     """The symmetric orbit continued over the sweep (drawn over the diagram, stable solid,
-    unstable dashed), and a line saying what was drawn or why not."""
+    unstable dashed), and what was drawn: ``{"drawn", "points", "termination", "note"}``
+    (``termination``: why the continuation stopped, with the parameter value; ``note``: a
+    line saying what was drawn or why not)."""
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.continuation import continue_symmetric
     from hybridpd.model import PDGains
@@ -198,15 +215,20 @@ def _symmetric_branch(pair, v0, name, stop, args):
         br = continue_symmetric(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name,
                                 stop, x10=args.x10, n=args.n, case=args.case)
     except ValueError as exc:
-        return (), f"no continued branch drawn: {exc}"
-    return [br], (f"continued symmetric branch drawn ({len(br)} points, stopped: "
-                  f"{br.termination})")
+        return (), {"drawn": False, "points": 0, "termination": None,
+                    "note": f"no continued branch drawn: {exc}"}
+    return [br], {"drawn": True, "points": len(br), "termination": br.termination,
+                  "note": (f"continued symmetric branch drawn ({len(br)} points, stopped: "
+                           f"{br.termination})")}
 
 
 def _run_model(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.model_diagrams import model_diagram
 
+    if args.periods is not None:
+        raise UsageError("--periods: the diagram iterates P^k (--period); it does not select "
+                         "orbits by their reference periods")
     given = [f"--{k}" for k in ("case", *_REQUIRED, "m2") if getattr(args, k) is not None]
     if given:
         raise UsageError(f"{', '.join(given)}: impact-pair options, not used with --model "
@@ -217,6 +239,7 @@ def _run_model(args) -> int:
                       event=args.event, period=args.period, iterations=args.iterations,
                       keep=args.keep, max_period=min(args.max_period, args.keep - 1),
                       executor=executor_of(args), max_workers=args.workers, progress=False)
+    d = stamp_controllers(d, args)
     d.save(args.out)
     if args.plot:
         # deferred import: loaded only when this runs, for start-up time
@@ -224,7 +247,7 @@ def _run_model(args) -> int:
 
         save_figure(plot_model_diagram(d), args.plot)
     if args.json:
-        print(json.dumps(dict(d.to_dict(), out=str(args.out), plot=args.plot)))
+        print_json(dict(d.to_dict(), out=str(args.out), plot=args.plot))
         return 0
     print(d.summary())
     print(f"  wrote {args.out}" + (f" and {args.plot}" if args.plot else ""))

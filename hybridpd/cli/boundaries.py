@@ -1,9 +1,8 @@
 """``hybridpd boundaries``: traced boundary curves of the symmetric orbit in a parameter box."""
 from __future__ import annotations
 
-import json
-
 from hybridpd.analysis.testfunctions import PARAMETERS
+from hybridpd.cli._common import JSON_HELP, print_json
 
 _EPILOG = """\
 examples:
@@ -50,7 +49,7 @@ def register(sub):
                    help="points per axis of the coarse seeding map (>= 3), default 41")
     p.add_argument("--max-step", type=float, default=0.02,
                    help="largest step along a curve as a fraction of the box, default 0.02")
-    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    p.add_argument("--json", action="store_true", help=JSON_HELP)
     p.set_defaults(func=run)
 
 
@@ -72,7 +71,7 @@ def run(args) -> int:
     res = boundary_curves(args.case, x=x, y=y, m2=args.m2, x10=args.x10, n=args.n,
                           seed_grid=args.seed_grid, max_step=args.max_step, **fixed)
     if args.json:
-        print(json.dumps(res.to_dict()))
+        print_json(res.to_dict())
         return 0
     print(f"{args.case}, n = {res.plane.n}: {len(res.curves)} boundary curves in "
           f"{res.x_name} x {res.y_name} = [{res.plane.x.lo:g}, {res.plane.x.hi:g}] x "

@@ -1,10 +1,16 @@
 """``hybridpd design``."""
 from __future__ import annotations
 
-import json
 import sys
 
-from hybridpd.cli._common import EXIT_INFEASIBLE, JSON_HELP, add_plant, clearance, command
+from hybridpd.cli._common import (
+    EXIT_INFEASIBLE,
+    JSON_HELP,
+    add_plant,
+    clearance,
+    command,
+    print_json,
+)
 
 DESCRIPTION = ("Chooses PD gains (kp, kv) and the reference amplitude xm so that the "
                "primary mass moves between +x10 and -x10 on an existing, stable "
@@ -54,7 +60,7 @@ def run(args) -> int:
         return EXIT_INFEASIBLE
     d = res.to_dict()
     if args.json:
-        print(json.dumps(d))
+        print_json(d)
         return 0
     print(f"{args.case} design: kp = {res.kp:.6g}, kv = {res.kv:.6g}, xm = {res.xm:.6g}, "
           f"phi0 = {res.phi0:.6g}")

@@ -1,8 +1,6 @@
 """``hybridpd regions``."""
 from __future__ import annotations
 
-import json
-
 from hybridpd.cli import _common as cli
 
 DESCRIPTION = ("Maps, on a grid of PD gains (kp, kv) and for each restitution "
@@ -33,10 +31,11 @@ def register(sub):
                    help="grid axis: NUM points from MIN to MAX")
     p.add_argument("--kv", type=float, nargs=3, default=None, metavar=("MIN", "MAX", "NUM"),
                    help="grid axis: NUM points from MIN to MAX")
-    cli.add_model_section(p)
+    cli.add_model_section(p, uses="--x KEY and --y KEY sweep two of them")
     p.add_argument("--x", nargs=4, default=None, metavar=("KEY", "MIN", "MAX", "NUM"),
                    help="--model: grid axis over the file's entry KEY (a dotted path such as "
-                        "controller.kp, contact.0.restitution, system.masses.2)")
+                        "controller.kp, contact.0.restitution, system.masses.2; "
+                        "--list-params lists them)")
     p.add_argument("--y", nargs=4, default=None, metavar=("KEY", "MIN", "MAX", "NUM"),
                    help="--model: second grid axis (as --x)")
     p.add_argument("--tile", type=int, default=8,
@@ -70,7 +69,7 @@ def run(args) -> int:
 
         cli.save_figure(plot_region_panels(rm), args.plot)
     if args.json:
-        print(json.dumps(rm.to_dict()))
+        cli.print_json(rm.to_dict())
         return 0
     print(f"{args.case} regions on kp x kv = {len(rm.x)} x {len(rm.y)}:")
     for k, e in enumerate(rm.e):
@@ -89,6 +88,7 @@ def _run_model(args) -> int:
                           periods=args.periods, tile=args.tile, executor=cli.executor_of(args),
                           max_workers=args.workers, store=args.store,
                           progress=cli.progress_wanted(args))
+    rm = cli.stamp_controllers(rm, args)
     if args.out:
         rm.save(args.out)
     if args.plot:
@@ -98,7 +98,7 @@ def _run_model(args) -> int:
 
         cli.save_figure(plot_region_panels(RegionMap.from_dataset(rm.to_dataset())), args.plot)
     if args.json:
-        print(json.dumps(rm.to_dict()))
+        cli.print_json(rm.to_dict())
         return 0
     print(rm.summary())
     return 0

@@ -4,7 +4,13 @@ from __future__ import annotations
 import json
 import sys
 
-from hybridpd.cli._common import add_executor, add_quiet, command, executor_of
+from hybridpd.cli._common import (
+    add_executor,
+    add_quiet,
+    command,
+    executor_of,
+    print_json,
+)
 
 DESCRIPTION = ("Reproduces the paper's figures (Fig. 3 phase plane, Figs 4-5 region "
                "maps, Figs 6-7 basins) under two conventions for the unstated secondary "
@@ -33,7 +39,8 @@ def register(sub):
     p.add_argument("--m2-range", type=float, nargs=2, default=None, metavar=("LO", "HI"),
                    help="range of the convention study (default 0.1 1000)")
     add_executor(p, default="processes")
-    p.add_argument("--json", action="store_true", help="print summary.json on stdout")
+    p.add_argument("--json", action="store_true", help="print summary.json on stdout (strict JSON: null for a number that "
+                        "is not finite)")
     add_quiet(p)
     p.set_defaults(func=run)
 
@@ -74,7 +81,7 @@ def run(args) -> int:
                      settings=settings)
     data = json.loads((path.parent / "summary.json").read_text())
     if args.json:
-        print(json.dumps(data))
+        print_json(data)
         return 0
     conv = ", ".join(f"m2 = {m:g}" for m in data["conventions"]["m2"])
     print(f"conclusion  verdict       by convention ({conv})")

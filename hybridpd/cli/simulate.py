@@ -7,18 +7,28 @@ given when they agree.
 """
 from __future__ import annotations
 
-import json
 import math
 import sys
 
 from hybridpd.cli._common import (
+    EXIT_DIVERGED,
+    EXIT_OK,
+    EXIT_STOPPED_EARLY,
     JSON_HELP,
     UsageError,
+    add_model,
+    add_set,
     case_type,
     check_image,
     check_out,
     command,
+    controllers_of,
+    dumps_json,
+    model_of,
+    print_json,
+    require,
     save_figure,
+    set_values,
 )
 
 # the pair options: required without --model, forbidden with it
@@ -31,6 +41,18 @@ DESCRIPTION = ("Simulates the impact pair under PD control (or, with --model, an
                "by sticking and release. Prints the impacts (time, contact, wall, "
                "pre-impact state) and why the run stopped.")
 
+NOTES = """\
+exit status:
+  0  the run reached --t-end
+  2  bad input (one line on stderr)
+  4  the run diverged: the state overflowed (nonfinite) or grew past the divergence bound
+     (diverged), or contacts closing at one instant had no joint impact
+     (simultaneous_contact)
+  5  the run stopped before --t-end at a bound: --max-impacts jumps (jump_limit), the bound
+     on flow steps (step_limit), or an accumulation of impacts it cannot continue past (zeno)
+  With 4 and 5 one line on stderr names the termination and the time it happened; the
+  output (text, --json, --out, --plot) is still written."""
+
 
 def register(sub):
     p = command(sub, "simulate", help="simulate the controlled impact pair or a model file",
@@ -39,9 +61,9 @@ def register(sub):
                          "0.75 --omega 5 --kp 10 --kv 20 --xm 1 --x0 0.3 0.5 0 0 "
                          "--t-end 10\n  hybridpd simulate --model "
                          "examples/models/drivetrain.toml --t-end 20 --out run.json "
-                         "--plot run.png"))
-    p.add_argument("--model", default=None, metavar="FILE.toml",
-                   help="mechanical model file (then the impact-pair options are not used)")
+                         "--plot run.png"), notes=NOTES)
+    add_model(p, uses="--set KEY VALUE sets them")
+    add_set(p)
     p.add_argument("--case", default=None, type=case_type, metavar="CASE",
                    help="collocated (the PD loop measures x2) or noncollocated (it measures "
                         "x1; alias non-collocated)")
@@ -62,14 +84,16 @@ def register(sub):
     p.add_argument("--kv", type=float, default=None, help="derivative gain kv (> 0)")
     p.add_argument("--x0", type=float, nargs=4, default=None, metavar=("X1", "Y1", "X2", "Y2"),
                    help="initial positions and velocities of both masses")
-    p.add_argument("--t-end", type=float, required=True,
-                   help="end time of the simulation (> 0)")
+    p.add_argument("--t-end", type=float, default=None,
+                   help="end time of the simulation (> 0; required)")
     p.add_argument("--max-impacts", type=int, default=100_000,
-                   help="stop after this many impacts (the run says why it stopped)")
+                   help="stop after this many impacts (with --model: jumps other than "
+                        "sampling instants); the run then exits with status 5")
     p.add_argument("--json", action="store_true", help=JSON_HELP)
     p.add_argument("--out", default=None, metavar="FILE.json",
                    help="write the JSON result plus dense samples of the trajectory (times, "
-                        "positions q and velocities v of every DOF), for 'hybridpd plot'")
+                        "positions q and velocities v of every DOF), for 'hybridpd plot' "
+                        "(.json, for the pair and for --model)")
     p.add_argument("--samples", type=int, default=2000,
                    help="number of sampling times written by --out and drawn by --plot")
     p.add_argument("--plot", default=None, metavar="IMAGE",
@@ -80,13 +104,28 @@ def register(sub):
 
 #: events listed in the text output before it summarises the rest
 _SHOWN = 10
-#: exit status of a model run stopped by an unresolved condition (not a user bound)
-EXIT_STOPPED = 4
-_FAILED = {
-    "simultaneous_contact": "contacts closing at one instant whose joint impact (the "
-                            "multi-contact LCP) has no solution or a degenerate one",
-    "diverged": "the state grew past the divergence bound (an unstable loop?)",
-    "nonfinite": "the state overflowed"}
+#: ``termination`` of a run that stopped before its end time: exit status and why
+STOPS = {
+    "simultaneous_contact": (EXIT_DIVERGED, ("contacts closing at one instant whose joint "
+                                             "impact (the multi-contact LCP) has no solution "
+                                             "or a degenerate one")),
+    "simultaneous": (EXIT_DIVERGED, "a joint jump the automaton could not resolve"),
+    "diverged": (EXIT_DIVERGED, "the state grew past the divergence bound (an unstable loop?)"),
+    "nonfinite": (EXIT_DIVERGED, "the state overflowed"),
+    "jump_limit": (EXIT_STOPPED_EARLY, "--max-impacts reached before --t-end (raise it)"),
+    "step_limit": (EXIT_STOPPED_EARLY, "the bound on flow steps was reached before --t-end"),
+    "zeno": (EXIT_STOPPED_EARLY, "an accumulation of impacts the run cannot continue past")}
+
+
+def stop_status(termination: str, t_final: float) -> int:
+    """Exit status of a run that stopped with `termination` (:data:`STOPS`; 0 for
+    ``end_time``), with one line on stderr naming the termination when it is not 0."""
+    if termination == "end_time":
+        return EXIT_OK
+    status, why = STOPS.get(termination, (EXIT_STOPPED_EARLY, "stopped before --t-end"))
+    print(f"hybridpd simulate: the run stopped at t = {t_final:.12g}: {termination} ({why})",
+          file=sys.stderr)
+    return status
 
 
 def _agree(a, b, rtol=1e-6):
@@ -131,6 +170,7 @@ def geometry(args):
 
 
 def run(args) -> int:
+    require(args, "t_end")
     check_out(args.out, "--out", (".json",))
     check_image(args.plot)
     if not 2 <= args.samples <= 1_000_000:
@@ -141,6 +181,9 @@ def run(args) -> int:
             raise UsageError(f"--model: cannot be combined with the impact-pair options "
                              f"({', '.join(given)})")
         return _run_model(args)
+    if args.set:
+        raise UsageError("--set needs --model FILE.toml (the impact pair's parameters are "
+                         "its options)")
     if args.m2 is None:
         args.m2 = 1.0
     missing = [f"--{k}" for k in _REQUIRED if getattr(args, k) is None]
@@ -152,23 +195,24 @@ def run(args) -> int:
 
 def _run_model(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.mechanics.modelfile import load_model
-
-    model = load_model(args.model)
+    model = model_of(args)
     if not args.t_end > model.t0:
         raise ValueError(f"--t-end must be > the model's t0 = {model.t0:g}, got {args.t_end:g}")
     traj = model.simulate(args.t_end, max_impacts=args.max_impacts)
     d = traj.to_dict()
     contacts = [{"name": c.name, "normal": [float(w) for w in c.normal],
                  "lo": c.lo, "hi": c.hi} for c in model.contacts]
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.plotting._common import model_title
+
+    controllers = controllers_of(args)
     _write(args, d, traj.mechanical, model.t0, traj.t_final, model.system.dofs, contacts,
-           title=str(model.source), parameters={"model": str(model.source)})
-    status = EXIT_STOPPED if d["termination"] in _FAILED else 0
-    if status:
-        print(f"hybridpd simulate: the run stopped at t = {traj.t_final:.12g}: "
-              f"{d['termination']} ({_FAILED[d['termination']]})", file=sys.stderr)
+           title=model_title(model.source, {"controllers": controllers}),
+           parameters={"model": str(model.source), "controllers": controllers,
+                       **set_values(args)})
+    status = stop_status(d["termination"], traj.t_final)
     if args.json:
-        print(json.dumps(d))
+        print_json(d)
         return status
     dofs = model.system.dofs
     print(f"{model.source}: {len(dofs)} DOFs ({', '.join(dofs)}), {len(model.contacts)} "
@@ -181,9 +225,7 @@ def _run_model(args) -> int:
     for a, b, k in d["sticking"][:_SHOWN]:
         print(f"  sticking on contact {k} on [{a:.10f}, {b:.10f}]")
     if len(d["sticking"]) > _SHOWN:
-        rest = d["sticking"][_SHOWN:]
-        print(f"  ... {len(rest)} more sticking intervals, {sum(b - a for a, b, _ in rest):.6g} "
-              "time units in all (use --json for all)")
+        print("  " + sticking_tail(d["sticking"], _SHOWN))
     for t_inf, k, _, n_res in traj.accumulations[:_SHOWN]:
         print(f"  accumulation of impacts on contact {k} at t = {t_inf:.12f} "
               f"({n_res} resolved)")
@@ -212,9 +254,10 @@ def _run_pair(args) -> int:
            title=(f"{args.case} impact pair: mu = {args.mu:g}, e = {args.e:g}, L = {L:g}, "
                   f"kp = {args.kp:g}, kv = {args.kv:g}, xm = {xm:.6g}, "
                   f"omega = {args.omega:g}"), parameters=params)
+    status = stop_status(d["termination"], traj.t_final)
     if args.json:
-        print(json.dumps(d))
-        return 0
+        print_json(d)
+        return status
     print(f"{args.case} impact pair (L = {L:g}, xm = {xm:.10g}), t in [0, {traj.t_final:g}]: "
           f"{traj.n_impacts} impacts ({int((traj.walls > 0).sum())} on wall +L, "
           f"{int((traj.walls < 0).sum())} on -L), "
@@ -224,9 +267,28 @@ def _run_pair(args) -> int:
               + " ".join(f"{v:+.6f}" for v in imp["pre"]))
     if traj.n_impacts > 10:
         print(f"  ... {traj.n_impacts - 10} more (use --json for all)")
-    for a, b, *_ in d["sticking"]:
+    for a, b, *_ in d["sticking"][:_SHOWN]:
         print(f"  sticking on [{a:.10f}, {b:.10f}]")
-    return 0
+    if len(d["sticking"]) > _SHOWN:
+        print("  " + sticking_tail(d["sticking"], _SHOWN))
+    return status
+
+
+def sticking_tail(sticking, shown: int) -> str:
+    """The line after the first `shown` sticking intervals ``(a, b, contact)``: how many more
+    and how long they hold, then how many and how long in all.
+
+    Examples
+    --------
+    >>> sticking_tail([(0.0, 1.0, 0), (2.0, 2.5, 0), (3.0, 3.25, 1)], 1)
+    '... 2 more sticking intervals (0.75 time units); 3 intervals, 1.75 time units held in all (use --json for all)'
+    """
+    rest = sticking[shown:]
+    held = sum(b - a for a, b, *_ in rest)
+    total = sum(b - a for a, b, *_ in sticking)
+    return (f"... {len(rest)} more sticking intervals ({held:.6g} time units); "
+            f"{len(sticking)} intervals, {total:.6g} time units held in all (use --json for "
+            "all)")
 
 
 def trajectory_record(result: dict, state, t0, t_final, dofs, contacts, *, samples=2000,
@@ -257,7 +319,7 @@ def _write(args, result, state, t0, t_final, dofs, contacts, *, title, parameter
                             samples=args.samples, title=title, parameters=parameters)
     if args.out is not None:
         Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.out).write_text(json.dumps(rec))
+        Path(args.out).write_text(dumps_json(rec))
     if args.plot is not None:
         # deferred import: loaded only when this runs, for start-up time
         from hybridpd.plotting.trajectory import plot_trajectory_samples

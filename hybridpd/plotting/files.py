@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import os
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -185,9 +186,12 @@ def _branch(path, title=None, quantity="spectral_radius"):
         unit = _BRANCH_UNITS.get(quantity)
         if unit and not ax.get_ylabel().endswith(")"):
             ax.set_ylabel(f"{ax.get_ylabel()} {unit}".strip())
+        # the termination names why and where it stopped (the corrector's failure at the
+        # smallest step, say): shortened to one line under the title, whole in the file
         ax.set_title(title if title is not None else
                      f"{br.case.value} {br.family} branch in {br.parameter_name} "
-                     f"({len(br)} points; stopped: {br.termination})")
+                     f"({len(br)} points)\nstopped: "
+                     + textwrap.shorten(str(br.termination), 100, placeholder=" ..."))
     return fig
 
 

@@ -7,11 +7,9 @@ off-section part hatched.
 """
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-from hybridpd.plotting._common import figure
+from hybridpd.plotting._common import figure, model_title
 from hybridpd.plotting.basins import _MARKERS, basin_colors, basin_hatches
 from hybridpd.sweeps.attractor_basins import format_percent
 
@@ -82,8 +80,8 @@ def plot_model_basin(basin, ax=None, title=None):
     ax.tick_params(labelsize=7)
     spec = basin.metadata.get("spec", {})
     vals = ", ".join(f"{k} = {v:g}" for k, v in basin.metadata.get("values", {}).items())
-    head = (f"{Path(basin.source).name}: contact {spec.get('contact', 0)} "
-            f"({spec.get('event', 'impact')})" + (f"\n{vals}" if vals else ""))
+    head = (f"{model_title(basin.source, basin.metadata)}:\ncontact {spec.get('contact', 0)} "
+            f"({spec.get('event', 'impact')})" + (f", {vals}" if vals else ""))
     ax.set_title(title if title is not None else head, fontsize=8)
     others = ", ".join(f"{n} = {v:.3g}" for n, v in zip(basin.coords, basin.fixed_point)
                        if n not in (basin.x_name, basin.y_name))

@@ -1,11 +1,9 @@
 """Draw a model file's bifurcation diagram (:class:`~hybridpd.sweeps.model_diagrams.ModelDiagram`)."""
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-from hybridpd.plotting._common import figure
+from hybridpd.plotting._common import figure, model_title
 
 __all__ = ["plot_model_diagram"]
 
@@ -58,6 +56,6 @@ def plot_model_diagram(d, coordinate: str | None = None, ax=None, title=None):
     ax.legend(fontsize=7, frameon=False, loc="best",
               title=("grey lines: map undefined" if np.any(und) else None), title_fontsize=7)
     ax.set_title(title if title is not None else
-                 f"{Path(d.source).name}: last {d.points.shape[1]} of "
+                 f"{model_title(d.source, d.metadata)}: last {d.points.shape[1]} of "
                  f"{d.metadata.get('iterations')} iterates", fontsize=8)
     return fig

@@ -227,11 +227,12 @@ def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, ti
             ax.set_ylabel(axis_label(m.y_name) if k == 0 else "")
             axes.append(ax)
     legend_from_gids(fig, axes, ncol=3)
-    head = title or f"{_CASE.get(rm.case, rm.case)} PD"
+    head = title or _head(rm)
     if mark is not None and not any(a.get_gid() == PAPER_GAINS for ax in axes
                                     for a in ax.get_children()):
         head += f" (the point $k_p$ = {mark[0]:g}, $k_v$ = {mark[1]:g} lies outside the box)"
-    fig.suptitle(f"{head}: {param_line(params or _params_of(rm))}")
+    line = _subject(rm) if params is None else param_line(params)
+    fig.suptitle(f"{head}: {line}" if line else head)
     return fig
 
 
@@ -269,8 +270,29 @@ def plot_regions(rm, ax=None, title=None, curves=None):
     _axes_legend(ax)
     ax.set_xlabel(axis_label(rm.x_name))
     ax.set_ylabel(axis_label(rm.y_name))
-    ax.set_title(title or f"{rm.case}: {param_line(_params_of(rm))}")
+    ax.set_title(title or f"{_head(rm)}: {_subject(rm)}")
     return fig
+
+
+def _head(rm) -> str:
+    """The title's head: the pair's case and PD loop, or a model file and its controllers
+    (named from the model, never assumed)."""
+    model = rm.fixed.get("model")
+    if model is None:
+        return f"{_CASE.get(rm.case, rm.case)} PD"
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.plotting._common import model_title
+
+    return model_title(model, rm.metadata)
+
+
+def _subject(rm) -> str:
+    """The pair's fixed parameters, or a model's section."""
+    f = rm.fixed
+    if f.get("model") is None:
+        return param_line(_params_of(rm))
+    return (f"periodic orbits on the {f.get('section_event', 'impact')} section of contact "
+            f"{f.get('section_contact', 0)}")
 
 
 def _axes_legend(ax):

@@ -14,7 +14,12 @@ from hybridpd.plotting.style import DOUBLE, MAX_HEIGHT, house_style, series
 
 __all__ = ["plot_model_trajectory", "plot_trajectory", "plot_trajectory_samples"]
 
-_MAX_PHASE = 4  # phase portraits drawn (one per DOF, the first ones), to fit 7.2 in
+#: lines per time panel: the series' styles (colour, dash, marker) never repeat in a panel
+_GROUP = 6
+#: phase portraits (one per DOF) drawn up to this many DOFs; beyond, only the time panels
+_MAX_PHASE = 12
+#: columns of the phase-portrait grid at most (1.44 in each at 7.2 in wide)
+_PHASE_COLS = 5
 
 
 def _contact(c) -> dict:
@@ -26,6 +31,11 @@ def plot_trajectory_samples(t, q, v, *, dofs=None, contacts=(), impact_times=(),
                             impact_contacts=None, impact_states=None, sticking=(),
                             title=None, fig=None):
     """Positions and contact gaps against time with the impacts marked, and phase portraits.
+
+    Every degree of freedom is drawn: positions and gaps in panels of at most six lines
+    (one line style each), and one phase portrait per DOF in a grid of at most five columns
+    (up to twelve DOFs; beyond, the time panels only), on a figure 7.2 in wide and at most
+    9 in high.
 
     Parameters
     ----------
@@ -61,13 +71,18 @@ def plot_trajectory_samples(t, q, v, *, dofs=None, contacts=(), impact_times=(),
     >>> q = np.c_[np.sin(t), np.cos(t)]
     >>> fig = plot_trajectory_samples(t, q, np.gradient(q, t, axis=0), dofs=["x1", "x2"],
     ...                               contacts=[{"normal": [1, -1], "lo": -1, "hi": 1}])
-    >>> len(fig.axes)
+    >>> len(fig.axes)      # positions, the gap, two phase portraits
     4
     """
     with house_style():
         return _plot_samples(t, q, v, dofs=dofs, contacts=contacts, impact_times=impact_times,
                              impact_contacts=impact_contacts, impact_states=impact_states,
                              sticking=sticking, title=title, fig=fig)
+
+
+def _groups(n: int, size: int = _GROUP) -> list:
+    """``range(n)`` cut into ``ceil(n / size)`` consecutive groups of near-equal length."""
+    return [list(g) for g in np.array_split(np.arange(n), -(-n // size))] if n else []
 
 
 def _plot_samples(t, q, v, *, dofs, contacts, impact_times, impact_contacts, impact_states,
@@ -85,31 +100,42 @@ def _plot_samples(t, q, v, *, dofs, contacts, impact_times, impact_contacts, imp
     contacts = [_contact(c) for c in contacts]
     it = np.asarray(impact_times, float).ravel()
     ic = np.zeros(it.size, int) if impact_contacts is None else np.asarray(impact_contacts, int)
-    npp = min(n, _MAX_PHASE)
-    rows = 3 if contacts else 2
-    fig = fig or Figure(figsize=(DOUBLE, min(MAX_HEIGHT, 2.0 * rows + 0.8)),
+    # every DOF is drawn: positions and gaps in panels of at most _GROUP lines, and a grid of
+    # phase portraits (up to _MAX_PHASE DOFs, beyond which they would be too small to read)
+    pos_groups, gap_groups = _groups(n), _groups(len(contacts))
+    phase = n <= _MAX_PHASE
+    prow = -(-n // _PHASE_COLS) if phase else 0
+    pcol = -(-n // prow) if phase else 1
+    heights = [1.45] * (len(pos_groups) + len(gap_groups)) + [1.55] * prow
+    fig = fig or Figure(figsize=(DOUBLE, min(MAX_HEIGHT, sum(heights) + 0.35)),
                         layout="constrained")
-    gs = fig.add_gridspec(rows, npp)
-    ax = fig.add_subplot(gs[0, :])
-    for i in range(n):
-        s = series(i)
-        ax.plot(t, q[:, i], lw=1.0, color=s["color"], ls=s["ls"], label=dofs[i])
-    if it.size:
-        ax.plot(it, np.full(it.size, np.nanmin(q) if q.size else 0.0), "k|", ms=8,
-                label="impacts")
-    _shade(ax, sticking, label="sticking")
-    ax.set_xlabel("$t$ (time)")
-    ax.set_ylabel("position (length)")
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
-    if title:
-        ax.set_title(title)
-    if contacts:
-        axg = fig.add_subplot(gs[1, :], sharex=ax)
-        pre = None if impact_states is None else np.asarray(impact_states, float)
+    gs = fig.add_gridspec(len(heights), pcol, height_ratios=heights)
+    row = 0
+    first = None
+    for g, idx in enumerate(pos_groups):
+        ax = fig.add_subplot(gs[row, :], sharex=first)
+        first = first or ax
+        row += 1
+        for i in idx:
+            s = series(i - idx[0])
+            ax.plot(t, q[:, i], lw=1.0, color=s["color"], ls=s["ls"], label=dofs[i])
+        if it.size and g == 0:
+            ax.plot(it, np.full(it.size, np.nanmin(q) if q.size else 0.0), "k|", ms=8,
+                    label="impacts")
+        _shade(ax, sticking, label="sticking" if g == 0 else None)
+        ax.set_ylabel("position (length)")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+        if g == 0 and title:
+            ax.set_title(title)
+    pre = None if impact_states is None else np.asarray(impact_states, float)
+    for g, idx in enumerate(gap_groups):
+        axg = fig.add_subplot(gs[row, :], sharex=first)
+        row += 1
         marked = False
-        for k, c in enumerate(contacts):
+        for k in idx:
+            c = contacts[k]
             w = c["normal"]
-            sk = series(k)
+            sk = series(k - idx[0])
             line, = axg.plot(t, q @ w, lw=1.0, color=sk["color"], ls=sk["ls"],
                              label=_gap_label(c, dofs, k))
             for b in (c["lo"], c["hi"]):
@@ -122,16 +148,22 @@ def _plot_samples(t, q, v, *, dofs, contacts, impact_times, impact_contacts, imp
                 axg.plot(it[sel], y, "|", color="k", ms=8, label=None if marked else "impacts")
                 marked = True
         _shade(axg, sticking)
-        axg.set_xlabel("$t$ (time)")
         axg.set_ylabel("gap (length)")
         axg.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
-    for i in range(npp):
-        axp = fig.add_subplot(gs[rows - 1, i])
+    for ax in fig.axes:
+        ax.set_xlabel("$t$ (time)" if ax is fig.axes[-1] else "")
+        if ax is not fig.axes[-1]:
+            ax.tick_params(labelbottom=False)
+    if not phase:
+        fig.axes[-1].set_xlabel(f"$t$ (time); phase portraits are drawn for at most "
+                                f"{_MAX_PHASE} DOFs ({n} here)")
+    for i in range(n if phase else 0):
+        axp = fig.add_subplot(gs[row + i // pcol, i % pcol])
         s = series(i)
         axp.plot(q[:, i], v[:, i], lw=0.8, color=s["color"], ls=s["ls"])
-        axp.set_xlabel(f"{dofs[i]} (length)")
-        axp.set_ylabel(f"d{dofs[i]}/dt (length/time)")
         axp.set_title(f"phase portrait: {dofs[i]}")
+        axp.set_xlabel("position (length)")
+        axp.set_ylabel("velocity (length/time)" if i % pcol == 0 else "")
     if fig.get_layout_engine() is None:
         fig.tight_layout()
     return fig
@@ -152,8 +184,16 @@ def _gap_label(c, dofs, k):
 
 
 def _shade(ax, sticking, label=None):
-    for k, s in enumerate(sticking):
-        ax.axvspan(s[0], s[1], facecolor="#D55E00", alpha=0.15, hatch="//", edgecolor="none",
+    # overlapping intervals of several contacts are shaded once: stacked translucent spans
+    # would darken where more contacts stick, which the legend does not explain
+    merged = []
+    for a, b in sorted((float(s[0]), float(s[1])) for s in sticking):
+        if merged and a <= merged[-1][1]:
+            merged[-1][1] = max(merged[-1][1], b)
+        else:
+            merged.append([a, b])
+    for k, (a, b) in enumerate(merged):
+        ax.axvspan(a, b, facecolor="#D55E00", alpha=0.15, hatch="//", edgecolor="none",
                    label=label if k == 0 else None)
 
 
