@@ -220,9 +220,30 @@ def add_model_section(p, *, period_help="returns to the section per orbit (k of 
     p.add_argument("--event", default="impact", choices=["impact", "release"],
                    help="--model: section on the contact's impacts, or on the ends of its "
                         "sticking phases (once per burst of impacts)")
-    p.add_argument("--period", type=int, default=1, help=f"--model: {period_help}")
+    p.add_argument("--period", type=period_arg, default="auto", metavar="{auto,K}",
+                   help=f"--model: {period_help}; 'auto' (default): the neighbours' or 1, "
+                        "then every K <= 4 after which the simulated motion returns with "
+                        "whole reference periods (the result says which K)")
+    p.add_argument("--mode", default=None, metavar="MODE",
+                   help="--model: the mode in which the section's guard fires, e.g. "
+                        "'stick0+1+' when contact 0 releases while contact 1 is held "
+                        "(default: the one the simulated motion takes)")
     p.add_argument("--periods", type=int, default=None,
                    help="--model: reference periods per orbit (default: any whole number)")
+
+
+def period_arg(text: str):
+    """``--period``: ``auto`` or a whole number >= 1 (argparse type)."""
+    if text == "auto":
+        return text
+    try:
+        k = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be 'auto' or an integer >= 1, got {text!r}") \
+            from None
+    if k < 1:
+        raise argparse.ArgumentTypeError(f"must be 'auto' or an integer >= 1, got {k}")
+    return k
 
 
 def clearance(args):

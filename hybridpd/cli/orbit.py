@@ -170,13 +170,11 @@ def _run_model(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.model_orbits import orbit_from_model
 
-    if args.period < 1:
-        raise UsageError(f"--period must be >= 1, got {args.period}")
     model = model_of(args)
     try:
         orb, P = orbit_from_model(model, args.contact, args.wall, args.period,
                                   guess=args.guess, transient=args.transient,
-                                  event=args.event, periods=args.periods)
+                                  event=args.event, periods=args.periods, mode=args.mode)
     except ValueError as exc:
         why = _transient_diverged(model, args) if args.guess is None else None
         if why is None:
@@ -188,9 +186,11 @@ def _run_model(args) -> int:
     if args.json:
         print_json(d)
         return _report(status, orb.reason)
-    print(f"{model.source}: period-{orb.period} orbit on contact {args.contact} "
-          f"(wall {d['wall']:+d}): {orb.reason} after {orb.iterations} Newton iterations "
-          f"(residual {orb.residual:.3g})")
+    k = (f"{orb.period} return{'s' if orb.period != 1 else ''} to the section per period"
+         if orb.converged else f"period {orb.period}")
+    print(f"{model.source}: orbit on contact {args.contact} (wall {d['wall']:+d}, "
+          f"{args.event} in mode {P.section.mode}, {k}): {orb.reason} after "
+          f"{orb.iterations} Newton iterations (residual {orb.residual:.3g})")
     print("  section point: " + ", ".join(f"{k} = {v:.10g}" for k, v in zip(orb.names, orb.s)))
     sig = orb.signature
     if args.full_sequence:
@@ -217,8 +217,8 @@ def _model_record(model, orb, P, args) -> dict:
     n = model.system.n
     lay = model.automaton.layout
     z = orb.z
-    pk = sec.automaton.packed
-    zp = (pk.Rh[sec.mode_index, sec.guard_index] @ np.append(z, 1.0))[:-1]
+    reset = sec.automaton.mode(sec.mode).guards[sec.guard_index].reset
+    zp = z if reset is None else reset[0] @ z + reset[1]
 
     def mech(x):      # [q_1, v_1, ..., q_n, v_n]
         return [float(x[lay["q"][i]]) if j == 0 else float(x[lay["v"][i]])
@@ -226,7 +226,8 @@ def _model_record(model, orb, P, args) -> dict:
 
     d.update({"model": model.source, "contact": args.contact,
               "wall": 1 if sec.guard.endswith("+") else -1, "event": args.event,
-              "T": sec.period, "phi0": float(orb.s[0]) if sec.has_phase else None,
+              "section_mode": sec.mode, "T": sec.period,
+              "phi0": float(orb.s[0]) if sec.has_phase else None,
               "t0": float(orb.s[0]) if sec.has_phase else 0.0, "n": orb.period,
               "pre": mech(z), "post": mech(zp)})
     return d
@@ -246,7 +247,7 @@ def _transient_diverged(model, args) -> str | None:
         return None
     transient = args.transient
     if transient is None:   # orbit_from_model's default
-        transient = 50.0 * sec.period if sec.has_phase else 200.0
+        transient = 50.0 * sec.reference_period if sec.has_phase else 200.0
     tr = model.simulate(model.t0 + float(transient))
     if tr.termination in ("diverged", "nonfinite"):
         return (f"the transient simulation from the file's initial state stopped at "

@@ -87,7 +87,8 @@ def _run_model(args) -> int:
                           wall=args.wall, event=args.event, period=args.period,
                           periods=args.periods, tile=args.tile, executor=cli.executor_of(args),
                           max_workers=args.workers, store=args.store,
-                          progress=cli.progress_wanted(args))
+                          progress=cli.progress_wanted(args),
+                          options={"mode": args.mode} if args.mode else None)
     rm = cli.stamp_controllers(rm, args)
     if args.out:
         rm.save(args.out)

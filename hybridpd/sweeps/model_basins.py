@@ -207,7 +207,8 @@ def _find_attractor(P, s, max_period, known, n_transient=200):
 
 def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
                 wall: int | None = None, event: str = "impact", period="auto",
-                periods: int | None = None, n_iter: int = 300, criterion: float = 1e-3,
+                periods: int | None = None, mode: str | None = None, n_iter: int = 300,
+                criterion: float = 1e-3,
                 max_period: int = 4, max_attractors: int = 4, executor="serial",
                 max_workers=None, progress: bool = False) -> ModelBasin:
     """Basin of a model file's periodic orbit on a 2-D slice of its section, by attractor.
@@ -220,9 +221,10 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
         ``"motor_dot"``; ``phi`` is the reference phase) and its grid.
     values : dict, optional
         ``{dotted path: value}`` set in the file first (e.g. ``{"controller.kp": 30}``).
-    contact, wall, event, period, periods
+    contact, wall, event, period, periods, mode
         The section and the orbit (as in :func:`~hybridpd.sweeps.model_regions.
-        model_region_map`).
+        model_region_map`; ``mode`` as in :class:`~hybridpd.analysis.model_orbits.
+        SectionSpec`).
     n_iter, criterion
         Iterations of ``P^k`` per point and the squared-distance criterion of convergence.
     max_period, max_attractors
@@ -245,7 +247,8 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
 
     template = template_of(model)
     m = template.model(values)
-    spec = SectionSpec(contact=contact, wall=wall, event=event, period=period, periods=periods)
+    spec = SectionSpec(contact=contact, wall=wall, event=event, period=period, periods=periods,
+                       mode=mode)
     res = solve_at(m, spec)
     if not res.orbits:
         raise ValueError(f"no periodic orbit of this section to take the basin of "

@@ -164,7 +164,8 @@ def _diagram_chunk(chunk, *, data, source, name, spec, iterations, keep, max_per
 
 
 def model_diagram(model, param, *, contact: int = 0, wall: int | None = None,
-                  event: str = "impact", period="auto", iterations: int = 300,
+                  event: str = "impact", period="auto", mode: str | None = None,
+                  iterations: int = 300,
                   keep: int = 50, max_period: int = 16, executor="serial", max_workers=None,
                   store=None, progress: bool = True) -> ModelDiagram:
     """A brute-force bifurcation diagram of a model file in one numeric entry.
@@ -176,7 +177,8 @@ def model_diagram(model, param, *, contact: int = 0, wall: int | None = None,
         ``(KEY, MIN, MAX, NUM)``: a dotted path and its values.
     contact, wall, event, period
         The section, in whichever mode the motion crosses it at each value (``period``: the
-        diagram iterates ``P^k``; ``"auto"`` iterates ``P`` and detects the period).
+        diagram iterates ``P^k``; ``"auto"`` iterates ``P`` and detects the period; ``mode``
+        fixes the section's mode, as in :class:`~hybridpd.analysis.model_orbits.SectionSpec`).
     iterations, keep, max_period
         Iterations per value, points kept, largest period detected.
     executor, max_workers, store, progress
@@ -197,7 +199,7 @@ def model_diagram(model, param, *, contact: int = 0, wall: int | None = None,
                          f"{iterations!r}")
     if not 1 <= int(max_period) < keep:
         raise ValueError(f"max_period must be in [1, keep), got {max_period!r}")
-    spec = SectionSpec(contact=contact, wall=wall, event=event, period=period)
+    spec = SectionSpec(contact=contact, wall=wall, event=event, period=period, mode=mode)
     base = template.model()
     try:
         P = spec.section_map(base, simulated_returns(base, spec).mode)
