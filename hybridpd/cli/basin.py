@@ -45,7 +45,8 @@ def register(sub):
     p.add_argument("--y", nargs=4, default=None, metavar=("COORD", "MIN", "MAX", "NUM"),
                    help="--model: second grid axis (as --x)")
     p.add_argument("--set", nargs=2, action="append", default=None, metavar=("KEY", "VALUE"),
-                   help="--model: set a numeric entry of the file (dotted path) first; "
+                   help="--model: set a numeric entry of the file (dotted path; a pattern "
+                        "controller.*.kp or a list a.b,c.d sets every entry it matches) first; "
                         "repeatable")
     p.add_argument("--x1", type=float, nargs=3, default=None, metavar=("MIN", "MAX", "NUM"),
                    help="slice window in x1 (default: the reproduction's, -3 x10 .. 5 x10, "

@@ -49,7 +49,8 @@ def register(sub):
                    help="--model: time of that simulation (default 50 periods)")
     p.add_argument("--set", nargs=2, action="append", default=None, metavar=("KEY", "VALUE"),
                    help="--model: set a numeric entry of the file by its dotted path "
-                        "(controller.kp, contact.0.restitution, ...) first; repeatable")
+                        "(controller.kp, contact.0.restitution, ...; a pattern controller.*.kp "
+                        "or a list a.b,c.d sets every entry it matches) first; repeatable")
     p.add_argument("--json", action="store_true", help=JSON_HELP)
     p.set_defaults(func=run)
 
