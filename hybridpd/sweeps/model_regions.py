@@ -442,7 +442,9 @@ def model_region_map(model, x, y, *, contact: int = 0, wall: int | None = None,
         The model file (or its parsed tables).
     x, y : (str, float, float, int)
         ``(KEY, MIN, MAX, NUM)``: a dotted path of a numeric entry of the file
-        (``"controller.kp"``) and its grid (``NUM >= 2`` points, ``MIN < MAX``).
+        (``"controller.kp"``) and its grid (``NUM >= 2`` points, ``MIN < MAX``); a pattern
+        (``"controller.*.kp"``) or a comma-separated list of paths sets every entry it
+        matches, and names the axis as given. The two axes set different entries.
     contact, wall, event, period, periods
         The section and the orbits sought (:class:`~hybridpd.analysis.model_orbits.
         SectionSpec`): contact ``contact``'s impacts (``event="impact"``) or sticking
