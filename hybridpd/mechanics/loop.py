@@ -506,9 +506,11 @@ def mechanical_loop(system: MechanicalSystem, controller, reference: Reference |
         chans = (ControlChannel(controller, measure, None, None, measure_velocity, delay),)
         where = [""]
     resolved = [_resolve(system, ch, reference, w) for ch, w in zip(chans, where)]
-    if method == "interconnect" and (len(resolved) > 1 or resolved[0][0].dt):
-        raise ValueError("method='interconnect' builds one continuous controller; write the "
-                         "others out (method='auto')")
+    if method == "interconnect" and len(resolved) > 1:
+        raise ValueError("method='interconnect' builds one continuous controller; write "
+                         "several out (method='auto')")
+    if resolved[0][0].dt:
+        method = "auto"         # a sampled-data loop has no interconnection to choose
     return _build(system, resolved, reference, method)
 
 
