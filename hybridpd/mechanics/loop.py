@@ -327,8 +327,9 @@ class MechanicalLoop:
 
     @property
     def forces(self) -> np.ndarray:
-        """Every controller's force ``u_i = forces[i] @ z``, shape ``(m, N)``."""
-        return np.array([ch.force for ch in self.channels])
+        """Every controller's force ``u_i = forces[i] @ z``, shape ``(m, N)``; the first row
+        is :attr:`force`."""
+        return np.array([self.force] + [ch.force for ch in self.channels[1:]])
 
     @property
     def references(self) -> tuple:
