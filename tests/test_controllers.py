@@ -253,6 +253,8 @@ def test_channel_and_loop_errors_name_the_parameter():
                         method="interconnect")
     with pytest.raises(ValueError, match="no input direction B"):
         _ = sysm.Minv_B
+    with pytest.raises(ValueError, match="no input direction B: give MechanicalSystem"):
+        mechanical_loop(sysm, (1.0, 1.0), ref, "x")          # the one-controller signature
 
 
 def test_common_and_reference_periods():

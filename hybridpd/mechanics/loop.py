@@ -525,8 +525,11 @@ def _resolve(system, ch: ControlChannel, reference, where):
         a = _direction(system, ch.actuate, f"{pre}actuate")
     elif system.B is not None:
         a = system.B
-    else:
+    elif where:
         raise ValueError(f"{pre}actuate is required: the system has no input direction B")
+    else:
+        raise ValueError("the system has no input direction B: give MechanicalSystem(B=...) "
+                         "or the controller as a ControlChannel with actuate")
     ref = ch.reference if ch.reference is not None else reference
     if ref is None:
         raise ValueError(f"{pre}reference is required (none given for the loop either)")
