@@ -131,7 +131,8 @@ def add_set(p):
     """``--set KEY VALUE`` (repeatable): a model file's entries set before the run."""
     p.add_argument("--set", nargs=2, action="append", default=None, metavar=("KEY", "VALUE"),
                    help="--model: set the file's numeric entry KEY (a dotted path, see "
-                        "--list-params) to VALUE first; repeatable")
+                        "--list-params; a pattern controller.*.kp or a list a.b,c.d sets "
+                        "every entry it matches) to VALUE first; repeatable")
 
 
 def set_values(args) -> dict:

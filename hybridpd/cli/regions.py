@@ -34,7 +34,8 @@ def register(sub):
     cli.add_model_section(p, uses="--x KEY and --y KEY sweep two of them")
     p.add_argument("--x", nargs=4, default=None, metavar=("KEY", "MIN", "MAX", "NUM"),
                    help="--model: grid axis over the file's entry KEY (a dotted path such as "
-                        "controller.kp, contact.0.restitution, system.masses.2; "
+                        "controller.kp, contact.0.restitution, system.masses.2; a pattern "
+                        "controller.*.kp or a list a.b,c.d sets every entry it matches; "
                         "--list-params lists them)")
     p.add_argument("--y", nargs=4, default=None, metavar=("KEY", "MIN", "MAX", "NUM"),
                    help="--model: second grid axis (as --x)")

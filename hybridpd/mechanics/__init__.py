@@ -2,7 +2,8 @@
 
 ``MechanicalSystem`` (``M q'' + C q' + K q = B u``) and its ``Contact`` list (rigid Newton or
 compliant Kelvin-Voigt) are closed by any python-control controller
-(:func:`mechanical_loop`, continuous or sampled-data) and compiled into the project's hybrid
+(:func:`mechanical_loop`, continuous or sampled-data, one controller or several, each a
+:class:`ControlChannel`) and compiled into the project's hybrid
 automaton (:func:`build_automaton`); :func:`simulate` runs it.
 """
 from hybridpd.mechanics.automaton import (
@@ -12,14 +13,22 @@ from hybridpd.mechanics.automaton import (
     build_automaton,
 )
 from hybridpd.mechanics.contacts import Contact
-from hybridpd.mechanics.loop import MechanicalLoop, Reference, mechanical_loop
+from hybridpd.mechanics.loop import (
+    ControlChannel,
+    LoopChannel,
+    MechanicalLoop,
+    Reference,
+    mechanical_loop,
+)
 from hybridpd.mechanics.modelfile import MechanicalModel, load_model, model_from_dict
 from hybridpd.mechanics.simulate import MechanicalTrajectory, simulate, simulate_state
 from hybridpd.mechanics.system import MechanicalSystem
 
 __all__ = [
     "Contact",
+    "ControlChannel",
     "GuardInfo",
+    "LoopChannel",
     "MechanicalAutomaton",
     "MechanicalLoop",
     "MechanicalModel",

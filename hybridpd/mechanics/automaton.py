@@ -48,8 +48,10 @@ Guards (``g > 0`` admissible, all with ``direction = -1`` except sampling):
   sticking cannot leave the flow outside a gap), target the mode sticking on ``S - {k}``.
 * ``enter{j}{+|-}`` / ``leave{j}{+|-}`` (compliant ``j``): the penetration changes sign;
   identity reset, target the configuration with ``j`` engaged / released.
-* ``sample`` (sampled-data loops): ``g = s - dt`` with ``direction = +1`` on the clock; reset
-  :attr:`MechanicalLoop.sample_reset`; target the same mode.
+* ``sample`` (sampled-data loops; ``sample{i}`` per sampled controller ``i`` when several
+  are sampled): ``g = s - dt`` with ``direction = +1`` on that controller's clock; reset its
+  own sampling jump (:attr:`LoopChannel.sample_reset
+  <hybridpd.mechanics.loop.LoopChannel.sample_reset>`); target the same mode.
 
 Priorities for simultaneous events: impacts and compliant switches 2, releases 1, samples 0.
 
@@ -103,12 +105,19 @@ class GuardInfo:
 
     ``kind`` is ``'impact'``, ``'release'``, ``'enter'``, ``'leave'`` or ``'sample'``;
     ``contact`` the 0-based contact index (``-1`` for ``'sample'``); ``wall`` ``+1`` at ``hi``,
-    ``-1`` at ``lo`` (0 for ``'sample'``).
+    ``-1`` at ``lo`` (0 for ``'sample'``); ``controller`` the index of the controller a
+    ``'sample'`` guard samples (``-1`` for the other kinds).
     """
 
     kind: str
     contact: int
     wall: int
+    controller: int = -1
+
+    def __repr__(self):
+        extra = f", controller={self.controller}" if self.kind == "sample" else ""
+        return (f"GuardInfo(kind={self.kind!r}, contact={self.contact}, wall={self.wall}"
+                f"{extra})")
 
 
 @dataclass(frozen=True, eq=False)  # array fields: identity semantics
@@ -283,12 +292,18 @@ def _mode_name(config, stick):
 
 
 class _LoopData:
-    """The parts of a :class:`MechanicalLoop` that building a mode reads."""
+    """The parts of a :class:`MechanicalLoop` that building a mode reads.
+
+    ``samplers``: per sampled controller ``(guard name, controller index, clock index, dt,
+    reset)``; ``sample_guards``: guard name -> controller index.
+    """
 
     def __init__(self, loop):
         self.system, self.A, self.b = loop.system, loop.A, loop.b
         self.layout, self.n_states = loop.layout, loop.n_states
-        self.sampled, self.dt, self.sample_reset = loop.sampled, loop.dt, loop.sample_reset
+        self.samplers = tuple((ch.guard, ch.index, ch.clock, ch.dt, ch.sample_reset)
+                              for ch in loop.channels if ch.sampled)
+        self.sample_guards = {g: i for g, i, *_ in self.samplers}
 
 
 class _Geometry:
@@ -459,7 +474,8 @@ def build_automaton(loop: MechanicalLoop, contacts, max_modes: int = 4096
     ha = HybridAutomaton([builder(free)], state_names=loop.state_names, mode_builder=builder,
                          max_modes=max_modes, zeno=ZenoOptions(tail_tol=ZENO_TAIL_TOL))
     return MechanicalAutomaton(automaton=ha, loop=loop, contacts=contacts,
-                               modes=_ModeTable(ha, contacts, geo), guards=_GuardTable(ha),
+                               modes=_ModeTable(ha, contacts, geo),
+                               guards=_GuardTable(ha, geo.loop.sample_guards),
                                gap_rows=geo.gap, impact_resets=_ResetTable(geo, "impact"),
                                plastic_resets=_ResetTable(geo, "plastic"), free_mode=free,
                                _geometry=geo)
@@ -550,8 +566,9 @@ class _ModeTable(Mapping):
 class _GuardTable(Mapping):
     """``(mode, guard)`` -> :class:`GuardInfo`, parsed from the guard name."""
 
-    def __init__(self, ha):
+    def __init__(self, ha, sample_guards):
         self._ha = ha
+        self._samples = dict(sample_guards)    # sampling guard name -> controller index
         self._cache = {}   # guard name -> GuardInfo: a trajectory asks once per jump
 
     def __getitem__(self, key):
@@ -562,8 +579,8 @@ class _GuardTable(Mapping):
         info = self._cache.get(gname)
         if info is not None:
             return info
-        if gname == "sample":
-            info = GuardInfo("sample", -1, 0)
+        if gname in self._samples:
+            info = GuardInfo("sample", -1, 0, self._samples[gname])
         else:
             m = _GUARD_RE.match(str(gname))
             if m is None:
@@ -652,9 +669,8 @@ def _guards(geo, config, stick, lam_rows, lam_b):
         out.append(Guard(gname, c=-wall * lam_rows[i], d=-wall * float(lam_b[i]) + margin,
                          direction=-1, reset=geo.projection(stick),
                          target=_mode_name(config, rest), priority=1))
-    if loop.sampled:
+    for gname, _, clock, dt, reset in loop.samplers:
         cl = np.zeros(loop.n_states)
-        cl[loop.layout["clock"]] = 1.0
-        out.append(Guard("sample", c=cl, d=-loop.dt, direction=+1, reset=loop.sample_reset,
-                         priority=0))
+        cl[clock] = 1.0
+        out.append(Guard(gname, c=cl, d=-dt, direction=+1, reset=reset, priority=0))
     return out

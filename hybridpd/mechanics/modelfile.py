@@ -1,6 +1,9 @@
-"""Model files: a mechanical system, its contacts, controller, reference and initial state.
+"""Model files: a mechanical system, its contacts, controllers, references and initial state.
 
-TOML layout (every key is checked; a bad file raises ``ValueError`` naming the key)::
+The full schema (every key, its type, default and unit, and the discretisation of each
+controller type) is the user guide's page "Model files" (``docs/guide/model_files.rst``).
+In short (every key is checked; a bad file raises ``ValueError`` naming the key by its dotted
+path, e.g. ``controller.1.actuate``)::
 
     [system]
     dofs = ["load", "gear", "motor"]     # unique names, n = len(dofs)
@@ -8,7 +11,7 @@ TOML layout (every key is checked; a bad file raises ``ValueError`` naming the k
     # masses = [m_1, ..., m_n]           # or a diagonal M (not both)
     damping = [[...]]                    # C (optional, zeros)
     stiffness = [[...]]                  # K (optional, zeros)
-    input = [0.0, 0.0, 1.0]              # B (n,), required
+    input = [0.0, 0.0, 1.0]              # B (n,): where a controller without actuate acts
 
     [[contact]]                          # one of: between = [a, b] (gap q_a - q_b),
     between = ["load", "gear"]           #   dof = "name" (gap q_dof), normal = [w_1..w_n]
@@ -16,15 +19,17 @@ TOML layout (every key is checked; a bad file raises ``ValueError`` naming the k
     hi = 0.75
     restitution = 0.5                    # rigid; or stiffness = k, damping = c (compliant)
 
-    [controller]
+    [controller]                         # one controller; or repeated [[controller]] tables
     type = "pd"                          # "pd" (kp, kv) | "pid" (kp, ki, kd, filter_time)
                                          #   | "tf" (num, den) | "ss" (A, B, C, D)
     kp = 10.0
     kv = 20.0
     measure = "gear"                     # DOF name (or a list of n weights)
+    # actuate = "motor"                  # where its force acts (default: [system] input)
     # measure_velocity = "motor"         # velocity sensor elsewhere (default: as measure)
     # dt = 0.001                         # discrete-time controller, zero-order hold
     # delay = 0                          # input delay in whole samples (with dt)
+    # [controller.reference]             # its own reference (default: [reference])
 
     [reference]                          # "sine" | "constant" | "sum_of_sines"; optional
     type = "sine"                        #   (default: constant 0)
@@ -37,14 +42,20 @@ TOML layout (every key is checked; a bad file raises ``ValueError`` naming the k
     v = [0.5, 0.0, 0.0]                  # default zeros
     t0 = 0.0                             # default 0
 
-Semantics: ``u = feedforward_mass xd'' + kp (xd - q_m) + kv (xd' - v_m)`` along ``input``
+Semantics: ``u = feedforward_mass xd'' + kp (xd - q_m) + kv (xd' - v_m)`` along ``actuate``
 (``pid``: ``u_fb = kp err + ki int(err) + kd d``, ``d`` the derivative ``err_dot`` through
 a first-order filter ``d' = (err_dot - d) / filter_time``, unfiltered when ``filter_time``
 is 0 or absent; ``ki``, ``kd`` default 0; with ``dt`` the same controller sampled with a
 zero-order hold, i.e. its exact discretisation at the sampling instants)
 (``tf``: from ``err = xd - y``; ``ss``: from ``err`` or ``[err, err_dot]``, by the number of
-inputs); ``sine`` is ``xd = amplitude cos(omega t)`` in absolute time, ``constant`` is
-``xd = value``, ``sum_of_sines`` is ``sum amplitudes[i] cos(omegas[i] t)``.
+inputs; with ``dt`` both are taken as discrete-time as written); ``sine`` is
+``xd = amplitude cos(omega t)`` in absolute time, ``constant`` is ``xd = value``,
+``sum_of_sines`` is ``sum amplitudes[i] cos(omegas[i] t)``.
+
+``[system] input`` next to the controllers: it is the direction of every controller that
+gives no ``actuate``; it is required when some controller omits ``actuate`` and refused when
+none does (it would act nowhere). A single ``[controller]`` table without ``actuate`` with
+``input`` is the file format of one controller, unchanged.
 """
 from __future__ import annotations
 
@@ -58,7 +69,7 @@ from hybridpd._repr import compact_repr
 from hybridpd.loop import Controller
 from hybridpd.mechanics.automaton import MechanicalAutomaton, build_automaton
 from hybridpd.mechanics.contacts import Contact
-from hybridpd.mechanics.loop import Reference, mechanical_loop
+from hybridpd.mechanics.loop import ControlChannel, Reference, mechanical_loop
 from hybridpd.mechanics.system import MechanicalSystem
 
 if sys.version_info >= (3, 11):
@@ -73,7 +84,8 @@ _TABLES = {
     "contact": {"between", "dof", "normal", "lo", "hi", "restitution", "stiffness", "damping",
                 "name"},
     "controller": {"type", "kp", "kv", "num", "den", "A", "B", "C", "D", "measure",
-                   "measure_velocity", "dt", "delay", "ki", "kd", "filter_time"},
+                   "measure_velocity", "actuate", "dt", "delay", "ki", "kd", "filter_time",
+                   "reference"},
     "reference": {"type", "amplitude", "omega", "feedforward_mass", "value", "amplitudes",
                   "omegas"},
     "initial": {"q", "v", "t0"},
@@ -81,6 +93,7 @@ _TABLES = {
 _CTRL_KEYS = {"pd": {"kp", "kv"}, "tf": {"num", "den"}, "ss": {"A", "B", "C", "D"},
               "pid": {"kp", "ki", "kd", "filter_time"}}
 _CTRL_OPTIONAL = {"ss": {"A"}, "pid": {"ki", "kd", "filter_time"}}
+_CTRL_COMMON = {"type", "measure", "measure_velocity", "actuate", "dt", "delay", "reference"}
 _REF_KEYS = {"sine": {"amplitude", "omega", "feedforward_mass"}, "constant": {"value"},
              "sum_of_sines": {"amplitudes", "omegas", "feedforward_mass"}}
 
@@ -199,10 +212,16 @@ def model_from_dict(data: dict, source: str = "<dict>") -> MechanicalModel:
     if not isinstance(raw, list):
         raise ValueError("contact: must be an array of tables [[contact]]")
     contacts = tuple(_contact(f"contact[{i}]", c, system) for i, c in enumerate(raw))
-    reference = _reference(data.get("reference", {"type": "constant", "value": 0.0}))
-    controller, measure, measure_v, delay = _controller(data["controller"], system)
-    loop = _reraise("controller", mechanical_loop, system, controller, reference, measure,
-                    delay, measure_v)
+    reference = _reference(data.get("reference", {"type": "constant", "value": 0.0}),
+                           "reference")
+    tables = _controller_tables(data["controller"])
+    system = _actuation(data["system"], system, tables)
+    channels = [_controller(where, t, system) for where, t in tables]
+    # the loop's reference is the file's; without a [reference] table it is the first
+    # controller's own (so that a phase is read from what is tracked)
+    own = all(ch.reference is not None for ch in channels)
+    loop = _reraise("controller", mechanical_loop, system, channels,
+                    None if own and "reference" not in data else reference)
     model = build_automaton(loop, contacts)
     x0, t0 = _initial(data.get("initial", {}), system)
     z0 = loop.initial_state(x0[0::2], x0[1::2], t0)
@@ -235,9 +254,7 @@ def _system(t) -> MechanicalSystem:
         raise ValueError("system.mass: required (or masses)")
     C = _array("system.damping", t["damping"], (n, n)) if "damping" in t else None
     K = _array("system.stiffness", t["stiffness"], (n, n)) if "stiffness" in t else None
-    if "input" not in t:
-        raise ValueError(f"system.input: required (B, {n} numbers)")
-    B = _array("system.input", t["input"], (n,))
+    B = _array("system.input", t["input"], (n,)) if "input" in t else None
     try:
         return MechanicalSystem(tuple(dofs), M, C, K, B)
     except ValueError as exc:
@@ -295,115 +312,153 @@ def _contact(where, t, system) -> Contact:
                     t.get("stiffness"), t.get("damping"), name)
 
 
-def _reference(t) -> Reference:
-    _check_keys("reference", t, _TABLES["reference"])
+def _reference(t, where) -> Reference:
+    _check_keys(where, t, _TABLES["reference"])
     kind = t.get("type", "sine")
     if kind not in _REF_KEYS:
-        raise ValueError(f"reference.type: must be one of {sorted(_REF_KEYS)}, got {kind!r}")
+        raise ValueError(f"{where}.type: must be one of {sorted(_REF_KEYS)}, got {kind!r}")
     extra = sorted(set(t) - _REF_KEYS[kind] - {"type"})
     if extra:
-        raise ValueError(f"reference.{extra[0]}: not a key of type {kind!r}")
+        raise ValueError(f"{where}.{extra[0]}: not a key of type {kind!r}")
     ff = t.get("feedforward_mass", 0.0)
     if kind == "sine":
         for k in ("amplitude", "omega"):
             if k not in t:
-                raise ValueError(f"reference.{k}: required for type 'sine'")
-        a = float(_array("reference.amplitude", t["amplitude"], ()))
-        w = float(_array("reference.omega", t["omega"], ()))
+                raise ValueError(f"{where}.{k}: required for type 'sine'")
+        a = float(_array(f"{where}.amplitude", t["amplitude"], ()))
+        w = float(_array(f"{where}.omega", t["omega"], ()))
         if a < 0:
-            raise ValueError(f"reference.amplitude: must be >= 0, got {a!r}")
+            raise ValueError(f"{where}.amplitude: must be >= 0, got {a!r}")
         if not w > 0:
-            raise ValueError(f"reference.omega: must be > 0, got {w!r}")
-        _array("reference.feedforward_mass", ff, ())
-        return _reraise("reference.feedforward_mass", Reference.sine, a, w, ff)
+            raise ValueError(f"{where}.omega: must be > 0, got {w!r}")
+        _array(f"{where}.feedforward_mass", ff, ())
+        return _reraise(f"{where}.feedforward_mass", Reference.sine, a, w, ff)
     if kind == "constant":
         if "value" not in t:
-            raise ValueError("reference.value: required for type 'constant'")
-        return Reference.constant(float(_array("reference.value", t["value"], ())))
+            raise ValueError(f"{where}.value: required for type 'constant'")
+        return Reference.constant(float(_array(f"{where}.value", t["value"], ())))
     for k in ("amplitudes", "omegas"):
         if k not in t:
-            raise ValueError(f"reference.{k}: required for type 'sum_of_sines'")
-    a = _array("reference.amplitudes", t["amplitudes"])
-    w = _array("reference.omegas", t["omegas"], a.shape)
+            raise ValueError(f"{where}.{k}: required for type 'sum_of_sines'")
+    a = _array(f"{where}.amplitudes", t["amplitudes"])
+    w = _array(f"{where}.omegas", t["omegas"], a.shape)
     if a.ndim != 1:
-        raise ValueError("reference.amplitudes: must be a list of numbers")
+        raise ValueError(f"{where}.amplitudes: must be a list of numbers")
     if np.any(a < 0) or np.any(w <= 0):
-        raise ValueError("reference.omegas: amplitudes must be >= 0 and omegas > 0")
-    return _reraise("reference.feedforward_mass", Reference.sum_of_sines, a, w, ff)
+        raise ValueError(f"{where}.omegas: amplitudes must be >= 0 and omegas > 0")
+    return _reraise(f"{where}.feedforward_mass", Reference.sum_of_sines, a, w, ff)
 
 
-def _controller(t, system):
-    _check_keys("controller", t, _TABLES["controller"])
+def _controller_tables(raw):
+    """``[(where, table)]``: a single ``[controller]`` table is ``controller``, repeated
+    ``[[controller]]`` tables are ``controller.0``, ``controller.1``, ..."""
+    if isinstance(raw, dict):
+        return [("controller", raw)]
+    if isinstance(raw, list) and raw and all(isinstance(t, dict) for t in raw):
+        return [(f"controller.{i}", t) for i, t in enumerate(raw)]
+    raise ValueError("controller: must be a table [controller] or a non-empty array of tables "
+                     "[[controller]]")
+
+
+def _actuation(table, system, tables):
+    """Check ``[system] input`` against the controllers' ``actuate`` (module docstring)."""
+    omit = [where for where, t in tables if isinstance(t, dict) and "actuate" not in t]
+    if "input" in table and not omit:
+        raise ValueError("system.input: not used: every controller gives actuate (remove "
+                         "input, or leave actuate out of the controllers that act along it)")
+    if "input" not in table and omit:
+        if len(tables) == 1 and "actuate" not in tables[0][1]:
+            raise ValueError(f"system.input: required (B, {system.n} numbers), or give "
+                             f"{omit[0]}.actuate")
+        raise ValueError(f"{omit[0]}.actuate: required (a DOF name or {system.n} weights): "
+                         "there is no [system] input to act along")
+    return system
+
+
+def _controller(where, t, system) -> ControlChannel:
+    """One ``[controller]`` / ``[[controller]]`` table as a :class:`ControlChannel`."""
+    _check_keys(where, t, _TABLES["controller"])
     kind = t.get("type")
     if kind not in _CTRL_KEYS:
-        raise ValueError(f"controller.type: must be one of {sorted(_CTRL_KEYS)}, got {kind!r}")
-    extra = sorted(set(t) - _CTRL_KEYS[kind]
-                   - {"type", "measure", "measure_velocity", "dt", "delay"})
+        raise ValueError(f"{where}.type: must be one of {sorted(_CTRL_KEYS)}, got {kind!r}")
+    extra = sorted(set(t) - _CTRL_KEYS[kind] - _CTRL_COMMON)
     if extra:
-        raise ValueError(f"controller.{extra[0]}: not a key of type {kind!r}")
+        raise ValueError(f"{where}.{extra[0]}: not a key of type {kind!r}")
     for k in sorted(_CTRL_KEYS[kind] - _CTRL_OPTIONAL.get(kind, set())):
         if k not in t:
-            raise ValueError(f"controller.{k}: required for type {kind!r}")
+            raise ValueError(f"{where}.{k}: required for type {kind!r}")
     if "measure" not in t:
-        raise ValueError("controller.measure: required (the measured DOF)")
-    measure = _measured(t, "measure", system)
-    measure_v = _measured(t, "measure_velocity", system) if "measure_velocity" in t else None
+        raise ValueError(f"{where}.measure: required (the measured DOF)")
+    measure = _measured(t, "measure", system, where)
+    measure_v = _measured(t, "measure_velocity", system, where) if "measure_velocity" in t \
+        else None
+    actuate = _measured(t, "actuate", system, where) if "actuate" in t else None
+    reference = _reference(t["reference"], f"{where}.reference") if "reference" in t else None
     dt = 0.0
     if "dt" in t:
-        dt = float(_array("controller.dt", t["dt"], ()))
+        dt = float(_array(f"{where}.dt", t["dt"], ()))
         if not dt > 0:
-            raise ValueError(f"controller.dt: must be > 0 (sampling period), got {t['dt']!r}")
+            raise ValueError(f"{where}.dt: must be > 0 (sampling period), got {t['dt']!r}")
     delay = t.get("delay", 0)
     if isinstance(delay, bool) or not isinstance(delay, int) or delay < 0:
-        raise ValueError(f"controller.delay: must be an integer >= 0, got {delay!r}")
+        raise ValueError(f"{where}.delay: must be an integer >= 0, got {delay!r}")
     if delay and not dt:
-        raise ValueError("controller.delay: needs a discrete-time controller (give dt)")
+        raise ValueError(f"{where}.delay: needs a discrete-time controller (give dt)")
     if kind == "pd":
-        kp = float(_array("controller.kp", t["kp"], ()))
-        kv = float(_array("controller.kv", t["kv"], ()))
+        kp = float(_array(f"{where}.kp", t["kp"], ()))
+        kv = float(_array(f"{where}.kv", t["kv"], ()))
         sysc = Controller(np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)),
                           np.array([[kp, kv]]), dt)
     elif kind == "pid":
-        sysc = _pid(t, dt)
+        sysc = _pid(t, dt, where)
     elif kind == "tf":
-        num = _array("controller.num", t["num"])
-        den = _array("controller.den", t["den"])
-        if num.ndim != 1 or den.ndim != 1 or not den.size or den[0] == 0:
-            raise ValueError("controller.den: num and den must be coefficient lists with a "
-                             "non-zero leading den coefficient")
-        if np.trim_zeros(num, "f").size > den.size:
-            raise ValueError("controller.num: improper transfer function (degree of num > "
-                             "degree of den) cannot be realised")
-        import control as ct  # deferred import: python-control realises transfer functions
-
-        sysc = ct.tf(num, den, dt)
+        sysc = _tf(t, dt, where)
     else:
-        D = np.atleast_2d(_array("controller.D", t["D"]))
-        if D.shape not in ((1, 1), (1, 2)):
-            raise ValueError(f"controller.D: must have shape (1, 1) or (1, 2), got {D.shape}")
-        m = D.shape[1]
-        if "A" in t and np.size(t["A"]):
-            A = np.atleast_2d(_array("controller.A", t["A"]))
-            k = A.shape[0]
-            if A.shape != (k, k):
-                raise ValueError(f"controller.A: must be square, got {A.shape}")
-            B = _array("controller.B", t["B"]).reshape(k, -1) if np.size(t["B"]) == k * m \
-                else _array("controller.B", t["B"], (k, m))
-            C = _array("controller.C", t["C"]).reshape(1, -1)
-            if C.shape != (1, k):
-                raise ValueError(f"controller.C: must have shape (1, {k}), got {C.shape}")
-        else:
-            A, B, C = np.zeros((0, 0)), np.zeros((0, m)), np.zeros((1, 0))
-        sysc = Controller(A, np.asarray(B, float), C, D, dt)
-    return sysc, measure, measure_v, delay
+        sysc = _ss(t, dt, where)
+    return _reraise(where, ControlChannel, sysc, measure, actuate, reference, measure_v, delay)
 
 
-def _pid(t, dt):
-    """The PID of a model file as a state-space controller from ``[err, err_dot]``."""
-    g = {k: float(_array(f"controller.{k}", t.get(k, 0.0), ())) for k in
+def _tf(t, dt, where):
+    num = _array(f"{where}.num", t["num"])
+    den = _array(f"{where}.den", t["den"])
+    if num.ndim != 1 or den.ndim != 1 or not den.size or den[0] == 0:
+        raise ValueError(f"{where}.den: num and den must be coefficient lists with a "
+                         "non-zero leading den coefficient")
+    if np.trim_zeros(num, "f").size > den.size:
+        raise ValueError(f"{where}.num: improper transfer function (degree of num > "
+                         "degree of den) cannot be realised")
+    import control as ct  # deferred import: python-control realises transfer functions
+
+    return ct.tf(num, den, dt)
+
+
+def _ss(t, dt, where):
+    D = np.atleast_2d(_array(f"{where}.D", t["D"]))
+    if D.shape not in ((1, 1), (1, 2)):
+        raise ValueError(f"{where}.D: must have shape (1, 1) or (1, 2), got {D.shape}")
+    m = D.shape[1]
+    if "A" in t and np.size(t["A"]):
+        A = np.atleast_2d(_array(f"{where}.A", t["A"]))
+        k = A.shape[0]
+        if A.shape != (k, k):
+            raise ValueError(f"{where}.A: must be square, got {A.shape}")
+        B = _array(f"{where}.B", t["B"]).reshape(k, -1) if np.size(t["B"]) == k * m \
+            else _array(f"{where}.B", t["B"], (k, m))
+        C = _array(f"{where}.C", t["C"]).reshape(1, -1)
+        if C.shape != (1, k):
+            raise ValueError(f"{where}.C: must have shape (1, {k}), got {C.shape}")
+    else:
+        A, B, C = np.zeros((0, 0)), np.zeros((0, m)), np.zeros((1, 0))
+    return Controller(A, np.asarray(B, float), C, D, dt)
+
+
+def _pid(t, dt, where="controller"):
+    """The PID of a model file as a state-space controller from ``[err, err_dot]``; with
+    ``dt`` its exact zero-order-hold discretisation (:meth:`Controller.sample`)."""
+    g = {k: float(_array(f"{where}.{k}", t.get(k, 0.0), ())) for k in
          ("kp", "ki", "kd", "filter_time")}
     if g["filter_time"] < 0:
-        raise ValueError(f"controller.filter_time: must be >= 0 (time units), got "
+        raise ValueError(f"{where}.filter_time: must be >= 0 (time units), got "
                          f"{g['filter_time']!r}")
     # states: the integral of err, then (with a filter) the filtered derivative
     A, B, C = [], [], []
@@ -424,12 +479,16 @@ def _pid(t, dt):
     return sysc.sample(dt) if dt else sysc
 
 
-def _measured(t, key, system):
+def _measured(t, key, system, where="controller"):
     m = t[key]
     if isinstance(m, str):
-        _reraise(f"controller.{key}", system.index, m)
+        _reraise(f"{where}.{key}", system.index, m)
         return m
-    return _array(f"controller.{key}", m, (system.n,))
+    w = _array(f"{where}.{key}", m, (system.n,))
+    if not np.any(w):
+        raise ValueError(f"{where}.{key}: all {system.n} weights are zero (give a DOF name or "
+                         "weights that are not all zero)")
+    return w
 
 
 def _initial(t, system):

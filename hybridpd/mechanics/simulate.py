@@ -230,8 +230,8 @@ def simulate_state(model: MechanicalAutomaton, z0, t_span, mode: str | None = No
         raise ValueError(f"mode must be a mode name such as 'free' or 'stick0+', got {mode!r}")
     loop = model.loop
     max_jumps = int(max_impacts)
-    if loop.sampled:
-        max_jumps += math.ceil((t1 - t0) / loop.dt) + 2
+    for _, dt in loop.clocks:        # every sampling instant of every sampled controller
+        max_jumps += math.ceil((t1 - t0) / dt) + 2
     if not (isinstance(time_tol, (int, float)) and math.isfinite(time_tol) and time_tol >= 0):
         raise ValueError(f"time_tol must be >= 0, got {time_tol!r}")
     if max_state is None:

@@ -5,7 +5,9 @@ Conventions
 * ``q`` are generalised coordinates (lengths or angles), ``n = len(dofs)``; the mechanical
   state is interleaved, ``[q_1, v_1, ..., q_n, v_n]`` (``v = q'``), which for the impact pair
   is the impact pair's ``[x1, y1, x2, y2]`` (CONVENTIONS.md).
-* ``u`` is one scalar control force (or torque) applied along the input direction ``B``.
+* ``u`` is one scalar control force (or torque) applied along the input direction ``B``;
+  a loop with several controllers (:class:`hybridpd.mechanics.ControlChannel`) gives each its
+  own direction (``actuate``), and ``B`` is then only the default of those that give none.
 """
 from __future__ import annotations
 
@@ -35,6 +37,18 @@ def _matrix(name, value, n, default_zero=False):
     return A
 
 
+def _input(value, n):
+    try:
+        B = np.array(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ValueError(f"input must be a list of {n} numbers") from None
+    if B.shape != (n,):
+        raise ValueError(f"input must have shape ({n},), got {B.shape}")
+    if not np.all(np.isfinite(B)) or not np.any(B):
+        raise ValueError("input must be finite and not zero")
+    return B
+
+
 @dataclass(frozen=True, eq=False)  # array fields: identity semantics
 class MechanicalSystem:
     """A linear mechanical system ``M q'' + C q' + K q = B u``.
@@ -47,9 +61,10 @@ class MechanicalSystem:
         Mass matrix, symmetric positive definite (checked to a relative ``1e-12``).
     C, K : array_like, shape (n, n), optional
         Damping and stiffness (default zero).
-    B : array_like, shape (n,)
+    B : array_like, shape (n,), optional
         Direction along which the control force ``u`` acts (e.g. ``[0, 1]``: on the second
-        DOF). Must not be zero.
+        DOF); finite and not zero when given. It may be omitted (``None``) when every
+        controller of the loop says where it acts (``ControlChannel.actuate``).
 
     Examples
     --------
@@ -58,6 +73,8 @@ class MechanicalSystem:
     (2, 1)
     >>> sysm.Minv_B
     array([0., 1.])
+    >>> MechanicalSystem(["a", "b"], M=[[1.0, 0], [0, 2.0]]).B is None   # actuated per controller
+    True
     """
 
     dofs: tuple
@@ -90,16 +107,7 @@ class MechanicalSystem:
             raise ValueError("mass: M must be positive definite") from None
         C = _matrix("damping", self.C, n, default_zero=True)
         K = _matrix("stiffness", self.K, n, default_zero=True)
-        if self.B is None:
-            raise ValueError(f"input is required (the direction B, shape ({n},))")
-        try:
-            B = np.array(self.B, dtype=float).reshape(-1)
-        except (TypeError, ValueError):
-            raise ValueError(f"input must be a list of {n} numbers") from None
-        if B.shape != (n,):
-            raise ValueError(f"input must have shape ({n},), got {B.shape}")
-        if not np.all(np.isfinite(B)) or not np.any(B):
-            raise ValueError("input must be finite and not zero")
+        B = None if self.B is None else _input(self.B, n)
         for k, v in (("dofs", dofs), ("M", M), ("C", C), ("K", K), ("B", B)):
             object.__setattr__(self, k, v)
 
@@ -115,7 +123,11 @@ class MechanicalSystem:
 
     @property
     def Minv_B(self) -> np.ndarray:
-        """``M^-1 B``, shape ``(n,)``: acceleration per unit control force."""
+        """``M^-1 B``, shape ``(n,)``: acceleration per unit control force (``ValueError``
+        when the system has no input direction ``B``)."""
+        if self.B is None:
+            raise ValueError("input: the system has no input direction B (its controllers "
+                             "give their own, ControlChannel.actuate)")
         return np.linalg.solve(self.M, self.B)
 
     def index(self, dof: str) -> int:

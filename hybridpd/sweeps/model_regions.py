@@ -75,7 +75,9 @@ def template_of(model) -> ModelTemplate:
 
 def _grid_spec(name, spec, what, check):
     """``(key, (lo, hi, num))`` of ``spec = (KEY, MIN, MAX, NUM)``: ``check(key)`` refuses an
-    unknown key, ``what`` names KEY in the messages."""
+    unknown key, ``what`` names KEY in the messages. A model entry's KEY may be a pattern or a
+    comma-separated list of paths (:func:`~hybridpd.mechanics.params.resolve_path`): the axis
+    sets every entry it matches, and is named by KEY as given."""
     try:
         key, lo, hi, num = spec
         lo, hi, numf = float(lo), float(hi), float(num)
@@ -529,7 +531,9 @@ def model_region_map(model, x, y, *, contact: int = 0, wall: int | None = None,
         The model file (or its parsed tables).
     x, y : (str, float, float, int)
         ``(KEY, MIN, MAX, NUM)``: a dotted path of a numeric entry of the file
-        (``"controller.kp"``) and its grid (``NUM >= 2`` points, ``MIN < MAX``).
+        (``"controller.kp"``) and its grid (``NUM >= 2`` points, ``MIN < MAX``); a pattern
+        (``"controller.*.kp"``) or a comma-separated list of paths sets every entry it
+        matches, and names the axis as given. The two axes set different entries.
     contact, wall, event, period, periods
         The section and the orbits sought (:class:`~hybridpd.analysis.model_orbits.
         SectionSpec`): contact ``contact``'s impacts (``event="impact"``) or sticking
@@ -577,6 +581,10 @@ def model_region_map(model, x, y, *, contact: int = 0, wall: int | None = None,
     y_name, ys = _axis("y", y, template)
     if x_name == y_name:
         raise ValueError(f"x and y must be different entries, both are {x_name!r}")
+    both = sorted(set(template.resolve(x_name)) & set(template.resolve(y_name)))
+    if both:
+        raise ValueError(f"x ({x_name}) and y ({y_name}) must set different entries, both "
+                         f"set {', '.join(both)}")
     spec = SectionSpec(contact=contact, wall=wall, event=event, period=period,
                        periods=periods, **dict(options or {}))
     if isinstance(tile, bool) or int(tile) != tile or tile < 1:
