@@ -8,8 +8,6 @@
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from hybridpd.analysis.hybridmap import Section
@@ -58,7 +56,8 @@ def mechanical_section(model, contact: int = 0, wall: int = 1, *, period=None,
         0-based contact index (file order).
     wall : {+1, -1}
     period : float, optional
-        Common period of a sum-of-sines reference.
+        Period of the phase (default: the common period of every sine of every controller's
+        reference, :attr:`~hybridpd.mechanics.loop.MechanicalLoop.reference_period`).
     mode : str, optional
         Mode of the section (default the free mode).
     sample_time : float
@@ -84,16 +83,13 @@ def mechanical_section(model, contact: int = 0, wall: int = 1, *, period=None,
     else:
         name = f"contact{contact}{sign}" if contacts[contact].rigid else f"enter{contact}{sign}"
     mode = model.free_mode if mode is None else mode
-    ref = model.loop.reference
+    loop = model.loop
     exo = tuple(int(i) for i in model.layout["exo"])
-    omegas = tuple(ref.omegas)
-    if period is None and omegas:
-        if max(omegas) - min(omegas) > 1e-12 * max(omegas):
-            raise ValueError("the reference has several frequencies: give period=")
-        period = 2 * math.pi / omegas[0]
-    clocks = getattr(model.loop, "clocks", ())
+    if period is None:
+        period = loop.reference_period      # every sine of every controller's reference
+    clocks = getattr(loop, "clocks", ())
     return Section(model.automaton, mode, name, exo=exo, period=period,
-                   exo_state=ref.exo_state(0.0), clocks=clocks or None, sample_time=sample_time,
+                   exo_state=loop.exo_state(0.0), clocks=clocks or None, sample_time=sample_time,
                    constraints=held_constraints(model, mode), bounds=contact_bounds(model))
 
 
