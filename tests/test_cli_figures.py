@@ -82,8 +82,8 @@ def pid_results(tmp_path_factory):
     assert main(["regions", "--model", m, "--x", "controller.kp", "15", "25", "2", "--y",
                  "controller.kd", "4", "6", "2", "--event", "release", "--out",
                  str(out["regions"]), "--quiet"]) == 0
-    assert main(["basin", "--model", m, "--event", "release", "--x", "gear", "-0.8", "0",
-                 "3", "--y", "gear_dot", "-6", "-2", "3", "--iterations", "20", "--out",
+    assert main(["basin", "--model", m, "--event", "release", "--x", "load", "-0.8", "0.8",
+                 "3", "--y", "load_dot", "-6", "6", "3", "--iterations", "20", "--out",
                  str(out["basin"]), "--quiet"]) == 0
     assert main(["bifurcation", "--model", m, "--event", "release", "--param",
                  "controller.kp", "15", "25", "2", "--iterations", "20", "--keep", "10",
