@@ -62,6 +62,9 @@ _NAMES = {
     "symmetric_orbit": "hybridpd.analysis.orbits",
     "symmetric_orbits": "hybridpd.analysis.orbits",
     "ImpactMap": "hybridpd.analysis.impactmap",
+    # the map protocol: any map a user writes
+    "PoincareMap": "hybridpd.analysis.maps",
+    "MapResult": "hybridpd.analysis.maps",
     # any hybrid automaton: sections, maps, orbits, stability
     "HybridAutomaton": "hybridpd.hybrid.automaton",
     "Section": "hybridpd.analysis.hybridmap",
@@ -103,7 +106,8 @@ _SUBPACKAGES = ("analysis", "hybrid", "mechanics", "pair", "plotting", "reproduc
 
 # the flat namespace: every name of _NAMES, the version and ``reproduce``
 __all__ = ["Case", "Contact", "ControlledImpactPair", "HybridAutomaton", "ImpactMap",
-           "ImpactMapper", "ImpactPair", "MechanicalSystem", "PDGains", "PeriodicOrbit",
+           "ImpactMapper", "ImpactPair", "MapResult", "MechanicalSystem", "PDGains",
+           "PeriodicOrbit", "PoincareMap",
            "Reference", "Section", "SectionMap", "SectionMapper", "Stability", "__version__",
            "attractor_basin", "basin_of_attraction", "bifurcation_diagram", "boundary_curves",
            "continue_family", "continue_orbit", "design", "find_orbit", "load_attractor_basin",

@@ -71,6 +71,10 @@ MAP_STATUS = {0: "returned", 1: "jump_limit", 2: "zeno", 3: "nonfinite", 4: "ste
 ST_RETURNED, ST_JUMP_LIMIT, ST_ZENO, ST_NONFINITE, ST_STEP_LIMIT = 0, 1, 2, 3, 4
 ST_END_TIME, ST_BAD_START, ST_SIMULTANEOUS = 6, 7, 8
 _ON_GUARD_RTOL = 1e-9      # |g| below this (relative) at a pending event: on that guard
+#: Why a return within one burst of impacts is no orbit, and what to do.
+FAST_RETURN_HINT = ("the section's guard fires again within one burst of impacts (rebounds); "
+                    "section on the ends of the sticking phases instead (event='release', "
+                    "command line --event release) or raise the period")
 
 
 # ----------------------------------------------------------------------------------------
@@ -709,6 +713,126 @@ class SectionMap(PoincareMap):
     @property
     def period(self) -> float | None:
         return self.section.period
+
+    @property
+    def mode(self) -> str:
+        return self.section.mode
+
+    @property
+    def structural_zeros(self) -> int:
+        """One per sampling clock set from the phase (the held force at a section point is
+        overwritten at the next sample)."""
+        return len(self.section.clocks)
+
+    def check_point(self, s) -> np.ndarray:
+        return self.section.check_point(s)
+
+    def state(self, s) -> np.ndarray:
+        return self.section.to_state(s)[0]
+
+    # ---- what an orbit of a section map must satisfy (hooks of find_orbit)
+    def _min_return(self, min_return):
+        sec = self.section
+        if min_return is None:
+            return sec.reference_period / 20.0 if sec.has_phase else 0.0
+        if not (float(min_return) >= 0 and math.isfinite(float(min_return))):
+            raise ValueError(f"min_return must be finite and >= 0, got {min_return!r}")
+        return float(min_return)
+
+    def refuse(self, s0, k, *, min_return=None, sampling_period=None, **options):
+        """``sampling_incommensurate`` (sampling clocks that never return with the phase)
+        and ``fast_return`` (``P^k`` returns within one burst of impacts), before Newton."""
+        sec = self.section
+        T = sec.reference_period if sec.has_phase else None
+        if not sec.sampling_commensurate:
+            near = "; ".join(f"dt = {dt:g} -> {d:.10g} (T / {round(T / d)})"
+                             for dt, d in sec.nearest_commensurate_dt().items())
+            return "sampling_incommensurate", (
+                f"the sampling periods and the reference period T = {T:.10g} have no common "
+                f"multiple m T (m <= 64): the sampling instants never return with the phase, "
+                f"so no motion repeats. The nearest sampling periods that divide T: {near}")
+        if sampling_period is not None and T and not sec.clocks:
+            dt = check_finite("sampling_period", sampling_period)
+            if not dt > 0:
+                raise ValueError(f"sampling_period must be finite and > 0, got {dt!r}")
+            if not common_multiple(T, [dt]):
+                d = T / max(1, round(T / dt))
+                return "sampling_incommensurate", (
+                    f"the sampling period {dt:g} and the reference period {T:g} have no common "
+                    f"multiple m T (m <= 64): the sampling clock never returns with the "
+                    f"phase; the nearest sampling period that divides T is {d:.10g} (T / "
+                    f"{round(T / d)})")
+        r = self.apply(s0, k)
+        mr = self._min_return(min_return)
+        if r.ok and r.t_hit - r.t_start < mr:
+            return "fast_return", (f"P^{k} returns {r.t_hit - r.t_start:.3g} after the start "
+                                   f"(< min_return = {mr:.3g}): {FAST_RETURN_HINT}")
+        return None
+
+    def accept(self, result, *, min_return=None, **options) -> bool:
+        """A trial point of Newton is rejected where ``P^k`` returns sooner than
+        ``min_return``: the points that return to themselves at once (a tangential
+        reopening) are zeros of ``P^k(s) - s`` but no orbits."""
+        return result.t_hit - result.t_start >= self._min_return(min_return)
+
+    def validate(self, s, k, result, *, periods=None, min_return=None, verify=True,
+                 **options) -> tuple:
+        """``(reason, n_periods, detail, return_error)`` of a zero of ``P^k(s) - s``: a
+        non-zero return time (``degenerate_return``), transversal (``grazing``), not within a
+        burst (``fast_return``), a whole number of reference periods (``periods`` if given)
+        and an independent simulation of one period returning to it (``not_periodic``)."""
+        sec = self.section
+        rr, t_per = result, result.t_hit - result.t_start
+        T = sec.reference_period if sec.has_phase else None
+        scale_t = T if T else max(1.0, abs(rr.t_start))
+        mr = self._min_return(min_return)
+        if not t_per > 1e-9 * scale_t:
+            return "degenerate_return", 0, (f"P^{k} returns {t_per:.3g} after the start: the "
+                                            "point returns to itself at once, not after a "
+                                            "period"), math.nan
+        if rr.grazing:
+            return "grazing", 0, "a contact on the orbit is tangential (no saltation matrix)", \
+                math.nan
+        if t_per < mr:
+            return "fast_return", 0, (f"the orbit's return takes {t_per:.3g} (< min_return = "
+                                      f"{mr:.3g}): {FAST_RETURN_HINT}"), math.nan
+        m = 1
+        if T:
+            m = round(t_per / T)
+            if m < 1 or abs(t_per - m * T) > 1e-7 * max(m, 1) * T:
+                return "not_periodic", 0, (f"return time {t_per:.12g} is not a whole number of "
+                                           f"reference periods T = {T:.12g}"), math.nan
+            if periods is not None and m != int(periods):
+                return "not_periodic", m, (f"return time {t_per:.12g} = {m} T, not the "
+                                           f"requested {int(periods)} T"), math.nan
+        if not verify:
+            return "converged", m, "", math.nan
+        err = self.return_error(s, k, t_per)
+        if not err <= 1e-6:
+            return "not_periodic", m, (f"simulating {t_per:.6g} from the section point does "
+                                       f"not return to it (relative error {err:.3g})"), err
+        return "converged", m, "", err
+
+    def return_error(self, s, k, t_per) -> float:
+        """Relative distance between the section state and the state where an independent run
+        of the automaton's simulator fires the section's guard for the ``(k+1)``-th time."""
+        sec = self.section
+        z0, t0 = sec.to_state(s)
+        try:
+            tr = sec.automaton.simulate(z0, sec.mode, (t0, t0 + t_per * (1 + 1e-9) + 1e-12),
+                                        max_jumps=self.max_jumps, max_steps=self.max_steps,
+                                        zeno=self.zeno)
+        except (ValueError, RuntimeError, FloatingPointError):
+            return math.inf
+        J = tr.jumps
+        hits = [i for i in range(len(J)) if J.source[i] == sec.mode and J.guard[i] == sec.guard
+                and J.kind[i] != "zeno"]
+        if len(hits) < k + 1:
+            return math.inf
+        i = hits[k]
+        dz = J.pre[i] - z0
+        scale = max(1.0, float(np.max(np.abs(z0))))
+        return float(max(np.max(np.abs(dz)) / scale, abs(J.t[i] - t0 - t_per) / max(1.0, t_per)))
 
     def _t_max(self, k):
         if self.t_max is not None:

@@ -20,6 +20,7 @@ path in its docstring and is compared with it in ``tests/test_specialisations.py
 from __future__ import annotations
 
 import abc
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -33,21 +34,25 @@ __all__ = ["MapResult", "PoincareMap", "check_returns", "minimal_period"]
 class MapResult:
     """One application of ``P^k`` (see :meth:`PoincareMap.apply`).
 
+    Only ``s`` is required: ``MapResult(s)`` or ``MapResult(s, DP=J)`` is a complete answer of
+    a map without times or jumps; the other fields default to "returned, no timing".
+
     Attributes
     ----------
     s : ndarray, shape (dim,)
         The image (NaN unless ``ok``; ``phi`` in ``[0, T)``).
     ok : bool
-        The run returned to the section.
+        The run returned to the section (default True).
     status : str
         ``"returned"`` when ``ok``; otherwise why the run stopped (the values depend on the
         map, e.g. :data:`hybridpd.analysis.hybridmap.MAP_STATUS`).
     t_start, t_hit : float
-        Start time (``phi``, or 0) and time of the return (time units).
-    z_hit : ndarray, shape (n,)
+        Start time (``phi``, or 0) and time of the return (time units; NaN for a map
+        without time).
+    z_hit : ndarray, shape (n,) or None
         Full pre-jump state at the return (or where the run stopped).
     mode_final : str
-        Mode where the run stopped.
+        Mode where the run stopped (empty for a map without modes).
     jumps : tuple of (float, str, str, str, str)
         ``(t, source mode, guard, target mode, kind)`` of every jump before the return, the
         initial one included; ``kind`` is ``"crossing"``, ``"grazing"`` or ``"zeno"``.
@@ -58,14 +63,14 @@ class MapResult:
     """
 
     s: np.ndarray
-    ok: bool
-    status: str
-    t_start: float
-    t_hit: float
-    z_hit: np.ndarray
-    mode_final: str
-    jumps: tuple
-    grazing: bool
+    ok: bool = True
+    status: str = "returned"
+    t_start: float = math.nan
+    t_hit: float = math.nan
+    z_hit: np.ndarray | None = field(default=None, repr=False)
+    mode_final: str = ""
+    jumps: tuple = ()
+    grazing: bool = False
     DP: np.ndarray | None = field(default=None, repr=False)
     __repr__ = compact_repr
 
@@ -85,28 +90,85 @@ def check_returns(k) -> int:
 class PoincareMap(abc.ABC):
     """A map of section points: the protocol of every impact map (module docstring).
 
-    Subclasses implement :attr:`dim`, :attr:`names`, :attr:`period` and :meth:`apply`; they
-    may override :meth:`apply_many` with a compiled batch (used by :meth:`jacobian_fd`).
+    For developers
+    --------------
+    A map gives :attr:`names` (a tuple of coordinate names; :attr:`dim` follows), its
+    :attr:`period` (``T`` when ``s[0]`` is a phase of period ``T``, else None; a class
+    attribute is enough) and :meth:`apply`, returning a :class:`MapResult` (with ``DP``
+    when ``jacobian`` is asked and the map knows it; without one the analyses take
+    :meth:`jacobian_fd`). Everything else is derived once here: ``__call__``,
+    :meth:`jacobian`, :meth:`jacobian_fd`, :meth:`iterate`, :meth:`apply_many`,
+    :meth:`wrap`. A specialisation overrides only what it speeds up (a compiled
+    :meth:`apply_many` or :meth:`iterate`). Maps that know more about their orbits answer
+    the hooks :meth:`refuse` and :meth:`validate` (a hybrid section map checks that a
+    fixed point returns after whole reference periods and that an independent simulation
+    returns to it), :attr:`structural_zeros`, :meth:`state` and :attr:`mode`.
+
+    Examples
+    --------
+    A linear contraction, written in a few lines:
+
+    >>> class Linear(PoincareMap):
+    ...     names = ("x", "y")
+    ...     def apply(self, s, k=1, jacobian=False):
+    ...         A = np.linalg.matrix_power(np.array([[0.5, 1.0], [0.0, -0.25]]), k)
+    ...         return MapResult(A @ np.asarray(s, float), DP=A if jacobian else None)
+    >>> P = Linear()
+    >>> P.dim, P.period, P([1.0, 2.0]).tolist()
+    (2, None, [2.5, -0.5])
     """
 
+    #: Names of the section coordinates (``"phi"`` first when there is a phase).
+    names: tuple = ()
+    #: Period ``T`` of the phase coordinate ``s[0]``, or None without a phase.
+    period: float | None = None
+    #: The mode of the section (maps of hybrid automata; empty otherwise).
+    mode: str = ""
+    #: Multipliers of ``DP`` that vanish by construction of the coordinates and are not
+    #: multipliers of the motion (see :func:`hybridpd.analysis.floquet.stability`).
+    structural_zeros: int = 0
+
     @property
-    @abc.abstractmethod
     def dim(self) -> int:
-        """Number of section coordinates."""
-
-    @property
-    @abc.abstractmethod
-    def names(self) -> tuple:
-        """Names of the section coordinates (``"phi"`` first when there is a phase)."""
-
-    @property
-    @abc.abstractmethod
-    def period(self) -> float | None:
-        """Period ``T`` of the phase coordinate ``s[0]``, or None without a phase."""
+        """Number of section coordinates (``len(names)``)."""
+        return len(self.names)
 
     @abc.abstractmethod
     def apply(self, s, k: int = 1, jacobian: bool = False) -> MapResult:
         """Apply ``P^k`` to the section point ``s`` (optionally with ``DP^k``)."""
+
+    def check_point(self, s) -> np.ndarray:
+        """``s`` as a float array of shape ``(dim,)``; ``ValueError`` naming ``s`` otherwise."""
+        s = np.asarray(s, float)
+        if s.shape != (self.dim,) or not np.all(np.isfinite(s)):
+            raise ValueError(f"s must be {self.dim} finite numbers {self.names}, got shape "
+                             f"{s.shape}")
+        return s
+
+    def state(self, s) -> np.ndarray:
+        """The full state at the section point ``s`` (default: ``s`` itself)."""
+        return np.array(s, float)
+
+    def refuse(self, s0, k: int, **options):
+        """Why no orbit of ``P^k`` can start from ``s0`` before Newton runs: ``(reason,
+        detail)``, or None (the default)."""
+        del s0, k, options
+
+    def accept(self, result: MapResult, **options) -> bool:
+        """Whether Newton may take the trial point whose application gave `result` (True by
+        default; a section map refuses returns within one burst of impacts)."""
+        return True
+
+    def validate(self, s, k: int, result: MapResult, **options) -> tuple:
+        """Whether a zero of ``P^k(s) - s`` is an orbit: ``(reason, n_periods, detail,
+        return_error)`` with reason ``"converged"`` when it is (the default)."""
+        return "converged", 1, "", math.nan
+
+    def canonical(self, s) -> np.ndarray:
+        """The representative of a section point (the phase reduced to ``[0, T)``)."""
+        if self.period is not None:
+            s[0] %= self.period
+        return s
 
     def _fd_steps(self, s, H):
         """Finite-difference steps at ``s`` (a hook: keep ``s +- H`` on the section)."""
@@ -116,7 +178,7 @@ class PoincareMap(abc.ABC):
         """Differences of section points with the phase taken to ``[-T/2, T/2)``."""
         ds = np.array(ds, float, copy=True)
         T = self.period
-        if T is not None and self.names[0] == "phi":
+        if T is not None:
             ds[..., 0] = (ds[..., 0] + 0.5 * T) % T - 0.5 * T
         return ds
 
@@ -128,11 +190,12 @@ class PoincareMap(abc.ABC):
         return r.s
 
     def jacobian(self, s, k: int = 1) -> np.ndarray:
-        """``DP^k(s)`` (shape ``(dim, dim)``) from :meth:`apply`."""
+        """``DP^k(s)`` (shape ``(dim, dim)``) from :meth:`apply`, or by :meth:`jacobian_fd`
+        where the map gives none."""
         r = self.apply(s, k, jacobian=True)
         if not r.ok:
             raise RuntimeError(f"P^{k} undefined at s = {np.asarray(s).tolist()}: {r.status}")
-        return r.DP
+        return self.jacobian_fd(s, k) if r.DP is None else r.DP
 
     def apply_many(self, S, k: int = 1) -> tuple:
         """``P^k`` of points ``S`` (shape ``(N, dim)``): images ``(N, dim)`` and ``ok`` ``(N,)``."""

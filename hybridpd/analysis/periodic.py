@@ -35,11 +35,11 @@ from hybridpd.analysis.certify import BasinMapper, certify_ball
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import (
     ST_RETURNED,
-    MapResult,
     SectionMap,
     _to_return,
 )
 from hybridpd.analysis.labels import OFF_SECTION
+from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
 from hybridpd.analysis.pathfollow import newton
 
 __all__ = [
@@ -160,48 +160,37 @@ def _scale(s):
 #: Reasons for which :func:`find_orbit` reports no orbit although Newton's residual vanished.
 ORBIT_REFUSALS = ("degenerate_return", "grazing", "not_periodic", "fast_return",
                   "sampling_incommensurate")
-_FAST_RETURN_HINT = ("the section's guard fires again within one burst of impacts (rebounds); "
-                     "section on the ends of the sticking phases instead (event='release', "
-                     "command line --event release) or raise the period")
 
 
-def _commensurate(T, dt, m_max=64):
-    """Smallest ``m <= m_max`` with ``m T / dt`` a whole number (relative 1e-9), or 0."""
-    for m in range(1, int(m_max) + 1):
-        q = m * T / dt
-        if abs(q - round(q)) <= 1e-9 * max(1.0, q):
-            return m
-    return 0
+def find_orbit(P: PoincareMap, s0, period: int = 1, *, tol: float = 1e-11, max_iter: int = 50,
+               jacobian: str = "exact", verify: bool = True, **checks) -> PeriodicOrbit:
+    """Solve ``P^k(s) = s`` by damped Newton from the guess ``s0``, on any map.
 
+    ``P`` is any :class:`~hybridpd.analysis.maps.PoincareMap`: the general section map of a
+    hybrid automaton, a specialisation, or a map written by the user. Newton runs on the
+    residual ``P^k(s) - s`` (phase wrapped to ``[-T/2, T/2)`` when the map has a phase) with
+    Broyden updates of ``DP^k - I`` (recomputed only where an updated step fails); ``DP``
+    is the map's own (``MapResult.DP``) where it gives one, else central finite differences
+    (:meth:`~hybridpd.analysis.maps.PoincareMap.jacobian_fd`). The multipliers are the
+    eigenvalues of ``DP^k`` at the solution (minus the map's
+    :attr:`~hybridpd.analysis.maps.PoincareMap.structural_zeros`).
 
-def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_iter: int = 50,
-               jacobian: str = "exact", periods: int | None = None,
-               min_return: float | None = None, sampling_period: float | None = None,
-               verify: bool = True) -> PeriodicOrbit:
-    """Solve ``P^k(s) = s`` by damped Newton from the guess ``s0``, and check the answer.
-
-    A vanishing residual is a periodic orbit only if (in this order; otherwise the result
-    has ``converged = False`` and the reason):
-
-    * ``degenerate_return``: the return time is not zero: a grazing "crossing" can return to
-      its own start at once, which every point satisfies;
-    * ``grazing``: no return on the way is tangential (no saltation matrix, no multipliers);
-    * ``fast_return``: the return takes at least ``min_return`` (rebounds of one burst);
-    * ``not_periodic``: with a reference phase, the return time is a whole number ``m >= 1``
-      of reference periods ``T`` (``periods`` if given) within ``1e-7 m T``, and simulating
-      the automaton from the section point for that time returns to it (``verify``).
-
-    Before Newton runs, a guess whose ``P^k`` returns faster than ``min_return`` is refused
-    (``fast_return``, with the hint to section on releases) and a sampled-data loop whose
-    sampling period ``dt`` has no common multiple with ``T`` (``m T = j dt``, ``m <= 64``) is
-    refused (``sampling_incommensurate``): its section coordinates include the sampling
-    clock, which then never returns together with the phase.
+    A map that knows more about its orbits is asked through its hooks: ``P.refuse`` before
+    Newton (e.g. a sampled-data loop whose sampling never returns with the phase),
+    ``P.accept`` for every trial point, ``P.validate`` for a vanishing residual. The section
+    map of a hybrid automaton (:class:`~hybridpd.analysis.hybridmap.SectionMap`) refuses or
+    rejects, with the reasons of :data:`ORBIT_REFUSALS`: a return after zero time
+    (``degenerate_return``), a tangential contact (``grazing``), a return within one burst of
+    impacts (``fast_return``, shorter than ``min_return``), a return time that is no whole
+    number of reference periods (``periods`` if given) or from which an independent
+    simulation of one period does not return (``not_periodic``; ``verify``), and sampling
+    clocks without a common period with the reference (``sampling_incommensurate``).
 
     Parameters
     ----------
-    P : SectionMap
+    P : PoincareMap
     s0 : array_like, shape (dim,)
-        Guess (a section point where the flow fires the guard).
+        Guess.
     period : int
         ``k >= 1``: the number of returns to the section per period of the orbit.
     tol : float
@@ -210,18 +199,15 @@ def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_it
     max_iter : int
         Bound on Newton iterations.
     jacobian : {"exact", "fd"}
-        ``DP`` from the saltation chain, or central finite differences of the simulated map
-        (for Newton and for the multipliers; much cheaper for orbits with many jumps).
-    periods : int, optional
-        Required number of reference periods of the orbit (default: any ``m >= 1``).
-    min_return : float, optional
-        Shortest acceptable time of ``P^k`` (time units; default ``T / 20`` with a reference
-        phase, else 0).
-    sampling_period : float, optional
-        ``dt`` of a sampled-data controller (checked against ``T``).
+        ``"exact"``: the map's ``DP`` where it gives one (finite differences otherwise);
+        ``"fd"``: always central finite differences of the map.
     verify : bool
-        Simulate one period from the orbit's section point with the automaton's own
-        simulator (an independent driver of the same flows) and require the return.
+        Passed to ``P.validate`` (a section map simulates one period independently).
+    **checks
+        Options of the map's hooks: for a section map ``periods`` (reference periods of the
+        orbit, default any), ``min_return`` (shortest acceptable return, default ``T / 20``)
+        and ``sampling_period`` (the ``dt`` of a sampled-data controller of an automaton
+        whose section does not know its clocks).
 
     Returns
     -------
@@ -232,7 +218,7 @@ def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_it
     Raises
     ------
     ValueError
-        Bad arguments (not a ``SectionMap``, a non-finite or wrongly sized ``s0``, ...).
+        Bad arguments (not a map, a non-finite or wrongly sized ``s0``, ...).
 
     Examples
     --------
@@ -247,54 +233,28 @@ def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_it
     >>> po.n_periods
     1
     """
-    if not isinstance(P, SectionMap):
-        raise ValueError(f"P must be a SectionMap, got {type(P).__name__}")
+    if not isinstance(P, PoincareMap):
+        raise ValueError(f"P must be a PoincareMap, got {type(P).__name__}")
     if jacobian not in ("exact", "fd"):
         raise ValueError(f"jacobian must be 'exact' or 'fd', got {jacobian!r}")
-    if isinstance(period, bool) or int(period) != period or period < 1:
-        raise ValueError(f"period must be an int >= 1, got {period!r}")
+    k = check_returns(period)
     if not (tol > 0):
         raise ValueError(f"tol must be > 0, got {tol!r}")
+    periods = checks.get("periods")
     if periods is not None and (isinstance(periods, bool) or int(periods) != periods
                                 or periods < 1):
         raise ValueError(f"periods must be None or an int >= 1, got {periods!r}")
-    sec = P.section
-    T = sec.reference_period if sec.has_phase else None
-    if min_return is None:
-        min_return = T / 20.0 if T else 0.0
-    elif not (float(min_return) >= 0 and math.isfinite(float(min_return))):
-        raise ValueError(f"min_return must be finite and >= 0, got {min_return!r}")
-    k = int(period)
-    s = sec.check_point(s0).copy()
-    if not sec.sampling_commensurate:
-        near = "; ".join(f"dt = {dt:g} -> {d:.10g} (T / {round(sec.reference_period / d)})"
-                         for dt, d in sec.nearest_commensurate_dt().items())
-        return _no_orbit(P, s, k, "sampling_incommensurate", 0, None,
-                         f"the sampling periods and the reference period T = "
-                         f"{sec.reference_period:.10g} have no common multiple m T (m <= 64): "
-                         f"the sampling instants never return with the phase, so no motion "
-                         f"repeats. The nearest sampling periods that divide T: {near}")
-    if sampling_period is not None and T and not sec.clocks:
-        if not (float(sampling_period) > 0 and math.isfinite(float(sampling_period))):
-            raise ValueError(f"sampling_period must be finite and > 0, got {sampling_period!r}")
-        if not _commensurate(T, float(sampling_period)):
-            d = T / max(1, round(T / float(sampling_period)))
-            return _no_orbit(P, s, k, "sampling_incommensurate", 0, None,
-                             f"the sampling period {float(sampling_period):g} and the reference "
-                             f"period {T:g} have no common multiple m T (m <= 64): the "
-                             f"sampling clock never returns with the phase; the nearest "
-                             f"sampling period that divides T is {d:.10g} (T / {round(T / d)})")
-    eq = _OrbitEquation(P, k, jacobian, min_return)
-    F, _, r = eq.run(s, True)
+    s = P.check_point(s0).copy()
+    refused = P.refuse(s, k, **checks)
+    if refused is not None:
+        return _no_orbit(P, s, k, refused[0], 0, None, refused[1])
+    eq = _OrbitEquation(P, k, jacobian, checks)
+    F = eq.run(s, True)[0]
     if F is None:
         return _no_orbit(P, s, k, eq.undefined(), 1, F)
-    if r.t_hit - r.t_start < min_return:
-        return _no_orbit(P, s, k, "fast_return", 0, F,
-                         f"P^{k} returns {r.t_hit - r.t_start:.3g} after the start "
-                         f"(< min_return = {min_return:.3g}): {_FAST_RETURN_HINT}")
     max_iter = int(max_iter)
     res = newton(eq.resid, eq.jac, s, tol=tol, max_iter=max_iter, norm=eq.norm, broyden=True,
-                 difference=eq.difference, canonical=eq.canonical, min_lambda=2.0 ** -29,
+                 difference=eq.difference, canonical=P.canonical, min_lambda=2.0 ** -29,
                  step_test=False)
     # the counts and words of this module: an iteration is one test of the residual
     its = min(len(res.history), max_iter)
@@ -307,8 +267,7 @@ def find_orbit(P: SectionMap, s0, period: int = 1, *, tol: float = 1e-11, max_it
         its = min(its, max_iter)
     elif res.converged and res.iterations == max_iter:
         reason = "max_iter"     # converged by the last step: this module's loop never saw it
-    return _make_orbit(P, res.x, k, reason, its, F, periods=periods, min_return=min_return,
-                       verify=verify, jacobian=jacobian)
+    return _make_orbit(P, res.x, k, reason, its, F, jacobian, dict(checks, verify=verify))
 
 
 class _OrbitEquation:
@@ -317,13 +276,12 @@ class _OrbitEquation:
     map cannot complete, or a Jacobian that is not finite, is a result.
 
     The latest run is kept: Newton asks for the residual and the Jacobian at one point in
-    turn, and one exact run gives both. A trial point whose return comes sooner than
-    ``min_return`` is rejected like one where the map is undefined: the points that return
-    to themselves at once (a tangential reopening) are zeros of ``F`` but no orbits.
+    turn, and one exact run gives both. A trial point the map does not ``accept`` is rejected
+    like one where the map is undefined.
     """
 
-    def __init__(self, P, k, jacobian, min_return):
-        self.P, self.k, self.jacobian, self.min_return = P, k, jacobian, min_return
+    def __init__(self, P, k, jacobian, checks):
+        self.P, self.k, self.jacobian, self.checks = P, k, jacobian, checks
         self.last = (None, None, None, None)
 
     def run(self, s, jac):
@@ -341,11 +299,13 @@ class _OrbitEquation:
             r = P.apply(s, self.k, jacobian=jac == "exact")
             if not r.ok:
                 return None, None, r
-            F = P.section.wrap(r.s - s)
-            J = r.DP - np.eye(P.dim) if jac == "exact" else None
-            if jac == "fd" or (J is not None and not np.all(np.isfinite(J))):
-                # no saltation matrix somewhere on the way (a tangential jump): the
-                # simulated map's differences still give Newton a direction
+            F = P.wrap(r.s - s)
+            J = None
+            if jac == "exact" and r.DP is not None:
+                J = r.DP - np.eye(P.dim)
+            if jac == "fd" or (jac == "exact" and (J is None or not np.all(np.isfinite(J)))):
+                # no DP from the map, or no saltation matrix somewhere on the way (a
+                # tangential jump): the map's differences still give Newton a direction
                 J = P.jacobian_fd(s, self.k) - np.eye(P.dim)
         except (ValueError, RuntimeError, FloatingPointError, np.linalg.LinAlgError) as exc:
             return None, None, f"{type(exc).__name__}: {exc}"
@@ -355,7 +315,7 @@ class _OrbitEquation:
 
     def resid(self, s):
         F, _, r = self.run(s, False)
-        return None if F is None or r.t_hit - r.t_start < self.min_return else F
+        return None if F is None or not self.P.accept(r, **self.checks) else F
 
     def jac(self, s):
         J = self.run(s, True)[1]
@@ -366,19 +326,15 @@ class _OrbitEquation:
     def norm(self, s, F):
         """``|F|`` relative to the solver's scales: the phase against ``max(1, T)``, the
         other coordinates against ``max(1, |s|_inf)`` of those coordinates."""
-        if self.P.section.has_phase:
+        T = self.P.period
+        if T is not None:
             rest = _scale(s[1:]) if s.size > 1 else 1.0
             tail = float(np.max(np.abs(F[1:]))) / rest if F.size > 1 else 0.0
-            return max(abs(float(F[0])) / max(1.0, self.P.section.period), tail)
+            return max(abs(float(F[0])) / max(1.0, T), tail)
         return float(np.max(np.abs(F))) / _scale(s)
 
     def difference(self, a, b):
-        return self.P.section.wrap(a - b)
-
-    def canonical(self, s):
-        if self.P.section.has_phase:
-            s[0] %= self.P.section.period
-        return s
+        return self.P.wrap(a - b)
 
     def undefined(self) -> str:
         r = self.last[3]
@@ -390,95 +346,35 @@ def _no_orbit(P, s, k, reason, it, F, detail="") -> PeriodicOrbit:
     res = float(np.max(np.abs(F))) if F is not None else math.nan
     return PeriodicOrbit(s, k, False, reason, it, res, math.nan, (), np.full((dim, dim), np.nan),
                          np.full(dim, np.nan + 0j), math.nan, False, False, False,
-                         P.section.to_state(s)[0], P.section.names, detail=detail,
-                         mode=P.section.mode)
+                         P.state(s), P.names, detail=detail, mode=P.mode)
 
 
-def _make_orbit(P, s, k, reason, it, F, *, periods=None, min_return=0.0,
-                verify=True, jacobian="exact") -> PeriodicOrbit:
+def _make_orbit(P, s, k, reason, it, F, jacobian, checks) -> PeriodicOrbit:
     ok = reason == "converged"
     if F is None:
         return _no_orbit(P, s, k, reason, it, F)
     res = float(np.max(np.abs(F)))
     dim = P.dim
-    exact = jacobian == "exact"
     try:
-        rr = P.apply(s, k, jacobian=exact)
-        DP = rr.DP if exact or not rr.ok else P.jacobian_fd(s, k)
+        rr = P.apply(s, k, jacobian=jacobian == "exact")
+        DP = rr.DP if rr.DP is not None or not rr.ok else P.jacobian_fd(s, k)
     except (ValueError, RuntimeError, FloatingPointError, np.linalg.LinAlgError) as exc:
         return _no_orbit(P, s, k, "map undefined", it, F, f"{type(exc).__name__}: {exc}")
     if not rr.ok:
         return _no_orbit(P, s, k, f"map undefined: {rr.status}", it, F)
     if np.all(np.isfinite(DP)):
-        st = stability(DP, structural_zeros=len(P.section.clocks))
+        st = stability(DP, structural_zeros=P.structural_zeros)
         mult, rho, stab, hyp = st.multipliers, st.spectral_radius, st.stable, st.hyperbolic
     else:
         mult, rho, stab, hyp = np.full(dim, np.nan + 0j), math.nan, False, False
     t_per = rr.t_hit - rr.t_start
     m, detail, err = 0, "", math.nan
     if ok:
-        reason, m, detail, err = _validate(P, s, k, rr, t_per, periods, min_return, verify)
+        reason, m, detail, err = P.validate(s, k, rr, **checks)
         ok = reason == "converged"
     return PeriodicOrbit(s, k, ok, reason, it, res, t_per, rr.signature, DP, mult, rho,
-                         bool(stab and ok), bool(hyp), rr.grazing, P.section.to_state(s)[0],
-                         P.section.names, n_periods=m, detail=detail, return_error=err,
-                         mode=P.section.mode)
-
-
-def _validate(P, s, k, rr, t_per, periods, min_return, verify):
-    """``(reason, m, detail, return_error)`` for a Newton solution (module rules)."""
-    sec = P.section
-    T = sec.reference_period if sec.has_phase else None
-    scale_t = T if T else max(1.0, abs(rr.t_start))
-    if not t_per > 1e-9 * scale_t:
-        return "degenerate_return", 0, (f"P^{k} returns {t_per:.3g} after the start: the "
-                                        "point returns to itself at once, not after a period"), \
-            math.nan
-    if rr.grazing:
-        return "grazing", 0, "a contact on the orbit is tangential (no saltation matrix)", \
-            math.nan
-    if t_per < min_return:
-        return "fast_return", 0, (f"the orbit's return takes {t_per:.3g} (< min_return = "
-                                  f"{min_return:.3g}): {_FAST_RETURN_HINT}"), math.nan
-    m = 1
-    if T:
-        m = round(t_per / T)
-        if m < 1 or abs(t_per - m * T) > 1e-7 * max(m, 1) * T:
-            return "not_periodic", 0, (f"return time {t_per:.12g} is not a whole number of "
-                                       f"reference periods T = {T:.12g}"), math.nan
-        if periods is not None and m != int(periods):
-            return "not_periodic", m, (f"return time {t_per:.12g} = {m} T, not the requested "
-                                       f"{int(periods)} T"), math.nan
-    if not verify:
-        return "converged", m, "", math.nan
-    err = _return_error(P, s, k, t_per)
-    if not err <= 1e-6:
-        return "not_periodic", m, (f"simulating {t_per:.6g} from the section point does not "
-                                   f"return to it (relative error {err:.3g})"), err
-    return "converged", m, "", err
-
-
-def _return_error(P, s, k, t_per) -> float:
-    """Relative distance between the section state and the state where an independent run
-    of the automaton's simulator fires the section's guard for the ``(k+1)``-th time."""
-    sec = P.section
-    ha = sec.automaton
-    z0, t0 = sec.to_state(s)
-    try:
-        tr = ha.simulate(z0, sec.mode, (t0, t0 + t_per * (1 + 1e-9) + 1e-12),
-                         max_jumps=P.max_jumps, max_steps=P.max_steps, zeno=P.zeno)
-    except (ValueError, RuntimeError, FloatingPointError) as exc:
-        del exc
-        return math.inf
-    J = tr.jumps
-    hits = [i for i in range(len(J)) if J.source[i] == sec.mode and J.guard[i] == sec.guard
-            and J.kind[i] != "zeno"]
-    if len(hits) < k + 1:
-        return math.inf
-    i = hits[k]
-    dz = J.pre[i] - z0
-    scale = max(1.0, float(np.max(np.abs(z0))))
-    return float(max(np.max(np.abs(dz)) / scale, abs(J.t[i] - t0 - t_per) / max(1.0, t_per)))
+                         bool(stab and ok), bool(hyp), rr.grazing, P.state(s), P.names,
+                         n_periods=m, detail=detail, return_error=err, mode=P.mode)
 
 
 def measured_contraction(P: SectionMap, s, period: int = 1, *, n_iter: int = 40,
