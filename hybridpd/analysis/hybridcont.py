@@ -39,11 +39,13 @@ import numpy as np
 from hybridpd._repr import compact_repr
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import Section, SectionMap
+from hybridpd.analysis.maps import PoincareMap
 from hybridpd.analysis.maps import minimal_period
 from hybridpd.analysis.pathfollow import corrector, follow_path, illinois
 from hybridpd.analysis.periodic import find_orbit
 
-__all__ = ["FAMILY_EVENTS", "FamilyBranch", "FamilyEvent", "FamilyPoint", "continue_family"]
+__all__ = ["FAMILY_EVENTS", "FamilyBranch", "FamilyEvent", "FamilyPoint", "continue_family",
+           "continue_orbit"]
 
 #: Kinds of :class:`FamilyEvent`.
 FAMILY_EVENTS = ("fold", "period_doubling", "neimark_sacker", "stability_change",
@@ -77,13 +79,21 @@ class FamilyPoint:
 
 @dataclass(frozen=True)
 class FamilyEvent:
-    """An event between points ``index`` and ``index + 1``, located at ``p`` (estimate)."""
+    """An event between points ``index`` and ``index + 1``, located at ``p`` (estimate).
+
+    ``kind`` is one of :data:`FAMILY_EVENTS`; ``parameter`` is ``p``.
+    """
 
     kind: str
     index: int
     p: float
     detail: str = ""
     __repr__ = compact_repr
+
+    @property
+    def parameter(self) -> float:
+        """The parameter value of the event (``p``)."""
+        return self.p
 
     def to_dict(self) -> dict:
         return {"kind": self.kind, "index": self.index, "p": float(self.p),
@@ -126,6 +136,11 @@ class FamilyBranch:
         return np.array([q.p for q in self.points])
 
     @property
+    def s(self) -> np.ndarray:
+        """The fixed points, shape ``(len(points), dim)``."""
+        return np.array([q.s for q in self.points])
+
+    @property
     def spectral_radius(self) -> np.ndarray:
         return np.array([q.spectral_radius for q in self.points])
 
@@ -151,9 +166,9 @@ def _map_factory(builder, section, map_options):
         cache[p] = _build(p)
         return cache[p]
 
-    def _build(p) -> SectionMap:
+    def _build(p) -> PoincareMap:
         m = builder(p)
-        if isinstance(m, SectionMap):
+        if isinstance(m, PoincareMap):
             return m
         if not isinstance(m, Section):
             ha = getattr(m, "automaton", m)
@@ -165,10 +180,10 @@ def _map_factory(builder, section, map_options):
     return make
 
 
-def _point(r, s, p) -> FamilyPoint:
-    """The family point of an application ``r`` of ``P^k`` (with ``DP``) at ``(s, p)``."""
-    st = stability(r.DP)
-    return FamilyPoint(float(p), s, r.DP, st.multipliers, st.spectral_radius,
+def _point(r, DP, s, p, zeros=0) -> FamilyPoint:
+    """The family point of an application ``r`` of ``P^k`` with Jacobian ``DP`` at ``(s, p)``."""
+    st = stability(DP, structural_zeros=zeros)
+    return FamilyPoint(float(p), s, DP, st.multipliers, st.spectral_radius,
                        bool(st.stable), r.signature, r.t_hit - r.t_start)
 
 
@@ -215,23 +230,27 @@ def _events(a: FamilyPoint, b: FamilyPoint, index: int) -> list:
     return out
 
 
-def continue_family(builder, s0, p0: float, p_end: float, *, period: int = 1, section=None,
-                    method: str = "arclength", step: float | None = None,
-                    max_step: float | None = None, min_step: float | None = None,
-                    max_steps: int = 200, tol: float = 1e-10, fd_step: float = 1e-6,
-                    locate: bool = True, map_options: dict | None = None) -> FamilyBranch:
-    """Follow a fixed point of ``P^k`` in the parameter of a model builder.
+def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None = None,
+                   section=None, method: str = "arclength", step: float | None = None,
+                   max_step: float | None = None, min_step: float | None = None,
+                   max_steps: int = 200, tol: float = 1e-10, fd_step: float = 1e-6,
+                   locate: bool = True, map_options: dict | None = None) -> FamilyBranch:
+    """Follow a periodic orbit (a fixed point of ``P^k``) in a parameter, on any map.
 
     Parameters
     ----------
     builder : callable
-        ``p -> SectionMap | Section | automaton`` (module docstring).
-    s0 : array_like
-        Guess of the fixed point at ``p0`` (corrected first).
+        ``p -> PoincareMap`` (any map: a user's, a specialisation, a
+        :class:`~hybridpd.analysis.hybridmap.SectionMap`), or ``p -> Section | automaton``
+        with ``section`` (module docstring). A map class whose constructor takes the
+        parameter first is a builder.
     p0, p_end : float
         Start and end of the parameter range.
-    period : int
-        ``k``.
+    s0 : array_like, shape (dim,), or PeriodicOrbit
+        Guess of the fixed point at ``p0`` (corrected first), or an orbit found there (its
+        section point and period).
+    period : int, optional
+        ``k`` (default: the orbit's, or 1).
     section : dict, optional
         Keyword arguments of :class:`Section` when ``builder`` returns an automaton.
     method : {"arclength", "natural"}
@@ -272,12 +291,15 @@ def continue_family(builder, s0, p0: float, p_end: float, *, period: int = 1, se
     ...     return impact_oscillator(omega0=1.0, zeta=0.1, omega=w, stop=1.0, e=0.8)
     >>> sec = {"mode": "free", "guard": "impact",
     ...        "reference": (oscillator_initial_state(0, 0, omega=0.8), 0.0)}
-    >>> br = hp.continue_family(build, [7.7, 1.66], 0.8, 0.82, section=sec, step=0.01)
+    >>> br = hp.continue_orbit(build, 0.8, 0.82, [7.7, 1.66], section=sec, step=0.01)
     >>> br.termination, round(br.points[-1].p, 6), bool(br.points[-1].stable)
     ('reached', 0.82, True)
     >>> br.reason
     'reached the end value p = 0.82'
     """
+    if not callable(builder):
+        raise ValueError(f"builder must be a callable p -> PoincareMap (e.g. a map class), got "
+                         f"{type(builder).__name__}")
     if method not in ("arclength", "natural"):
         raise ValueError(f"method must be 'arclength' or 'natural', got {method!r}")
     p0, p_end = float(p0), float(p_end)
@@ -291,6 +313,9 @@ def continue_family(builder, s0, p0: float, p_end: float, *, period: int = 1, se
         raise ValueError("steps must satisfy 0 < min_step <= step <= max_step")
     if int(max_steps) < 1:
         raise ValueError(f"max_steps must be >= 1, got {max_steps!r}")
+    if period is None:
+        period = getattr(s0, "period", 1)
+    s0 = getattr(s0, "s", s0)
     k = int(period)
     make = _map_factory(builder, section, dict(map_options or {}))
     P = make(p0)
@@ -375,47 +400,53 @@ class _Path:
         key = u.tobytes()
         if self._last[0] != key:      # F and Fs ask for the same point in turn
             P = self.make(u[-1])
-            self._last = (key, (P, P.apply(u[:-1], self.k, jacobian=True)))
+            r = P.apply(u[:-1], self.k, jacobian=True)
+            DP = r.DP
+            if r.ok and DP is None:   # the map gives no DP: its finite differences
+                try:
+                    DP = P.jacobian_fd(u[:-1], self.k)
+                except RuntimeError:
+                    DP = np.full((P.dim, P.dim), np.nan)
+            self._last = (key, (P, r, DP))
         return self._last[1]
 
     def F(self, u):
         try:
-            P, r = self._run(u)
+            P, r, DP = self._run(u)
         except ValueError as exc:     # not a section point
             self._why = f"not a section point at p = {u[-1]:.10g}: {exc}"
             return None
-        if r.ok and np.all(np.isfinite(r.DP)):
+        if r.ok and np.all(np.isfinite(DP)):
             return P.wrap(r.s - u[:-1])
         self._undefined(u, r)
         return None
 
     def Fs(self, u):
-        P, r = self._run(u)
+        P, r, DP = self._run(u)
         if not r.ok:
             raise RuntimeError(f"P^k undefined: {r.status}")
-        return r.DP - np.eye(P.dim)
+        return DP - np.eye(P.dim)
 
     def Fp(self, u):
         m, s, hp = self.make, u[:-1], self.hp
         return m(u[-1]).wrap(m(u[-1] + hp)(s, self.k) - m(u[-1] - hp)(s, self.k)) / (2 * hp)
 
     def point(self, u, _its=0):
-        P, r = self._run(u)
-        if not r.ok or not np.all(np.isfinite(r.DP)):
+        P, r, DP = self._run(u)
+        if not r.ok or not np.all(np.isfinite(DP)):
             self._undefined(u, r)
             return None
-        s = u[:-1].copy()
-        if P.section.has_phase:
-            s[0] %= P.section.period
+        s = P.canonical(u[:-1].copy())
         try:
             fp = self.Fp(u)
         except RuntimeError:
             fp = None
-        return _PathPoint(u.copy(), r.DP, fp, _point(r, s, u[-1]))
+        return _PathPoint(u.copy(), DP, fp, _point(r, DP, s, u[-1], P.structural_zeros))
 
     def unwrap(self, cur, new):
-        if self.make(new.u[-1]).section.has_phase:
-            new.u[0] = cur.u[0] + self.make(new.u[-1]).wrap(new.u[:-1] - cur.u[:-1])[0]
+        P = self.make(new.u[-1])
+        if P.period is not None:
+            new.u[0] = cur.u[0] + P.wrap(new.u[:-1] - cur.u[:-1])[0]
 
 
 def _locate(path, correct, a, b, ev, max_iter=40) -> FamilyEvent:
@@ -440,3 +471,8 @@ def _locate(path, correct, a, b, ev, max_iter=40) -> FamilyEvent:
         return ev
     return FamilyEvent(ev.kind, ev.index, best.fam.p, (ev.detail + "; " if ev.detail else "")
                        + f"located: test {fv:.3g}")
+
+
+def continue_family(builder, s0, p0: float, p_end: float, **options) -> FamilyBranch:
+    """:func:`continue_orbit` with the guess first (the argument order of earlier versions)."""
+    return continue_orbit(builder, p0, p_end, s0, **options)

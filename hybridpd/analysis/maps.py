@@ -27,7 +27,7 @@ import numpy as np
 
 from hybridpd._repr import compact_repr
 
-__all__ = ["MapResult", "PoincareMap", "check_returns", "minimal_period"]
+__all__ = ["MapResult", "PoincareMap", "check_returns", "detect_period", "minimal_period"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -279,6 +279,12 @@ class PoincareMap(abc.ABC):
 
     def iterate(self, s0, n: int, k: int = 1) -> np.ndarray:
         """``s0, P^k(s0), ..., P^{nk}(s0)``, shape ``(n + 1, dim)``; NaN rows after a failure."""
+        return self.iterate_status(s0, n, k)[0]
+
+    def iterate_status(self, s0, n: int, k: int = 1) -> tuple:
+        """:meth:`iterate` and why it stopped early: ``(points, status)`` with ``status``
+        ``""`` when all ``n`` iterations ran, else the map's status (``"nonfinite"`` for an
+        image that is not finite, ``"off_section"`` where the image left the map's domain)."""
         out = np.full((int(n) + 1, self.dim), np.nan)
         out[0] = s0
         for i in range(int(n)):
@@ -287,11 +293,58 @@ class PoincareMap(abc.ABC):
             except ValueError:
                 if i == 0:              # a bad start
                     raise
-                break                   # the image left the section's domain
+                return out, "off_section"   # the image left the section's domain
             if not r.ok:
-                break
+                return out, r.status
+            if not np.all(np.isfinite(r.s)):
+                return out, "nonfinite"
             out[i + 1] = r.s
-        return out
+        return out, ""
+
+    def iterate_many(self, S, n: int, k: int = 1, tail: int = 1) -> tuple:
+        """Iterate every row of ``S`` (shape ``(N, dim)``) ``n`` times by ``P^k``:
+        ``(tails (N, tail, dim), status (N,), iterations (N,))`` with the last ``tail``
+        points of each run and why it stopped (``""`` when it ran to the end; see
+        :meth:`iterate_status`). A map may compile this loop (basins run it on whole grids)."""
+        S = np.atleast_2d(np.asarray(S, float))
+        tails = np.full((len(S), int(tail), self.dim), np.nan)
+        status = []
+        its = np.zeros(len(S), np.int64)
+        for i, s in enumerate(S):
+            try:
+                pts, why = self.iterate_status(s, n, k)
+            except ValueError:
+                status.append("off_section")
+                continue
+            done = int(np.sum(np.all(np.isfinite(pts), axis=1))) - 1
+            its[i] = done
+            tails[i] = pts[max(done + 1 - int(tail), 0):done + 1][-int(tail):] \
+                if done + 1 >= int(tail) else np.nan
+            status.append(why)
+        return tails, status, its
+
+    def jacobians(self, S, k: int = 1) -> np.ndarray:
+        """``DP^k`` at every row of ``S`` (shape ``(N, dim)``), shape ``(N, dim, dim)``
+        (a map may compute them all at once); ``RuntimeError`` where undefined."""
+        return np.array([self.jacobian(s, k) for s in np.atleast_2d(S)])
+
+
+def detect_period(points, wrap, max_period: int, tol: float = 1e-6) -> int:
+    """Smallest ``k <= max_period`` with ``points[i] = points[i - k]`` over the whole window
+    (differences through ``wrap``, e.g. :meth:`PoincareMap.wrap`; relative to ``max(1,
+    |points|)``), or 0. The one period detector of a sequence of iterates.
+
+    Examples
+    --------
+    >>> detect_period(np.array([[0.0], [1.0], [0.0], [1.0], [0.0], [1.0]]), np.asarray, 4)
+    2
+    """
+    X = np.asarray(points, float)
+    scale = max(1.0, float(np.max(np.abs(X)))) if X.size else 1.0
+    for k in range(1, min(int(max_period), X.shape[0] // 2) + 1):
+        if float(np.max(np.abs(wrap(X[k:] - X[:-k])))) <= tol * scale:
+            return k
+    return 0
 
 
 def minimal_period(P: PoincareMap, s, k: int, rtol: float = 1e-7) -> int:
