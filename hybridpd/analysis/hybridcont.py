@@ -39,8 +39,7 @@ import numpy as np
 from hybridpd._repr import compact_repr
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import Section, SectionMap
-from hybridpd.analysis.maps import PoincareMap
-from hybridpd.analysis.maps import minimal_period
+from hybridpd.analysis.maps import PoincareMap, minimal_period
 from hybridpd.analysis.pathfollow import corrector, follow_path, illinois
 from hybridpd.analysis.periodic import find_orbit
 
