@@ -96,9 +96,11 @@ class Interval:
     --------
     >>> from hybridpd.pair.intervals import Interval
     >>> x = Interval([1.0, -2.0], [2.0, 3.0])
-    >>> y = x * x - 1 / Interval(3.0)
-    >>> bool((y.lo <= -1 / 3).all() and (y.hi >= 11 / 3).all())
+    >>> y = x * x - 1 / Interval(3.0)   # encloses x^2 - 1/3 for every x of the intervals
+    >>> bool(y.lo[0] <= 1 - 1 / 3 and y.hi[0] >= 4 - 1 / 3)
     True
+    >>> (x * x).lo[1], (x ** 2).lo[1]     # a product does not know its factors are equal
+    (np.float64(-6.000000000000006), np.float64(0.0))
     """
 
     __slots__ = ("hi", "lo")

@@ -160,7 +160,39 @@ def hurwitz_quantities(entries):
 
     All positive iff every eigenvalue of ``M`` has modulus < 1 (see the module docstring).
     """
-    c = _charpoly(entries) + [1]
+    return _hurwitz(_charpoly(entries))
+
+
+def _power_sums(c, kmax=8):
+    """``p_k = tr(M^k) = sum_i lambda_i^k``, ``k = 1..kmax``, by Newton's identities."""
+    p = []
+    for k in range(1, kmax + 1):
+        acc = c[4 - k] * k if k <= 4 else None
+        for j in range(1, min(k, 5)):
+            t = c[4 - j] * p[k - j - 1]
+            acc = t if acc is None else acc + t
+        p.append(-acc)
+    return p
+
+
+def escape_quantities(entries):
+    """Quantities whose modulus exceeds a bound only if some eigenvalue has modulus > 1.
+
+    Returns ``[(x, bound)]``: the coefficients ``c_k`` of the characteristic polynomial
+    (``|c_k| <= C(4, k)`` when every ``|lambda| <= 1``) and the power sums ``tr(M^k)``,
+    ``k = 1..8`` (``<= 4``). With the bilinear test they cover strongly unstable orbits,
+    whose widely spread multipliers make ``Delta_3`` nearly cancel.
+    """
+    c = _charpoly(entries)
+    out = [(c[k], float(_BINOM[k])) for k in range(4)]
+    return out + [(p, 4.0) for p in _power_sums(c)]
+
+
+_BINOM = (1, 4, 6, 4)
+
+
+def _hurwitz(c):
+    c = list(c) + [1]
     q = []
     for j in range(5):
         acc = None
@@ -180,14 +212,17 @@ def _orbit_stage(case, n, boxes: Boxes, dirs):
     nI = Interval(float(n))
     C, S, det = kernel("existence", case)(INTERVAL_OPS, *_args(P), nI)
     M = kernel("halfmap", case)(INTERVAL_OPS, C, S, *_args(P), nI)
-    J = hurwitz_quantities(M)
+    c = _charpoly(M)
     apart = lambda x: (x.r.lo > 0) | (x.r.hi < 0)
     exists = apart(det) & (apart(C) | apart(S))
     stable = np.ones(boxes.size, bool)
     unstable = np.zeros(boxes.size, bool)
-    for j in J:
+    for j in _hurwitz(c):
         stable &= j.r.lo > 0
         unstable |= j.r.hi < 0
+    for x, bound in [(c[k], float(_BINOM[k])) for k in range(4)] + \
+            [(p, 4.0) for p in _power_sums(c)]:
+        unstable |= (x.r.lo > bound) | (x.r.hi < -bound)
     return exists, stable, unstable, C, S, box
 
 
@@ -348,22 +383,31 @@ def viability(case, n, boxes: Boxes, dirs, C1, S1, *, pieces=8, depth=10):
     return verdict, used
 
 
-def classify(case, n, boxes: Boxes, *, pieces=8, depth=10):
-    """Class (:data:`CLASSES` index) and reason (:data:`REASONS` index) of every box."""
+def classify(case, n, boxes: Boxes, *, pieces=8, depth=10, details=False):
+    """Class (:data:`CLASSES` index) and reason (:data:`REASONS` index) of every box.
+
+    With ``details`` also a dict of the parts of the proof per box: ``exists`` (bool),
+    ``viable`` (+1 proved, -1 violated, 0 undecided; 0 where existence is not proved),
+    ``stable`` and ``unstable`` (bool).
+    """
     dirs = boxes.directions()
-    exists, stable, unstable, C1, S1, _ = _orbit_stage(case, n, boxes, dirs)
+    exists, stable, unstable, C, S, _ = _orbit_stage(case, n, boxes, dirs)
     cls = np.zeros(boxes.size, np.int64)
     why = np.full(boxes.size, R_EXIST, np.int64)
+    viable = np.zeros(boxes.size, np.int64)
     idx = np.flatnonzero(exists)
     if idx.size:
-        sub = boxes.take(idx)
-        v, _ = viability(case, n, sub, dirs, C1.take(idx), S1.take(idx), pieces=pieces,
-                         depth=depth)
-        c = np.where(v < 0, NO_ORBIT, np.where(v == 0, UNDECIDED,
-                     np.where(stable[idx], STABLE, np.where(unstable[idx], UNSTABLE, UNDECIDED))))
-        r = np.where(v < 0, R_VIOLATED, np.where(v == 0, R_VIAB,
-                     np.where(stable[idx], R_STABLE, np.where(unstable[idx], R_UNSTABLE, R_STAB))))
-        cls[idx], why[idx] = c, r
+        v, _ = viability(case, n, boxes.take(idx), dirs, C.take(idx), S.take(idx),
+                         pieces=pieces, depth=depth)
+        viable[idx] = v
+        st, un = stable[idx], unstable[idx]
+        cls[idx] = np.select([v < 0, v == 0, st, un], [NO_ORBIT, UNDECIDED, STABLE, UNSTABLE],
+                             UNDECIDED)
+        why[idx] = np.select([v < 0, v == 0, st, un], [R_VIOLATED, R_VIAB, R_STABLE, R_UNSTABLE],
+                             R_STAB)
+    if details:
+        return cls, why, {"exists": exists, "viable": viable, "stable": stable,
+                          "unstable": unstable}
     return cls, why
 
 
