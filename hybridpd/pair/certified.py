@@ -285,7 +285,22 @@ class OrbitCertificate:
 
 
 def _arb_orbit(case, n, kp, kv, mu, e, L, m2, omega, x10):
-    """arb enclosures: ``xm``, the section point, the moduli of the eigenvalues of ``DP``."""
+    """arb enclosures: ``xm``, the section point, the moduli of the eigenvalues of ``DP``.
+
+    At 106 bits, then 212 and 424 while arb cannot isolate the eigenvalues (they may lie
+    far apart, 1e-5 and 1e3, or close together).
+    """
+    from flint import ctx
+
+    for prec in (106, 212, 424):
+        with ctx.workprec(prec):
+            xm, section, moduli = _arb_orbit_at(case, n, kp, kv, mu, e, L, m2, omega, x10)
+        if moduli is not None:
+            break
+    return xm, section, moduli
+
+
+def _arb_orbit_at(case, n, kp, kv, mu, e, L, m2, omega, x10):
     from flint import acb_mat, arb, arb_mat
 
     from hybridpd.pair.interval_kernels import kernel
@@ -313,7 +328,7 @@ def _arb_orbit(case, n, kp, kv, mu, e, L, m2, omega, x10):
         eig = acb_mat(Mm * Mm).eig()
         moduli = sorted((_arb_bounds(abs(z)) for z in eig), key=lambda p: -p[1])
     except (ValueError, ZeroDivisionError):
-        pass  # eigenvalues not isolated: the class rests on the characteristic polynomial
+        pass  # not isolated at this precision
     return _arb_bounds(xm), {k: _arb_bounds(x) for k, x in section.items()}, moduli
 
 

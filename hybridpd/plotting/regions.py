@@ -206,7 +206,7 @@ def _certified_panel(ax, rm, k, title=True):
     if title:
         N = f.size
         ax.set_title(f"e = {rm.e[k]:g}: {_pct((f != 0).sum() / N)} of {N} cells proved\n"
-                     f"stable {(f == 1).sum()}, unstable {(f == 2).sum()}, no orbit "
+                     f"stable/unstable/no orbit: {(f == 1).sum()}/{(f == 2).sum()}/"
                      f"{(f == 3).sum()}")
 
 
