@@ -114,7 +114,7 @@ def test_series_derivatives_enclose_finite_differences(lo, width, which):
     for p in _points(lo, hi)[:4]:
         h = arb(2) ** -30
         with flint.ctx.workprec(200):
-            s = lambda u: arb_ops().DSH(arb(0), u, arb(1))  # noqa: E731 - su(u) in arb
+            s = lambda u: arb_ops().DSH(arb(0), u, arb(1))
             if which == 1:
                 val = (s(arb(p) + h) - s(arb(p) - h)) / (2 * h)
             else:
@@ -168,7 +168,7 @@ def test_kernels_enclose_arb_point_values(kp, kv, h, e, case, order):
     M = kernel("halfmap", case)(INTERVAL_OPS, C, S, *args, nI)
     s = Interval(0.25, 0.375)
     G = kernel("gap", case)(INTERVAL_OPS, s, C, S, *args, nI)
-    rng = lambda x: x if isinstance(x, Interval) else x.r  # noqa: E731
+    rng = lambda x: x if isinstance(x, Interval) else x.r
     with flint.ctx.workprec(256):
         _check_kernel_points(case, e, kp, kv, h, C, S, det, M, G, rng)
 
@@ -276,7 +276,7 @@ class _Paper:
 
     def _to_wall(self, X, wall):
         """Flow until z3 = wall * L (first crossing after leaving the other wall)."""
-        g = lambda t: self.flow(X, t)[0] - self.flow(X, t)[2] - wall * self.L  # noqa: E731
+        g = lambda t: self.flow(X, t)[0] - self.flow(X, t)[2] - wall * self.L
         ts = np.linspace(1e-9, 3 * self.tau, 240)
         vals = [g(t) for t in ts]
         for k in range(1, len(ts)):
@@ -387,7 +387,7 @@ def test_point_certificates_of_other_classes():
 
 def _grazing_kv(kp=10.0):
     """kv of the grazing boundary (collocated, e = 0.1) at kp, by bisection on the float path."""
-    f = lambda kv: hp.symmetric_orbits(kp, kv, mu=0.1, e=0.1, L=0.75, omega=5.0).exists  # noqa: E731
+    f = lambda kv: hp.symmetric_orbits(kp, kv, mu=0.1, e=0.1, L=0.75, omega=5.0).exists
     a, b = 20.0, 24.0
     assert f(a) and not f(b)
     for _ in range(40):
@@ -398,7 +398,7 @@ def _grazing_kv(kp=10.0):
 
 def _stability_kv(kp=5.0):
     """kv where the non-collocated orbit loses stability at kp (e = 0.5)."""
-    f = lambda kv: hp.symmetric_orbits(kp, kv, mu=0.1, e=0.5, L=0.75, omega=5.0,  # noqa: E731
+    f = lambda kv: hp.symmetric_orbits(kp, kv, mu=0.1, e=0.5, L=0.75, omega=5.0,
                                        case="noncollocated").stable
     a, b = 0.2, 6.0
     assert f(a) and not f(b)
