@@ -429,7 +429,7 @@ def test_boxes_straddling_a_boundary(which):
        case=st.sampled_from(["collocated", "noncollocated"]))
 def test_any_proved_box_agrees_with_its_points(kp, kv, e, case):
     b = {"kp": (kp, kp + 0.4), "kv": (kv, kv + 0.4)}
-    flags, _, _ = certify_cells(case, kp=b["kp"], kv=b["kv"], e=e, depth=0, **FIXED)
+    flags = certify_cells(case, kp=b["kp"], kv=b["kv"], e=e, depth=0, **FIXED).flags
     kps, kvs = _samples(b, num=30, seed=int(kp * 1000))
     pts = hp.symmetric_orbits(kps, kvs, mu=0.1, e=e, L=0.75, omega=5.0, case=case)
     point_class = np.where(~pts.exists, 3, np.where(pts.stable, 1, 2))

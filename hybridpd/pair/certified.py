@@ -41,9 +41,9 @@ from hybridpd.model import (
 from hybridpd.pair import proofs
 from hybridpd.pair.intervals import widen_down, widen_up
 
-__all__ = ["FLAG_MEANINGS", "FLAG_VALUES", "MAP_AXES", "BoxCertificate", "CertifiedMap",
-           "OrbitCertificate", "cell_edges", "certified_map", "certify_box", "certify_cells",
-           "certify_orbit", "class_shares"]
+__all__ = ["FLAG_MEANINGS", "FLAG_VALUES", "MAP_AXES", "BoxCertificate", "CertifiedCells",
+           "CertifiedMap", "OrbitCertificate", "cell_boxes", "cell_edges", "certified_map",
+           "certify_box", "certify_cells", "certify_orbit", "class_shares"]
 
 #: CF flag values of a certified map and their meanings (``flag_meanings`` is one string).
 FLAG_VALUES = (0, 1, 2, 3)
@@ -82,6 +82,32 @@ def _ratio(num, den):
     return np.where(exact, a, widen_down(a / d)), np.where(exact, b, widen_up(b / c))
 
 
+@dataclass(frozen=True)
+class CertifiedCells:
+    """The certified classes of many boxes (:func:`certify_cells`).
+
+    Attributes
+    ----------
+    flags : ndarray of int8
+        :data:`FLAG_VALUES` (``0`` undecided, ``1`` proved stable, ``2`` proved unstable,
+        ``3`` proved no orbit), the broadcast shape of the parameters.
+    reasons : ndarray of int8
+        Indices into :data:`hybridpd.pair.proofs.REASONS`.
+    boxes_evaluated : int
+        Boxes classified, parts included.
+    stop : str
+        Why the bisection stopped: ``"decided"`` (no undecided part left), ``"depth"`` or
+        ``"max_boxes"``.
+    """
+
+    __repr__ = compact_repr
+
+    flags: np.ndarray
+    reasons: np.ndarray
+    boxes_evaluated: int
+    stop: str
+
+
 def certify_cells(case="collocated", *, kp, kv, mu, e, omega, m2=1.0, gamma=None, L=None,
                   x10=1.0, n=1, depth=3):
     """Classify many boxes at once (vectorised); every parameter a number or ``(lo, hi)``.
@@ -102,21 +128,17 @@ def certify_cells(case="collocated", *, kp, kv, mu, e, omega, m2=1.0, gamma=None
 
     Returns
     -------
-    flags : ndarray of int8
-        :data:`FLAG_VALUES` (``0`` undecided, ``1`` proved stable, ``2`` proved unstable,
-        ``3`` proved no orbit), the broadcast shape of the parameters.
-    reasons : ndarray of int8
-        Indices into :data:`hybridpd.pair.proofs.REASONS`.
-    boxes_evaluated : int
-        Boxes classified, parts included.
+    CertifiedCells
 
     Examples
     --------
+    >>> import numpy as np
     >>> from hybridpd.pair.certified import certify_cells
-    >>> flags, reasons, _ = certify_cells("collocated", kp=(9.5, 10.5), kv=(19.5, 20.5),
-    ...                                   mu=0.1, e=0.5, gamma=0.75, omega=5.0)
-    >>> int(flags)    # 1: proved stable on the whole box
-    1
+    >>> kp = np.array([9.5, 10.0])
+    >>> r = certify_cells("collocated", kp=(kp, kp + 0.5), kv=(19.5, 20.0), mu=0.1, e=0.5,
+    ...                   gamma=0.75, omega=5.0)
+    >>> r.flags.tolist(), r.stop    # 1: proved stable on each whole box
+    ([1, 1], 'decided')
     """
     case = Case.parse(case).value
     n = check_odd_order(n)
@@ -129,9 +151,9 @@ def certify_cells(case="collocated", *, kp, kv, mu, e, omega, m2=1.0, gamma=None
         kp=_interval_arg("kp", kp), kv=_interval_arg("kv", kv), mu=_interval_arg("mu", mu),
         e=_interval_arg("e", e), gamma=gam, omega=_interval_arg("omega", omega),
         m2=_interval_arg("m2", m2))
-    cls, why, evaluated, _ = proofs.classify_bisect(case, n, boxes, depth=depth)
-    return (cls.astype(np.int8).reshape(shape), why.astype(np.int8).reshape(shape),
-            int(evaluated))
+    cls, why, evaluated, stop = proofs.classify_bisect(case, n, boxes, depth=depth)
+    return CertifiedCells(cls.astype(np.int8).reshape(shape), why.astype(np.int8).reshape(shape),
+                          int(evaluated), stop)
 
 
 def _pair(lo, hi):
@@ -158,6 +180,8 @@ class BoxCertificate:
         Bisections allowed.
     boxes_evaluated : int
         Boxes classified (the box and its parts).
+    stop : str
+        Why the bisection stopped (``"decided"``, ``"depth"`` or ``"max_boxes"``).
     """
 
     __repr__ = compact_repr
@@ -170,13 +194,14 @@ class BoxCertificate:
     box: dict
     depth: int
     boxes_evaluated: int
+    stop: str
 
     def to_dict(self) -> dict:
         """JSON-ready form."""
         return {"verdict": self.verdict, "flag": self.flag, "reason": self.reason,
                 "case": self.case, "n": self.n,
                 "box": {k: list(v) for k, v in self.box.items()}, "depth": self.depth,
-                "boxes_evaluated": self.boxes_evaluated}
+                "boxes_evaluated": self.boxes_evaluated, "stop": self.stop}
 
 
 def certify_box(case="collocated", *, kp, kv, mu, e, gamma, omega, m2=1.0, n=1,
@@ -212,10 +237,11 @@ def certify_box(case="collocated", *, kp, kv, mu, e, gamma, omega, m2=1.0, n=1,
         if lo.ndim or hi.ndim:
             raise ValueError(f"{k} must be a number or a (lo, hi) pair of numbers")
         values[k] = _pair(lo, hi)
-    flags, why, ev = certify_cells(case, n=n, depth=depth, **values)
-    f = int(flags)
-    return BoxCertificate(proofs.CLASSES[f], f, proofs.REASONS[int(why)], Case.parse(case).value,
-                          int(n), values, int(depth), ev)
+    r = certify_cells(case, n=n, depth=depth, **values)
+    f = int(r.flags)
+    return BoxCertificate(proofs.CLASSES[f], f, proofs.REASONS[int(r.reasons)],
+                          Case.parse(case).value, int(n), values, int(depth), r.boxes_evaluated,
+                          r.stop)
 
 
 # ----------------------------------------------------------------------------------------
@@ -451,6 +477,13 @@ def class_shares(flags) -> dict:
         for the three proved classes, where ``k`` counts cells proved in the class and
         ``u`` the undecided ones (which may belong to it): the class's true share of the
         cells lies in ``share``. For ``"undecided"`` itself, ``proved`` is its count.
+
+    Examples
+    --------
+    >>> from hybridpd.pair.certified import class_shares
+    >>> s = class_shares([[1, 1], [0, 3]])
+    >>> s["proved_stable"]["share"], s["proved_no_orbit"]["share"]
+    ((0.5, 0.75), (0.25, 0.5))
     """
     f = np.asarray(flags)
     N = int(f.size)
@@ -557,7 +590,21 @@ def _map_axis(param, spec, spacing):
 
 
 def cell_boxes(x_name, x_edges, y_name, y_edges):
-    """``{name: (lo, hi)}`` arrays of shape ``(len(y_edges) - 1, len(x_edges) - 1)``."""
+    """The cells of a grid as ``{name: (lo, hi)}``, arrays of shape ``(ny, nx)``.
+
+    Parameters
+    ----------
+    x_name, y_name : str
+    x_edges, y_edges : ndarray
+        Cell edges (:func:`cell_edges`), lengths ``nx + 1`` and ``ny + 1``.
+
+    Examples
+    --------
+    >>> from hybridpd.pair.certified import cell_boxes
+    >>> c = cell_boxes("kp", [1.0, 1.5, 2.0], "kv", [3.0, 4.0])
+    >>> c["kp"][0].tolist(), c["kp"][1].tolist(), c["kv"][0].tolist()
+    ([[1.0, 1.5]], [[1.5, 2.0]], [[3.0, 3.0]])
+    """
     XL, YL = np.meshgrid(x_edges[:-1], y_edges[:-1])
     XH, YH = np.meshgrid(x_edges[1:], y_edges[1:])
     return {x_name: (XL, XH), y_name: (YL, YH)}
@@ -625,9 +672,9 @@ def certified_map(case="collocated", *, x=("kp", 0.1, 50.0, 101), y=("kv", 0.1, 
         for c in range(0, xs.size * ys.size, chunk_size):
             sl = slice(c, c + chunk_size)
             part = {k: (lo[sl], hi[sl]) for k, (lo, hi) in flat.items()}
-            f, r, k = certify_cells(case, n=n, depth=depth, e=ev, **fixed, **part)
-            f_out[sl], r_out[sl] = f, r
-            evaluated += k
+            r = certify_cells(case, n=n, depth=depth, e=ev, **fixed, **part)
+            f_out[sl], r_out[sl] = r.flags, r.reasons
+            evaluated += r.boxes_evaluated
     return CertifiedMap(case, n, xname, yname, xs, ys, xe, ye, es, {**fixed, "n": n}, flags,
                         reasons, int(depth), time.perf_counter() - t0, evaluated)
 

@@ -159,6 +159,20 @@ def hurwitz_quantities(entries):
     """``q_0..q_4`` and ``Delta_3`` of the bilinear image of ``M``'s characteristic polynomial.
 
     All positive iff every eigenvalue of ``M`` has modulus < 1 (see the module docstring).
+
+    Parameters
+    ----------
+    entries : sequence of 16 numbers, intervals or centred forms
+        ``M`` row by row.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hybridpd.pair.intervals import Interval
+    >>> from hybridpd.pair.proofs import hurwitz_quantities
+    >>> M = np.diag([0.5, -0.9, 0.2, 0.0]) + 0.05
+    >>> all(q.lo > 0 for q in hurwitz_quantities([Interval(v) for v in M.ravel()]))
+    True
     """
     return _hurwitz(_charpoly(entries))
 
@@ -389,6 +403,15 @@ def classify(case, n, boxes: Boxes, *, pieces=8, depth=10, details=False):
     With ``details`` also a dict of the parts of the proof per box: ``exists`` (bool),
     ``viable`` (+1 proved, -1 violated, 0 undecided; 0 where existence is not proved),
     ``stable`` and ``unstable`` (bool).
+
+    Examples
+    --------
+    >>> from hybridpd.pair.proofs import CLASSES, classify, scaled_boxes
+    >>> boxes, _ = scaled_boxes(kp=(9.9, 10.1), kv=(19.9, 20.1), mu=0.1, e=0.5, gamma=0.75,
+    ...                         omega=5.0, m2=1.0)
+    >>> cls, why = classify("noncollocated", 1, boxes)
+    >>> CLASSES[int(cls[0])]
+    'proved_unstable'
     """
     dirs = boxes.directions()
     exists, stable, unstable, C, S, _ = _orbit_stage(case, n, boxes, dirs)

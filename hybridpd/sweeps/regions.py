@@ -252,8 +252,8 @@ def _certify_chunk(chunk, case, n, fixed, depth, xname, yname):
     kw = dict(fixed)
     kw[xname] = (chunk["x_lo"], chunk["x_hi"])
     kw[yname] = (chunk["y_lo"], chunk["y_hi"])
-    flags, reasons, _ = certify_cells(case, n=n, depth=depth, e=chunk["e"], **kw)
-    return {"certified": flags, "certified_reason": reasons}
+    r = certify_cells(case, n=n, depth=depth, e=chunk["e"], **kw)
+    return {"certified": r.flags, "certified_reason": r.reasons}
 
 
 def _certify(case, n, fixed, depth, xname, xs, yname, ys, es, *, executor, max_workers, store,
