@@ -472,7 +472,8 @@ def test_certified_map_agrees_with_the_point_map():
 def test_region_map_certified_round_trip(tmp_path):
     rm = hp.region_map("collocated", x=("kp", 9, 11, 3), y=("kv", 19, 21, 2), e=[0.5, 0.9],
                        mu=0.1, gamma=0.75, omega=5.0, certify=True, certify_depth=1,
-                       progress=False)
+                       progress=False, store=tmp_path / "run.zarr")
+    assert (tmp_path / "run.certified.zarr").is_dir()   # the certification's own store
     assert rm.certified.shape == (2, 2, 3) and rm.certified.dtype == np.int8
     assert (rm.certified[rm.certified != 0] == 1).all()
     ds = rm.to_dataset()

@@ -329,6 +329,7 @@ def _arb_orbit(case, n, kp, kv, mu, e, L, m2, omega, x10):
 def _arb_orbit_at(case, n, kp, kv, mu, e, L, m2, omega, x10):
     from flint import acb_mat, arb, arb_mat
 
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.pair.interval_kernels import kernel
     from hybridpd.pair.intervals import arb_ops
 

@@ -67,6 +67,7 @@ def _syms():
     """The SymPy symbols of the scaled kernels, by argument name."""
     import sympy as sp
 
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.pair.symbolic.derive import _symbols
 
     y = _symbols()
@@ -81,6 +82,7 @@ def _scaling(case: str) -> dict:
     ``L``, ``x10``) and the orbit's velocities (``tau``, ``v``, ``x20``, ``y20``, ``y21``)."""
     import sympy as sp
 
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.pair.symbolic.derive import _symbols
 
     y, z = _symbols(), _syms()
@@ -103,6 +105,7 @@ def _check_free(exprs, name):
 
 def existence_exprs(case: str):
     """``[C, S, det]`` of (13)-(14) in the scaled parameters (SymPy expressions)."""
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.pair.symbolic.derive import _existence_derivation
 
     ex = _existence_derivation(case)
@@ -118,6 +121,7 @@ def gap_exprs(case: str):
     """``[z3, z3', z3'']`` after the ``+L`` impact at ``t = s n pi / w`` (SymPy)."""
     import sympy as sp
 
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.pair.symbolic.derive import _flow_derivation, _symbols
 
     y, z = _symbols(), _syms()
@@ -146,6 +150,7 @@ def halfmap_exprs(case: str):
     """
     import sympy as sp
 
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.pair.symbolic.derive import (
         _flow_derivation,
         _impact_block_derivation,
@@ -201,6 +206,7 @@ class _Printer:
     def __call__(self, ex) -> str:
         import sympy as sp
 
+        # deferred import: loaded only when this runs, for start-up time
         from hybridpd.pair.symbolic.derive import sympy_functions
 
         DCh, DSh = sympy_functions()
@@ -283,6 +289,7 @@ def kernel_source(name: str, case="collocated") -> str:
 
 @functools.cache
 def _key() -> str:
+    # deferred import: loaded only when this runs, for start-up time
     from hybridpd.pair.symbolic._numeric import sympy_version
 
     srcs = [hashlib.sha256(p.read_bytes()).hexdigest() for p in _SOURCES]

@@ -113,6 +113,7 @@ class RegionMap:
         rho = np.where(self.exists, self.spectral_radius, np.nan)
         extra = {}
         if self.certified is not None:
+            # deferred import: loaded only when this runs, for start-up time
             from hybridpd.pair.certified import FLAG_MEANINGS
 
             extra = {"certified": self.certified.tolist(), "certified_meanings": FLAG_MEANINGS,
@@ -153,6 +154,7 @@ class RegionMap:
                 "flag_meanings": " ".join(re.sub(r"\W+", "_", REASONS[c]).strip("_")
                                           for c in codes)})}
         if self.certified is not None:
+            # deferred import: loaded only when this runs, for start-up time
             from hybridpd.pair.certified import FLAG_MEANINGS, FLAG_VALUES
 
             data["certified"] = (dims, np.asarray(self.certified, np.int8), {
