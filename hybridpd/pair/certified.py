@@ -279,7 +279,8 @@ class OrbitCertificate:
         ``[0, T)``), ``z1 = x2`` (length), ``z2 = y2`` and ``z4 = y1 - y2`` (velocity).
     multiplier_moduli : tuple of (float, float) or None
         Enclosures of ``|lambda|`` for the four eigenvalues of ``DP``, by decreasing upper
-        bound (``None`` where arb could not isolate the eigenvalues).
+        bound (``None`` where arb could not isolate the eigenvalues, or viability is
+        violated).
     spectral_radius : (float, float) or None
     viable : int
         ``+1`` viability proved, ``-1`` violated, ``0`` undecided.
@@ -416,10 +417,12 @@ def certify_orbit(pair: ImpactPair, gains, omega: float, *, x10: float = 1.0, n:
             flag, reason = proofs.STABLE, proofs.REASONS[proofs.R_STABLE]
         elif max(m[0] for m in moduli) > 1:
             flag, reason = proofs.UNSTABLE, proofs.REASONS[proofs.R_UNSTABLE]
+    if viable == -1:
+        moduli = None  # the candidate of (13)-(14) is no orbit: its "multipliers" mean nothing
     rho = None if moduli is None else (max(m[0] for m in moduli), max(m[1] for m in moduli))
     params = {"kp": g.kp, "kv": g.kv, "mu": pair.mu, "e": pair.e, "L": pair.L, "m2": pair.m2,
               "omega": omega, "x10": x10}
-    return OrbitCertificate(proofs.CLASSES[flag], flag, reason.replace(" box", " point"),
+    return OrbitCertificate(proofs.CLASSES[flag], flag, reason.replace(" on the whole box", ""),
                             case, n, params, xm, section,
                             None if moduli is None else tuple(moduli), rho, viable)
 
