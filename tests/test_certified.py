@@ -9,7 +9,6 @@ multipliers from central finite differences of the impact map (contacts located 
 ``brentq``).
 """
 import math
-import os
 
 import numpy as np
 import pytest
@@ -538,8 +537,7 @@ def test_bad_map_and_orbit_input():
         certify_cells("sideways", kp=1.0, kv=1.0, mu=0.1, e=0.5, omega=5.0, gamma=0.75)
 
 
-@pytest.mark.slow
-@pytest.mark.skipif(os.environ.get("HYBRIDPD_SKIP_HEAVY") == "1", reason="heavy")
+@pytest.mark.slow  # ~15 s per case
 @pytest.mark.parametrize("case", ["collocated", "noncollocated"])
 def test_certified_map_full_paper_box_is_consistent(case):
     cm = certified_map(case, x=("kp", 0.1, 50, 41), y=("kv", 0.1, 50, 41), e=[0.1, 0.5, 0.9],
