@@ -4,4 +4,7 @@
 ``symbolic`` holds the SymPy closed forms (flows, existence, Jacobian blocks) and ``batch``
 the compiled closed-form engine. Both fast paths are checked against the general path in the
 tests. ``naive`` is the plain ``solve_ivp`` loop kept as an independent reference.
+``certified`` proves the symmetric orbit's class on boxes of parameters, in the interval
+arithmetic of ``intervals`` and ``centred`` on the closed forms of ``interval_kernels``
+(the proofs themselves in ``proofs``).
 """

@@ -24,7 +24,7 @@ from hybridpd.plotting._common import (
 )
 from hybridpd.plotting.style import DOUBLE, axis_label, house_figure, series, styled
 
-__all__ = ["param_line", "plot_region_panels", "plot_regions"]
+__all__ = ["param_line", "plot_certified_panels", "plot_region_panels", "plot_regions"]
 
 #: Colour-blind-safe colours (Okabe-Ito).
 FILL = "#56B4E9"
@@ -40,6 +40,12 @@ LAB_EX = "existence boundary (ticks on the existing side)"
 LAB_ST = "stability boundary"
 LAB_ZOOM = "zoom window (second row)"
 _CASE = {"collocated": "collocated", "noncollocated": "non-collocated"}
+
+#: Certified classes (CF flag value -> legend text and face colour); undecided is hatched.
+CERTIFIED = {1: ("proved stable", FILL), 2: ("proved unstable", "#E69F00"),
+             3: ("proved no orbit (white)", "white")}
+UNDECIDED = "undecided (hatched)"
+UNDECIDED_FACE, UNDECIDED_EDGE, UNDECIDED_HATCH = "0.88", "0.55", "xxxx"
 
 #: Traced boundary kinds that bound existence (drawn like the existence boundary).
 _EXISTENCE_KINDS = ("existence", "grazing", "viability", "xm_zero", "sticking")
@@ -175,8 +181,83 @@ def _panel(ax, X, Y, ex, st, *, curves=None, mark=None, title=None, outline=None
         ax.set_title(title)
 
 
+def _certified_panel(ax, rm, k, title=True):
+    """The certified classes of the cells of ``rm.certified[k]``: proved classes filled,
+    undecided cells hatched in a neutral grey; each cell drawn as its box."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd._format import pct as _pct
+    from hybridpd.pair.certified import cell_edges
+
+    xe, ye = cell_edges(rm.x), cell_edges(rm.y)
+    f = np.asarray(rm.certified[k])
+    for code, (label, face) in CERTIFIED.items():
+        if (f == code).any():
+            m = ax.pcolormesh(xe, ye, np.ma.masked_where(f != code, np.ones(f.shape)),
+                              cmap=_one_colour(face), vmin=0, vmax=1, shading="flat")
+            register(ax, m, label, patch_proxy(facecolor=face, edgecolor="0.3", lw=0.6))
+    if (f == 0).any():
+        m = ax.pcolor(xe, ye, np.ma.masked_where(f != 0, np.ones(f.shape)),
+                      cmap=_one_colour(UNDECIDED_FACE), vmin=0, vmax=1, hatch=UNDECIDED_HATCH,
+                      edgecolor=UNDECIDED_EDGE, linewidth=0.0)
+        register(ax, m, UNDECIDED, patch_proxy(facecolor=UNDECIDED_FACE, edgecolor=UNDECIDED_EDGE,
+                                               hatch=UNDECIDED_HATCH, lw=0.6))
+    ax.set_xlim(xe[0], xe[-1])
+    ax.set_ylim(ye[0], ye[-1])
+    if title:
+        N = f.size
+        ax.set_title(f"e = {rm.e[k]:g}: {_pct((f != 0).sum() / N)} of {N} cells proved\n"
+                     f"stable/unstable/no orbit: {(f == 1).sum()}/{(f == 2).sum()}/"
+                     f"{(f == 3).sum()}")
+
+
+def _one_colour(face):
+    from matplotlib.colors import ListedColormap
+
+    return ListedColormap([face])
+
+
 @styled
-def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, title=None):
+def plot_certified_panels(rm, *, params=None, title=None):
+    """One panel per ``e``: the certified class of every grid point's cell.
+
+    Proved stable, proved unstable and proved no orbit are filled (blue, orange, white);
+    undecided cells are hatched in a neutral grey. Each cell is drawn as the box the proof
+    covers (half-way to the neighbouring points; see
+    :func:`hybridpd.pair.certified.cell_edges`).
+
+    Parameters
+    ----------
+    rm : RegionMap
+        With ``certified`` (``region_map(..., certify=True)``).
+    params : dict, optional
+        Caption parameters (default: from ``rm.fixed``).
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    if getattr(rm, "certified", None) is None:
+        raise ValueError("rm has no certified classes: make it with region_map(..., "
+                         "certify=True)")
+    ne = len(rm.e)
+    fig = house_figure(DOUBLE, 3.4)
+    axes = []
+    for k in range(ne):
+        ax = fig.add_subplot(1, ne, k + 1)
+        _certified_panel(ax, rm, k)
+        ax.set_xlabel(axis_label(rm.x_name))
+        ax.set_ylabel(axis_label(rm.y_name) if k == 0 else "")
+        axes.append(ax)
+    legend_from_gids(fig, axes, ncol=4)
+    head = title or f"{_CASE.get(rm.case, rm.case)} PD, certified"
+    fig.suptitle(f"{head}: {param_line(params or _params_of(rm))}")
+    return fig
+
+
+@styled
+def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, title=None,
+                       certified=None):
     """One panel per ``e`` (Figs 4-5): the stable region filled, boundaries marked.
 
     Parameters
@@ -194,6 +275,10 @@ def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, ti
     params : dict, optional
         ``mu, gamma, omega, n, m2, x10`` for the caption (default: from ``rm.fixed``).
     title : str, optional
+    certified : bool, optional
+        Add a row with the certified class of every cell (proved classes filled, undecided
+        hatched; see :func:`plot_certified_panels`). Default: when ``rm`` has certified
+        classes and no ``zoom`` is given.
 
     Returns
     -------
@@ -203,9 +288,17 @@ def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, ti
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd._format import pct as _pct
 
+    has_cert = getattr(rm, "certified", None) is not None
+    if certified is None:
+        certified = has_cert and zoom is None
+    if certified and not has_cert:
+        raise ValueError("certified=True needs a region map made with certify=True")
+    if certified and zoom is not None:
+        raise ValueError("draw either a zoom row or the certified row, not both")
     maps = [rm] + ([zoom] if zoom is not None else [])
     ne = len(rm.e)
-    fig = house_figure(DOUBLE, min(9.0, 2.45 * len(maps) + 1.0))
+    rows = len(maps) + (1 if certified else 0)
+    fig = house_figure(DOUBLE, min(9.0, 2.45 * rows + 1.0))
     axes = []
     outline = None
     if zoom is not None:
@@ -213,7 +306,7 @@ def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, ti
     for row, m in enumerate(maps):
         X, Y = np.meshgrid(m.x, m.y)
         for k, e in enumerate(m.e):
-            ax = fig.add_subplot(len(maps), ne, row * ne + k + 1)
+            ax = fig.add_subplot(rows, ne, row * ne + k + 1)
             if isinstance(curves, dict):  # per e, or per (row, e) with a zoom row
                 cv = curves.get((row, float(e)), curves.get(float(e)) if row == 0 else None)
             else:
@@ -225,6 +318,13 @@ def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, ti
                          f"exists and stable {_pct(fs)}")
             ax.set_xlabel(axis_label(m.x_name))
             ax.set_ylabel(axis_label(m.y_name) if k == 0 else "")
+            axes.append(ax)
+    if certified:
+        for k in range(ne):
+            ax = fig.add_subplot(rows, ne, len(maps) * ne + k + 1)
+            _certified_panel(ax, rm, k)
+            ax.set_xlabel(axis_label(rm.x_name))
+            ax.set_ylabel(axis_label(rm.y_name) if k == 0 else "")
             axes.append(ax)
     legend_from_gids(fig, axes, ncol=3)
     head = title or _head(rm)

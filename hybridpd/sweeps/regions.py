@@ -15,7 +15,14 @@ import numpy as np
 
 from hybridpd._repr import compact_repr
 from hybridpd.analysis.orbits import REASONS, symmetric_orbits
-from hybridpd.model import Case, check_array, check_named_axis, check_odd_order, check_positive
+from hybridpd.model import (
+    Case,
+    check_array,
+    check_int,
+    check_named_axis,
+    check_odd_order,
+    check_positive,
+)
 from hybridpd.sweeps.labelled import (
     axis_attrs,
     decode_attrs,
@@ -53,6 +60,12 @@ class RegionMap:
     spectral_radius, xm : ndarray of float, same shape (NaN where no orbit exists / singular)
     reason : ndarray of int, same shape
         Codes of :data:`hybridpd.analysis.orbits.REASONS`.
+    certified : ndarray of int8, same shape, or None
+        The certified class of each grid point's cell (``region_map(certify=True)``; see
+        :mod:`hybridpd.pair.certified`): CF flags ``0`` undecided, ``1`` proved stable,
+        ``2`` proved unstable, ``3`` proved no orbit. The cell of a point is the box half-way
+        to its neighbours, the edge cells ending at the grid's first and last points
+        (:func:`hybridpd.pair.certified.cell_edges`).
     """
 
     case: str
@@ -68,6 +81,7 @@ class RegionMap:
     xm: np.ndarray
     reason: np.ndarray
     metadata: dict = field(default_factory=dict)
+    certified: np.ndarray | None = None
     __repr__ = compact_repr
 
     def cell_area(self) -> float:
@@ -84,17 +98,37 @@ class RegionMap:
         arr = {"exists": self.exists, "stable": self.stable}[which]
         return arr.mean(axis=(1, 2))
 
+    def certified_shares(self) -> list:
+        """Per ``e``, each certified class's count and share interval (see
+        :func:`hybridpd.pair.certified.class_shares`); ``[]`` without a certified map."""
+        if self.certified is None:
+            return []
+        # deferred import: loaded only when this runs, for start-up time
+        from hybridpd.pair.certified import class_shares
+
+        return [class_shares(f) for f in self.certified]
+
     def to_dict(self) -> dict:
         """JSON-ready form (the CLI's ``regions --json``), arrays indexed ``[e][y][x]``."""
         rho = np.where(self.exists, self.spectral_radius, np.nan)
-        return {
+        extra = {}
+        if self.certified is not None:
+            # deferred import: loaded only when this runs, for start-up time
+            from hybridpd.pair.certified import FLAG_MEANINGS
+
+            extra = {"certified": self.certified.tolist(), "certified_meanings": FLAG_MEANINGS,
+                     "certified_shares": [{k: {**v, "share": list(v["share"])}
+                                           for k, v in sh.items()}
+                                          for sh in self.certified_shares()]}
+        return {**extra, 
             "case": self.case, "x_name": self.x_name, "y_name": self.y_name,
             self.x_name: self.x.tolist(), self.y_name: self.y.tolist(), "e": self.e.tolist(),
             "fixed": self.fixed,
             "exists": self.exists.tolist(), "stable": self.stable.tolist(),
             "spectral_radius": [[[None if not np.isfinite(v) else float(v) for v in row]
                                  for row in plane] for plane in rho],
-            "reason": self.reason.tolist(), "reasons": {str(k): v for k, v in REASONS.items()}}
+            "reason": self.reason.tolist(), "reasons": {str(k): v for k, v in REASONS.items()},
+            **extra}
 
     def to_dataset(self):
         """The map as an :class:`xarray.Dataset` with dimensions ``(e, y_name, x_name)``.
@@ -119,6 +153,15 @@ class RegionMap:
                 "long_name": "why no orbit exists (0: it exists)", "flag_values": codes,
                 "flag_meanings": " ".join(re.sub(r"\W+", "_", REASONS[c]).strip("_")
                                           for c in codes)})}
+        if self.certified is not None:
+            # deferred import: loaded only when this runs, for start-up time
+            from hybridpd.pair.certified import FLAG_MEANINGS, FLAG_VALUES
+
+            data["certified"] = (dims, np.asarray(self.certified, np.int8), {
+                "long_name": "certified class of the grid point's cell (interval proofs)",
+                "flag_values": np.asarray(FLAG_VALUES, np.int8), "flag_meanings": FLAG_MEANINGS,
+                "cells": "half-way to the neighbouring grid points; edge cells end at the "
+                         "first and last points"})
         attrs = {"kind": "region_map", "case": self.case, "x_name": self.x_name,
                  "y_name": self.y_name, "fixed_names": " ".join(self.fixed),
                  **encode_attrs(self.fixed)}
@@ -138,14 +181,16 @@ class RegionMap:
                    ds[a["y_name"]].values, ds["e"].values, {k: a[k] for k in names},
                    ds["exists"].values.astype(bool), ds["stable"].values.astype(bool),
                    ds["spectral_radius"].values, ds["xm"].values,
-                   ds["reason"].values.astype(np.int64), dict(a.get("metadata") or {}))
+                   ds["reason"].values.astype(np.int64), dict(a.get("metadata") or {}),
+                   ds["certified"].values.astype(np.int8) if "certified" in ds else None)
 
     def save(self, path) -> Path:
         """Write to ``.nc`` (netCDF) or ``.zarr`` (:meth:`to_dataset`), or ``.npz``, by suffix."""
         return save_result(self, path, lambda: (
             {"x": self.x, "y": self.y, "e": self.e, "exists": self.exists,
              "stable": self.stable, "spectral_radius": self.spectral_radius, "xm": self.xm,
-             "reason": self.reason},
+             "reason": self.reason,
+             **({} if self.certified is None else {"certified": self.certified})},
             {"kind": "region_map", "case": self.case, "x_name": self.x_name,
              "y_name": self.y_name, "fixed": self.fixed, **self.metadata}))
 
@@ -185,7 +230,8 @@ def load_region_map(path) -> RegionMap:
                  if k not in ("kind", "case", "x_name", "y_name", "fixed")}
         return RegionMap(meta["case"], meta["x_name"], meta["y_name"], a["x"], a["y"], a["e"],
                          meta["fixed"], a["exists"].astype(bool), a["stable"].astype(bool),
-                         a["spectral_radius"], a["xm"], a["reason"], extra)
+                         a["spectral_radius"], a["xm"], a["reason"], extra,
+                         a["certified"].astype(np.int8) if "certified" in a else None)
 
     return load_result(RegionMap, path, from_npz)
 
@@ -200,11 +246,48 @@ def _region_chunk(chunk, case, n, fixed):
             "xm": r.xm, "reason": r.reason}
 
 
+def _certify_chunk(chunk, case, n, fixed, depth, xname, yname):
+    """Certify one chunk of grid cells (module-level: runs in worker processes)."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.pair.certified import certify_cells
+
+    kw = dict(fixed)
+    kw[xname] = (chunk["x_lo"], chunk["x_hi"])
+    kw[yname] = (chunk["y_lo"], chunk["y_hi"])
+    r = certify_cells(case, n=n, depth=depth, e=chunk["e"], **kw)
+    return {"certified": r.flags, "certified_reason": r.reasons}
+
+
+def _certify(case, n, fixed, depth, xname, xs, yname, ys, es, *, executor, max_workers, store,
+             progress):
+    """The certified flags of every cell of the grid, shape ``(len(e), len(y), len(x))``."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.pair.certified import cell_boxes, cell_edges
+    from hybridpd.sweeps.sweep import run_sweep
+
+    cells = cell_boxes(xname, cell_edges(xs), yname, cell_edges(ys))
+    (xl, xh), (yl, yh) = cells[xname], cells[yname]
+    shape = (es.size,) + xl.shape
+    rep = lambda a: np.broadcast_to(a, shape).ravel()
+    points = {"e": np.repeat(es, xl.size), "x_lo": rep(xl), "x_hi": rep(xh), "y_lo": rep(yl),
+              "y_hi": rep(yh)}
+    if store is not None:
+        p = Path(store)
+        store = p.with_name(f"{p.stem}.certified{p.suffix}")
+    out = run_sweep(_certify_chunk, points, chunk_size=min(points["e"].size, 4096),
+                    executor=executor, max_workers=max_workers, store=store, progress=progress,
+                    label=f"certify {case} e={','.join(f'{v:g}' for v in es)}",
+                    func_kwargs={"case": case, "n": n, "fixed": fixed, "depth": depth,
+                                 "xname": xname, "yname": yname},
+                    metadata={"kind": "certified_region_sweep", "version": 1}).outputs
+    return np.asarray(out["certified"]).reshape(shape).astype(np.int8)
+
+
 def region_map(case="collocated", *, x=("kp", 0.1, 50.0, 200), y=("kv", 0.1, 50.0, 200),
                e=(0.1, 0.5, 0.9), mu=None, omega=None, L=None, gamma=None, x10=1.0,
                m2=1.0, n=1,
                kp=None, kv=None, executor="serial", max_workers=None, chunk_size=None,
-               store=None, progress=True) -> RegionMap:
+               store=None, progress=True, certify=False, certify_depth=3) -> RegionMap:
     """Existence and stability of the symmetric orbit over a grid of two parameters.
 
     Parameters
@@ -224,6 +307,15 @@ def region_map(case="collocated", *, x=("kp", 0.1, 50.0, 200), y=("kv", 0.1, 50.
         as it goes and resume. Progress is labelled e.g. ``regions collocated e=0.1,0.5``.
         The default ``chunk_size`` is at least 16384 points (a function of the grid size
         only): the evaluation is vectorised, and smaller chunks lose to per-call overhead.
+    certify : bool
+        Also prove the class of every grid point's cell (the box half-way to its
+        neighbours; edge cells end at the first and last points) with the interval proofs of
+        :mod:`hybridpd.pair.certified`, into :attr:`RegionMap.certified` (CF flags: 0
+        undecided, 1 proved stable, 2 proved unstable, 3 proved no orbit). About a second
+        per thousand cells; with ``store`` it writes and resumes ``NAME.certified.zarr``
+        beside it.
+    certify_depth : int
+        Bisections of an undecided cell (0 to 12).
 
     Returns
     -------
@@ -235,6 +327,10 @@ def region_map(case="collocated", *, x=("kp", 0.1, 50.0, 200), y=("kv", 0.1, 50.
     ...                 mu=0.1, omega=5.0, gamma=0.75)
     >>> rm.exists.shape
     (1, 4, 5)
+    >>> rm = region_map("collocated", x=("kp", 9, 11, 3), y=("kv", 19, 21, 2), e=[0.5],
+    ...                 mu=0.1, omega=5.0, gamma=0.75, certify=True, progress=False)
+    >>> rm.certified.tolist()            # every cell proved stable
+    [[[1, 1, 1], [1, 1, 1]]]
     """
     case = Case.parse(case).value
     n = check_odd_order(n)
@@ -283,7 +379,12 @@ def region_map(case="collocated", *, x=("kp", 0.1, 50.0, 200), y=("kv", 0.1, 50.
                     max_workers=max_workers, store=store, progress=progress, label=label,
                     func_kwargs=kwargs, metadata={"kind": "region_sweep", "version": 1}).outputs
     get = lambda k: np.asarray(out[k]).reshape(shape)
+    certified = None
+    if certify:
+        certified = _certify(case, n, fixed, check_int("certify_depth", certify_depth, 0, 12),
+                             xname, xs, yname, ys, es, executor=executor,
+                             max_workers=max_workers, store=store, progress=progress)
     return RegionMap(case, xname, yname, xs, ys, es, {**fixed, "n": n},
                      get("exists").astype(bool), get("stable").astype(bool),
                      get("spectral_radius").astype(float), get("xm").astype(float),
-                     get("reason").astype(np.int64))
+                     get("reason").astype(np.int64), certified=certified)

@@ -1,0 +1,706 @@
+"""Certified (computer-assisted) classification of the impact pair's symmetric orbits.
+
+A region map classifies grid *points*; this module proves statements about whole *boxes* of
+parameters. For a feedback case, an odd order ``n`` and a box of ``(kp, kv, mu, e,
+gamma = L/x10, omega, m2)`` (any of them an interval), one of
+
+* ``proved_stable``: for every parameter in the box the simple symmetric orbit exists
+  (conditions (13)-(17) solvable with ``xm > 0``), is viable (18) (``|x1 - x2| < L`` on the
+  whole open flight between the two impacts) and every Floquet multiplier (eigenvalue of
+  ``DP = DP43 DP32 DP21 DP10``) has modulus < 1;
+* ``proved_unstable``: it exists, is viable, and some multiplier has modulus > 1;
+* ``proved_no_orbit``: viability fails for every parameter in the box;
+* ``undecided``: none of these could be proved (with the reason).
+
+The proofs evaluate the paper's closed forms in outward-rounded interval arithmetic (see
+:mod:`hybridpd.pair.proofs` for the three proofs and :mod:`hybridpd.pair.intervals` for
+the arithmetic and the assumption made of the platform's libm), and bisect undecided boxes.
+Point certificates (:func:`certify_orbit`) add python-flint ``arb`` enclosures of the
+section point and of every multiplier's modulus. Region maps (:func:`certified_map`) give
+each grid point the box half-way to its neighbours (see :func:`cell_edges`).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hybridpd._repr import compact_repr
+from hybridpd.model import (
+    Case,
+    ImpactPair,
+    as_gains,
+    check_array,
+    check_int,
+    check_named_axis,
+    check_odd_order,
+    check_positive,
+)
+from hybridpd.pair import proofs
+from hybridpd.pair.intervals import widen_down, widen_up
+
+__all__ = ["FLAG_MEANINGS", "FLAG_VALUES", "MAP_AXES", "BoxCertificate", "CertifiedCells",
+           "CertifiedMap", "OrbitCertificate", "cell_boxes", "cell_edges", "certified_map",
+           "certify_box", "certify_cells", "certify_orbit", "class_shares"]
+
+#: CF flag values of a certified map and their meanings (``flag_meanings`` is one string).
+FLAG_VALUES = (0, 1, 2, 3)
+FLAG_MEANINGS = " ".join(proofs.CLASSES)
+#: Parameters a certified map can sweep (those of a region map).
+MAP_AXES = ("kp", "kv", "mu", "L", "omega", "m2", "x10")
+
+_DOMAIN = {"e": (0.0, 1.0)}  # closed; every other parameter is > 0
+
+
+def _interval_arg(name, value):
+    """``(lo, hi)`` float arrays from a number, an array or a ``(lo, hi)`` pair."""
+    if isinstance(value, tuple):
+        if len(value) != 2:
+            raise ValueError(f"{name} must be a number or a (lo, hi) pair, got {value!r}")
+        lo = check_array(f"{name} lo", value[0])
+        hi = check_array(f"{name} hi", value[1])
+    else:
+        lo = hi = check_array(name, value)
+    lo, hi = np.broadcast_arrays(lo, hi)
+    if np.any(~(lo <= hi)):
+        raise ValueError(f"{name}: every lower bound must be <= its upper bound")
+    if name in _DOMAIN:
+        a, b = _DOMAIN[name]
+        if np.any(lo < a) or np.any(hi > b):
+            raise ValueError(f"{name} must lie in [{a:g}, {b:g}]")
+    elif np.any(lo <= 0):
+        raise ValueError(f"{name} must be > 0 (allowed range (0, inf))")
+    return lo, hi
+
+
+def _ratio(num, den):
+    """Outward enclosure of ``num / den`` for positive interval pairs."""
+    (a, b), (c, d) = num, den
+    exact = (c == 1.0) & (d == 1.0)
+    return np.where(exact, a, widen_down(a / d)), np.where(exact, b, widen_up(b / c))
+
+
+@dataclass(frozen=True)
+class CertifiedCells:
+    """The certified classes of many boxes (:func:`certify_cells`).
+
+    Attributes
+    ----------
+    flags : ndarray of int8
+        :data:`FLAG_VALUES` (``0`` undecided, ``1`` proved stable, ``2`` proved unstable,
+        ``3`` proved no orbit), the broadcast shape of the parameters.
+    reasons : ndarray of int8
+        Indices into :data:`hybridpd.pair.proofs.REASONS`.
+    boxes_evaluated : int
+        Boxes classified, parts included.
+    stop : str
+        Why the bisection stopped: ``"decided"`` (no undecided part left), ``"depth"`` or
+        ``"max_boxes"``.
+    """
+
+    __repr__ = compact_repr
+
+    flags: np.ndarray
+    reasons: np.ndarray
+    boxes_evaluated: int
+    stop: str
+
+
+def certify_cells(case="collocated", *, kp, kv, mu, e, omega, m2=1.0, gamma=None, L=None,
+                  x10=1.0, n=1, depth=3):
+    """Classify many boxes at once (vectorised); every parameter a number or ``(lo, hi)``.
+
+    Parameters
+    ----------
+    case : {"collocated", "noncollocated"}
+    kp, kv, mu, e, omega, m2 : float, array or (lo, hi) pair of them
+        Gains (> 0), mass ratio (> 0), restitution (in [0, 1]), reference frequency (> 0),
+        secondary mass (> 0); all broadcast.
+    gamma, L, x10 : float, array or (lo, hi)
+        ``gamma = L/x10`` (> 0), or ``L`` with ``x10``: give exactly one of ``gamma``, ``L``.
+    n : int
+        Odd order.
+    depth : int
+        Bisections of an undecided box (each halves its widest parameter, relative to the
+        box's own widths); ``0`` classifies the boxes as given.
+
+    Returns
+    -------
+    CertifiedCells
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hybridpd.pair.certified import certify_cells
+    >>> kp = np.array([9.5, 10.0])
+    >>> r = certify_cells("collocated", kp=(kp, kp + 0.5), kv=(19.5, 20.0), mu=0.1, e=0.5,
+    ...                   gamma=0.75, omega=5.0)
+    >>> r.flags.tolist(), r.stop    # 1: proved stable on each whole box
+    ([1, 1], 'decided')
+    """
+    case = Case.parse(case).value
+    n = check_odd_order(n)
+    depth = check_int("depth", depth, 0, 12)
+    if (gamma is None) == (L is None):
+        raise ValueError("give exactly one of gamma or L (gamma = L / x10)")
+    gam = _interval_arg("gamma", gamma) if gamma is not None else \
+        _ratio(_interval_arg("L", L), _interval_arg("x10", x10))
+    boxes, shape = proofs.scaled_boxes(
+        kp=_interval_arg("kp", kp), kv=_interval_arg("kv", kv), mu=_interval_arg("mu", mu),
+        e=_interval_arg("e", e), gamma=gam, omega=_interval_arg("omega", omega),
+        m2=_interval_arg("m2", m2))
+    cls, why, evaluated, stop = proofs.classify_bisect(case, n, boxes, depth=depth)
+    return CertifiedCells(cls.astype(np.int8).reshape(shape), why.astype(np.int8).reshape(shape),
+                          int(evaluated), stop)
+
+
+def _pair(lo, hi):
+    return (float(lo), float(hi))
+
+
+@dataclass(frozen=True)
+class BoxCertificate:
+    """The certified class of one box of parameters (see the module docstring).
+
+    Attributes
+    ----------
+    verdict : str
+        ``"proved_stable"``, ``"proved_unstable"``, ``"proved_no_orbit"`` or ``"undecided"``.
+    flag : int
+        Its :data:`FLAG_VALUES` code.
+    reason : str
+        What was proved, or what could not be.
+    case : str
+    n : int
+    box : dict
+        ``name -> (lo, hi)`` of ``kp, kv, mu, e, gamma, omega, m2``.
+    depth : int
+        Bisections allowed.
+    boxes_evaluated : int
+        Boxes classified (the box and its parts).
+    stop : str
+        Why the bisection stopped (``"decided"``, ``"depth"`` or ``"max_boxes"``).
+    """
+
+    __repr__ = compact_repr
+
+    verdict: str
+    flag: int
+    reason: str
+    case: str
+    n: int
+    box: dict
+    depth: int
+    boxes_evaluated: int
+    stop: str
+
+    def to_dict(self) -> dict:
+        """JSON-ready form."""
+        return {"verdict": self.verdict, "flag": self.flag, "reason": self.reason,
+                "case": self.case, "n": self.n,
+                "box": {k: list(v) for k, v in self.box.items()}, "depth": self.depth,
+                "boxes_evaluated": self.boxes_evaluated, "stop": self.stop}
+
+
+def certify_box(case="collocated", *, kp, kv, mu, e, gamma, omega, m2=1.0, n=1,
+                depth=4) -> BoxCertificate:
+    """Prove the class of the symmetric orbit on one box of parameters.
+
+    Parameters
+    ----------
+    case : {"collocated", "noncollocated"}
+    kp, kv, mu, e, gamma, omega, m2 : float or (lo, hi)
+        The box: gains (> 0), mass ratio (> 0), restitution in [0, 1], ``gamma = L/x10``
+        (> 0), reference frequency (> 0, rad/time), secondary mass (> 0).
+    n : int
+        Odd order.
+    depth : int
+        Bisections of undecided parts, at most (0 to 12).
+
+    Returns
+    -------
+    BoxCertificate
+
+    Examples
+    --------
+    >>> from hybridpd.pair.certified import certify_box
+    >>> c = certify_box("noncollocated", kp=(9.5, 10.5), kv=(19.5, 20.5), mu=0.1, e=0.5,
+    ...                 gamma=0.75, omega=5.0)
+    >>> c.verdict
+    'proved_unstable'
+    """
+    values = dict(kp=kp, kv=kv, mu=mu, e=e, gamma=gamma, omega=omega, m2=m2)
+    for k, v in values.items():
+        lo, hi = _interval_arg(k, v)
+        if lo.ndim or hi.ndim:
+            raise ValueError(f"{k} must be a number or a (lo, hi) pair of numbers")
+        values[k] = _pair(lo, hi)
+    r = certify_cells(case, n=n, depth=depth, **values)
+    f = int(r.flags)
+    return BoxCertificate(proofs.CLASSES[f], f, proofs.REASONS[int(r.reasons)],
+                          Case.parse(case).value, int(n), values, int(depth), r.boxes_evaluated,
+                          r.stop)
+
+
+# ----------------------------------------------------------------------------------------
+# Point certificates
+# ----------------------------------------------------------------------------------------
+
+
+def _arb_bounds(x):
+    """Float bounds ``(lo, hi)`` enclosing the ball ``x`` (NaN if it is not finite)."""
+    if not x.is_finite():
+        return (math.nan, math.nan)
+    m, r = float(x.mid()), float(x.rad())
+    return (float(widen_down(m - r * (1 + 2.0**-50))), float(widen_up(m + r * (1 + 2.0**-50))))
+
+
+@dataclass(frozen=True)
+class OrbitCertificate:
+    """A certificate of one symmetric orbit (one parameter point).
+
+    Attributes
+    ----------
+    verdict : str
+        ``"proved_stable"``, ``"proved_unstable"``, ``"proved_no_orbit"`` or ``"undecided"``.
+    flag : int
+        Its :data:`FLAG_VALUES` code.
+    reason : str
+    case : str
+    n : int
+    params : dict
+        ``kp, kv, mu, e, L, m2, omega, x10``.
+    xm : (float, float)
+        Enclosure of the reference amplitude (20) (length).
+    section_point : dict
+        Enclosures ``(lo, hi)`` of the pre-impact section point ``phi0`` (time, in
+        ``[0, T)``), ``z1 = x2`` (length), ``z2 = y2`` and ``z4 = y1 - y2`` (velocity).
+    multiplier_moduli : tuple of (float, float) or None
+        Enclosures of ``|lambda|`` for the four eigenvalues of ``DP``, by decreasing upper
+        bound (``None`` where arb could not isolate the eigenvalues, or viability is
+        violated).
+    spectral_radius : (float, float) or None
+    viable : int
+        ``+1`` viability proved, ``-1`` violated, ``0`` undecided.
+    """
+
+    __repr__ = compact_repr
+
+    verdict: str
+    flag: int
+    reason: str
+    case: str
+    n: int
+    params: dict = field(repr=False)
+    xm: tuple
+    section_point: dict = field(repr=False)
+    multiplier_moduli: tuple | None = field(repr=False)
+    spectral_radius: tuple | None
+    viable: int
+
+    def to_dict(self) -> dict:
+        """JSON-ready form (bounds as ``[lo, hi]`` lists)."""
+        b = lambda p: None if p is None else [p[0], p[1]]
+        return {"verdict": self.verdict, "flag": self.flag, "reason": self.reason,
+                "case": self.case, "n": self.n, "params": dict(self.params), "xm": b(self.xm),
+                "section_point": {k: b(v) for k, v in self.section_point.items()},
+                "multiplier_moduli": None if self.multiplier_moduli is None else
+                [b(m) for m in self.multiplier_moduli],
+                "spectral_radius": b(self.spectral_radius), "viable": self.viable}
+
+
+def _arb_orbit(case, n, kp, kv, mu, e, L, m2, omega, x10):
+    """arb enclosures: ``xm``, the section point, the moduli of the eigenvalues of ``DP``.
+
+    At 106 bits, then 212 and 424 while arb cannot isolate the eigenvalues (they may lie
+    far apart, 1e-5 and 1e3, or close together).
+    """
+    from flint import ctx
+
+    for prec in (106, 212, 424):
+        with ctx.workprec(prec):
+            xm, section, moduli = _arb_orbit_at(case, n, kp, kv, mu, e, L, m2, omega, x10)
+        if moduli is not None:
+            break
+    return xm, section, moduli
+
+
+def _arb_orbit_at(case, n, kp, kv, mu, e, L, m2, omega, x10):
+    from flint import acb_mat, arb, arb_mat
+
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.pair.interval_kernels import kernel
+    from hybridpd.pair.intervals import arb_ops
+
+    ops = arb_ops()
+    a = [arb(kp) / arb(m2), arb(kv) / arb(m2), arb(mu), arb(e), arb(L) / arb(x10), arb(omega),
+         arb(n)]
+    C, S, _ = kernel("existence", case)(ops, *a)
+    X = arb(x10)
+    xm = X * (C * C + S * S).sqrt()
+    w = arb(omega)
+    T = 2 * arb.pi() / w
+    ang = arb.atan2(S, C)
+    phi0 = (ang + 2 * arb.pi() if ang < 0 else ang) / w
+    if not (ang < 0 or ang >= 0):  # the ball straddles the branch cut: any phase in [0, T)
+        phi0 = arb(0).union(T)
+    v = 2 * X * w / (arb(n) * arb.pi())
+    y2m = v * (arb(e) - 2 * arb(mu) - 1) / (1 + arb(e))
+    section = {"phi0": phi0, "z1": X - arb(L), "z2": y2m, "z4": v - y2m}
+    M = kernel("halfmap", case)(ops, C, S, *a)
+    Mm = arb_mat([[M[4 * i + j] for j in range(4)] for i in range(4)])
+    moduli = None
+    try:
+        eig = acb_mat(Mm * Mm).eig()
+        moduli = sorted((_arb_bounds(abs(z)) for z in eig), key=lambda p: -p[1])
+    except (ValueError, ZeroDivisionError):
+        pass  # not isolated at this precision
+    return _arb_bounds(xm), {k: _arb_bounds(x) for k, x in section.items()}, moduli
+
+
+def certify_orbit(pair: ImpactPair, gains, omega: float, *, x10: float = 1.0, n: int = 1,
+                  case="collocated") -> OrbitCertificate:
+    """Certify the symmetric orbit at one parameter point (signature of
+    :func:`hybridpd.analysis.orbits.symmetric_orbit`).
+
+    Parameters
+    ----------
+    pair : ImpactPair
+    gains : PDGains, (kp, kv) or {"kp", "kv"}
+    omega : float
+        Reference frequency (rad/time).
+    x10 : float
+        Desired primary-mass amplitude (length); ``gamma = L / x10``.
+    n : int
+        Odd order.
+    case : {"collocated", "noncollocated"}
+
+    Returns
+    -------
+    OrbitCertificate
+        The class (proved by the interval proofs of :mod:`hybridpd.pair.proofs` on the
+        point, and by the ``arb`` enclosures of the multipliers where they decide), the
+        enclosures of ``xm``, of the section point and of the multipliers' moduli.
+
+    Examples
+    --------
+    >>> import hybridpd as hp
+    >>> from hybridpd.pair.certified import certify_orbit
+    >>> c = certify_orbit(hp.ImpactPair(mu=0.1, e=0.5, L=0.75), hp.PDGains(10, 20), omega=5.0)
+    >>> c.verdict
+    'proved_stable'
+    >>> lo, hi = c.spectral_radius          # encloses the float path's 0.5238184...
+    >>> round(lo, 6), hi - lo < 1e-9
+    (0.523818, True)
+    """
+    if not isinstance(pair, ImpactPair):
+        raise ValueError(f"pair must be an ImpactPair, got {type(pair).__name__}")
+    g = as_gains(gains)
+    omega = check_positive("omega", omega)
+    x10 = check_positive("x10", x10)
+    n = check_odd_order(n)
+    case = Case.parse(case).value
+    gam = _ratio((np.array(pair.L), np.array(pair.L)), (np.array(x10), np.array(x10)))
+    boxes, _ = proofs.scaled_boxes(kp=g.kp, kv=g.kv, mu=pair.mu, e=pair.e, gamma=gam,
+                                   omega=omega, m2=pair.m2)
+    cls, why, parts = proofs.classify(case, n, boxes, details=True)
+    xm, section, moduli = _arb_orbit(case, n, g.kp, g.kv, pair.mu, pair.e, pair.L, pair.m2,
+                                     omega, x10)
+    flag, reason = int(cls[0]), proofs.REASONS[int(why[0])]
+    viable = int(parts["viable"][0])
+    if flag == proofs.UNDECIDED and moduli is not None and bool(parts["exists"][0]) \
+            and viable == 1:
+        # the rigorous eigenvalue enclosures may decide where the polynomial tests did not
+        if max(m[1] for m in moduli) < 1:
+            flag, reason = proofs.STABLE, proofs.REASONS[proofs.R_STABLE]
+        elif max(m[0] for m in moduli) > 1:
+            flag, reason = proofs.UNSTABLE, proofs.REASONS[proofs.R_UNSTABLE]
+    if viable == -1:
+        moduli = None  # the candidate of (13)-(14) is no orbit: its "multipliers" mean nothing
+    rho = None if moduli is None else (max(m[0] for m in moduli), max(m[1] for m in moduli))
+    params = {"kp": g.kp, "kv": g.kv, "mu": pair.mu, "e": pair.e, "L": pair.L, "m2": pair.m2,
+              "omega": omega, "x10": x10}
+    return OrbitCertificate(proofs.CLASSES[flag], flag, reason.replace(" on the whole box", ""),
+                            case, n, params, xm, section,
+                            None if moduli is None else tuple(moduli), rho, viable)
+
+
+# ----------------------------------------------------------------------------------------
+# Certified maps
+# ----------------------------------------------------------------------------------------
+
+
+def cell_edges(axis, spacing="linear") -> np.ndarray:
+    """Edges of the cells of a grid axis: the cell of each point is half-way to its neighbours.
+
+    Convention: interior edges lie half-way between neighbouring points in the axis's own
+    spacing (the arithmetic mean for ``"linear"``, the geometric mean for ``"log"``); the
+    first and last edges are the first and last grid points. The cells tile the axis's
+    range exactly (no gaps, no overlaps, never outside the swept range, so never outside a
+    parameter's domain); the two edge cells are half cells.
+
+    Parameters
+    ----------
+    axis : array_like, shape (N,)
+        Increasing grid values, ``N >= 2`` (``> 0`` for ``"log"``).
+    spacing : {"linear", "log"}
+
+    Returns
+    -------
+    ndarray, shape (N + 1,)
+
+    Examples
+    --------
+    >>> from hybridpd.pair.certified import cell_edges
+    >>> cell_edges([1.0, 2.0, 4.0]).tolist(), cell_edges([1.0, 4.0, 16.0], "log").tolist()
+    ([1.0, 1.5, 3.0, 4.0], [1.0, 2.0, 8.0, 16.0])
+    """
+    x = check_array("axis", axis)
+    if x.ndim != 1 or x.size < 2 or not np.all(np.diff(x) > 0):
+        raise ValueError("axis must be an increasing 1-D array of at least 2 values")
+    if spacing == "linear":
+        mid = 0.5 * x[:-1] + 0.5 * x[1:]
+    elif spacing == "log":
+        if x[0] <= 0:
+            raise ValueError("a log-spaced axis must be > 0 (allowed range (0, inf))")
+        mid = np.sqrt(x[:-1] * x[1:])
+    else:
+        raise ValueError(f"spacing must be 'linear' or 'log', got {spacing!r}")
+    return np.concatenate([x[:1], mid, x[-1:]])
+
+
+def class_shares(flags) -> dict:
+    """Counts and shares of each class in an array of flags (the last two axes: one map).
+
+    Returns
+    -------
+    dict
+        ``{class name: {"proved": k, "undecided": u, "cells": N, "share": (k/N, (k+u)/N)}}``
+        for the three proved classes, where ``k`` counts cells proved in the class and
+        ``u`` the undecided ones (which may belong to it): the class's true share of the
+        cells lies in ``share``. For ``"undecided"`` itself, ``proved`` is its count.
+
+    Examples
+    --------
+    >>> from hybridpd.pair.certified import class_shares
+    >>> s = class_shares([[1, 1], [0, 3]])
+    >>> s["proved_stable"]["share"], s["proved_no_orbit"]["share"]
+    ((0.5, 0.75), (0.25, 0.5))
+    """
+    f = np.asarray(flags)
+    N = int(f.size)
+    u = int((f == 0).sum())
+    out = {}
+    for code, name in enumerate(proofs.CLASSES):
+        k = int((f == code).sum())
+        out[name] = {"proved": k, "undecided": u if code else 0, "cells": N,
+                     "share": (k / N, (k + (u if code else 0)) / N) if N else (0.0, 0.0)}
+    return out
+
+
+@dataclass(frozen=True)
+class CertifiedMap:
+    """A certified classification of a grid of two parameters, per restitution coefficient.
+
+    Attributes
+    ----------
+    case : str
+    n : int
+    x_name, y_name : str
+    x, y : ndarray
+        Grid axes.
+    x_edges, y_edges : ndarray
+        Cell edges (:func:`cell_edges`), lengths ``len(x) + 1``, ``len(y) + 1``.
+    e : ndarray
+        Restitution coefficients (first index).
+    fixed : dict
+        The other parameters.
+    flags : ndarray of int8, shape (len(e), len(y), len(x))
+        :data:`FLAG_VALUES`.
+    reasons : ndarray of int8, same shape
+        Indices into :data:`hybridpd.pair.proofs.REASONS`.
+    depth : int
+    seconds : float
+        Wall time.
+    boxes_evaluated : int
+    """
+
+    __repr__ = compact_repr
+
+    case: str
+    n: int
+    x_name: str
+    y_name: str
+    x: np.ndarray
+    y: np.ndarray
+    x_edges: np.ndarray
+    y_edges: np.ndarray
+    e: np.ndarray
+    fixed: dict
+    flags: np.ndarray
+    reasons: np.ndarray
+    depth: int
+    seconds: float
+    boxes_evaluated: int
+
+    def shares(self) -> list:
+        """:func:`class_shares` of each ``e``'s map."""
+        return [class_shares(f) for f in self.flags]
+
+    def proved_fraction(self) -> np.ndarray:
+        """Share of proved cells per ``e``."""
+        return (self.flags != 0).mean(axis=(1, 2))
+
+    def summary(self) -> list:
+        """One line per ``e``: the proved counts and each class's share interval."""
+        lines = []
+        for e, sh in zip(self.e, self.shares()):
+            N = sh["undecided"]["cells"]
+            parts = [f"{name} {d['proved']}/{N} [{100 * d['share'][0]:.1f}, "
+                     f"{100 * d['share'][1]:.1f}]%" for name, d in sh.items() if name != "undecided"]
+            lines.append(f"e = {e:g}: undecided {sh['undecided']['proved']}/{N}; "
+                         + "; ".join(parts))
+        return lines
+
+    def to_dict(self) -> dict:
+        """JSON-ready form (flags indexed ``[e][y][x]``)."""
+        return {"case": self.case, "n": self.n, "x_name": self.x_name, "y_name": self.y_name,
+                self.x_name: self.x.tolist(), self.y_name: self.y.tolist(),
+                "x_edges": self.x_edges.tolist(), "y_edges": self.y_edges.tolist(),
+                "e": self.e.tolist(), "fixed": dict(self.fixed),
+                "flag_values": list(FLAG_VALUES), "flag_meanings": FLAG_MEANINGS,
+                "flags": self.flags.tolist(), "reasons": self.reasons.tolist(),
+                "reason_texts": list(proofs.REASONS), "depth": self.depth,
+                "seconds": self.seconds, "boxes_evaluated": self.boxes_evaluated,
+                "shares": [{k: {**v, "share": list(v["share"])} for k, v in sh.items()}
+                           for sh in self.shares()]}
+
+
+def _map_axis(param, spec, spacing):
+    """``(name, values)`` from ``(NAME, MIN, MAX, NUM)`` or ``(NAME, values)``."""
+    if isinstance(spec, (tuple, list)) and len(spec) == 2 and not isinstance(spec[1], (int, float)):
+        name = spec[0]
+        if not isinstance(name, str) or name not in MAP_AXES:
+            raise ValueError(f"{param} axis name must be one of {MAP_AXES}, got {name!r}")
+        values = check_array(param, spec[1], lo=0.0)
+        cell_edges(values, spacing)  # validates
+        return name, values
+    name, values = check_named_axis(param, spec, MAP_AXES, min_num=2, positive=True)
+    if spacing == "log":
+        values = np.geomspace(values[0], values[-1], values.size)
+    return name, values
+
+
+def cell_boxes(x_name, x_edges, y_name, y_edges):
+    """The cells of a grid as ``{name: (lo, hi)}``, arrays of shape ``(ny, nx)``.
+
+    Parameters
+    ----------
+    x_name, y_name : str
+    x_edges, y_edges : ndarray
+        Cell edges (:func:`cell_edges`), lengths ``nx + 1`` and ``ny + 1``.
+
+    Examples
+    --------
+    >>> from hybridpd.pair.certified import cell_boxes
+    >>> c = cell_boxes("kp", [1.0, 1.5, 2.0], "kv", [3.0, 4.0])
+    >>> c["kp"][0].tolist(), c["kp"][1].tolist(), c["kv"][0].tolist()
+    ([[1.0, 1.5]], [[1.5, 2.0]], [[3.0, 3.0]])
+    """
+    XL, YL = np.meshgrid(x_edges[:-1], y_edges[:-1])
+    XH, YH = np.meshgrid(x_edges[1:], y_edges[1:])
+    return {x_name: (XL, XH), y_name: (YL, YH)}
+
+
+def certified_map(case="collocated", *, x=("kp", 0.1, 50.0, 101), y=("kv", 0.1, 50.0, 101),
+                  e=(0.1, 0.5, 0.9), mu=None, omega=None, L=None, gamma=None, x10=1.0,
+                  m2=1.0, n=1, kp=None, kv=None, spacing="linear", depth=3,
+                  chunk_size=4096) -> CertifiedMap:
+    """Certified classification of every cell of a grid (see the module docstring).
+
+    Parameters
+    ----------
+    case : {"collocated", "noncollocated"}
+    x, y : (NAME, MIN, MAX, NUM) or (NAME, values)
+        Swept parameters (names from :data:`MAP_AXES`); ``linspace`` (or ``geomspace`` with
+        ``spacing="log"``) or the given increasing values.
+    e : sequence of float
+        Restitution coefficients in [0, 1], one map each.
+    mu, omega, L or gamma, x10, m2, n, kp, kv
+        The fixed parameters (as for :func:`hybridpd.sweeps.regions.region_map`).
+    spacing : {"linear", "log"} or (x_spacing, y_spacing)
+        The cells' convention of :func:`cell_edges`.
+    depth : int
+        Bisections of undecided cells.
+    chunk_size : int
+        Cells classified per vectorised batch.
+
+    Returns
+    -------
+    CertifiedMap
+
+    Examples
+    --------
+    >>> from hybridpd.pair.certified import certified_map
+    >>> cm = certified_map("collocated", x=("kp", 9, 11, 3), y=("kv", 19, 21, 3), e=[0.5],
+    ...                    mu=0.1, gamma=0.75, omega=5.0)
+    >>> cm.flags.tolist()                    # every cell proved stable
+    [[[1, 1, 1], [1, 1, 1], [1, 1, 1]]]
+    >>> cm.shares()[0]["proved_stable"]["share"]
+    (1.0, 1.0)
+    """
+    t0 = time.perf_counter()
+    case = Case.parse(case).value
+    n = check_odd_order(n)
+    sx, sy = (spacing, spacing) if isinstance(spacing, str) else tuple(spacing)
+    xname, xs = _map_axis("x", x, sx)
+    yname, ys = _map_axis("y", y, sy)
+    if xname == yname:
+        raise ValueError(f"x and y must sweep different parameters, got {xname!r} twice")
+    es = np.atleast_1d(check_array("e", e, lo=0.0, lo_open=False, hi=1.0))
+    if es.ndim != 1 or es.size == 0:
+        raise ValueError("e must be a non-empty list of restitution coefficients")
+    chunk_size = check_int("chunk_size", chunk_size, 1)
+    fixed = _fixed_params(xname, yname, mu=mu, omega=omega, L=L, gamma=gamma, x10=x10, m2=m2,
+                          kp=kp, kv=kv)
+    xe, ye = cell_edges(xs, sx), cell_edges(ys, sy)
+    cells = cell_boxes(xname, xe, yname, ye)
+    flags = np.zeros((es.size, ys.size, xs.size), np.int8)
+    reasons = np.zeros_like(flags)
+    evaluated = 0
+    flat = {k: (lo.ravel(), hi.ravel()) for k, (lo, hi) in cells.items()}
+    for i, ev in enumerate(es):
+        f_out, r_out = flags[i].reshape(-1), reasons[i].reshape(-1)
+        for c in range(0, xs.size * ys.size, chunk_size):
+            sl = slice(c, c + chunk_size)
+            part = {k: (lo[sl], hi[sl]) for k, (lo, hi) in flat.items()}
+            r = certify_cells(case, n=n, depth=depth, e=ev, **fixed, **part)
+            f_out[sl], r_out[sl] = r.flags, r.reasons
+            evaluated += r.boxes_evaluated
+    return CertifiedMap(case, n, xname, yname, xs, ys, xe, ye, es, {**fixed, "n": n}, flags,
+                        reasons, int(depth), time.perf_counter() - t0, evaluated)
+
+
+def _fixed_params(xname, yname, *, mu, omega, L, gamma, x10, m2, kp, kv) -> dict:
+    """The parameters that are not swept, validated (``L = gamma x10`` when ``gamma`` given)."""
+    swept = (xname, yname)
+    if "L" in swept:
+        if gamma is not None or L is not None:
+            raise ValueError("L is a swept axis: do not give L or gamma as well")
+    elif (L is None) == (gamma is None):
+        raise ValueError("give exactly one of L or gamma (L = gamma * x10)")
+    elif L is None and "x10" in swept:
+        raise ValueError("with x10 swept give L, not gamma (L would change along the axis)")
+    elif L is None:
+        L = check_positive("gamma", gamma) * check_positive("x10", x10)
+    given = {"mu": mu, "omega": omega, "L": L, "x10": x10, "m2": m2, "kp": kp, "kv": kv}
+    fixed = {}
+    for name, val in given.items():
+        if name in swept:
+            continue
+        if val is None:
+            raise ValueError(f"{name} must be given when it is not a swept axis")
+        fixed[name] = check_positive(name, val)
+    return fixed
