@@ -61,6 +61,7 @@ _NAMES = {
     "ControlledImpactPair": "hybridpd.pair.impactpair",
     "symmetric_orbit": "hybridpd.analysis.orbits",
     "symmetric_orbits": "hybridpd.analysis.orbits",
+    "certify_orbit": "hybridpd.pair.certified",
     "ImpactMap": "hybridpd.analysis.impactmap",
     # the map protocol: any map a user writes
     "PoincareMap": "hybridpd.analysis.maps",
@@ -110,6 +111,7 @@ __all__ = ["Case", "Contact", "ControlledImpactPair", "HybridAutomaton", "Impact
            "PeriodicOrbit", "PoincareMap",
            "Reference", "Section", "SectionMap", "SectionMapper", "Stability", "__version__",
            "attractor_basin", "basin_of_attraction", "bifurcation_diagram", "boundary_curves",
+           "certify_orbit",
            "continue_family", "continue_orbit", "design", "find_orbit", "load_attractor_basin",
            "load_basin", "load_branch", "load_model", "load_region_map", "plot_file", "region_map",
            "reproduce", "run_sweep", "section_basin", "simulate", "stability", "switch_branch",

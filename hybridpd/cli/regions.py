@@ -41,6 +41,13 @@ def register(sub):
                    help="--model: second grid axis (as --x)")
     p.add_argument("--tile", type=int, default=8,
                    help="--model: side of the square tiles of cells (one task each)")
+    p.add_argument("--certify", action="store_true",
+                   help="also prove the class of every grid point's cell (the box half-way "
+                        "to its neighbours) in interval arithmetic: proved stable, proved "
+                        "unstable, proved no orbit or undecided (variable 'certified' of "
+                        "--out; the figure draws the proved classes)")
+    p.add_argument("--certify-depth", type=int, default=3,
+                   help="--certify: bisections of an undecided cell (default 3)")
     cli.add_sweep(p, what="the region map (one panel per e)")
     p.set_defaults(func=run)
 
@@ -61,7 +68,8 @@ def run(args) -> int:
     rm = region_map(args.case, x=("kp", *args.kp), y=("kv", *args.kv), e=args.e, mu=args.mu,
                     omega=args.omega, L=L, x10=x10, m2=args.m2, n=args.n,
                     executor=cli.executor_of(args), max_workers=args.workers,
-                    store=args.store, progress=cli.progress_wanted(args))
+                    store=args.store, progress=cli.progress_wanted(args),
+                    certify=args.certify, certify_depth=args.certify_depth)
     if args.out:
         rm.save(args.out)
     if args.plot:
@@ -76,6 +84,12 @@ def run(args) -> int:
     for k, e in enumerate(rm.e):
         print(f"  e = {e:g}: exists {100 * rm.fraction('exists')[k]:.2f}%, exists & stable "
               f"{100 * rm.fraction('stable')[k]:.2f}% (area {rm.area('stable')[k]:.4g})")
+    for e, sh in zip(rm.e, rm.certified_shares()):
+        parts = [f"{name} [{100 * v['share'][0]:.2f}, {100 * v['share'][1]:.2f}]%"
+                 for name, v in sh.items() if name != "undecided"]
+        print(f"  e = {e:g}, certified cells: " + ", ".join(parts)
+              + f" (undecided {sh['undecided']['proved']} of {sh['undecided']['cells']} "
+                "cells)")
     return 0
 
 
