@@ -244,6 +244,24 @@ def bifurcation_diagram(builder, values, *, s0, period: int = 1, iterations: int
     ------
     ValueError
         Bad values or settings, or a builder that does not return a map.
+
+    Examples
+    --------
+    The Hénon map's fixed point doubles at ``a = 3 (1 - b)^2 / 4 = 0.3675`` (``b = 0.3``):
+
+    >>> import hybridpd as hp
+    >>> class Henon(hp.PoincareMap):
+    ...     names = ("x", "y")
+    ...     def __init__(self, a):
+    ...         self.a = a
+    ...     def apply(self, s, k=1, jacobian=False):
+    ...         x, y = s
+    ...         for _ in range(k):
+    ...             x, y = 1 - self.a * x * x + y, 0.3 * x
+    ...         return hp.MapResult(np.array([x, y]))
+    >>> d = hp.bifurcation_diagram(Henon, [0.3, 0.5, 0.95], s0=[0.1, 0.1], parameter="a")
+    >>> d.periods.tolist()
+    [1, 2, 4]
     """
     v = np.asarray(values, float).reshape(-1)
     if v.size < 2 or not np.all(np.isfinite(v)):

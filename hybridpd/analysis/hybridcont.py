@@ -473,5 +473,19 @@ def _locate(path, correct, a, b, ev, max_iter=40) -> FamilyEvent:
 
 
 def continue_family(builder, s0, p0: float, p_end: float, **options) -> FamilyBranch:
-    """:func:`continue_orbit` with the guess first (the argument order of earlier versions)."""
+    """:func:`continue_orbit` with the guess first (the argument order of earlier versions).
+
+    Examples
+    --------
+    >>> import hybridpd as hp
+    >>> class Scale(hp.PoincareMap):
+    ...     names = ("x",)
+    ...     def __init__(self, a):
+    ...         self.a = a
+    ...     def apply(self, s, k=1, jacobian=False):
+    ...         return hp.MapResult(np.array([self.a ** k * s[0] + 1.0]))
+    >>> br = continue_family(Scale, [2.0], 0.5, 0.6)
+    >>> round(float(br.s[-1][0]), 10)       # the fixed point 1 / (1 - a) at a = 0.6
+    2.5
+    """
     return continue_orbit(builder, p0, p_end, s0, **options)

@@ -60,6 +60,12 @@ class MapResult:
         A grazing jump occurred, or the return is tangential.
     DP : ndarray, shape (dim, dim) or None
         Jacobian, when requested and ``ok`` (phase unwrapped).
+
+    Examples
+    --------
+    >>> r = MapResult(np.array([0.5, 0.2]), DP=np.eye(2))
+    >>> r.ok, r.status, r.signature
+    (True, 'returned', ())
     """
 
     s: np.ndarray
