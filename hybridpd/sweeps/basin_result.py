@@ -45,8 +45,9 @@ def load_basin(path) -> BasinResult:
     >>> import tempfile, os
     >>> import hybridpd as hp
     >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
-    >>> b = hp.basin_of_attraction(hp.ImpactMapper.from_orbit(orb, n_iter=100),
-    ...                            (-1, 3, 3), (-1, 5, 2), progress=False)
+    >>> from hybridpd.sweeps.basins import basin_of_attraction
+    >>> b = basin_of_attraction(hp.ImpactMapper.from_orbit(orb, n_iter=100),
+    ...                         (-1, 3, 3), (-1, 5, 2), progress=False)
     >>> path = b.save(os.path.join(tempfile.mkdtemp(), "basin.nc"))
     >>> bool((hp.load_basin(path).labels == b.labels).all())
     True

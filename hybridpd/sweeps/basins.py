@@ -198,7 +198,7 @@ def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chun
     >>> import hybridpd as hp
     >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
     >>> mapper = hp.ImpactMapper.from_orbit(orb, n_iter=200)
-    >>> b = hp.basin_of_attraction(mapper, (-1, 3, 5), (-1, 5, 4), progress=False)
+    >>> b = basin_of_attraction(mapper, (-1, 3, 5), (-1, 5, 4), progress=False)
     >>> b.labels.shape, b.converged_fraction
     ((4, 5), 1.0)
     """
