@@ -646,7 +646,7 @@ class SectionMap(PoincareMap):
     The pair's symmetric orbit is a fixed point of the general map:
 
     >>> from hybridpd import ImpactPair, PDGains
-    >>> from hybridpd.analysis.orbits import symmetric_orbit
+    >>> from hybridpd.pair.orbits import symmetric_orbit
     >>> from hybridpd.analysis.sections import impact_pair_section
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> P = SectionMap(impact_pair_section(orb.system()))

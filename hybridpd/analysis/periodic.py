@@ -19,7 +19,7 @@ with ``DP`` from exact flows and saltation matrices):
   :func:`hybridpd.sweeps.section_basins.section_basin` applies it over a 2-D slice.
 
 Stability: stable iff every multiplier has modulus < 1; hyperbolic iff none is within
-``1e-9`` of the unit circle (the convention of :mod:`hybridpd.analysis.impactmap`).
+``1e-9`` of the unit circle (the convention of :mod:`hybridpd.pair.impactmap`).
 """
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ import numpy as np
 
 from hybridpd._deprecated import moved_names
 from hybridpd._jit import njit
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.analysis.certify import BasinMapper, certify_ball
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import (
@@ -223,7 +223,7 @@ def find_orbit(P: PoincareMap, s0, period: int = 1, *, tol: float = 1e-11, max_i
     Examples
     --------
     >>> from hybridpd import ImpactPair, PDGains
-    >>> from hybridpd.analysis.orbits import symmetric_orbit
+    >>> from hybridpd.pair.orbits import symmetric_orbit
     >>> from hybridpd.analysis.sections import impact_pair_section
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> P = SectionMap(impact_pair_section(orb.system()))
@@ -526,7 +526,7 @@ class SectionMapper(BasinMapper):
     ``unresolved`` (jump or step bound); ``off_section`` (the flow does not fire the guard at
     the point).
 
-    **Early exit** as in :mod:`hybridpd.sweeps.basins`: an iterate inside the certified
+    **Early exit** as in :mod:`hybridpd.pair.basins`: an iterate inside the certified
     contraction ball of a cycle point (:func:`hybridpd.analysis.certify.certify_ball`, one
     ball per cycle point; numerical, sampled) is labelled ``converged`` at once.
 
@@ -545,7 +545,7 @@ class SectionMapper(BasinMapper):
     Examples
     --------
     >>> from hybridpd import ImpactPair, PDGains
-    >>> from hybridpd.analysis.orbits import symmetric_orbit
+    >>> from hybridpd.pair.orbits import symmetric_orbit
     >>> from hybridpd.analysis.sections import impact_pair_section
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> m = SectionMapper(SectionMap(impact_pair_section(orb.system())), orb.fixed_point)

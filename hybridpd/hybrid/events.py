@@ -94,7 +94,7 @@ from typing import NamedTuple
 import numpy as np
 
 from hybridpd._jit import njit
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 
 # re-exported: the kernels below and their users share these
 from hybridpd.hybrid._poly import (

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.hybrid.events import flow_eval
 from hybridpd.hybrid.modes import TerminationCause
 

@@ -72,7 +72,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode, ZenoOptions
 from hybridpd.mechanics.contacts import Contact
 from hybridpd.mechanics.impact import multi_impact, solve_lcp

@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.mechanics.automaton import ZENO_TAIL_TOL, MechanicalAutomaton  # noqa: F401 (old path)
 
 __all__ = ["MechanicalTrajectory", "simulate", "simulate_state"]

@@ -119,7 +119,7 @@ def check_4_necessary(col_stable: list, non_stable: list) -> str:
 
 
 def check_5(comparison) -> dict:
-    """Conclusion 5 from a :class:`~hybridpd.analysis.design.RobustnessComparison`: the share
+    """Conclusion 5 from a :class:`~hybridpd.pair.design.RobustnessComparison`: the share
     of the gain box that stays existing and stable over the uncertainty box is smaller for the
     non-collocated case (the amplitude-constrained share is evidence)."""
     rows = {r.case: r for r in comparison.rows}

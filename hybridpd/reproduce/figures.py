@@ -47,7 +47,7 @@ class ScaledMap:
 def scaled_map(case, settings, num) -> ScaledMap:
     """The regions in ``(kp/m2, kv/m2)``: computed at ``m2 = 1`` (only the ratios matter)."""
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.orbits import symmetric_orbits
+    from hybridpd.pair.orbits import symmetric_orbits
 
     (xa, xb), (ya, yb) = SCALED_WINDOW
     x, y = np.logspace(xa, xb, num), np.logspace(ya, yb, num)
@@ -201,8 +201,8 @@ def _traced(run, case: str, settings, cache=None):
     from types import SimpleNamespace
 
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.boundaries import boundary_curves
-    from hybridpd.analysis.boundarymask import stable_region_edges
+    from hybridpd.pair.boundaries import boundary_curves
+    from hybridpd.pair.boundarymask import stable_region_edges
 
     cache = {} if cache is None else cache
     s = run.m2

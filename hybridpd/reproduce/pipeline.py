@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.model import ImpactPair, PDGains
 from hybridpd.reproduce import conclusions as C
 from hybridpd.reproduce.settings import AUTO, PAPER, Settings
@@ -152,8 +152,8 @@ def m2_study(settings: Settings, *, log=None) -> M2Study:
     verdict grid and on the resolution-check grid (:meth:`Settings.check_num`).
     """
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.design import robustness_comparison
-    from hybridpd.analysis.orbits import symmetric_orbits
+    from hybridpd.pair.design import robustness_comparison
+    from hybridpd.pair.orbits import symmetric_orbits
 
     say = _say(log)
     P = PAPER
@@ -213,7 +213,7 @@ def _regions(run, settings, common, *, progress, tick):
     """Region maps of Figs 4-5 on the scaled box (saved as .nc) and their shares on the
     run's grid and on the resolution-check grid."""
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.regions import region_map
+    from hybridpd.pair.regions import region_map
 
     s, d, m2 = run.scale, run.directory, run.m2
     kpm, kvm, num = settings.gains
@@ -285,7 +285,7 @@ def _check_4(run, basins, grid, settings):
 
 def _comparison(m2, settings, grid, n_starts, maxiter):
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.design import robustness_comparison
+    from hybridpd.pair.design import robustness_comparison
 
     P = PAPER
     return robustness_comparison(
@@ -307,7 +307,7 @@ def run_convention(m2, settings: Settings, out, *, executor="processes", max_wor
     dict) lets conventions share work that depends on ``kp/m2, kv/m2`` only.
     """
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.orbits import symmetric_orbit
+    from hybridpd.pair.orbits import symmetric_orbit
     from hybridpd.reproduce.figures import convention_figures
     from hybridpd.reproduce.rules import resolution
 

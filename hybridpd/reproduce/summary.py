@@ -158,7 +158,7 @@ def _orbit_row(o) -> dict:
 
 def _run_dict(r) -> dict:
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.basins import LABELS
+    from hybridpd.pair.basins import LABELS
 
     basins = []
     for (case, e), b in r.basins.items():
@@ -285,7 +285,7 @@ def _feedback(m2, settings) -> dict | None:
     if m2 is None:
         return None
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.orbits import symmetric_orbits
+    from hybridpd.pair.orbits import symmetric_orbits
 
     P = PAPER
     rho = {}
