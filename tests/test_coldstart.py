@@ -279,8 +279,8 @@ def test_fast_path_builds_the_python_control_system_on_demand():
 
 @pytest.mark.parametrize("case", CASES)
 def test_interpreted_kernels_equal_compiled(case, monkeypatch):
-    from hybridpd.pair import orbits
     from hybridpd.hybrid import automaton
+    from hybridpd.pair import orbits
     from hybridpd.pair.impactpair import ControlledImpactPair
     from hybridpd.pair.orbits import symmetric_orbit
 
