@@ -185,7 +185,7 @@ def _zeno_switch(mode, g, t_k, t_inf, h, Phi, Ah, Rz, zt, max_jumps, Kp1, w, fc,
 def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target, zt, Rz,
                   dt_min, t_end, max_jumps, max_steps, zf, zi, w, fc, ic,
                   jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out,
-                  gkind, simtol):
+                  gkind, simtol, gid, fired):
     """:func:`run_hybrid` with modes built on demand and simultaneity groups (module docstring)."""
     # One function on purpose: numba compiles the whole jump loop into one native loop.
     N1 = w.shape[0]
@@ -242,13 +242,18 @@ def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, t
                 w[i] = wout[i]
             fc[0] = tev
             return 1
-        if simtol >= 0.0 and gkind[mode, g] != 0 and _other_active(
-                G[mode], ng[mode], gkind[mode], g, wout, h[mode], simtol * (1.0 + abs(tev))):
-            for i in range(N1):
-                w[i] = wout[i]
-            fc[0] = tev
-            ic[12] = g
-            return _RC_SIMULTANEOUS
+        if simtol >= 0.0 and gkind[mode, g] != 0:
+            again = _fired_before(gid[mode, g], tev, fc, ic, fired)
+            if again or _other_active(G[mode], ng[mode], gkind[mode], g, wout, h[mode],
+                                      simtol * (1.0 + abs(tev))):
+                for i in range(N1):
+                    w[i] = wout[i]
+                fc[0] = tev
+                fc[6] = t
+                ic[12] = g
+                ic[13] = 1 if again else 0
+                return _RC_SIMULTANEOUS
+            _note_fired(gid[mode, g], ic, fired)
         _matvec(Rh[mode, g], wout, post)
         post[N1 - 1] = 1.0
         tgt = target[mode, g]
@@ -325,6 +330,32 @@ def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, t
 
 
 @njit(cache=True)
+def _fired_before(me, tev, fc, ic, fired):
+    """Whether the guard of identity ``me`` has fired already at the instant ``tev``.
+
+    The guards of groups that fired at one instant ``fc[5]`` are kept in ``fired[:ic[14]]``
+    (beyond its capacity further ones are not kept: the instant-jump bound still holds);
+    a later instant starts afresh (``ic[15]``, the joint jumps of the instant, too).
+    """
+    if fc[5] != tev:
+        fc[5] = tev
+        ic[14] = 0
+        ic[15] = 0
+        return False
+    for q in range(min(ic[14], fired.shape[0])):
+        if fired[q] == me:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _note_fired(me, ic, fired):
+    if ic[14] < fired.shape[0]:
+        fired[ic[14]] = me
+    ic[14] += 1
+
+
+@njit(cache=True)
 def _other_active(Gm, ngm, gk, g, w, hm, tau):
     """Whether another guard of group ``gk[g]`` is on its guard at ``w`` or reaches it within
     ``tau`` (time units) while closing: the jump must then be resolved jointly."""
@@ -356,4 +387,5 @@ def run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, targ
     return run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target,
                          zt, Rz, dt_min, t_end, max_jumps, max_steps, zf, zi, w, fc, ic, jt, jj,
                          jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out,
-                         np.zeros((1, 1), np.int64), -1.0)
+                         np.zeros((1, 1), np.int64), -1.0, np.zeros((1, 1), np.int64),
+                         np.zeros(1, np.int64))

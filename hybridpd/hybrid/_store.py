@@ -48,7 +48,8 @@ def _empty(cap, GM, Kp1, N1):
         "cnorm": np.zeros((cap, GM)), "prio": np.zeros((cap, GM), np.int64),
         "ng": np.full(cap, -1, np.int64), "Rh": np.zeros((cap, GM, N1, N1)),
         "target": np.zeros((cap, GM), np.int64), "zt": np.full((cap, GM), -1, np.int64),
-        "Rz": np.zeros((cap, GM, N1, N1)), "gkind": np.zeros((cap, GM), np.int64)}
+        "Rz": np.zeros((cap, GM, N1, N1)), "gkind": np.zeros((cap, GM), np.int64),
+        "gid": np.full((cap, GM), -1, np.int64)}
 
 
 class ModeStore:
@@ -67,6 +68,7 @@ class ModeStore:
     def __init__(self, n, K, theta):
         self.n, self.K, self.theta = int(n), int(K), float(theta)
         self.count = 0                       # rows in use (built modes)
+        self.guard_ids = {}                  # guard name -> id, the same in every mode
         self._pk = _empty(4, 1, self.K + 1, self.n + 1)
 
     def _grow(self, cap, GM):
@@ -128,6 +130,7 @@ class ModeStore:
             pk["Rh"][i, gi] = Rhs[gi]
             pk["Rz"][i, gi] = Rzs[gi]
             pk["gkind"][i, gi] = int(g.group)
+            pk["gid"][i, gi] = self.guard_ids.setdefault(g.name, len(self.guard_ids))
         pk["ng"][i] = ngi
         return i
 
@@ -141,11 +144,17 @@ class ModeStore:
     def packed(self) -> PackedAutomaton:
         """Views of the tables over the built rows (targets ``< -1``: reserved modes)."""
         c = self.count
-        return PackedAutomaton(**{k: v[:c] for k, v in self._pk.items() if k != "gkind"})
+        return PackedAutomaton(**{k: v[:c] for k, v in self._pk.items()
+                                  if k not in ("gkind", "gid")})
 
     def gkind(self) -> np.ndarray:
         """Per-guard simultaneity group (``(count, GM)`` int64, 0: none)."""
         return self._pk["gkind"][:self.count]
+
+    def gid(self) -> np.ndarray:
+        """Per-guard identity (``(count, GM)`` int64): guards of one name share it in every
+        mode (:attr:`guard_ids`), so that a guard firing again after a mode change is seen."""
+        return self._pk["gid"][:self.count]
 
     @property
     def nbytes(self) -> int:

@@ -70,6 +70,7 @@ inputs :class:`PackedAutomaton`; the calling contract is documented there).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 
@@ -122,6 +123,8 @@ __all__ = [
 # 1 ms per jump), in chunks bounded by both; the run carries its state between chunks.
 _INTERP_MAX_STEPS = 2000
 _INTERP_JUMPS = 64
+# guards of simultaneity groups remembered per instant (to see one fire again there)
+_FIRED_CAP = 64
 
 
 
@@ -421,7 +424,9 @@ class HybridAutomaton:
         ic[3] = -1
         opts = (zeno, resolver, float(simtol), -1.0 if max_state is None else float(max_state))
         rc, cat = self._run_chunks(t0, t1, max_jumps, max_steps, opts, w, fc, ic)
-        return self._make_trajectory(t0, rc, cat, w, fc, ic)
+        traj = self._make_trajectory(t0, rc, cat, w, fc, ic)
+        reason = _stop_reason(traj, max_jumps, max_steps, zeno)
+        return traj if not reason else dataclasses.replace(traj, reason=reason)
 
     def _run_chunks(self, t0, t1, max_jumps, max_steps, opts, w, fc, ic):
         """Run the jump loop from the carried state ``(w, fc, ic)`` until it stops.
@@ -443,6 +448,7 @@ class HybridAutomaton:
         small = (t1 - t0) <= _INTERP_MAX_STEPS * hmin or max_jumps <= _INTERP_JUMPS
         if resolver is None:
             simtol = -1.0
+        fired = np.zeros(_FIRED_CAP, np.int64)
         while True:
             pk = self._store.packed()
             gk = self._store.gkind() if simtol >= 0 else None
@@ -450,7 +456,8 @@ class HybridAutomaton:
                       else np.full(pk.h.shape[0], float(zeno.dt_min)))
             # without groups the plain loop (the same code) is the kernel to compile
             kern = run_hybrid if simtol < 0 else run_hybrid_ex
-            extra = {} if simtol < 0 else {"gkind": gk, "simtol": simtol}
+            extra = {} if simtol < 0 else {"gkind": gk, "simtol": simtol,
+                                           "gid": self._store.gid(), "fired": fired}
             interp = small and kern.prefer_interpreter()
             steps = min(max_steps, int(ic[8]) + _INTERP_MAX_STEPS) if interp else max_steps
             if interp:
@@ -472,9 +479,8 @@ class HybridAutomaton:
                 if int(ic[1]) >= max_jumps:
                     rc = 1
                     break
-                done = self._resolve(resolver, w, fc, ic, chunks)
-                if not done:
-                    rc = TerminationCause.SIMULTANEOUS.value
+                rc = self._resolve(resolver, w, fc, ic, chunks, fired, int(zeno.max_instant_jumps))
+                if rc is not None:
                     break
                 continue
             if rc == _RC_BUFFER_FULL or (rc == _RC_STEP_LIMIT and steps < max_steps):
@@ -488,37 +494,72 @@ class HybridAutomaton:
         cat["jname"] = names
         return rc, cat
 
-    def _resolve(self, resolver, w, fc, ic, chunks) -> bool:
-        """Apply the resolver's joint jump to the carried state; False if it has none."""
+    def _resolve(self, resolver, w, fc, ic, chunks, fired, max_inst):
+        """Apply the resolver's joint jump to the carried state.
+
+        Returns ``None`` to resume the run, else its termination code: ``SIMULTANEOUS`` when
+        the resolver has no joint jump, ``ZENO`` past ``max_instant_jumps`` jumps at one
+        instant (the joint jumps count like the kernel's own).
+        """
         n = self._n
         mode = int(ic[0])
         g = int(ic[12])
         src = self._names[mode]
         t = float(fc[0])
-        out = resolver(src, self._built[mode].guards[g].name, t, w[:n].copy())
+        gname = self._built[mode].guards[g].name
+        if ic[13]:
+            # a guard of the group fires again at this instant: the resolver is told how
+            # often this happened, so that it can resolve the contacts' accumulation
+            ic[15] += 1
+            out = resolver(src, gname, t, w[:n].copy(), refire=int(ic[15]))
+        else:
+            out = resolver(src, gname, t, w[:n].copy())
         if out is None:
-            return False
-        z_post, target, names = out
+            return TerminationCause.SIMULTANEOUS.value
+        z_post, target, names, *more = out
+        kind = more[0] if more else "simultaneous"
+        if kind not in ("simultaneous", "zeno") or not names:
+            raise ValueError("resolver must return (z_post, target, names[, kind]) with at "
+                             "least one name and kind 'simultaneous' or 'zeno'")
         z_post = np.asarray(z_post, dtype=float)
         tgt = self.mode_index(target)
         k = len(names)
         pre = w.copy()
         post = np.append(z_post, 1.0)
+        zeno = kind == "zeno"
         chunks.append({
             "jt": np.full(k, t), "jj": int(ic[1]) + 1 + np.arange(k, dtype=np.int64),
             "jg": np.full(k, -1, np.int64), "jsrc": np.full(k, mode, np.int64),
-            "jdst": np.full(k, tgt, np.int64), "jkind": np.full(k, 4, np.int64),
+            "jdst": np.full(k, tgt, np.int64), "jkind": np.full(k, 3 if zeno else 4, np.int64),
             "jpre": np.tile(pre, (k, 1)), "jpost": np.tile(post, (k, 1)),
             "st0": np.empty(0), "st1": np.empty(0), "smode": np.empty(0, np.int64),
-            "sj": np.empty(0, np.int64), "sw": np.empty((0, n + 1)), "zt_out": np.empty(0),
-            "jname": list(names)})
+            "sj": np.empty(0, np.int64), "sw": np.empty((0, n + 1)),
+            "zt_out": np.full(1 if zeno else 0, t), "jname": list(names)})
         ic[1] += k
         w[:] = post
         ic[0] = tgt
         ic[2] = -1
         ic[3] = -1
         fc[1] = 0.0
-        return True
+        ids = self._store.guard_ids
+        for nm in names:       # the joint jump fires each named guard at this instant
+            if nm in ids:
+                if ic[14] < fired.shape[0]:
+                    fired[ic[14]] = ids[nm]
+                ic[14] += 1
+        # fc[6]: the start of the flow that ended here; no flow between: one more jump at
+        # this instant
+        ic[7] = ic[7] + 1 if fc[0] == fc[6] else 0
+        if ic[7] > max_inst:
+            chunks.append({
+                "jt": np.empty(0), "jj": np.empty(0, np.int64), "jg": np.empty(0, np.int64),
+                "jsrc": np.empty(0, np.int64), "jdst": np.empty(0, np.int64),
+                "jkind": np.empty(0, np.int64), "jpre": np.empty((0, n + 1)),
+                "jpost": np.empty((0, n + 1)), "st0": np.array([t]), "st1": np.array([t]),
+                "smode": np.array([tgt], np.int64), "sj": np.array([ic[1]], np.int64),
+                "sw": post[None, :].copy(), "zt_out": np.array([t]), "jname": []})
+            return TerminationCause.ZENO.value
+        return None
 
     def _make_trajectory(self, t0, rc, cat, w, fc, ic) -> HybridTrajectory:
         n = self._n
@@ -554,3 +595,31 @@ def _buffers(cap, N1):
         "jpost": np.empty((cap, N1)), "st0": np.empty(cap + 2), "st1": np.empty(cap + 2),
         "smode": np.empty(cap + 2, np.int64), "sj": np.empty(cap + 2, np.int64),
         "sw": np.empty((cap + 2, N1)), "zt_out": np.empty(cap)}
+
+
+def _stop_reason(traj, max_jumps, max_steps, zeno) -> str:
+    """One line saying why ``traj`` stopped before its end time ("" if it did not)."""
+    cause = traj.termination
+    t = f"t = {traj.t_final:.12g}"
+    jt = traj.jumps
+    last = jt.t.size and jt.t[-1] == traj.t_final
+    at = f" (last jump: {jt.guard[-1]} in mode {jt.source[-1]!r})" if last else ""
+    if cause is TerminationCause.END_TIME:
+        return ""
+    if cause is TerminationCause.JUMP_LIMIT:
+        return f"jump_limit: max_jumps = {max_jumps} jumps reached at {t}{at}"
+    if cause is TerminationCause.ZENO:
+        n_inst = int(np.sum(jt.t == traj.t_final)) if last else 0
+        if n_inst > zeno.max_instant_jumps:
+            return (f"zeno: more than max_instant_jumps = {zeno.max_instant_jumps} jumps at "
+                    f"the one instant {t}{at}")
+        return (f"zeno: jumps accumulate at {traj.zeno_times[-1]:.12g} in mode "
+                f"{traj.mode_final!r}, whose guard has no zeno_target (stopped at {t})")
+    if cause is TerminationCause.SIMULTANEOUS:
+        return (f"simultaneous: the resolver found no joint jump at {t} in mode "
+                f"{traj.mode_final!r}")
+    if cause is TerminationCause.STEP_LIMIT:
+        return f"step_limit: max_steps = {max_steps} flow steps taken by {t}"
+    if cause is TerminationCause.NONFINITE:
+        return f"nonfinite: the state overflowed or became NaN at {t} in mode {traj.mode_final!r}"
+    return f"diverged: a state component exceeded max_state at {t} in mode {traj.mode_final!r}"

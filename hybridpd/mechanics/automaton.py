@@ -85,6 +85,9 @@ _GUARD_KIND = {"contact": "impact", "release": "release", "enter": "enter", "lea
 RELEASE_MARGIN = 1e-9
 #: resolve an accumulation until its extrapolated tail is this short (relative to 1 + |t|)
 ZENO_TAIL_TOL = 1e-12
+_EPS = float(np.finfo(float).eps)
+#: contacts within this (relative) of their bounds take part in an accumulation's limit
+_TOUCH_RTOL = 1e-12
 
 
 @dataclass(frozen=True)
@@ -185,7 +188,8 @@ class MechanicalAutomaton:
         (:func:`~hybridpd.mechanics.impact.multi_impact`) and returns ``(z_post, target
         mode, impact guard names)``, or ``None`` when the LCP has no non-degenerate solution.
         """
-        return lambda mode, guard, t, z: _resolve(self, time_tol, mode, guard, t, z)
+        return lambda mode, guard, t, z, refire=0: _resolve(self, time_tol, mode, guard, t, z,
+                                                            refire)
 
     def initial_state(self, q0, v0, t0: float = 0.0, controller_state=None) -> np.ndarray:
         """Full state at ``t0`` (see :meth:`MechanicalLoop.initial_state`)."""
@@ -209,8 +213,10 @@ class MechanicalAutomaton:
         return self.free_mode
 
 
-def _active(model, z, t, time_tol, stick, fired):
-    """Rigid contacts on a bound (or closing onto it within the tolerance) at state ``z``."""
+def _active(model, z, t, time_tol, stick, fired, touching=False):
+    """Rigid contacts on a bound (or closing onto it within the tolerance) at state ``z``:
+    ``(k, wall, held)``. With ``touching`` a contact on its bound takes part even while it
+    separates (the contacts of an accumulation, which must not close again)."""
     iv = model.layout["v"]
     v = z[iv]
     held = dict(stick)
@@ -233,39 +239,108 @@ def _active(model, z, t, time_tol, stick, fired):
         for wall, bound in c.bounds:
             dist = wall * (bound - s)               # > 0 inside
             closing = wall * sd
-            if closing < -64 * np.finfo(float).eps * sdscale:
+            if closing < -64 * _EPS * sdscale and not touching:
                 continue
-            if dist <= 64 * np.finfo(float).eps * (scale + abs(bound)) + max(closing, 0) * tau:
+            # an accumulation's contacts are on their bounds to the precision of the event
+            # location (the guard's rounding bound, ~1e-13 relative), not to a few ulps
+            rtol = _TOUCH_RTOL if touching else 64 * _EPS
+            if dist <= rtol * (scale + abs(bound)) + max(closing, 0) * tau:
                 out.append((k, wall, False))
     return out
 
 
-def _resolve(model, time_tol, mode, guard, t, z):
+def _resolve(model, time_tol, mode, guard, t, z, refire=0):
+    """The joint jump of the active contacts (``refire = 0``), or of every contact on its
+    bound when a contact fires again at one instant (``refire`` times so far): with
+    restitution the first time, then as the limit of impacts accumulating there.
+
+    The limit (kind ``'zeno'``) is the plastic joint impact of the contacts on their bounds;
+    the contact that fired again and every other one left at zero relative velocity whose
+    force pushes are held, the state projected onto them (as the plastic projection of a
+    single contact's accumulation).
+    """
     info = model.modes[mode]
     gi = model.guards[(mode, guard)]
-    act = _active(model, z, t, time_tol, info.stick, (gi.contact, gi.wall))
+    geo = model._geometry
+    fired = (gi.contact, gi.wall)
+    act = _active(model, z, t, time_tol, info.stick, fired, refire > 0)
     iv = model.layout["v"]
     W = np.array([-wall * model.contacts[k].normal for k, wall, _ in act])
     e = np.array([model.contacts[k].restitution for k, _, _ in act])
+    limit = refire >= 2
+    if limit:
+        e[:] = 0.0
     held = np.array([h for *_, h in act])
-    out = multi_impact(model._geometry.Minv, W, z[iv], e, held)
+    out = multi_impact(geo.Minv, W, z[iv], e, held)
     if out is None:
-        return None
-    scale = float(out.impulses.max(initial=0.0))
-    b = np.where(held, 0.0, e * np.maximum(-out.u_pre, 0.0))
-    keep = []
-    for i, (k, wall, h) in enumerate(act):
-        pushing = out.impulses[i] > 1e-12 * scale
-        if (h and (pushing or abs(out.u_post[i]) <= 1e-12 * (1 + abs(out.u_pre).max()))) or (
-                not h and pushing and b[i] == 0.0):
-            keep.append((k, wall))
-    keep = tuple(sorted(keep))
-    if keep and model._geometry.held(keep) is None:
         return None
     z1 = np.array(z, dtype=float)
     z1[iv] = out.v
-    names = [f"contact{k}{_sign(wall)}" for k, wall, h in act if not h]
-    return z1, _mode_name(info.config, keep), names
+    # on the bound at zero relative velocity (relative to the velocities that make it up,
+    # as the jump loop judges it): held if the contact force pushes
+    vscale = np.abs(W) @ (np.abs(z[iv]) + np.abs(out.v))
+    still = np.abs(out.u_post) <= 1e-10 * (vscale + float(np.abs(out.u_pre).max(initial=0.0)))
+    cand = [(k, wall) for (k, wall, _), s in zip(act, still) if s]
+    # the contact that keeps firing is held at last, whatever the forces say: the jump loop
+    # sees it at rest on its bound and pushed in (their judgements differ by rounding)
+    forced = (fired,) if refire >= 3 and fired in cand else ()
+    keep = _hold(geo, info.config, z1, cand, forced)
+    if keep and geo.held(keep) is None:
+        return None
+    target = _mode_name(info.config, keep)
+    new = sorted(set(keep) - set(info.stick))
+    if limit and new:
+        R, r = geo.projection(keep)
+        return R @ z1 + r, target, [f"contact{k}{_sign(w)}" for k, w in new], "zeno"
+    scale = float(out.impulses.max(initial=0.0))
+    names = [f"contact{k}{_sign(wall)}" for i, (k, wall, h) in enumerate(act) if not h and (
+        k == gi.contact or out.u_pre[i] < 0.0 or out.impulses[i] > 1e-12 * scale)]
+    return z1, target, names
+
+
+def _hold(geo, config, z, cand, always=()):
+    """The contacts of ``cand`` (on their bounds at zero relative velocity) that stay held.
+
+    Their forces ``f >= 0`` solve the LCP of the separating accelerations
+    ``a = W a0 + W M^-1 W^T f >= 0``, ``f . a = 0`` (``a0``: the accelerations without the
+    contacts, ``W`` the oriented normals): a contact that pushes, or whose acceleration
+    apart is zero to a relative ``RELEASE_MARGIN``, stays held; one that accelerates apart
+    is free. The set is then checked against the release guards of the mode that holds it
+    (the same forces, with their margin): a contact they would release at once is dropped,
+    so no contact enters a sticking phase whose force already pulls (a sticking interval of
+    zero length). The contacts of ``always`` stay held whatever their forces.
+    """
+    if not cand:
+        return ()
+    A, b, _, _ = geo.flow(config, ())
+    a0 = (A @ z + b)[geo.iv]
+    W = np.array([-wall * geo.contacts[k].normal for k, wall in cand])
+    Aw = W @ geo.Minv @ W.T
+    q = W @ a0
+    f = solve_lcp(Aw, q)
+    if f is None:
+        keep = list(cand)
+    else:
+        acc = Aw @ f + q
+        # relative to the terms that make up the accelerations, as the release margin is
+        # relative to the force's terms: near rest both vanish, and a contact the jump loop
+        # sees at rest and pushed in must not be judged free on rounding
+        terms = np.abs(A[geo.iv]) @ np.abs(z) + np.abs(b[geo.iv])
+        tol = RELEASE_MARGIN * (np.abs(W) @ terms + np.abs(Aw) @ f)
+        keep = [c for c, a, tl in zip(cand, acc, tol) if a <= tl or c in always]
+    for _ in range(len(keep)):
+        keep.sort()
+        if not keep or geo.held(tuple(keep)) is None:
+            break
+        _, _, lam_rows, lam_b = geo.flow(config, tuple(keep))
+        pull = np.array([w for _, w in keep]) * (lam_rows @ z + lam_b)
+        margin = RELEASE_MARGIN * (np.abs(lam_rows).sum(axis=1) * geo.scale + np.abs(lam_b))
+        excess = np.where([c in always for c in keep], -np.inf, pull - margin)
+        worst = int(np.argmax(excess))
+        if not excess[worst] > 0.0:
+            break
+        keep.pop(worst)
+    return tuple(sorted(keep))
 
 
 def _label(c):

@@ -67,7 +67,10 @@ def solve_lcp(A, q, tol: float | None = None) -> np.ndarray | None:
         Positive definite for a unique solution (``W M^-1 W^T`` with independent ``W``).
     q : array_like, shape (k,)
     tol : float, optional
-        Complementarity tolerance (default ``1e-11 (1 + max|q|) (1 + max|A|)``).
+        Complementarity tolerance (default ``1e-11 max|q| (1 + max|A|)``: relative to ``q``,
+        since the solution scales with it; an absolute floor would accept ``z = 0`` for
+        every small ``q``, e.g. the impact of contacts closing at 1e-12, and leave them
+        closing).
 
     Returns
     -------
@@ -88,7 +91,7 @@ def solve_lcp(A, q, tol: float | None = None) -> np.ndarray | None:
     if A.shape != (k, k):
         raise ValueError(f"A must have shape ({k}, {k}), got {A.shape}")
     if tol is None:
-        tol = 1e-11 * (1.0 + float(np.abs(q).max(initial=0.0))) * (
+        tol = 1e-11 * float(np.abs(q).max(initial=0.0)) * (
             1.0 + float(np.abs(A).max(initial=0.0)))
     if k == 0:
         return np.zeros(0)
