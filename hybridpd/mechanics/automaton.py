@@ -73,7 +73,7 @@ import numpy as np
 from hybridpd._repr import compact_repr
 from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode, ZenoOptions
 from hybridpd.mechanics.contacts import Contact
-from hybridpd.mechanics.impact import multi_impact, solve_lcp
+from hybridpd.mechanics.impact import impact_cascade, multi_impact, solve_lcp
 from hybridpd.mechanics.loop import MechanicalLoop
 
 __all__ = ["GuardInfo", "MechanicalAutomaton", "ModeInfo", "build_automaton"]
@@ -251,13 +251,16 @@ def _active(model, z, t, time_tol, stick, fired, touching=False):
 
 def _resolve(model, time_tol, mode, guard, t, z, refire=0):
     """The joint jump of the active contacts (``refire = 0``), or of every contact on its
-    bound when a contact fires again at one instant (``refire`` times so far): with
-    restitution the first time, then as the limit of impacts accumulating there.
+    bound when a contact fires again at one instant (``refire`` times so far).
 
-    The limit (kind ``'zeno'``) is the plastic joint impact of the contacts on their bounds;
-    the contact that fired again and every other one left at zero relative velocity whose
-    force pushes are held, the state projected onto them (as the plastic projection of a
-    single contact's accumulation).
+    The first time the impacts of those contacts follow each other to their end
+    (:func:`~hybridpd.mechanics.impact.impact_cascade`: one at a time, with the held ones,
+    to the plastic limit where they accumulate); after that the contacts are at rest on
+    their bounds and pushed in, and their limit is the plastic joint impact. Contacts left
+    at zero relative velocity whose forces push are held (:func:`_hold`); where impacts
+    accumulated the jump has kind ``'zeno'``, one record per newly held contact, and the
+    state is projected onto the held contacts (as the plastic projection of a single
+    contact's accumulation).
     """
     info = model.modes[mode]
     gi = model.guards[(mode, guard)]
@@ -267,19 +270,29 @@ def _resolve(model, time_tol, mode, guard, t, z, refire=0):
     iv = model.layout["v"]
     W = np.array([-wall * model.contacts[k].normal for k, wall, _ in act])
     e = np.array([model.contacts[k].restitution for k, _, _ in act])
-    limit = refire >= 2
-    if limit:
-        e[:] = 0.0
     held = np.array([h for *_, h in act])
-    out = multi_impact(geo.Minv, W, z[iv], e, held)
-    if out is None:
-        return None
+    if refire == 1:
+        cas = impact_cascade(geo.Minv, W, z[iv], e, held)
+        if cas is None:
+            return None
+        v1, still, limit = cas.v, cas.held, cas.accumulated
+        hit = sorted(set(cas.hits))
+    else:
+        limit = refire >= 2
+        out = multi_impact(geo.Minv, W, z[iv], np.zeros_like(e) if limit else e, held)
+        if out is None:
+            return None
+        v1 = out.v
+        # at zero relative velocity, relative to the velocities that make it up (as the
+        # jump loop judges it)
+        vscale = np.abs(W) @ (np.abs(z[iv]) + np.abs(v1))
+        still = np.abs(out.u_post) <= 1e-10 * (
+            vscale + float(np.abs(out.u_pre).max(initial=0.0)))
+        scale = float(out.impulses.max(initial=0.0))
+        hit = [i for i, (k, _, h) in enumerate(act) if not h and (
+            k == gi.contact or out.u_pre[i] < 0.0 or out.impulses[i] > 1e-12 * scale)]
     z1 = np.array(z, dtype=float)
-    z1[iv] = out.v
-    # on the bound at zero relative velocity (relative to the velocities that make it up,
-    # as the jump loop judges it): held if the contact force pushes
-    vscale = np.abs(W) @ (np.abs(z[iv]) + np.abs(out.v))
-    still = np.abs(out.u_post) <= 1e-10 * (vscale + float(np.abs(out.u_pre).max(initial=0.0)))
+    z1[iv] = v1
     cand = [(k, wall) for (k, wall, _), s in zip(act, still) if s]
     # the contact that keeps firing is held at last, whatever the forces say: the jump loop
     # sees it at rest on its bound and pushed in (their judgements differ by rounding)
@@ -292,10 +305,8 @@ def _resolve(model, time_tol, mode, guard, t, z, refire=0):
     if limit and new:
         R, r = geo.projection(keep)
         return R @ z1 + r, target, [f"contact{k}{_sign(w)}" for k, w in new], "zeno"
-    scale = float(out.impulses.max(initial=0.0))
-    names = [f"contact{k}{_sign(wall)}" for i, (k, wall, h) in enumerate(act) if not h and (
-        k == gi.contact or out.u_pre[i] < 0.0 or out.impulses[i] > 1e-12 * scale)]
-    return z1, target, names
+    names = [f"contact{act[i][0]}{_sign(act[i][1])}" for i in hit if not act[i][2]]
+    return z1, target, names or [f"contact{fired[0]}{_sign(fired[1])}"]
 
 
 def _hold(geo, config, z, cand, always=()):
