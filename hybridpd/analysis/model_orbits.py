@@ -106,7 +106,7 @@ def orbit_status(po: PeriodicOrbit) -> int:
 
 def signature_table(automaton) -> tuple:
     """All ``(guard, kind)`` pairs a signature of `automaton` can hold, in a fixed order."""
-    names = sorted({g.name for m in automaton.modes for g in m.guards})
+    names = automaton.guard_names()       # declared by a mode builder: no mode is built
     return tuple((g, k) for g in names for k in _KINDS)
 
 

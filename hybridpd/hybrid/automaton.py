@@ -45,7 +45,9 @@ Conventions
   packed into the kernel's tables) the first time a run enters it or a caller names it; a
   guard naming a mode not built yet carries a reservation code, and the jump loop hands
   control back to build it. :meth:`HybridAutomaton.materialize` builds every reachable mode
-  (``modes`` and ``packed`` do so first, for analyses that need them all).
+  (iterating ``modes`` does so first, for analyses that need them all); ``packed`` holds the
+  tables of the modes built so far, and every map of a section builds modes as it enters
+  them, as a simulation does.
 * **Simultaneity groups**: a guard of a non-zero ``group`` that fires while another guard of
   its group is on its guard (or closing onto it within ``simtol (1 + |t|)``) hands the joint
   jump to the ``resolver`` of :meth:`HybridAutomaton.simulate` (jumps of kind
@@ -90,7 +92,7 @@ from hybridpd.hybrid._kernel import (  # noqa: F401 (the kernel helpers keep the
     run_hybrid,
     run_hybrid_ex,
 )
-from hybridpd.hybrid._store import ModeStore
+from hybridpd.hybrid._store import ModeStore, reset_matrix
 from hybridpd.hybrid.events import K_DEFAULT, THETA_DEFAULT
 from hybridpd.hybrid.modes import Guard, Mode, TerminationCause, ZenoOptions
 from hybridpd.hybrid.trajectory import (
@@ -244,7 +246,11 @@ class HybridAutomaton:
         self._store = ModeStore(n, K, theta)
         self._index = {}                 # name -> row of a built mode
         self._names = []                 # row -> name
-        self._built = []                 # row -> Mode
+        self._built = []                 # row -> Mode, its guards without resets (_full)
+        self._full_cache = {}            # row -> Mode with resets, the last few asked for
+        # a builder that gives a guard's Zeno reset on its own: those are packed when first
+        # used (most Zeno targets are never entered, their resets would be most of the tables)
+        self._lazy_zeno = callable(getattr(mode_builder, "zeno_reset", None))
         self._reserved = {}              # name -> reservation number r (target code -2 - r)
         self._res_names = []             # r -> name
         self._code_rows = {}             # target code -> row, once built
@@ -285,10 +291,14 @@ class HybridAutomaton:
             raise ValueError(
                 f"max_modes: more than {self._max_modes} modes would be built; simulate builds "
                 "the modes it visits, an analysis of every mode needs them all")
-        row = self._store.add(m, self._reserve)
+        row = self._store.add(m, self._reserve, lazy_zeno=self._lazy_zeno)
         self._index[name] = row
         self._names.append(name)
-        self._built.append(m)
+        # the resets live in the packed tables (stored once each, shared between modes);
+        # a mode keeps its guards without them (mode() puts them back), so that an automaton
+        # with many modes does not hold every reset matrix twice
+        self._built.append(dataclasses.replace(m, guards=tuple(
+            dataclasses.replace(g, reset=None, zeno_reset=None) for g in m.guards)))
         r = self._reserved.get(name)
         if r is not None:
             self._store.patch(-2 - r, row)
@@ -325,11 +335,74 @@ class HybridAutomaton:
         return self._store.nbytes
 
     @property
-    def modes(self) -> tuple:
-        """The modes, in order (their index is the mode code of the kernels); all reachable
-        modes are built first (:meth:`materialize`)."""
+    def modes(self) -> Sequence:
+        """The modes, in order (their index is the mode code of the kernels).
+
+        Indexing a mode that is built (an index a kernel or :meth:`mode_index` gave) builds
+        nothing; its length, iteration or any other index build every reachable mode first
+        (:meth:`materialize`). :attr:`built_mode_names` names the modes built so far. The
+        guards' resets are read back from the packed tables, where each is stored once.
+        """
+        return _Modes(self)
+
+    def _slim(self) -> list:
+        """The modes built so far, their guards without resets (flows, guard rows, names and
+        targets: what an analysis reads besides the packed tables; nothing is built)."""
+        return self._built
+
+    def _zeno_reset(self, i, gi) -> np.ndarray:
+        """The homogeneous Zeno reset of guard ``gi`` of mode ``i``, packed if it was not."""
+        pk = self._store.packed()
+        if pk.rz[i, gi] < 0:
+            where = f"mode {self._names[i]!r} guard {self._built[i].guards[gi].name!r}"
+            self._store.set_zeno(i, gi, reset_matrix(
+                f"{where} zeno_reset", self._builder.zeno_reset(
+                    self._names[i], self._built[i].guards[gi].name), self._n))
+            pk = self._store.packed()
+        return pk.Rz[i, gi]
+
+    def _full(self, i) -> Mode:
+        """Built mode ``i`` with its guards' resets, from the packed tables."""
+        m = self._full_cache.pop(i, None)
+        if m is None:
+            n = self._n
+            pk = self._store.packed()
+            guards = []
+            for gi, g in enumerate(self._built[i].guards):
+                Rh = pk.Rh[i, gi]
+                zr = None
+                if g.zeno_target is not None:
+                    Rz = self._zeno_reset(i, gi)
+                    zr = (Rz[:n, :n].copy(), Rz[:n, n].copy())
+                guards.append(dataclasses.replace(g, reset=(Rh[:n, :n].copy(), Rh[:n, n].copy()),
+                                                  zeno_reset=zr))
+            m = dataclasses.replace(self._built[i], guards=tuple(guards))
+        self._full_cache[i] = m                 # the most recent few, most recent last
+        while len(self._full_cache) > 16:
+            self._full_cache.pop(next(iter(self._full_cache)))
+        return m
+
+    @property
+    def built_mode_names(self) -> tuple:
+        """Names of the modes built so far, in order (nothing is built)."""
+        return tuple(self._names)
+
+    def build_code(self, code: int) -> int:
+        """Build the mode a kernel reported as not built (its target code ``< -1``, the
+        kernels' return code 6 with ``ic[0] = code``) and return its index."""
+        r = -2 - int(code)
+        if not 0 <= r < len(self._res_names):
+            raise ValueError(f"code must be a reserved mode code (< -1), got {code!r}")
+        return self.mode_index(self._res_names[r])
+
+    def guard_names(self) -> tuple:
+        """Sorted names of the guards of every mode: declared by the mode builder (its
+        ``guard_names`` attribute, when it has one) or found by :meth:`materialize`."""
+        declared = getattr(self._builder, "guard_names", None)
+        if declared is not None:
+            return tuple(sorted(set(declared)))
         self.materialize()
-        return tuple(self._built)
+        return tuple(sorted({g.name for m in self._built for g in m.guards}))
 
     @property
     def mode_names(self) -> tuple:
@@ -346,9 +419,10 @@ class HybridAutomaton:
 
     @property
     def packed(self) -> PackedAutomaton:
-        """Stacked arrays for :func:`run_hybrid` over all reachable modes (read-only by
-        convention; :meth:`materialize` first)."""
-        self.materialize()
+        """Stacked arrays for :func:`run_hybrid` over the modes built so far (read-only by
+        convention). A target or Zeno target ``< -1`` names a mode not built yet: the jump
+        loop returns code 6 on entering it (:meth:`build_code` builds it; the tables are then
+        new arrays). Call :meth:`materialize` first for the tables of every mode."""
         return self._store.packed()
 
     def _packed_now(self) -> PackedAutomaton:
@@ -366,7 +440,7 @@ class HybridAutomaton:
 
     def mode(self, name: str) -> Mode:
         """The mode called ``name`` (built on demand)."""
-        return self._built[self.mode_index(name)]
+        return self._full(self.mode_index(name))
 
     def simulate(self, x0, mode0: str, t_span, max_jumps: int = 10_000,
                  max_steps: int | None = None, zeno: ZenoOptions | None = None,
@@ -418,7 +492,7 @@ class HybridAutomaton:
         w = np.append(x0, 1.0)
         fc = np.zeros(8)
         fc[0] = t0
-        ic = np.zeros(16, np.int64)
+        ic = np.zeros(18, np.int64)
         ic[0] = mi
         ic[2] = -1
         ic[3] = -1
@@ -449,6 +523,7 @@ class HybridAutomaton:
         if resolver is None:
             simtol = -1.0
         fired = np.zeros(_FIRED_CAP, np.int64)
+        bufs = None
         while True:
             pk = self._store.packed()
             gk = self._store.gkind() if simtol >= 0 else None
@@ -462,18 +537,23 @@ class HybridAutomaton:
             steps = min(max_steps, int(ic[8]) + _INTERP_MAX_STEPS) if interp else max_steps
             if interp:
                 cap = min(cap, _INTERP_JUMPS + 4)
-            bufs = _buffers(cap, N1)
+            if bufs is None or bufs["jt"].shape[0] != cap:
+                bufs = _buffers(cap, N1)
             ic[9:12] = 0
             run = kern.interpret if interp else kern
             rc = run(pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs, pk.gsum, pk.cnorm,
-                     pk.prio, pk.ng, pk.Rh, pk.target, pk.zt, pk.Rz, dt_min, t1, max_jumps,
+                     pk.prio, pk.ng, pk.R, pk.rh, pk.target, pk.zt, pk.rz, dt_min, t1, max_jumps,
                      steps, zf, zi, w, fc, ic, **bufs, **extra)
             nj, ns, nz = int(ic[9]), int(ic[10]), int(ic[11])
+            # the records are copied out: the buffers serve the next chunk, and a run that
+            # returns often (joint jumps, modes built) holds only what it recorded
             chunks.append({k: (v[:nj] if k.startswith("j") else v[:ns] if k.startswith("s")
-                               else v[:nz]) for k, v in bufs.items()})
+                               else v[:nz]).copy() for k, v in bufs.items()})
             if rc == _RC_NEED_MODE:
-                code = int(ic[0])
-                ic[0] = self._build(self._res_names[-2 - code])
+                if ic[16]:
+                    self._apply_zeno(w, ic, chunks[-1])
+                if ic[0] < 0:
+                    ic[0] = self.build_code(int(ic[0]))
                 continue
             if rc == _RC_SIMULTANEOUS:
                 if int(ic[1]) >= max_jumps:
@@ -487,12 +567,23 @@ class HybridAutomaton:
                 cap = min(max(max_jumps - int(ic[1]), 0) + 4, 65536)
                 continue
             break
-        cat = {k: np.concatenate([c[k] for c in chunks]) for k in chunks[0] if k != "jname"}
         names = []
         for c in chunks:
-            names.extend(c["jname"] if "jname" in c else [None] * len(c["jt"]))
+            names.extend(c.pop("jname") if "jname" in c else [None] * len(c["jt"]))
+        # one record at a time, each chunk's part let go as it is joined: the peak is the
+        # records once and one of them twice, not all twice
+        cat = {k: np.concatenate([c.pop(k) for c in chunks]) for k in list(chunks[0])}
         cat["jname"] = names
         return rc, cat
+
+    def _apply_zeno(self, w, ic, chunk) -> None:
+        """Apply the Zeno reset the jump loop handed back (``ic[16] = mode + 1``, ``ic[17]``
+        the guard) to ``w`` and to the post state of the last jump recorded."""
+        Rz = self._zeno_reset(int(ic[16]) - 1, int(ic[17]))
+        w[:] = Rz @ w
+        w[-1] = 1.0
+        chunk["jpost"][-1] = w
+        ic[16] = 0
 
     def _resolve(self, resolver, w, fc, ic, chunks, fired, max_inst):
         """Apply the resolver's joint jump to the carried state.
@@ -571,20 +662,48 @@ class HybridAutomaton:
         jsrc = cat["jsrc"]
         guard = tuple(nm if nm is not None else gnames[s][g]
                       for s, g, nm in zip(jsrc, cat["jg"], cat["jname"]))
+        # views, not copies: a long run's records are its largest memory
         jumps = JumpTable(
-            t=cat["jt"].copy(), j=cat["jj"].copy(), guard=guard,
-            pre=cat["jpre"][:, :n].copy(), post=cat["jpost"][:, :n].copy(),
+            t=cat["jt"], j=cat["jj"], guard=guard,
+            pre=cat["jpre"][:, :n], post=cat["jpost"][:, :n],
             source=tuple(mn[s] for s in jsrc), target=tuple(mn[d] for d in cat["jdst"]),
             kind=tuple(_KIND_NAMES[int(k)] for k in cat["jkind"]))
-        segs = SegmentTable(t_start=cat["st0"].copy(), t_end=cat["st1"].copy(),
-                            mode=tuple(mn[m] for m in cat["smode"]), j=cat["sj"].copy(),
-                            x_start=cat["sw"][:, :n].copy())
+        segs = SegmentTable(t_start=cat["st0"], t_end=cat["st1"],
+                            mode=tuple(mn[m] for m in cat["smode"]), j=cat["sj"],
+                            x_start=cat["sw"][:, :n])
         return HybridTrajectory(
             t0=t0, t_final=float(fc[0]), termination=TerminationCause(int(rc)),
             segments=segs, jumps=jumps, zeno_times=cat["zt_out"].copy(),
             x_final=w[:n].copy(), mode_final=mn[int(ic[0])], j_final=int(ic[1]),
             n_steps=int(ic[8]), state_names=self._state_names, _automaton=self,
             _seg_mode_idx=cat["smode"].copy(), _seg_w=np.ascontiguousarray(cat["sw"]))
+
+
+class _Modes(Sequence):
+    """:attr:`HybridAutomaton.modes`: a built mode by index builds nothing; everything else
+    builds every reachable mode first."""
+
+    def __init__(self, automaton):
+        self._ha = automaton
+
+    def __getitem__(self, i):
+        ha = self._ha
+        if isinstance(i, (int, np.integer)) and 0 <= i < len(ha._built):
+            return ha._full(int(i))
+        n = ha.materialize()
+        if isinstance(i, slice):
+            return tuple(ha._full(j) for j in range(n)[i])
+        return ha._full(range(n)[i])
+
+    def __len__(self):
+        return self._ha.materialize()
+
+    def __iter__(self):
+        n = self._ha.materialize()
+        return (self._ha._full(j) for j in range(n))
+
+    def __repr__(self):
+        return f"<modes of an automaton: {len(self._ha._built)} built>"
 
 
 def _buffers(cap, N1):

@@ -35,7 +35,9 @@ Guards (``g > 0`` admissible, all with ``direction = -1`` except sampling):
   mode is built (:meth:`_Geometry.impact_held`); target the mode holding what stays held (the
   same mode if all do); accumulating impacts enter the mode that also holds ``k`` through the
   plastic projection onto all of its contacts (``zeno_target``; none if the normals are
-  dependent: the run then ends with ``ZENO``). Impact guards form simultaneity group 1: when
+  dependent: the run then ends with ``ZENO``; the projection is the mode builder's
+  ``zeno_reset``, packed the first time an accumulation uses it). Impact guards form
+  simultaneity group 1: when
   another rigid contact is on its bound or closing onto it at the same instant, the joint
   impact is solved by :func:`~hybridpd.mechanics.impact.multi_impact` at run time
   (:meth:`MechanicalAutomaton.resolver`).
@@ -88,6 +90,7 @@ ZENO_TAIL_TOL = 1e-12
 _EPS = float(np.finfo(float).eps)
 #: contacts within this (relative) of their bounds take part in an accumulation's limit
 _TOUCH_RTOL = 1e-12
+_CACHE_SIZE = 512              # impact laws and projections kept for the next modes built
 
 
 @dataclass(frozen=True)
@@ -396,6 +399,7 @@ class _Geometry:
         self.iq, self.iv = lay["q"], lay["v"]
         self.Minv = np.linalg.inv(sysm.M)
         self._held = {}
+        self._cache = {}
         self.scale = max([1.0] + [abs(b) for c in contacts for _, b in c.bounds])
         self.gap = np.zeros((len(contacts), N))
         self.Mw = np.zeros((len(contacts), sysm.n))
@@ -424,8 +428,33 @@ class _Geometry:
         beta = np.array([self.bound(k, w) for k, w in stick])
         return W, MW, np.linalg.inv(G), beta
 
+    def _cached(self, key, fn, *args):
+        # a contact's impact law and a projection recur in the modes built one after the
+        # other: the last few are kept (the packed tables keep every one, once)
+        out = self._cache.pop(key, self)
+        if out is self:
+            out = fn(*args)
+        self._cache[key] = out
+        while len(self._cache) > _CACHE_SIZE:
+            self._cache.pop(next(iter(self._cache)))
+        return out
+
     def projection(self, stick):
         """Plastic projection onto every contact of ``stick``: ``(R, r)`` or None."""
+        return self._cached(("projection", tuple(stick)), self._projection, tuple(stick))
+
+    def impact_held(self, k, wall, stick):
+        """The contacts of ``stick`` that stay held through an impact of ``k`` at ``wall``
+        (:meth:`_impact_held`)."""
+        return self._cached(("held", k, wall, tuple(stick)), self._impact_held, k, wall,
+                            tuple(stick))
+
+    def impact(self, k, stick):
+        """Newton's law of contact ``k`` with the contacts of ``stick`` held: ``(R, r)``, or
+        None when the others hold ``k`` too (:meth:`_impact`)."""
+        return self._cached(("impact", k, tuple(stick)), self._impact, k, tuple(stick))
+
+    def _projection(self, stick):
         h = self.held(stick)
         if h is None:
             return None
@@ -438,7 +467,7 @@ class _Geometry:
         r[self.iq] = MW @ (Gi @ beta)
         return R, r
 
-    def impact_held(self, k, wall, stick):
+    def _impact_held(self, k, wall, stick):
         """The contacts of ``stick`` that stay held through an impact of ``k`` at ``wall``.
 
         The joint impact of ``k`` and the held contacts (zero normal velocity) is an LCP
@@ -462,8 +491,7 @@ class _Geometry:
         u = A @ lam + q
         return tuple(s for i, s in enumerate(stick) if u[i] <= 1e-12 * float(lam.max()))
 
-    def impact(self, k, stick):
-        """Newton's law of contact ``k`` with the contacts of ``stick`` held: ``(R, r)``."""
+    def _impact(self, k, stick):
         c = self.contacts[k]
         mw = self.Mw[k]
         if stick:
@@ -556,6 +584,24 @@ class _ModeBuilder:
 
     def __init__(self, geo):
         self.geo = geo
+        # the guards of every mode, known without building them (signature tables)
+        names = ["sample"] if geo.loop.sampled else []
+        for k, c in enumerate(geo.contacts):
+            for wall, _ in c.bounds:
+                kinds = ("contact", "release") if c.rigid else ("enter", "leave")
+                names += [f"{kind}{k}{_sign(wall)}" for kind in kinds]
+        self.guard_names = tuple(sorted(names))
+
+    def zeno_reset(self, mode, guard):
+        """The Zeno reset ``(R, r)`` of the impact guard ``guard`` of ``mode``: the plastic
+        projection onto the contacts held after the accumulation."""
+        geo = self.geo
+        config, stick = _parse_mode(mode, geo.contacts, geo)
+        m = _GUARD_RE.match(guard)
+        if m is None or m.group(1) != "contact":
+            raise ValueError(f"guard {guard!r} of mode {mode!r} has no Zeno reset")
+        k, wall = int(m.group(2)), 1 if m.group(3) == "+" else -1
+        return geo.projection(_add(geo.impact_held(k, wall, stick), k, wall))
 
     def __call__(self, name):
         geo = self.geo
@@ -712,9 +758,10 @@ def _guards(geo, config, stick, lam_rows, lam_b):
                 reset = geo.impact(k, kept)
                 gname = f"contact{k}{_sign(wall)}"
                 to = _add(kept, k, wall)
-                proj = geo.projection(to)
-                zt = (dict(zeno_target=_mode_name(config, to), zeno_reset=proj)
-                      if proj is not None else {})
+                # its Zeno reset, the projection onto `to`, is asked for when first used
+                # (_ModeBuilder.zeno_reset): most accumulations never happen in most modes
+                zt = ({"zeno_target": _mode_name(config, to)}
+                      if geo.held(to) is not None else {})
                 out.append(Guard(gname, c=-wall * gap[k], d=wall * bound, direction=-1,
                                  reset=reset, target=_mode_name(config, kept), priority=2,
                                  group=1, **zt))
