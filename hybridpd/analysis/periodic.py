@@ -713,7 +713,7 @@ class SectionMapper(BasinMapper):
         bufs = P._buffers()
         p = 0
         while p < N:
-            p, code = _label_kernel(*P._kernel_args, W0, T0, sec.mode_index, sec.guard_index,
+            p, _code = _label_kernel(*P._kernel_args, W0, T0, sec.mode_index, sec.guard_index,
                                     self.period, P._t_max(self.period), P.max_jumps,
                                     P.max_steps, np.ascontiguousarray(sec.C),
                                     sec.period or 0.0, targets, int(n_iter), self.criterion,

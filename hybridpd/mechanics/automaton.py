@@ -596,7 +596,7 @@ class _ModeBuilder:
         """The Zeno reset ``(R, r)`` of the impact guard ``guard`` of ``mode``: the plastic
         projection onto the contacts held after the accumulation."""
         geo = self.geo
-        config, stick = _parse_mode(mode, geo.contacts, geo)
+        _, stick = _parse_mode(mode, geo.contacts, geo)
         m = _GUARD_RE.match(guard)
         if m is None or m.group(1) != "contact":
             raise ValueError(f"guard {guard!r} of mode {mode!r} has no Zeno reset")
