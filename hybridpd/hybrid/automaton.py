@@ -52,11 +52,18 @@ Conventions
   its group is on its guard (or closing onto it within ``simtol (1 + |t|)``) hands the joint
   jump to the ``resolver`` of :meth:`HybridAutomaton.simulate` (jumps of kind
   ``'simultaneous'``, one per guard the resolver names, all at one instant); a resolver that
-  finds no joint jump stops the run with ``SIMULTANEOUS``.
+  finds no joint jump stops the run with ``SIMULTANEOUS``. A guard of a group that fires
+  again at an instant where it (a guard of the same name, in any mode) has fired already is
+  handed to the resolver too, with ``refire = 1, 2, ...`` (how often this happened at the
+  instant): impacts that keep coming back in no time accumulate, and the resolver resolves
+  them together (it may answer with kind ``'zeno'``). The resolver's jumps count towards
+  ``max_instant_jumps`` like the loop's own, so a joint jump that changes nothing cannot
+  repeat without bound.
 * **Divergence**: with ``max_state`` the run stops with ``DIVERGED`` when a state component
   exceeds it at a jump or the start of a flow.
 * **Bounds**: every loop is bounded (``max_jumps``, ``max_steps``, the bisection budget); the
-  trajectory always says why it stopped (:class:`TerminationCause`). When the jump limit is
+  trajectory always says why it stopped (:class:`TerminationCause`, and in one line
+  :attr:`HybridTrajectory.reason`). When the jump limit is
   reached the run stops at the event that would have been jump ``max_jumps + 1``, with the
   pre-jump state.
 
@@ -468,7 +475,11 @@ class HybridAutomaton:
             :class:`Guard`): ``z`` the pre-jump state (shape ``(n,)``), ``names`` the guard
             names to record (one jump of kind ``'simultaneous'`` each, all at ``t`` with the
             joint post state). It returns ``None`` when the joint jump has no solution: the
-            run stops there with ``SIMULTANEOUS``. Without a resolver groups are ignored.
+            run stops there with ``SIMULTANEOUS``. A guard of the group that fires again at
+            one instant is handed over as ``resolver(mode, guard, t, z, refire=k)`` (module
+            docstring); the answer may then carry a fourth entry, the kind ``'zeno'`` (an
+            accumulation resolved) or ``'simultaneous'``. Without a resolver groups are
+            ignored.
         simtol : float
             Guards of a group closing within ``simtol (1 + |t|)`` are simultaneous.
         max_state : float, optional

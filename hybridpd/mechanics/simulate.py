@@ -20,7 +20,14 @@ Impacts accumulating on one contact are resolved one by one until the tail extra
 from their (verified, geometric) ratios is shorter than ``1e-12 (1 + |t|)``, or a flight is
 shorter than ``1e-9`` flow steps; the sticking phase starts at the accumulation time with the
 state projected onto the contact (gap at its bound, zero normal velocity):
-:attr:`MechanicalTrajectory.accumulations`. A run whose state grows past ``max_state``
+:attr:`MechanicalTrajectory.accumulations`. Impacts alternating between coupled contacts
+(a chain at low restitution) shrink until they follow each other in no time; a contact that
+fires again at one instant hands the contacts on their bounds to the resolver, which lets
+their impacts follow each other to the end (:func:`~hybridpd.mechanics.impact.impact_cascade`)
+or, where they accumulate, takes their plastic limit and holds those whose forces push (the
+held set solves the contact-force complementarity problem, so no contact enters a sticking
+phase whose force already pulls). Every run reaches its end time or says why not
+(:attr:`MechanicalTrajectory.reason`). A run whose state grows past ``max_state``
 (default ``1e12 max(1, |z0|, |bounds|)``) stops with termination ``"diverged"``.
 
 Contact tolerance
