@@ -508,17 +508,17 @@ class SectionMap(PoincareMap):
                             float)
         self._zi = np.array([int(bool(zeno.enabled)), int(zeno.min_ratios),
                              int(zeno.max_instant_jumps)], np.int64)
-        self._tables_for = 0            # modes built when the kernel's tables were taken
+        self._tables_for = -1           # the tables' version when the kernel's were taken
         self._checked = 0               # modes checked against the section's exosystem
         self._hint = {}
 
     @property
     def _kernel_args(self) -> tuple:
-        """The jump loop's tables over the modes built so far (taken afresh after a mode is
-        built: the automaton's tables then are new arrays), ``dt_min`` and the Zeno
-        options, in the order of ``_to_return``."""
+        """The jump loop's tables over the modes built so far (taken afresh whenever they
+        changed: a mode built or a reset packed may make them new arrays), ``dt_min`` and
+        the Zeno options, in the order of ``_to_return``."""
         ha = self.section.automaton
-        if self._tables_for != ha.n_built:
+        if self._tables_for != ha._store.version:
             self._check_exosystem()
             pk = ha.packed
             dt_min = (pk.h * 1e-9 if self.zeno.dt_min is None
@@ -527,7 +527,7 @@ class SectionMap(PoincareMap):
                           pk.cnorm, pk.prio, pk.ng, pk.R, pk.rh, pk.target, pk.zt, pk.rz, dt_min,
                           self._zf, self._zi)
             self._groups = ha._store.gkind()
-            self._tables_for = ha.n_built
+            self._tables_for = ha._store.version
         return self._args
 
     def _check_exosystem(self):

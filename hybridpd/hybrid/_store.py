@@ -72,6 +72,7 @@ class ModeStore:
     def __init__(self, n, K, theta):
         self.n, self.K, self.theta = int(n), int(K), float(theta)
         self.count = 0                       # rows in use (built modes)
+        self.version = 0                     # changes whenever the tables do
         self.guard_ids = {}                  # guard name -> id, the same in every mode
         self._pk = _empty(4, 1, self.K + 1, self.n + 1)
         # the distinct resets: row 0 the identity; a mode's guards share them with other
@@ -95,6 +96,7 @@ class ModeStore:
                 self._R = R
             self._R[row] = Rh
             self._n_resets += 1
+            self.version += 1
             self._reset_row[key] = row
         return row
 
@@ -161,11 +163,13 @@ class ModeStore:
             pk["gkind"][i, gi] = int(g.group)
             pk["gid"][i, gi] = self.guard_ids.setdefault(g.name, len(self.guard_ids))
         pk["ng"][i] = ngi
+        self.version += 1
         return i
 
     def set_zeno(self, row, g, Rh) -> None:
         """Pack the homogeneous Zeno reset ``Rh`` of guard ``g`` of mode ``row``."""
         self._pk["rz"][row, g] = self._reset(Rh)
+        self.version += 1
 
     def patch(self, code, row):
         """Replace the reservation ``code`` by ``row`` in the target tables."""
@@ -173,6 +177,7 @@ class ModeStore:
         for key in ("target", "zt"):
             t = self._pk[key][:c]
             t[t == code] = row
+        self.version += 1
 
     def packed(self) -> PackedAutomaton:
         """Views of the tables over the built rows (targets ``< -1``: reserved modes)."""
