@@ -40,6 +40,16 @@ projection onto the contact that is consistent with the flows (``R_z f- = f+`` a
 accumulation point, as for the pair's and the samples' sticking modes), the dependence of the
 accumulation time drops out. A grazing jump (``c . f- ~ 0``) has no saltation matrix:
 :attr:`MapResult.grazing` flags it and the Jacobian is then infinite or meaningless.
+
+Modes on demand
+---------------
+A map builds the modes its runs enter, as a simulation does: the compiled return loop hands
+back when a run enters a mode not built yet (or takes a Zeno switch whose reset is not packed
+yet), the tables are completed and the run is made again (each mode is built once, so this is
+bounded by the automaton's ``max_modes``). :class:`SectionMap`, its Jacobian, ``apply_many``
+and the basin labeller of :class:`~hybridpd.analysis.periodic.SectionMapper` read only the
+modes built so far; the exosystem is found over those and every mode built later is checked
+against it.
 """
 from __future__ import annotations
 
@@ -58,10 +68,11 @@ __all__ = ["MAP_STATUS", "MapResult", "Section", "SectionMap", "exosystem"]
 
 #: Codes of :attr:`MapResult.status`.
 MAP_STATUS = {0: "returned", 1: "jump_limit", 2: "zeno", 3: "nonfinite", 4: "step_limit",
-              6: "end_time", 7: "bad_start", 8: "simultaneous"}
+              6: "end_time", 7: "bad_start", 8: "simultaneous", 10: "too_many_modes"}
 ST_RETURNED, ST_JUMP_LIMIT, ST_ZENO, ST_NONFINITE, ST_STEP_LIMIT = 0, 1, 2, 3, 4
 ST_END_TIME, ST_BAD_START, ST_SIMULTANEOUS = 6, 7, 8
 ST_NEED_MODE = 9           # internal: the run entered a mode not built yet
+ST_TOO_MANY_MODES = 10
 _ON_GUARD_RTOL = 1e-9      # |g| below this (relative) at a pending event: on that guard
 
 
@@ -464,6 +475,12 @@ class SectionMap(PoincareMap):
         applies jumps one at a time, so where that happens :meth:`apply` reports status
         ``"simultaneous"`` (no image) instead of a sequential answer. ``None`` skips the check.
         The compiled iterations of basins do not check.
+    max_table_bytes : float
+        Bound on the automaton's packed tables (:attr:`HybridAutomaton.table_bytes`, bytes)
+        up to which the map builds the modes its runs enter (default 256 MB). A run that
+        needs one more beyond it has status ``"too_many_modes"`` (a point of a basin is then
+        ``unresolved``): an orbit search that wanders through very many sets of held
+        contacts stops and says so instead of filling the memory.
 
     Examples
     --------
@@ -480,9 +497,12 @@ class SectionMap(PoincareMap):
 
     def __init__(self, section: Section, *, t_max: float | None = None, max_jumps: int = 10_000,
                  max_steps: int = 10_000_000, zeno: ZenoOptions | None = None,
-                 simtol: float | None = 1e-12):
+                 simtol: float | None = 1e-12, max_table_bytes: float = 256e6):
         if not isinstance(section, Section):
             raise ValueError(f"section must be a Section, got {type(section).__name__}")
+        if not (math.isfinite(float(max_table_bytes)) and float(max_table_bytes) > 0):
+            raise ValueError(f"max_table_bytes must be finite and > 0, got {max_table_bytes!r}")
+        self.max_table_bytes = float(max_table_bytes)
         self.section = section
         if t_max is not None and not (float(t_max) > 0 and math.isfinite(float(t_max))):
             raise ValueError(f"t_max must be finite and > 0, got {t_max!r}")
@@ -549,16 +569,20 @@ class SectionMap(PoincareMap):
                         "that evolve alike in every mode")
         self._checked = len(modes)
 
-    def _complete(self, ic) -> None:
+    def _complete(self, ic) -> bool:
         """What a run handed back for (``ST_NEED_MODE``): the Zeno reset of ``ic[16] - 1``,
         ``ic[17]`` is packed and the mode ``ic[0]`` built if it is a reserved code; the run
-        is then made again."""
+        is then made again. False (nothing done) when a mode is needed and the tables have
+        reached ``max_table_bytes``."""
         ha = self.section.automaton
+        if ic[0] < -1 and ha.table_bytes >= self.max_table_bytes:
+            return False
         if ic[16]:
             ha._zeno_reset(int(ic[16]) - 1, int(ic[17]))
             ic[16] = 0
         if ic[0] < -1:
             ha.build_code(int(ic[0]))
+        return True
 
     @property
     def dim(self) -> int:
@@ -603,7 +627,9 @@ class SectionMap(PoincareMap):
                                     self.max_jumps, self.max_steps, *bufs)
             if st != ST_NEED_MODE:
                 break
-            self._complete(bufs[2])
+            if not self._complete(bufs[2]):
+                st = ST_TOO_MANY_MODES
+                break
         if st == ST_RETURNED:
             self._hint[k] = max(int(nb), 1)   # next time: stop right at the return
         return int(st), int(nb), z0, t0, bufs
@@ -637,13 +663,13 @@ class SectionMap(PoincareMap):
                              sec.mode, (), False)
         modes = ha._slim()
         kinds = {1: "crossing", 2: "grazing", 3: "zeno"}
-        jumps = tuple((float(jt[q]), mn[jsrc[q]], modes[jsrc[q]].guards[jg[q]].name, mn[jdst[q]],
-                       kinds[int(jkind[q])]) for q in range(nb))
+        jumps = tuple((float(jt[q]), mn[jsrc[q]], modes[jsrc[q]].guards[jg[q]].name,
+                       ha._name_of(int(jdst[q])), kinds[int(jkind[q])]) for q in range(nb))
         z_hit = w[:n].copy()
         t_hit = float(fc[0])
         if self._joint_jump(bufs, nb):     # the sequential answer is not the model's
             st = ST_SIMULTANEOUS
-        mode_final = mn[int(ic[0])] if st != ST_RETURNED else sec.mode
+        mode_final = ha._name_of(int(ic[0])) if st != ST_RETURNED else sec.mode
         if st != ST_RETURNED:
             return MapResult(np.full(self.dim, np.nan), False, MAP_STATUS[st], t0, t_hit,
                              z_hit, mode_final, jumps, any(j[4] == "grazing" for j in jumps))

@@ -718,8 +718,10 @@ class SectionMapper(BasinMapper):
                                     P.max_steps, np.ascontiguousarray(sec.C),
                                     sec.period or 0.0, targets, int(n_iter), self.criterion,
                                     Qs, r2s, self.escape, sub, lab, its, p, *bufs)
-            if p < N:
-                P._complete(bufs[2])
+            if p < N and not P._complete(bufs[2]):
+                lab[p] = _UNRESOLVED        # its run needs a mode beyond the tables' bound
+                its[p] += 1
+                p += 1
         return lab, its, sub
 
     def labels(self, S) -> tuple:

@@ -46,9 +46,10 @@ joint jump is then the caller's (``w`` holds the pre-jump state, ``fc[0]`` its t
 ``ic[12]`` the guard; apply the jump, set ``ic[0]``, ``ic[2] = ic[3] = -1`` and resume).
 ``simtol < 0`` disables the groups. ``gid (M, GM)`` names each guard across modes and
 ``fired`` holds the guards of groups fired at the current instant ``fc[5]`` (``ic[14]`` of
-them): a guard of a group that fires there again returns code 7 with ``ic[13] = 1`` (the
-joint jump then resolves the contacts' accumulation; ``ic[15]`` counts those at the
-instant, ``fc[6]`` is the start of the flow that ended there).
+them): a guard of a group that fires there after ``_REFIRE_AFTER`` firings of it returns
+code 7 with ``ic[13] = 1`` (the joint jump then resolves the contacts' accumulation;
+``ic[15]`` counts those at the instant, ``fc[6]`` is the start of the flow that ended
+there).
 
 Code 6 also comes back (in both loops) from a Zeno switch whose reset is not packed yet
 (``rz[mode, g] = -1``): the jump is recorded with the state flowed to the accumulation time
@@ -83,6 +84,10 @@ _RC_NEED_MODE = 6
 _RC_SIMULTANEOUS = 7
 _RC_DIVERGED = 8
 _KIND_NAMES = {1: "crossing", 2: "grazing", 3: "zeno", 4: "simultaneous"}
+# a guard of a group firing at one instant after this many firings of it there goes to the
+# resolver: a short cascade of impacts (a contact hit twice) stays in the loop, impacts
+# that keep coming back are resolved together
+_REFIRE_AFTER = 2
 
 
 class PackedAutomaton(NamedTuple):
@@ -295,7 +300,7 @@ def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh
             fc[0] = tev
             return 1
         if simtol >= 0.0 and gkind[mode, g] != 0:
-            again = _fired_before(gid[mode, g], tev, fc, ic, fired)
+            again = _fired_before(gid[mode, g], tev, fc, ic, fired) >= _REFIRE_AFTER
             if again or _other_active(G[mode], ng[mode], gkind[mode], g, wout, h[mode],
                                       simtol * (1.0 + abs(tev))):
                 for i in range(N1):
@@ -383,7 +388,7 @@ def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh
 
 @njit(cache=True)
 def _fired_before(me, tev, fc, ic, fired):
-    """Whether the guard of identity ``me`` has fired already at the instant ``tev``.
+    """How often the guard of identity ``me`` has fired already at the instant ``tev``.
 
     The guards of groups that fired at one instant ``fc[5]`` are kept in ``fired[:ic[14]]``
     (beyond its capacity further ones are not kept: the instant-jump bound still holds);
@@ -393,11 +398,12 @@ def _fired_before(me, tev, fc, ic, fired):
         fc[5] = tev
         ic[14] = 0
         ic[15] = 0
-        return False
+        return 0
+    count = 0
     for q in range(min(ic[14], fired.shape[0])):
         if fired[q] == me:
-            return True
-    return False
+            count += 1
+    return count
 
 
 @njit(cache=True)

@@ -389,6 +389,11 @@ class HybridAutomaton:
             self._full_cache.pop(next(iter(self._full_cache)))
         return m
 
+    def _name_of(self, code) -> str:
+        """Name of the mode of row or reservation code ``code`` (a run may stop right after
+        a jump into a mode not built yet, e.g. on the instant-jump bound)."""
+        return self._names[code] if code >= 0 else self._res_names[-2 - int(code)]
+
     @property
     def built_mode_names(self) -> tuple:
         """Names of the modes built so far, in order (nothing is built)."""
@@ -669,7 +674,13 @@ class HybridAutomaton:
         gnames = [[g.name for g in m.guards] for m in self._built]
         for key in ("jdst", "smode"):
             for code in np.unique(cat[key][cat[key] < 0]):
+                if int(code) not in self._code_rows:
+                    # the run stopped right after entering it (e.g. on the instant-jump
+                    # bound): built now, so that the trajectory's modes all have tables
+                    self.build_code(int(code))
                 cat[key][cat[key] == code] = self._code_rows[int(code)]
+        if ic[0] < 0:
+            ic[0] = self.build_code(int(ic[0]))
         jsrc = cat["jsrc"]
         guard = tuple(nm if nm is not None else gnames[s][g]
                       for s, g, nm in zip(jsrc, cat["jg"], cat["jname"]))

@@ -40,7 +40,13 @@ Guards (``g > 0`` admissible, all with ``direction = -1`` except sampling):
   simultaneity group 1: when
   another rigid contact is on its bound or closing onto it at the same instant, the joint
   impact is solved by :func:`~hybridpd.mechanics.impact.multi_impact` at run time
-  (:meth:`MechanicalAutomaton.resolver`).
+  (:meth:`MechanicalAutomaton.resolver`); the contacts it leaves at rest are held if their
+  forces push (a complementarity problem in the contact forces, so that no contact enters a
+  sticking phase whose force already pulls). A contact that fires again at one instant (its
+  impacts alternating with a neighbour's faster than time resolves them) goes to the
+  resolver as well, with every contact on its bound: their impacts follow each other to the
+  end (:func:`~hybridpd.mechanics.impact.impact_cascade`), or where they accumulate to their
+  plastic limit, the contacts then at rest held as above (kind ``'zeno'``).
 * ``release{k}{+|-}`` (``k`` in ``S``): ``g = -wall * lambda_k + delta_k``: the contact force
   pulls by the margin ``delta_k = RELEASE_MARGIN (|c_k|_1 max(1, |bounds|) + |d_k|)`` (``c_k,
   d_k`` the affine force row), so that the free flow entered at the release separates
@@ -190,6 +196,9 @@ class MechanicalAutomaton:
         ``time_tol (1 + |t|)``, and every held one), solves their joint impact
         (:func:`~hybridpd.mechanics.impact.multi_impact`) and returns ``(z_post, target
         mode, impact guard names)``, or ``None`` when the LCP has no non-degenerate solution.
+        ``resolver(..., refire=k)`` (a contact firing again at one instant, the ``k``-th time
+        there) resolves the contacts on their bounds together (module docstring) and may
+        return a fourth entry, the kind ``'zeno'``.
         """
         return lambda mode, guard, t, z, refire=0: _resolve(self, time_tol, mode, guard, t, z,
                                                             refire)
