@@ -714,7 +714,7 @@ class SectionMap(PoincareMap):
             while q < nseg and sj[q] == m:
                 tau = st1[q] - st0[q]
                 if tau > 0.0:
-                    Z = expm(modes[smode[q]].A * tau) @ Z
+                    Z = _flow_sensitivity(modes[smode[q]].A, tau, Z)
                 q += 1
             if m == nb:
                 break
@@ -780,6 +780,23 @@ class SectionMap(PoincareMap):
         dD = tgrad[k] - tgrad[k1]
         dr = (dD - r * (tgrad[k1] - tgrad[k2])) / D1
         return tgrad[k] + (dD * r + D * dr / (1 - r)) / (1 - r)
+
+
+def _flow_sensitivity(A, tau, Z) -> np.ndarray:
+    """``expm(A tau) @ Z``: by its Taylor series where ``|A tau|_1 <= 1/2`` (the short flights
+    between the impacts of a burst: a few products with ``Z``, each term below 1e-17 of the
+    sum ends it), else by ``scipy.linalg.expm``."""
+    At = A * tau
+    if float(np.abs(At).sum(axis=0).max()) > 0.5:
+        return expm(At) @ Z
+    out = Z.copy()
+    term = Z
+    for j in range(1, 40):
+        term = (At @ term) / j
+        out += term
+        if float(np.abs(term).max()) <= 1e-17 * float(np.abs(out).max()):
+            break
+    return out
 
 
 def _accumulating(bufs, nb) -> np.ndarray:
