@@ -40,7 +40,7 @@ def pair_rates():
     from hybridpd.pair.impactmap import ImpactMap
     from hybridpd.pair.orbits import symmetric_orbit
     from hybridpd.analysis.periodic import SectionMapper
-    from hybridpd.analysis.sections import impact_pair_section
+    from hybridpd.pair.section import impact_pair_section
 
     orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     P = SectionMap(impact_pair_section(orb.system()))

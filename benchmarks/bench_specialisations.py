@@ -47,7 +47,7 @@ def main():
     from hybridpd.pair.impactmap import ImpactMap
     from hybridpd.pair.lti import filtered_pd, lti_symmetric_orbit
     from hybridpd.pair.orbits import symmetric_orbit
-    from hybridpd.analysis.sections import impact_pair_section
+    from hybridpd.pair.section import impact_pair_section
 
     pair = ImpactPair(0.1, 0.5, 0.75)
     n = len

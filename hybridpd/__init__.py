@@ -71,7 +71,7 @@ _NAMES = {
     "MapResult": "hybridpd.analysis.maps",
     # any hybrid automaton: sections, maps, orbits, stability
     "HybridAutomaton": "hybridpd.hybrid.automaton",
-    "Section": "hybridpd.analysis.hybridmap",
+    "Section": "hybridpd.hybrid.section",
     "SectionMap": "hybridpd.analysis.hybridmap",
     "find_orbit": "hybridpd.analysis.periodic",
     "PeriodicOrbit": "hybridpd.analysis.periodic",

@@ -20,7 +20,7 @@ import sys
 import types
 import warnings
 
-__all__ = ["MOVED_MODULES", "REMOVAL", "MovedModuleFinder", "install", "moved_names"]
+__all__ = ["MOVED_APART", "MOVED_MODULES", "REMOVAL", "MovedModuleFinder", "install", "moved_names"]
 
 #: The release that removes the old paths.
 REMOVAL = "0.4.0"
@@ -61,6 +61,13 @@ MOVED_MODULES = {
     "hybridpd.sweeps.basins": "hybridpd.pair.basins",
     "hybridpd.sweeps.attractor_basins": "hybridpd.pair.attractor_basins",
     "hybridpd.sweeps.diagram_sweep": "hybridpd.pair.diagram_sweep",
+    "hybridpd.analysis.sections": "hybridpd.mechanics.sections",
+}
+
+
+#: Names of an old module of :data:`MOVED_MODULES` that went to another module than the rest.
+MOVED_APART = {
+    "hybridpd.analysis.sections": {"impact_pair_section": "hybridpd.pair.section"},
 }
 
 
@@ -95,7 +102,11 @@ class _Forward(importlib.abc.Loader):
         warnings.warn(_message(f"the module {old}", new), DeprecationWarning, stacklevel=2)
         target = importlib.import_module(new)
 
+        apart = MOVED_APART.get(old, {})
+
         def __getattr__(name):
+            if name in apart:
+                return getattr(importlib.import_module(apart[name]), name)
             try:
                 return getattr(target, name)
             except AttributeError:

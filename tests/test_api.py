@@ -24,6 +24,7 @@ HEAVY = ("numba", "sympy", "control", "matplotlib", "xarray", "scipy", "dask", "
 # Every module path of the first version, the module that replaced it, and its public names
 # then (read from the repository's history).
 OLD_MODULES = {
+    "hybridpd.analysis.sections": ("hybridpd.mechanics.sections", "mechanical_section mode_code"),
     "hybridpd.automaton": ("hybridpd.hybrid.automaton", """
         Guard HybridAutomaton HybridTrajectory Jump JumpTable Mode PackedAutomaton
         Segment SegmentTable TerminationCause ZenoOptions run_hybrid
@@ -253,3 +254,13 @@ def test_continue_orbit_takes_a_builder_of_any_map():
     np.testing.assert_allclose(a.p, b.p, rtol=0, atol=1e-12)
     with pytest.raises(ValueError, match="builder"):
         hp.continue_orbit("not a builder", 0.8, 0.81, [7.7, 1.66])
+
+
+def test_a_name_that_moved_apart_from_its_module_still_resolves():
+    old = "hybridpd.analysis.sections"
+    sys.modules.pop(old, None)
+    with pytest.deprecated_call(match=r"hybridpd\.mechanics\.sections"):
+        mod = importlib.import_module(old)
+    from hybridpd.pair.section import impact_pair_section
+
+    assert mod.impact_pair_section is impact_pair_section

@@ -8,7 +8,7 @@ import pytest
 from hybridpd import ImpactPair, PDGains, Reference
 from hybridpd.analysis.hybridcont import FAMILY_EVENTS, continue_family
 from hybridpd.analysis.hybridmap import SectionMap
-from hybridpd.analysis.sections import impact_pair_section
+from hybridpd.pair.section import impact_pair_section
 from hybridpd.hybrid.samples import impact_oscillator, oscillator_initial_state
 from hybridpd.pair.continuation import continue_orbit, find_periodic_orbit
 from hybridpd.pair.impactmap import ImpactMap

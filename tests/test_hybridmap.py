@@ -18,7 +18,7 @@ from hybridpd.analysis.periodic import (
     find_orbit,
     measured_contraction,
 )
-from hybridpd.analysis.sections import impact_pair_section
+from hybridpd.pair.section import impact_pair_section
 from hybridpd.hybrid.samples import (
     ball_initial_state,
     bouncing_ball,

@@ -201,7 +201,7 @@ def test_section_map_reports_a_joint_impact_instead_of_a_sequential_one():
     """The section map applies jumps one at a time; where the simulation would take a joint
     impact (two stops reached together) the map says so rather than give another answer."""
     from hybridpd.analysis.hybridmap import SectionMap
-    from hybridpd.analysis.sections import mechanical_section
+    from hybridpd.mechanics.sections import mechanical_section
 
     ma = _free_chain([[1.0, 0.2], [0.2, 1.0]], [Contact([1, 0], hi=0.5, restitution=0.5),
                                                Contact([0, 1], hi=0.5, restitution=0.5)])

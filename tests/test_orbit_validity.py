@@ -10,7 +10,7 @@ import pytest
 from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.model_orbits import _guess_from_simulation, orbit_from_model
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
-from hybridpd.analysis.sections import mechanical_section
+from hybridpd.mechanics.sections import mechanical_section
 from hybridpd.cli import main
 from hybridpd.mechanics.modelfile import model_from_dict
 

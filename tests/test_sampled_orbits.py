@@ -18,7 +18,7 @@ import pytest
 from scipy.optimize import brentq
 
 from hybridpd.analysis.model_orbits import orbit_from_model
-from hybridpd.analysis.sections import mechanical_section
+from hybridpd.mechanics.sections import mechanical_section
 from hybridpd.mechanics.modelfile import model_from_dict
 
 OMEGA = 5.0

@@ -26,7 +26,7 @@ from hybridpd import ImpactPair, PDGains
 from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.maps import MapResult, PoincareMap
 from hybridpd.analysis.periodic import SectionMapper, find_orbit
-from hybridpd.analysis.sections import impact_pair_section
+from hybridpd.pair.section import impact_pair_section
 from hybridpd.loop import pd_controller
 from hybridpd.pair.basins import ImpactMapper
 from hybridpd.pair.impactmap import ImpactMap

@@ -9,7 +9,7 @@ from hybridpd import ImpactPair, PDGains, Reference
 from hybridpd.analysis.hybridcont import continue_family
 from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.pathfollow import corrector, follow_path
-from hybridpd.analysis.sections import impact_pair_section
+from hybridpd.pair.section import impact_pair_section
 from hybridpd.cli import main
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.impactpair import ControlledImpactPair

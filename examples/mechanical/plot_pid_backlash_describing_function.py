@@ -17,7 +17,7 @@ harmonic-balance solutions ``H(jw) N(A) = -1``: a predicted limit cycle of motor
 
 **Exact cycle** (hybridpd): the same loop as a mechanical model (:mod:`hybridpd.mechanics`,
 the load with a small inertia ``m_L`` and viscous friction ``c_L``), its impact map on the
-backlash's ``hi`` contact (:func:`hybridpd.analysis.sections.mechanical_section`), the
+backlash's ``hi`` contact (:func:`hybridpd.mechanics.sections.mechanical_section`), the
 periodic orbit by Newton on the map with ``DP`` from exact flows and saltation matrices
 (:func:`hybridpd.analysis.periodic.find_orbit`), its Floquet multipliers, and its continuation
 in ``ki`` (:func:`hybridpd.analysis.hybridcont.continue_family`).
@@ -113,7 +113,7 @@ def exact_cycle(ma, guess=None, transient=150.0, event="release"):
     """
     from hybridpd.analysis.hybridmap import SectionMap
     from hybridpd.analysis.periodic import find_orbit
-    from hybridpd.analysis.sections import mechanical_section
+    from hybridpd.mechanics.sections import mechanical_section
 
     sec = mechanical_section(ma, 0, 1, event=event)
     P = SectionMap(sec, t_max=200.0)
@@ -150,7 +150,7 @@ def ki_family(kis):
     from hybridpd.analysis.hybridcont import continue_family
     from hybridpd.analysis.hybridmap import SectionMap
     from hybridpd.analysis.periodic import find_orbit
-    from hybridpd.analysis.sections import mechanical_section
+    from hybridpd.mechanics.sections import mechanical_section
 
     def build(ki):
         ma = model(ki=ki)

@@ -2,7 +2,7 @@
 
 A *model builder* ``builder(p)`` returns, for a parameter value ``p``, the model: a
 :class:`~hybridpd.analysis.hybridmap.SectionMap`, a
-:class:`~hybridpd.analysis.hybridmap.Section`, or a
+:class:`~hybridpd.hybrid.section.Section`, or a
 :class:`~hybridpd.hybrid.automaton.HybridAutomaton` (or any object with an ``automaton``
 attribute, e.g. a mechanical automaton) together with ``section=dict(mode=..., guard=...,
 ...)`` (keyword arguments of :class:`Section`). Any parameter of any model can therefore be

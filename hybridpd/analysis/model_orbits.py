@@ -22,7 +22,7 @@ from hybridpd._results import compact_repr
 from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.maps import minimal_period
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
-from hybridpd.analysis.sections import mechanical_section
+from hybridpd.mechanics.sections import mechanical_section
 
 __all__ = [
     "FAMILY_DISTANCE",
@@ -525,7 +525,7 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period="a
         and every ``k <= max_period`` after which a simulation of the model returns with whole
         reference periods (see :func:`simulated_returns`); the orbit's ``period`` says which.
     guess : array_like, optional
-        Section point (coordinates of :func:`~hybridpd.analysis.sections.mechanical_section`
+        Section point (coordinates of :func:`~hybridpd.mechanics.sections.mechanical_section`
         in `mode`). Default: simulate from the file's initial state for ``transient`` and take
         the last crossing of the section (in whichever mode it happens).
     transient : float, optional

@@ -59,7 +59,7 @@ class PeriodicOrbit:
     Attributes
     ----------
     s : ndarray, shape (dim,)
-        Section point (pre-jump, coordinates of :class:`~hybridpd.analysis.hybridmap.Section`).
+        Section point (pre-jump, coordinates of :class:`~hybridpd.hybrid.section.Section`).
     period : int
         ``k``: number of returns to the section per period.
     converged : bool
@@ -106,7 +106,7 @@ class PeriodicOrbit:
     The impact pair's symmetric orbit, found again by Newton on the general map:
 
     >>> import hybridpd as hp
-    >>> from hybridpd.analysis.sections import impact_pair_section
+    >>> from hybridpd.pair.section import impact_pair_section
     >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
     >>> po = hp.find_orbit(hp.SectionMap(impact_pair_section(orb.system())), orb.fixed_point)
     >>> po.reason, po.period, round(po.spectral_radius, 6), bool(po.stable)
@@ -225,7 +225,7 @@ def find_orbit(P: PoincareMap, s0, period: int = 1, *, tol: float = 1e-11, max_i
     --------
     >>> from hybridpd import ImpactPair, PDGains
     >>> from hybridpd.pair.orbits import symmetric_orbit
-    >>> from hybridpd.analysis.sections import impact_pair_section
+    >>> from hybridpd.pair.section import impact_pair_section
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> P = SectionMap(impact_pair_section(orb.system()))
     >>> po = find_orbit(P, orb.fixed_point + [0.01, 0.01, -0.02, 0.05])
@@ -558,7 +558,7 @@ class SectionMapper(BasinMapper):
     --------
     >>> from hybridpd import ImpactPair, PDGains
     >>> from hybridpd.pair.orbits import symmetric_orbit
-    >>> from hybridpd.analysis.sections import impact_pair_section
+    >>> from hybridpd.pair.section import impact_pair_section
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> m = SectionMapper(SectionMap(impact_pair_section(orb.system())), orb.fixed_point)
     >>> m.label_name(m(orb.fixed_point + [0, 0.01, 0, 0]))

@@ -236,7 +236,7 @@ def _model_record(model, orb, P, args) -> dict:
 def _transient_diverged(model, args) -> str | None:
     """Why the transient simulation that seeds Newton stopped, if it diverged (else None)."""
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.sections import mechanical_section
+    from hybridpd.mechanics.sections import mechanical_section
 
     ma = model.automaton
     try:

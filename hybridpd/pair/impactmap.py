@@ -72,7 +72,7 @@ class ImpactMap(PoincareMap):
     for the PD impact pair: closed-form flights between impacts (:mod:`hybridpd.pair.batch`),
     ``DP`` from the symbolic blocks ``DP43 DP32 DP21 DP10`` on the simple pattern
     ``(+L, -L, +L)`` (finite differences otherwise). It equals the general
-    :class:`~hybridpd.analysis.hybridmap.SectionMap` on :func:`~hybridpd.analysis.sections.
+    :class:`~hybridpd.analysis.hybridmap.SectionMap` on :func:`~hybridpd.mechanics.sections.
     impact_pair_section` to about ``1e-12`` (``tests/test_specialisations.py``). Measured
     (``benchmarks/bench_specialisations.py``, README parameters, loaded 2-core machine): ``P``
     5 times faster per call and 57-130 times faster in batch (:meth:`apply_batch`) than the

@@ -43,7 +43,7 @@ from hybridpd.analysis.model_orbits import (
     simulated_returns,
     solve_at,
 )
-from hybridpd.analysis.sections import mode_code, mode_name
+from hybridpd.mechanics.sections import mode_code, mode_name
 from hybridpd.mechanics.params import ModelTemplate
 from hybridpd.sweeps.labelled import (
     axis_attrs,
@@ -125,7 +125,7 @@ class ModelRegionMap:
     period, period2 : ndarray of int, shape (ny, nx)
         Returns to the section per period of the first and second orbit (``k``; 0: none).
     mode, mode2 : ndarray of int, shape (ny, nx)
-        The section's mode of each orbit (:func:`~hybridpd.analysis.sections.mode_code`;
+        The section's mode of each orbit (:func:`~hybridpd.mechanics.sections.mode_code`;
         ``metadata["modes"]`` names the codes present; -1: none).
     section_state, section_state2 : ndarray, shape (ny, nx, n)
         Full pre-jump state of each orbit at its section point (``metadata["state_names"]``).
@@ -365,7 +365,7 @@ class _Cells:
     """Per-cell results as arrays (the sweep's outputs): :meth:`put` a search, :meth:`add`
     the new orbits of a later search. Each orbit keeps its section point in the map's chart
     (``s``), its full state and time (``z``, ``t``), its returns per period (``k``) and its
-    section's mode (``mode``, :func:`~hybridpd.analysis.sections.mode_code`)."""
+    section's mode (``mode``, :func:`~hybridpd.mechanics.sections.mode_code`)."""
 
     _SLOTS = (("status", "rho", "s", "sig", "z", "t", "k", "mode"),
               ("status2", "rho2", "s2", "sig2", "z2", "t2", "k2", "mode2"))

@@ -54,7 +54,7 @@ def section_basin(mapper: SectionMapper, axis_x, axis_y, x, y, *, executor="seri
     BasinResult
         ``x1``/``y1`` hold the ``x``/``y`` axes, ``labels`` has shape ``(ny, nx)``;
         ``metadata["axes"]`` names the coordinates. Points whose state lies outside the
-        section's admissible set (:meth:`~hybridpd.analysis.hybridmap.Section.violations`:
+        section's admissible set (:meth:`~hybridpd.hybrid.section.Section.violations`:
         a contact's gap beyond its bounds) are labelled ``inadmissible`` and never iterated
         (``metadata["inadmissible"]`` counts them); ``fraction`` is of the others.
 
@@ -66,7 +66,7 @@ def section_basin(mapper: SectionMapper, axis_x, axis_y, x, y, *, executor="seri
     Examples
     --------
     >>> import hybridpd as hp
-    >>> from hybridpd.analysis.sections import impact_pair_section
+    >>> from hybridpd.pair.section import impact_pair_section
     >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
     >>> P = hp.SectionMap(impact_pair_section(orb.system()))
     >>> b = hp.section_basin(hp.SectionMapper(P, orb.fixed_point, n_iter=50), "z1", "z4",

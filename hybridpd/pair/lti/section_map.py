@@ -106,7 +106,7 @@ class LTIImpactMap(PoincareMap):
     exact flights of the closed loop between contacts, ``DP`` as the product of the impact
     and flight blocks (implicit differentiation, the orbit's named blocks ``DP10 .. DP43``).
     It equals the general :class:`~hybridpd.analysis.hybridmap.SectionMap` on
-    :func:`~hybridpd.analysis.sections.impact_pair_section` to about ``1e-14``
+    :func:`~hybridpd.pair.section.impact_pair_section` to about ``1e-14``
     (``tests/test_specialisations.py``). Measured on a filtered PD (README parameters,
     ``benchmarks/bench_specialisations.py``, loaded 2-core machine): ``P`` 1.3-2.5 times
     faster per call than the general path, ``DP`` 0.5-1.3 times as fast (it gives the named

@@ -1,38 +1,18 @@
-"""Sections of the project's models for :mod:`hybridpd.analysis.hybridmap`.
+"""The sections of a mechanical automaton's contacts (:mod:`hybridpd.hybrid.section`).
 
-* :func:`impact_pair_section`: the paper's section of the controlled impact pair,
-  coordinates ``(phi, z1, z2, z4, controller states)``;
-* :func:`mechanical_section`: a contact's impacts (or the ends of its sticking phases) of a
-  mechanical automaton of :mod:`hybridpd.mechanics`.
+:func:`mechanical_section`: a contact's impacts (or the ends of its sticking phases) of a
+mechanical automaton of :mod:`hybridpd.mechanics`, with the constraints of the contacts held
+in its mode and the bounds of every contact's gap.
 
 """
 from __future__ import annotations
 
 import numpy as np
 
-from hybridpd.analysis.hybridmap import Section
+from hybridpd.hybrid.section import Section
 
-__all__ = ["contact_bounds", "held_constraints", "impact_pair_section", "mechanical_section",
+__all__ = ["contact_bounds", "held_constraints", "mechanical_section",
            "mode_code", "mode_name"]
-
-
-def impact_pair_section(system, wall: int = 1) -> Section:
-    """The paper's section of a :class:`~hybridpd.pair.impactpair.ControlledImpactPair`.
-
-    Pre-impact states on the ``wall`` (``+1``: ``z3 = +L``), coordinates
-    ``(phi, z1, z2, z4, c_1, ...)`` = ``(t mod T, x2, y2, y1 - y2, controller states)``.
-    """
-    if wall not in (1, -1):
-        raise ValueError(f"wall must be +1 or -1, got {wall!r}")
-    ha = system.automaton
-    n = ha.n_states
-    rows = [np.eye(n)[2], np.eye(n)[3], np.eye(n)[1] - np.eye(n)[3]]
-    rows += [np.eye(n)[i] for i in range(6, n)]
-    names = ("z1", "z2", "z4") + tuple(ha.state_names[6:])
-    T = system.reference.period
-    return Section(ha, "free", "wall+" if wall == 1 else "wall-", exo=(4, 5), period=T,
-                   exo_state=system.reference.exo_state(0.0), coords=np.array(rows),
-                   names=names)
 
 
 def mechanical_section(model, contact: int = 0, wall: int = 1, *, period=None,
