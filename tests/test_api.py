@@ -95,8 +95,8 @@ MOVED_NAMES = [
     ("hybridpd.pair.basins", "load_attractor_basin", "hybridpd.pair.attractor_basins"),
     ("hybridpd.analysis.periodic", "section_basin", "hybridpd.sweeps.section_basins"),
     ("hybridpd.analysis.periodic", "orbit_from_model", "hybridpd.analysis.model_orbits"),
-    ("hybridpd.analysis.hybridmap", "impact_pair_section", "hybridpd.analysis.sections"),
-    ("hybridpd.analysis.hybridmap", "mechanical_section", "hybridpd.analysis.sections"),
+    ("hybridpd.analysis.hybridmap", "impact_pair_section", "hybridpd.pair.section"),
+    ("hybridpd.analysis.hybridmap", "mechanical_section", "hybridpd.mechanics.sections"),
 ]
 
 

@@ -47,7 +47,7 @@ from hybridpd._jit import njit
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
 from hybridpd.hybrid._kernel import _RC_NEED_MODE, _other_active
 from hybridpd.hybrid.automaton import ZenoOptions, run_hybrid
-from hybridpd.hybrid.section import Section, common_multiple, exosystem
+from hybridpd.hybrid.section import Section, _moves, common_multiple, exosystem
 from hybridpd.model import check_finite
 
 __all__ = ["MAP_STATUS", "MapResult", "Section", "SectionMap", "common_multiple", "exosystem"]
@@ -651,6 +651,6 @@ def _accumulating(bufs, nb) -> np.ndarray:
     return out
 
 
-# the sections of the project's models (they need Section, defined above)
-__getattr__ = moved_names(__name__, {"impact_pair_section": "hybridpd.mechanics.sections",
+# the sections of the models, once defined here
+__getattr__ = moved_names(__name__, {"impact_pair_section": "hybridpd.pair.section",
                                      "mechanical_section": "hybridpd.mechanics.sections"})
