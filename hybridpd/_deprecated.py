@@ -160,7 +160,8 @@ def moved_names(module: str, moves: dict):
         The old module's ``__name__``.
     moves : dict of str to str
         Each moved name and the dotted path of the module that now holds it (given as a string
-        so that the old module does not import the new one).
+        so that the old module does not import the new one), or ``"module:new_name"`` for a
+        name that was also renamed.
 
     Returns
     -------
@@ -173,10 +174,12 @@ def moved_names(module: str, moves: dict):
         new = moves.get(name)
         if new is None:
             raise AttributeError(f"module {module!r} has no attribute {name!r}")
-        warnings.warn(_message(f"{module}.{name}", f"{new}.{name} (or hybridpd.{name})"
-                               if _is_public(name) else f"{new}.{name}"),
+        new, _, new_name = new.partition(":")
+        new_name = new_name or name
+        warnings.warn(_message(f"{module}.{name}", f"{new}.{new_name} (or hybridpd.{new_name})"
+                               if _is_public(new_name) else f"{new}.{new_name}"),
                       DeprecationWarning, stacklevel=2)
-        return getattr(importlib.import_module(new), name)
+        return getattr(importlib.import_module(new), new_name)
 
     return __getattr__
 

@@ -60,7 +60,7 @@ def check_impact_law():
 
 
 def numeric_check(case, n):
-    o = hs.symmetric_orbit(n=n, case=case, **SAMPLE)
+    o = hs.solve_symmetric_orbit(n=n, case=case, **SAMPLE)
     A = hs.system_matrix(kp=o.kp, kv=o.kv, m2=o.m2, w=o.w, case=case)
     sol = solve_ivp(lambda t, x: A @ x, (0.0, float(o.tau)), o.post_impact_state,
                     method="DOP853", rtol=1e-13, atol=1e-13)
@@ -106,7 +106,7 @@ def main(argv=None):
                             [0.1, 0.5, 0.9], indexing="ij")
     for case in ("collocated", "noncollocated"):
         t1 = time.perf_counter()
-        o = hs.symmetric_orbit(kp=kp, kv=kv, e=e, mu=0.1, L=0.75, w=5.0, x10=1.0, case=case)
+        o = hs.solve_symmetric_orbit(kp=kp, kv=kv, e=e, mu=0.1, L=0.75, w=5.0, x10=1.0, case=case)
         dt = time.perf_counter() - t1
         print(f"\n{case}: 200x200x3 grid of (kp, kv, e) in {dt * 1e3:.1f} ms, "
               f"singular: {int(np.sum(o.singular))}, nan xm: {int(np.sum(np.isnan(o.xm)))}")

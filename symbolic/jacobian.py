@@ -91,7 +91,7 @@ def fd_flight(s_in, wall, xm, case, h=1e-6):
 
 def fd_map(s0, xm, case, h=1e-6):
     def P(s):
-        r = hs.impact_map(s, xm=xm, case=case, **SAMPLE)
+        r = hs.closed_form_map(s, xm=xm, case=case, **SAMPLE)
         assert r.ok
         return r.s4
 
@@ -103,12 +103,12 @@ def rel(a, b):
 
 
 def numeric_check(case):
-    o = hs.symmetric_orbit(x10=X10, case=case, **SAMPLE)
+    o = hs.solve_symmetric_orbit(x10=X10, case=case, **SAMPLE)
     xm = float(o.xm)
     ok = True
     for label, s0 in (("symmetric fixed point", o.section_point),
                       ("perturbed point", o.section_point + PERTURB)):
-        r = hs.impact_map(s0, xm=xm, case=case, **SAMPLE)
+        r = hs.closed_form_map(s0, xm=xm, case=case, **SAMPLE)
         J = hs.map_jacobian(s0, r.tau1, r.tau2, xm=xm, case=case, **SAMPLE)
         B_fd = central(lambda s: hs.impact_section_map(s, mu=SAMPLE["mu"], e=SAMPLE["e"]),
                        s0, 1e-5)

@@ -40,8 +40,8 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np
 import sympy as sp
 
-from hybridpd.pair.orbits import _viability_kernel, symmetric_orbits
 from hybridpd.pair import symbolic as hs
+from hybridpd.pair.orbits import _viability_kernel, symmetric_orbits
 
 PAPER = dict(e=(0.1, 0.5, 0.9), L=0.75, omega=5.0, x10=1.0, m2=1.0, n=1)
 

@@ -80,8 +80,8 @@ OLD_MODULES = {
     "hybridpd.symbolic": ("hybridpd.pair.symbolic", """
         Derivation ImpactMapResult JacobianResult SymmetricOrbit dch derivation dsh
         flight_block flight_section_map flight_time flow gap gap_derivatives
-        impact_block impact_map impact_section_map map_jacobian orbit_jacobian
-        section_from_state state_from_section symmetric_orbit symmetric_velocities
+        impact_block closed_form_map impact_section_map map_jacobian orbit_jacobian
+        section_from_state state_from_section solve_symmetric_orbit symmetric_velocities
         sympy_functions system_matrix transition_matrix virtual_restitution
     """),
 }
@@ -264,3 +264,28 @@ def test_a_name_that_moved_apart_from_its_module_still_resolves():
     from hybridpd.pair.section import impact_pair_section
 
     assert mod.impact_pair_section is impact_pair_section
+
+
+@pytest.mark.parametrize(("module", "old", "new"), [
+    ("hybridpd.pair.symbolic", "symmetric_orbit", "solve_symmetric_orbit"),
+    ("hybridpd.pair.symbolic", "impact_map", "closed_form_map"),
+    ("hybridpd.pair.symbolic.existence", "symmetric_orbit", "solve_symmetric_orbit"),
+    ("hybridpd.pair.symbolic.section_map", "impact_map", "closed_form_map"),
+])
+def test_renamed_functions_warn_and_resolve(module, old, new):
+    mod = importlib.import_module(module)
+    with pytest.deprecated_call(match=new):
+        obj = getattr(mod, old)
+    assert obj is getattr(mod, new)
+
+
+def test_no_public_name_is_defined_in_two_modules():
+    import ast
+
+    where = {}
+    for path in sorted((ROOT / "hybridpd").rglob("*.py")):
+        for node in ast.parse(path.read_text()).body:
+            if isinstance(node, (ast.FunctionDef, ast.ClassDef)) and not node.name.startswith("_"):
+                where.setdefault(node.name, []).append(str(path.relative_to(ROOT)))
+    twice = {k: v for k, v in where.items() if len(v) > 1 and k not in ("register", "run")}
+    assert not twice, twice

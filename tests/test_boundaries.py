@@ -199,7 +199,7 @@ def test_curves_end_where_the_orbit_stops_existing():
        mu=st.floats(0.05, 2.0), case=st.sampled_from(["collocated", "noncollocated"]))
 def test_symmetry_dp_is_a_square_so_no_period_doubling_curves(kp, kv, e, mu, case):
     # DP = M^2 with M = S DP21 DP10: hence det(I + DP) = |det(M - iI)|^2 >= 0
-    c = symbolic.symmetric_orbit(kp=kp, kv=kv, mu=mu, e=e, L=0.75, w=5.0, x10=1.0, case=case)
+    c = symbolic.solve_symmetric_orbit(kp=kp, kv=kv, mu=mu, e=e, L=0.75, w=5.0, x10=1.0, case=case)
     jac = symbolic.orbit_jacobian(c)
     S = np.diag([1.0, -1, -1, -1])
     M = S @ jac.DP21 @ jac.DP10

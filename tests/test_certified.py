@@ -31,7 +31,7 @@ from hybridpd.pair.certified import (
     certify_orbit,
     class_shares,
 )
-from hybridpd.pair.interval_kernels import KERNEL_ARGS, kernel
+from hybridpd.pair.interval_kernels import KERNEL_ARGS, interval_kernel
 from hybridpd.pair.intervals import FLOAT_OPS, Interval, arb_ops
 
 flint = pytest.importorskip("flint")
@@ -163,10 +163,10 @@ def test_kernels_enclose_arb_point_values(kp, kv, h, e, case, order):
         P = _box_forms(lo, hi, order)
     args = [P[k] for k in proofs.SCALED]
     nI = Interval(1.0)
-    C, S, det = kernel("existence", case)(INTERVAL_OPS, *args, nI)
-    M = kernel("halfmap", case)(INTERVAL_OPS, C, S, *args, nI)
+    C, S, det = interval_kernel("existence", case)(INTERVAL_OPS, *args, nI)
+    M = interval_kernel("halfmap", case)(INTERVAL_OPS, C, S, *args, nI)
     s = Interval(0.25, 0.375)
-    G = kernel("gap", case)(INTERVAL_OPS, s, C, S, *args, nI)
+    G = interval_kernel("gap", case)(INTERVAL_OPS, s, C, S, *args, nI)
     rng = lambda x: x if isinstance(x, Interval) else x.r
     with flint.ctx.workprec(256):
         _check_kernel_points(case, e, kp, kv, h, C, S, det, M, G, rng)
@@ -176,14 +176,14 @@ def _check_kernel_points(case, e, kp, kv, h, C, S, det, M, G, rng):
     ops = arb_ops()
     for a, b in [(kp, kv), (kp + h, kv + h), (kp + h / 3, kv + 2 * h / 3)]:
         pa = [arb(a), arb(b), arb(0.1), arb(e), arb(0.75), arb(5.0), arb(1)]
-        Ca, Sa, da = kernel("existence", case)(ops, *pa)
-        Ma = kernel("halfmap", case)(ops, Ca, Sa, *pa)
+        Ca, Sa, da = interval_kernel("existence", case)(ops, *pa)
+        Ma = interval_kernel("halfmap", case)(ops, Ca, Sa, *pa)
         for x, ref in zip([C, S, det, *M], [Ca, Sa, da, *Ma]):
             r = rng(x)
             assert _inside(ref, r.lo[()] if r.lo.ndim == 0 else r.lo[0],
                            r.hi[()] if r.hi.ndim == 0 else r.hi[0])
         for sv in (0.25, 0.3, 0.375):
-            Ga = kernel("gap", case)(ops, arb(sv), Ca, Sa, *pa)
+            Ga = interval_kernel("gap", case)(ops, arb(sv), Ca, Sa, *pa)
             for x, ref in zip(G, Ga):
                 r = rng(x)
                 assert _inside(ref, np.ravel(r.lo)[0], np.ravel(r.hi)[0])
@@ -196,11 +196,11 @@ def test_kernels_reproduce_the_float_path():
         for kp, kv, e in [(10, 20, 0.5), (3, 1, 0.1), (40, 5, 0.9)]:
             orb = hp.symmetric_orbit(hp.ImpactPair(mu=0.1, e=e, L=0.75), hp.PDGains(kp, kv),
                                      omega=5.0, case=case)
-            C, S, _ = kernel("existence", case)(FLOAT_OPS, kp, kv, 0.1, e, 0.75, 5.0, 1)
+            C, S, _ = interval_kernel("existence", case)(FLOAT_OPS, kp, kv, 0.1, e, 0.75, 5.0, 1)
             np.testing.assert_allclose(math.hypot(C, S), orb.xm, rtol=1e-12, atol=0)
-            M = np.array(kernel("halfmap", case)(FLOAT_OPS, C, S, kp, kv, 0.1, e, 0.75, 5.0,
+            M = np.array(interval_kernel("halfmap", case)(FLOAT_OPS, C, S, kp, kv, 0.1, e, 0.75, 5.0,
                                                  1)).reshape(4, 4)
-            cand = symbolic.symmetric_orbit(kp=kp, kv=kv, mu=0.1, e=e, L=0.75, w=5.0, x10=1.0,
+            cand = symbolic.solve_symmetric_orbit(kp=kp, kv=kv, mu=0.1, e=e, L=0.75, w=5.0, x10=1.0,
                                             case=case)
             DP = np.asarray(symbolic.orbit_jacobian(cand).DP).reshape(4, 4)
             np.testing.assert_allclose(M @ M, DP, rtol=1e-9, atol=1e-9 * np.abs(DP).max())

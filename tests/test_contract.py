@@ -77,7 +77,7 @@ def _entry_points():
                                 case=case, margin_samples=margin_samples, tol=tol, margin=True)
 
     def sym_orbit(kp, kv, m2, mu, e, L, w, x10, n, case):
-        return symbolic.symmetric_orbit(kp=kp, kv=kv, m2=m2, mu=mu, e=e, L=L, w=w, x10=x10,
+        return symbolic.solve_symmetric_orbit(kp=kp, kv=kv, m2=m2, mu=mu, e=e, L=L, w=w, x10=x10,
                                         n=n, case=case)
 
     def simulate(x0, t_span, max_impacts):
@@ -223,7 +223,7 @@ def _entry_points():
                              dict(kp=arr, kv=arr, mu=arr, e="unit[]", L=arr, omega=arr, m2=arr,
                                   x10=arr, n="odd", case="case", margin_samples="count",
                                   tol=pos)),
-        "symbolic.symmetric_orbit": (sym_orbit, dict(kp=10.0, kv=20.0, m2=1.0, mu=0.1, e=0.5,
+        "symbolic.solve_symmetric_orbit": (sym_orbit, dict(kp=10.0, kv=20.0, m2=1.0, mu=0.1, e=0.5,
                                                      L=0.75, w=5.0, x10=1.0, n=1,
                                                      case="collocated"),
                                      dict(kp=arr, kv=arr, m2=arr, mu=arr, e="unit[]", L=arr,
@@ -301,7 +301,7 @@ def test_reprs_are_one_line_with_shapes():
     grid = symmetric_orbits(np.linspace(1, 40, 30), np.linspace(1, 40, 20)[:, None], mu=0.1,
                             e=0.5, L=0.75, omega=5.0)
     traj = ControlledImpactPair(PAIR, GAINS, REF).simulate([0.1, 0, 0, 0], (0, 5))
-    cand = symbolic.symmetric_orbit(kp=np.linspace(1, 40, 30), kv=20.0, mu=0.1, e=0.5, L=0.75,
+    cand = symbolic.solve_symmetric_orbit(kp=np.linspace(1, 40, 30), kv=20.0, mu=0.1, e=0.5, L=0.75,
                                     w=5.0, x10=1.0)
     jac = symbolic.orbit_jacobian(cand)
     P = ImpactMap(PAIR, GAINS, orb.reference())

@@ -277,6 +277,6 @@ def test_identity_ignores_executor_and_workers_but_sees_array_kwargs():
     a = run_sweep(sum_func, pts, executor="serial")
     b = run_sweep(sum_func, pts, executor="processes", max_workers=2)
     assert a.identity_hash == b.identity_hash
-    ida = store_mod.jsonable({"w": np.arange(3.0)}, "func_kwargs", arrays="digest")
-    idb = store_mod.jsonable({"w": np.arange(3.0) + 1e-15 + 1}, "func_kwargs", arrays="digest")
+    ida = store_mod.json_value({"w": np.arange(3.0)}, "func_kwargs", arrays="digest")
+    idb = store_mod.json_value({"w": np.arange(3.0) + 1e-15 + 1}, "func_kwargs", arrays="digest")
     assert ida != idb

@@ -50,13 +50,13 @@ def test_derivation_is_cached():
         assert hs.derivation(case) is hs.derivation(case)
     assert hs.derivation("non-collocated") is hs.derivation("noncollocated")
     t = time.perf_counter()
-    hs.symmetric_orbit(kp=10.0, kv=20.0, e=0.5, **PAPER)
+    hs.solve_symmetric_orbit(kp=10.0, kv=20.0, e=0.5, **PAPER)
     assert time.perf_counter() - t < 0.1  # nothing re-derived
 
 
 def test_bad_inputs():
     with pytest.raises(ValueError):
-        hs.symmetric_orbit(kp=10.0, kv=20.0, e=0.5, n=2, **PAPER)
+        hs.solve_symmetric_orbit(kp=10.0, kv=20.0, e=0.5, n=2, **PAPER)
     with pytest.raises(ValueError):
         hs.flow(0.1, np.zeros(5), kp=1.0, kv=1.0, w=1.0)
     with pytest.raises(ValueError):
@@ -237,7 +237,7 @@ def _integrate(A, X0, tau):
 @pytest.mark.parametrize("kp,kv,e", [(10.0, 20.0, 0.5), (3.0, 0.5, 0.1), (80.0, 2.0, 0.9),
                                      (25.0, 10.0, 0.5)])  # (25, 10): critical damping
 def test_symmetric_orbit_lands(case, n, kp, kv, e):
-    o = hs.symmetric_orbit(kp=kp, kv=kv, e=e, n=n, case=case, **PAPER)
+    o = hs.solve_symmetric_orbit(kp=kp, kv=kv, e=e, n=n, case=case, **PAPER)
     assert not o.singular and o.xm > 0
     assert o.sn == pytest.approx(np.sin(o.w * o.phi0), abs=1e-12)
     assert o.cs == pytest.approx(np.cos(o.w * o.phi0), abs=1e-12)
@@ -253,8 +253,8 @@ def test_symmetric_orbit_lands(case, n, kp, kv, e):
 
 @pytest.mark.parametrize("case", CASES)
 def test_symmetric_orbit_is_fixed_point_of_closed_form_map(case):
-    o = hs.symmetric_orbit(kp=10.0, kv=20.0, e=0.5, case=case, **PAPER)
-    r = hs.impact_map(o.section_point, xm=o.xm, kp=10.0, kv=20.0, e=0.5, m2=1.0, mu=0.1,
+    o = hs.solve_symmetric_orbit(kp=10.0, kv=20.0, e=0.5, case=case, **PAPER)
+    r = hs.closed_form_map(o.section_point, xm=o.xm, kp=10.0, kv=20.0, e=0.5, m2=1.0, mu=0.1,
                       L=0.75, w=5.0, case=case)
     assert r.ok
     assert r.tau1 == pytest.approx(o.tau, rel=1e-12) and r.tau2 == pytest.approx(o.tau, rel=1e-12)
@@ -265,14 +265,14 @@ def test_existence_grid_speed_and_broadcast():
     kp, kv, e = np.meshgrid(np.linspace(0.5, 100, 200), np.linspace(0.5, 100, 200),
                             [0.1, 0.5, 0.9], indexing="ij")
     for case in CASES:
-        hs.symmetric_orbit(kp=10.0, kv=20.0, e=0.5, case=case, **PAPER)  # warm
+        hs.solve_symmetric_orbit(kp=10.0, kv=20.0, e=0.5, case=case, **PAPER)  # warm
         t = time.perf_counter()
-        o = hs.symmetric_orbit(kp=kp, kv=kv, e=e, case=case, **PAPER)
+        o = hs.solve_symmetric_orbit(kp=kp, kv=kv, e=e, case=case, **PAPER)
         dt = time.perf_counter() - t
         assert dt < 1.0, dt
         assert o.xm.shape == (200, 200, 3)
         assert not np.any(o.singular) and np.all(np.isfinite(o.xm))
-        o1 = hs.symmetric_orbit(kp=kp[17, 33, 2], kv=kv[17, 33, 2], e=0.9, case=case, **PAPER)
+        o1 = hs.solve_symmetric_orbit(kp=kp[17, 33, 2], kv=kv[17, 33, 2], e=0.9, case=case, **PAPER)
         for f in ("C", "S", "xm", "sn", "cs", "phi0", "R", "y2_pre", "y2_post"):
             assert getattr(o, f)[17, 33, 2] == pytest.approx(float(getattr(o1, f)), rel=1e-13)
 
@@ -283,11 +283,11 @@ def test_determinant_closed_forms():
     kp, kv = np.meshgrid(np.linspace(0.1, 50, 30), np.linspace(0.1, 30, 30))
     m2, w, n = 1.7, 3.0, 3
     tau = n * np.pi / w
-    o = hs.symmetric_orbit(kp=kp, kv=kv, m2=m2, e=0.5, mu=0.1, L=0.75, w=w, x10=1.0, n=n)
+    o = hs.solve_symmetric_orbit(kp=kp, kv=kv, m2=m2, e=0.5, mu=0.1, L=0.75, w=w, x10=1.0, n=n)
     al = kv / (2 * m2)
     ref = -w * (1 + 2 * hs.dch(al, al**2 - kp / m2, tau) + np.exp(-2 * al * tau))
     np.testing.assert_allclose(o.det, ref, rtol=1e-10)
-    o = hs.symmetric_orbit(kp=kp, kv=kv, m2=m2, e=0.5, mu=0.1, L=0.75, w=w, x10=1.0, n=n,
+    o = hs.solve_symmetric_orbit(kp=kp, kv=kv, m2=m2, e=0.5, mu=0.1, L=0.75, w=w, x10=1.0, n=n,
                            case="noncollocated")
     ref = -(4 / w**3) * ((kp / m2 - w**2) ** 2 + (kv / m2) ** 2 * w**2)
     np.testing.assert_allclose(o.det, ref, rtol=1e-10)
@@ -419,7 +419,7 @@ def map_point(draw):
 @given(mp=map_point())
 def test_DP_blocks_against_finite_differences(case, mp):
     p, pert = mp
-    o = hs.symmetric_orbit(x10=1.0, case=case, **p)
+    o = hs.solve_symmetric_orbit(x10=1.0, case=case, **p)
     xm = float(o.xm)
     s0 = o.section_point + pert * np.array([o.T, 1.0, max(1.0, abs(o.y2_pre)), o.v])
     ref = ExpmMap(case, xm=xm, **p)
@@ -456,7 +456,7 @@ def test_DP_blocks_against_finite_differences(case, mp):
 
 @pytest.mark.parametrize("case", CASES)
 def test_flight_time_root_finder_matches_orbit(case):
-    o = hs.symmetric_orbit(kp=10.0, kv=20.0, e=0.5, n=3, case=case, **PAPER)
+    o = hs.solve_symmetric_orbit(kp=10.0, kv=20.0, e=0.5, n=3, case=case, **PAPER)
     s1 = hs.impact_section_map(o.section_point, mu=0.1, e=0.5)
     tau, hit = hs.flight_time(s1, xm=o.xm, kp=10.0, kv=20.0, w=5.0, L=0.75, wall=1, case=case,
                               return_wall=True)
@@ -482,7 +482,7 @@ def test_continuity_across_critical_damping(case, kp):
     kcrit = 2 * np.sqrt(kp * PAPER["m2"])
     deltas = np.array([-1e-6, -1e-9, -1e-12, 0.0, 1e-12, 1e-9, 1e-6])
     kv = kcrit * (1 + deltas)
-    o = hs.symmetric_orbit(kp=kp, kv=kv, e=0.5, case=case, **PAPER)
+    o = hs.solve_symmetric_orbit(kp=kp, kv=kv, e=0.5, case=case, **PAPER)
     J = hs.orbit_jacobian(o)
     i0 = 3
     for name, arr in [("sn", o.sn), ("cs", o.cs), ("xm", o.xm), ("phi0", o.phi0),
@@ -496,7 +496,7 @@ def test_continuity_across_critical_damping(case, kp):
             assert jump <= 1e-10 + 1e3 * abs(dlt) * kcrit, (name, dlt, jump)
     # smoothness on a dense sweep through D = 0: second differences small
     kvs = kcrit * (1 + np.linspace(-1e-3, 1e-3, 201))
-    o = hs.symmetric_orbit(kp=kp, kv=kvs, e=0.5, case=case, **PAPER)
+    o = hs.solve_symmetric_orbit(kp=kp, kv=kvs, e=0.5, case=case, **PAPER)
     J = hs.orbit_jacobian(o)
     for arr in (o.sn, o.cs, o.xm, J.DP.reshape(201, -1)):
         arr = np.asarray(arr).reshape(201, -1)
@@ -508,14 +508,14 @@ def test_continuity_across_critical_damping(case, kp):
 @pytest.mark.parametrize("case", CASES)
 def test_orbit_jacobian_vectorised_matches_pointwise(case):
     kp, kv = np.meshgrid(np.linspace(1, 100, 200), np.linspace(1, 100, 200), indexing="ij")
-    o = hs.symmetric_orbit(kp=kp, kv=kv, e=0.5, case=case, **PAPER)
+    o = hs.solve_symmetric_orbit(kp=kp, kv=kv, e=0.5, case=case, **PAPER)
     t = time.perf_counter()
     J = hs.orbit_jacobian(o)
     dt = time.perf_counter() - t
     assert J.DP.shape == (200, 200, 4, 4) and np.all(np.isfinite(J.DP))
     assert dt < 3.0, dt
     i, j = 57, 140
-    o1 = hs.symmetric_orbit(kp=kp[i, j], kv=kv[i, j], e=0.5, case=case, **PAPER)
+    o1 = hs.solve_symmetric_orbit(kp=kp[i, j], kv=kv[i, j], e=0.5, case=case, **PAPER)
     J1 = hs.orbit_jacobian(o1)
     np.testing.assert_allclose(J.DP[i, j], J1.DP, rtol=1e-12, atol=1e-12 * np.abs(J1.DP).max())
     # on the orbit the flights end exactly on the walls

@@ -29,7 +29,7 @@ import numpy as np
 from hybridpd.pair import intervals as iv
 from hybridpd.pair.intervals import Interval
 
-__all__ = ["INTERVAL_OPS", "Box", "CForm", "CForm2", "dch", "dsh", "where"]
+__all__ = ["INTERVAL_OPS", "Box", "CForm", "CForm2", "interval_dch", "interval_dsh", "where"]
 
 
 class Box:
@@ -564,12 +564,12 @@ def _damped(a, D, t, which):
     return where(over, alt, gen)
 
 
-def dch(a, D, t):
+def interval_dch(a, D, t):
     """``exp(-a t) cosh(sqrt(D) t)`` (entire in ``D``) of intervals or centred forms."""
     return _damped(a, D, t, "ch")
 
 
-def dsh(a, D, t):
+def interval_dsh(a, D, t):
     """``exp(-a t) sinh(sqrt(D) t) / sqrt(D)`` (entire in ``D``) of intervals or forms."""
     return _damped(a, D, t, "sh")
 
@@ -581,4 +581,4 @@ INTERVAL_OPS = types.SimpleNamespace(
     PI=Interval(iv.widen_down(math.pi), iv.widen_up(math.pi)),
     POW=lambda x, k: _call("pow", x, k), SQRT=lambda x: _call("sqrt", x),
     EXP=lambda x: _call("exp", x), SIN=lambda x: _call("sin", x),
-    COS=lambda x: _call("cos", x), DCH=dch, DSH=dsh)
+    COS=lambda x: _call("cos", x), DCH=interval_dch, DSH=interval_dsh)

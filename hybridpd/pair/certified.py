@@ -331,13 +331,13 @@ def _arb_orbit_at(case, n, kp, kv, mu, e, L, m2, omega, x10):
     from flint import acb_mat, arb, arb_mat
 
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.interval_kernels import kernel
+    from hybridpd.pair.interval_kernels import interval_kernel
     from hybridpd.pair.intervals import arb_ops
 
     ops = arb_ops()
     a = [arb(kp) / arb(m2), arb(kv) / arb(m2), arb(mu), arb(e), arb(L) / arb(x10), arb(omega),
          arb(n)]
-    C, S, _ = kernel("existence", case)(ops, *a)
+    C, S, _ = interval_kernel("existence", case)(ops, *a)
     X = arb(x10)
     xm = X * (C * C + S * S).sqrt()
     w = arb(omega)
@@ -349,7 +349,7 @@ def _arb_orbit_at(case, n, kp, kv, mu, e, L, m2, omega, x10):
     v = 2 * X * w / (arb(n) * arb.pi())
     y2m = v * (arb(e) - 2 * arb(mu) - 1) / (1 + arb(e))
     section = {"phi0": phi0, "z1": X - arb(L), "z2": y2m, "z4": v - y2m}
-    M = kernel("halfmap", case)(ops, C, S, *a)
+    M = interval_kernel("halfmap", case)(ops, C, S, *a)
     Mm = arb_mat([[M[4 * i + j] for j in range(4)] for i in range(4)])
     moduli = None
     try:

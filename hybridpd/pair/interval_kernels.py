@@ -49,8 +49,8 @@ from hybridpd import _codecache
 from hybridpd._version import __version__
 from hybridpd.model import Case
 
-__all__ = ["KERNEL_ARGS", "existence_exprs", "gap_exprs", "halfmap_exprs", "kernel",
-           "kernel_source"]
+__all__ = ["KERNEL_ARGS", "existence_exprs", "gap_exprs", "halfmap_exprs", "interval_kernel",
+           "interval_kernel_source"]
 
 #: Argument names of each kernel (after the backend ``ops``).
 KERNEL_ARGS = {
@@ -280,7 +280,7 @@ def _generate(name: str, case: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def kernel_source(name: str, case="collocated") -> str:
+def interval_kernel_source(name: str, case="collocated") -> str:
     """Python source of the kernel ``name`` (see the module docstring) for ``case``."""
     if name not in KERNEL_ARGS:
         raise ValueError(f"name must be one of {tuple(KERNEL_ARGS)}, got {name!r}")
@@ -298,7 +298,7 @@ def _key() -> str:
 
 
 @functools.cache
-def kernel(name: str, case: str):
+def interval_kernel(name: str, case: str):
     """The cached kernel ``name`` for ``case`` (``"collocated"``/``"noncollocated"``).
 
     Returns
@@ -309,9 +309,9 @@ def kernel(name: str, case: str):
 
     Examples
     --------
-    >>> from hybridpd.pair.interval_kernels import kernel
+    >>> from hybridpd.pair.interval_kernels import interval_kernel
     >>> from hybridpd.pair.intervals import FLOAT_OPS
-    >>> C, S, det = kernel("existence", "collocated")(FLOAT_OPS, 10.0, 20.0, 0.1, 0.5,
+    >>> C, S, det = interval_kernel("existence", "collocated")(FLOAT_OPS, 10.0, 20.0, 0.1, 0.5,
     ...                                               0.75, 5.0, 1)
     >>> round((C * C + S * S) ** 0.5, 6)    # xm of the paper's collocated orbit
     0.398584

@@ -207,7 +207,7 @@ def symmetric_orbits(kp, kv, *, mu, e, L, omega, m2=1.0, x10=1.0, n=1, case="col
     margin_samples = check_int("margin_samples", margin_samples, 2)
     kp, kv, mu, e, L, omega, m2, x10 = np.broadcast_arrays(kp, kv, mu, e, L, omega, m2, x10)
     shape = kp.shape
-    cand = symbolic.symmetric_orbit(kp=kp, kv=kv, m2=m2, mu=mu, e=e, L=L, w=omega, x10=x10, n=n,
+    cand = symbolic.solve_symmetric_orbit(kp=kp, kv=kv, m2=m2, mu=mu, e=e, L=L, w=omega, x10=x10, n=n,
                                     case=case.value)
     xm = np.broadcast_to(cand.xm, shape).astype(float)
     singular = np.broadcast_to(np.asarray(cand.singular, bool), shape) | ~np.isfinite(xm)

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hybridpd.pair.centred import INTERVAL_OPS, Box, CForm2
-from hybridpd.pair.interval_kernels import kernel
+from hybridpd.pair.interval_kernels import interval_kernel
 from hybridpd.pair.intervals import Interval, widen_down, widen_up
 
 __all__ = ["CLASSES", "REASONS", "SCALED", "Boxes", "classify", "classify_bisect", "viability"]
@@ -224,8 +224,8 @@ def _orbit_stage(case, n, boxes: Boxes, dirs):
     """Existence and stability verdicts, and the first-order forms of ``C``, ``S``."""
     P, box, _ = _forms(boxes, dirs, 2)
     nI = Interval(float(n))
-    C, S, det = kernel("existence", case)(INTERVAL_OPS, *_args(P), nI)
-    M = kernel("halfmap", case)(INTERVAL_OPS, C, S, *_args(P), nI)
+    C, S, det = interval_kernel("existence", case)(INTERVAL_OPS, *_args(P), nI)
+    M = interval_kernel("halfmap", case)(INTERVAL_OPS, C, S, *_args(P), nI)
     c = _charpoly(M)
     apart = lambda x: (x.r.lo > 0) | (x.r.hi < 0)
     exists = apart(det) & (apart(C) | apart(S))
@@ -280,7 +280,7 @@ def _gap_forms(case, n, boxes, dirs, C1, S1, idx, s_lo, s_hi, s_point=False):
     else:
         s = box.variable(len(dirs), s_lo, s_hi, centres[-1], order=order)
     C, S = C1.take(idx).on(box), S1.take(idx).on(box)
-    z3, z3d, z3dd = kernel("gap", case)(INTERVAL_OPS, s, C, S, *_args(P), Interval(float(n)))
+    z3, z3d, z3dd = interval_kernel("gap", case)(INTERVAL_OPS, s, C, S, *_args(P), Interval(float(n)))
     return z3, z3d, z3dd, P["gam"]
 
 

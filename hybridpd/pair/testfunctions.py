@@ -30,7 +30,7 @@ exactly on the boundary; they seed the curves. The "local" versions
 near the boundary, and are what the curve points satisfy to ``1e-10``.
 
 Why the other conditions of (13)-(14) give no curves: their determinant is never zero for
-``kv > 0`` (see :func:`hybridpd.pair.symbolic.symmetric_orbit`), and ``xm = hypot(C, S)``
+``kv > 0`` (see :func:`hybridpd.pair.symbolic.solve_symmetric_orbit`), and ``xm = hypot(C, S)``
 vanishes only where ``C = S = 0`` (two equations: isolated points of a plane). The impact
 speed ``z4 = 2 v (1 + mu) / (1 + e)`` is fixed and positive, and for ``e > 0`` the rebound
 always separates the masses; with a plastic impact (``e = 0``) they may stick, which is the
@@ -360,7 +360,7 @@ class Plane:
         for a in (self.x, self.y):   # keep the closed forms away from invalid values
             safe[a.name] = np.where(ok, p[a.name], a.lo)
         L = safe["gamma"] * safe["x10"]
-        c = symbolic.symmetric_orbit(kp=safe["kp"], kv=safe["kv"], m2=safe["m2"], mu=safe["mu"],
+        c = symbolic.solve_symmetric_orbit(kp=safe["kp"], kv=safe["kv"], m2=safe["m2"], mu=safe["mu"],
                                      e=safe["e"], L=L, w=safe["omega"], x10=safe["x10"],
                                      n=self.n, case=self.case.value)
         b = lambda a: np.broadcast_to(np.asarray(a, float), (N,))

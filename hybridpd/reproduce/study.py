@@ -259,7 +259,7 @@ def candidate_stability(case, kp, kv, *, mu, e, L, omega, m2, x10=1.0, n=1):
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.pair import symbolic
 
-    cand = symbolic.symmetric_orbit(kp=kp, kv=kv, m2=m2, mu=mu, e=e, L=L, w=omega, x10=x10,
+    cand = symbolic.solve_symmetric_orbit(kp=kp, kv=kv, m2=m2, mu=mu, e=e, L=L, w=omega, x10=x10,
                                     n=n, case=Case.parse(case).value)
     ok = ~np.asarray(cand.singular, bool) & (np.nan_to_num(cand.xm) > 0)
     with np.errstate(all="ignore"):

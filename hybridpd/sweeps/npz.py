@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from hybridpd.sweeps.store import canonical_json, jsonable
+from hybridpd.sweeps.store import canonical_json, json_value
 
 __all__ = ["load_npz", "save_npz"]
 
@@ -117,7 +117,7 @@ def save_npz(path: str | os.PathLike, arrays: Mapping[str, Any],
             raise ValueError(f"arrays[{k!r}] has object dtype; only plain numpy dtypes can be "
                              "stored without pickle")
         items.append((k, a))
-    meta = jsonable(dict(metadata or {}), "metadata", arrays="list")
+    meta = json_value(dict(metadata or {}), "metadata", arrays="list")
     items.append((_METADATA_KEY, np.array(canonical_json(meta))))
     method = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
 

@@ -73,7 +73,7 @@ def _array_digest(a: np.ndarray) -> str:
     return h.hexdigest()
 
 
-def jsonable(obj: Any, where: str, *, arrays: str) -> Any:
+def json_value(obj: Any, where: str, *, arrays: str) -> Any:
     """Convert `obj` to plain JSON types, deterministically.
 
     ``arrays="digest"`` replaces numpy arrays by dtype/shape/sha256 (for the
@@ -92,7 +92,7 @@ def jsonable(obj: Any, where: str, *, arrays: str) -> Any:
         if obj.dtype.kind not in _NUMERIC_KINDS:
             raise ValueError(f"{where} holds a numpy scalar of dtype {obj.dtype}; allowed: "
                              f"{_JSON_ALLOWED}")
-        return jsonable(obj.item(), where, arrays=arrays)
+        return json_value(obj.item(), where, arrays=arrays)
     if isinstance(obj, np.ndarray):
         if obj.dtype.kind not in _NUMERIC_KINDS:
             raise ValueError(f"{where} holds an array of dtype {obj.dtype}; allowed: "
@@ -100,22 +100,22 @@ def jsonable(obj: Any, where: str, *, arrays: str) -> Any:
         if arrays == "digest":
             return {"__ndarray__": {"dtype": obj.dtype.str, "shape": list(obj.shape),
                                     "sha256": _array_digest(obj)}}
-        return jsonable(obj.tolist(), where, arrays=arrays)
+        return json_value(obj.tolist(), where, arrays=arrays)
     if isinstance(obj, Mapping):
         out = {}
         for k, v in obj.items():
             if not isinstance(k, str):
                 raise ValueError(f"{where} has a non-string key {k!r}; JSON needs string keys")
-            out[k] = jsonable(v, f"{where}[{k!r}]", arrays=arrays)
+            out[k] = json_value(v, f"{where}[{k!r}]", arrays=arrays)
         return out
     if isinstance(obj, (list, tuple)):
-        return [jsonable(v, f"{where}[{i}]", arrays=arrays) for i, v in enumerate(obj)]
+        return [json_value(v, f"{where}[{i}]", arrays=arrays) for i, v in enumerate(obj)]
     if isinstance(obj, os.PathLike):
         return os.fspath(obj)
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
         cls = type(obj)
         return {"__dataclass__": f"{cls.__module__}.{cls.__qualname__}",
-                "fields": {f.name: jsonable(getattr(obj, f.name), f"{where}.{f.name}",
+                "fields": {f.name: json_value(getattr(obj, f.name), f"{where}.{f.name}",
                                             arrays=arrays) for f in dataclasses.fields(obj)}}
     raise ValueError(f"{where} holds an object of type {type(obj).__qualname__} that cannot be "
                      f"recorded as JSON; allowed: {_JSON_ALLOWED}")
@@ -129,8 +129,8 @@ def func_identity(func: Callable) -> Any:
     """Name `func` by module and qualified name (plus partial arguments)."""
     if isinstance(func, functools.partial):
         return {"partial": func_identity(func.func),
-                "args": jsonable(list(func.args), "func (partial args)", arrays="digest"),
-                "keywords": jsonable(dict(func.keywords), "func (partial keywords)",
+                "args": json_value(list(func.args), "func (partial args)", arrays="digest"),
+                "keywords": json_value(dict(func.keywords), "func (partial keywords)",
                                      arrays="digest")}
     qualname = getattr(func, "__qualname__", None)
     module = getattr(func, "__module__", None)
@@ -138,7 +138,7 @@ def func_identity(func: Callable) -> Any:
         cls = type(func)
         name = f"{cls.__module__}.{cls.__qualname__}"
         if dataclasses.is_dataclass(func):
-            return {"callable": name, "state": jsonable(func, "func", arrays="digest")}
+            return {"callable": name, "state": json_value(func, "func", arrays="digest")}
         return name
     return f"{module}.{qualname}"
 
@@ -155,8 +155,8 @@ def points_identity(cols: Mapping[str, np.ndarray]) -> dict[str, Any]:
 def sweep_identity(func, func_kwargs, metadata, cols, chunk_size) -> tuple[dict, str]:
     """The identity of a sweep and its SHA-256 (see the module docstring)."""
     identity = {"format": FORMAT, "func": func_identity(func),
-                "func_kwargs": jsonable(func_kwargs, "func_kwargs", arrays="digest"),
-                "metadata": jsonable(dict(metadata or {}), "metadata", arrays="list"),
+                "func_kwargs": json_value(func_kwargs, "func_kwargs", arrays="digest"),
+                "metadata": json_value(dict(metadata or {}), "metadata", arrays="list"),
                 "points": points_identity(cols), "chunk_size": chunk_size}
     # Round-trip through JSON so the in-memory identity equals the stored one
     # (e.g. tuples become lists) and comparisons are exact.

@@ -124,8 +124,8 @@ def shifted_amplitude(kp, kv, xm, *, mu, e, L, omega, m2=1.0, n=1, case="colloca
     n = check_odd_order(n)
     kw = {"kp": kp, "kv": kv, "m2": m2, "mu": mu, "e": e, "L": L, "w": omega, "n": n,
           "case": case}
-    a = symbolic.symmetric_orbit(x10=1.0, **kw)
-    b = symbolic.symmetric_orbit(x10=2.0, **kw)
+    a = symbolic.solve_symmetric_orbit(x10=1.0, **kw)
+    b = symbolic.solve_symmetric_orbit(x10=2.0, **kw)
     with np.errstate(all="ignore"):
         C1 = np.asarray(b.C) - np.asarray(a.C)
         S1 = np.asarray(b.S) - np.asarray(a.S)

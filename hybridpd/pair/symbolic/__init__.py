@@ -59,17 +59,18 @@ Flows: :func:`transition_matrix`, :func:`flow`, :func:`gap`, :func:`gap_derivati
 :func:`system_matrix`, :func:`dch`, :func:`dsh`.
 Section: :func:`state_from_section`, :func:`section_from_state`.
 Symmetric orbit: :func:`virtual_restitution`, :func:`symmetric_velocities`,
-:func:`symmetric_orbit` (-> :class:`SymmetricOrbit`).
+:func:`solve_symmetric_orbit` (-> :class:`SymmetricOrbit`).
 Impact map: :func:`impact_section_map`, :func:`impact_block`, :func:`flight_section_map`,
-:func:`flight_block`, :func:`flight_time`, :func:`impact_map` (-> :class:`ImpactMapResult`),
+:func:`flight_block`, :func:`flight_time`, :func:`closed_form_map` (-> :class:`ImpactMapResult`),
 :func:`map_jacobian`, :func:`orbit_jacobian` (-> :class:`JacobianResult`).
 SymPy objects: :func:`derivation` (-> :class:`Derivation`), :func:`sympy_functions`.
 """
+from hybridpd._deprecated import moved_names
 from hybridpd.pair.symbolic.damped import dch, dsh
 from hybridpd.pair.symbolic.derive import Derivation, derivation, sympy_functions
 from hybridpd.pair.symbolic.existence import (
     SymmetricOrbit,
-    symmetric_orbit,
+    solve_symmetric_orbit,
     symmetric_velocities,
     virtual_restitution,
 )
@@ -85,19 +86,46 @@ from hybridpd.pair.symbolic.flows import (
 from hybridpd.pair.symbolic.section_map import (
     ImpactMapResult,
     JacobianResult,
+    closed_form_map,
     flight_block,
     flight_section_map,
     flight_time,
     impact_block,
-    impact_map,
     impact_section_map,
     map_jacobian,
     orbit_jacobian,
 )
 
-__all__ = ["Derivation", "ImpactMapResult", "JacobianResult", "SymmetricOrbit", "dch", "derivation",
-           "dsh", "flight_block", "flight_section_map", "flight_time", "flow", "gap",
-           "gap_derivatives", "impact_block", "impact_map", "impact_section_map", "map_jacobian",
-           "orbit_jacobian", "section_from_state", "state_from_section", "symmetric_orbit",
-           "symmetric_velocities", "sympy_functions", "system_matrix", "transition_matrix",
-           "virtual_restitution"]
+__all__ = [
+    "Derivation",
+    "ImpactMapResult",
+    "JacobianResult",
+    "SymmetricOrbit",
+    "closed_form_map",
+    "dch",
+    "derivation",
+    "dsh",
+    "flight_block",
+    "flight_section_map",
+    "flight_time",
+    "flow",
+    "gap",
+    "gap_derivatives",
+    "impact_block",
+    "impact_section_map",
+    "map_jacobian",
+    "orbit_jacobian",
+    "section_from_state",
+    "solve_symmetric_orbit",
+    "state_from_section",
+    "symmetric_velocities",
+    "sympy_functions",
+    "system_matrix",
+    "transition_matrix",
+    "virtual_restitution",
+]
+
+# the names of 0.2.0
+__getattr__ = moved_names(__name__, {
+    "impact_map": "hybridpd.pair.symbolic.section_map:closed_form_map",
+    "symmetric_orbit": "hybridpd.pair.symbolic.existence:solve_symmetric_orbit"})

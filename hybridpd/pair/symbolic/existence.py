@@ -10,17 +10,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hybridpd._deprecated import moved_names
 from hybridpd._results import compact_repr, short_repr
-from hybridpd.model import check_array
+from hybridpd.model import check_array, virtual_restitution
 from hybridpd.pair.symbolic._numeric import _as_float_arrays, _case, kernel
 
-__all__ = ["SymmetricOrbit", "symmetric_orbit", "symmetric_velocities", "virtual_restitution"]
-
-
-def virtual_restitution(mu, e):
-    """Virtual restitution coefficient (12): ``R = (e + 2 e mu - 1)/(e - 2 mu - 1)``."""
-    mu, e = _as_float_arrays(mu=mu, e=e)
-    return ((e + 2 * e * mu - 1) / (e - 2 * mu - 1))[()]
+__all__ = ["SymmetricOrbit", "solve_symmetric_orbit", "symmetric_velocities",
+           "virtual_restitution"]
 
 
 def symmetric_velocities(*, mu, e, w, x10, n=1):
@@ -54,7 +50,7 @@ def _check_odd(n):
 class SymmetricOrbit:
     """Simple symmetric periodic orbit of order ``n`` (paper section 3).
 
-    All array fields share the broadcast shape of the inputs of :func:`symmetric_orbit`.
+    All array fields share the broadcast shape of the inputs of :func:`solve_symmetric_orbit`.
     The orbit is only *candidate*: viability (18) (no extra impact in between) is not
     checked here.
 
@@ -130,7 +126,7 @@ class SymmetricOrbit:
                                             self.C, self.S), axis=-1)
 
 
-def symmetric_orbit(*, kp, kv, m2=1.0, mu, e, L, w, x10, n=1,
+def solve_symmetric_orbit(*, kp, kv, m2=1.0, mu, e, L, w, x10, n=1,
                     case="collocated") -> SymmetricOrbit:
     """Solve the existence conditions (13)-(14) of the symmetric orbit; vectorised.
 
@@ -204,3 +200,8 @@ def symmetric_orbit(*, kp, kv, m2=1.0, mu, e, L, w, x10, n=1,
         n=b(nf), C=b(C), S=b(S), xm=b(xm), sn=b(sn), cs=b(cs), phi0=b(phi0), T=b(T),
         tau=b(nf * T / 2), x20=b(x10 - L), v=b(v), y2_pre=b(y2m), y2_post=b(y2p),
         R=b(virtual_restitution(mu, e)), det=b(det), singular=b(singular))
+
+
+# the name of 0.2.0 (the flat hybridpd.symmetric_orbit is the pair-object form)
+__getattr__ = moved_names(__name__, {
+    "symmetric_orbit": "hybridpd.pair.symbolic.existence:solve_symmetric_orbit"})

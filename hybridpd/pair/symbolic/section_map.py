@@ -12,13 +12,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hybridpd._deprecated import moved_names
 from hybridpd._results import compact_repr
 from hybridpd.pair.symbolic._numeric import _as_float_arrays, _case, _stack, kernel
 from hybridpd.pair.symbolic.existence import SymmetricOrbit
 
-__all__ = ["ImpactMapResult", "JacobianResult", "flight_block", "flight_section_map",
-           "flight_time", "impact_block", "impact_map", "impact_section_map", "map_jacobian",
-           "orbit_jacobian"]
+__all__ = [
+    "ImpactMapResult",
+    "JacobianResult",
+    "closed_form_map",
+    "flight_block",
+    "flight_section_map",
+    "flight_time",
+    "impact_block",
+    "impact_section_map",
+    "map_jacobian",
+    "orbit_jacobian",
+]
 
 
 def impact_section_map(s, *, mu, e) -> np.ndarray:
@@ -199,7 +209,7 @@ class ImpactMapResult:
     ok: bool
 
 
-def impact_map(s0, *, xm, kp, kv, m2=1.0, mu, e, L, w, case="collocated",
+def closed_form_map(s0, *, xm, kp, kv, m2=1.0, mu, e, L, w, case="collocated",
                tmax=None) -> ImpactMapResult:
     """Apply ``P = P43 o P32 o P21 o P10`` to one pre-impact section point (scalar).
 
@@ -289,7 +299,7 @@ def map_jacobian(s0, tau1, tau2, *, xm, kp, kv, m2=1.0, mu, e, L, w,
     s0 : array_like, shape (..., 4)
         Pre-impact ``(phi, z1, z2, z4)`` on ``z3 = +L`` (``z4 > 0``).
     tau1, tau2 : array_like
-        Flight times ``+L -> -L`` and ``-L -> +L`` (e.g. from :func:`impact_map`).
+        Flight times ``+L -> -L`` and ``-L -> +L`` (e.g. from :func:`closed_form_map`).
     xm, kp, kv, m2, mu, e, L, w : array_like
         Reference amplitude and parameters; everything broadcasts.
     case : {"collocated", "noncollocated"}
@@ -322,3 +332,8 @@ def orbit_jacobian(orbit: SymmetricOrbit) -> JacobianResult:
     return map_jacobian(orbit.section_point, orbit.tau, orbit.tau, xm=orbit.xm, kp=orbit.kp,
                         kv=orbit.kv, m2=orbit.m2, mu=orbit.mu, e=orbit.e, L=orbit.L, w=orbit.w,
                         case=orbit.case)
+
+
+# the name of 0.2.0 (hybridpd.pair.batch.impact_map is the compiled map of a batch)
+__getattr__ = moved_names(__name__, {
+    "impact_map": "hybridpd.pair.symbolic.section_map:closed_form_map"})
