@@ -219,3 +219,54 @@ def test_docstring_examples(test, tmp_path, monkeypatch):
     out = []
     result = runner.run(test, out=out.append)
     assert result.failed == 0, "".join(out)
+
+
+# ---------------------------------------------------------------------------------------------
+# command lines of the README and the guide
+_MD_SHELL = re.compile(r"^```(?:bash|console|sh)[ \t]*\n(.*?)^```[ \t]*$", re.DOTALL | re.MULTILINE)
+_RST_SHELL = re.compile(r"^( *)\.\. code-block:: (?:bash|console|sh)[ \t]*\n((?:[ \t]*:[\w-]+:.*\n)*)"
+                        r"((?:\1[ \t]+.*\n|[ \t]*\n)+)", re.MULTILINE)
+
+
+def hybridpd_commands(text, rst=False):
+    """Every ``hybridpd ...`` command of the shell blocks of a text (continuation lines
+    joined, comments dropped), as argument lists without the program name."""
+    import shlex
+
+    bodies = ([textwrap.dedent(m.group(3)) for m in _RST_SHELL.finditer(text)] if rst
+              else [m.group(1) for m in _MD_SHELL.finditer(text)])
+    out = []
+    for body in bodies:
+        for line in body.replace("\\\n", " ").splitlines():
+            line = line.split("#", 1)[0].strip().removeprefix("$ ")
+            for part in re.split(r"&&|;|\|", line):
+                words = shlex.split(part)
+                if words[:1] == ["hybridpd"]:
+                    out.append(words[1:])
+    return out
+
+
+def _documents():
+    yield "README.md", (ROOT / "README.md").read_text(encoding="utf-8"), False
+    for page in sorted(GUIDE.glob("*.rst")):
+        yield f"docs/guide/{page.name}", page.read_text(encoding="utf-8"), True
+
+
+def test_every_documented_command_line_parses():
+    """The command lines the documentation shows are accepted by the CLI's parser (their
+    options exist and their values have the right types); running them is the job of the
+    command-line tests, which run each subcommand on small inputs."""
+    from hybridpd.cli import build_parser
+
+    parser = build_parser()
+    seen = 0
+    for label, text, rst in _documents():
+        for argv in hybridpd_commands(text, rst):
+            try:
+                parser.parse_args(argv)
+            except SystemExit as exc:  # argparse reports and exits (0 for --help, --version)
+                if exc.code == 0:
+                    continue
+                pytest.fail(f"{label}: hybridpd {' '.join(argv)} (exit {exc.code})")
+            seen += 1
+    assert seen >= 10
