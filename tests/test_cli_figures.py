@@ -134,7 +134,7 @@ def _chain(n):
 
 @pytest.mark.parametrize("n", [3, 10])
 def test_a_trajectory_figure_shows_every_dof_at_print_size(n, tmp_path):
-    from hybridpd.cli._common import save_figure
+    from hybridpd.cli._common import write_figure
     from hybridpd.plotting.trajectory import plot_trajectory_samples
 
     t, q, v, contacts = _chain(n)
@@ -159,7 +159,7 @@ def test_a_trajectory_figure_shows_every_dof_at_print_size(n, tmp_path):
     w, h = fig.get_size_inches()
     assert w == pytest.approx(DOUBLE, abs=1e-9) and h <= MAX_HEIGHT + 1e-9
     path = tmp_path / f"chain{n}.png"
-    save_figure(fig, path)
+    write_figure(fig, path)
     assert min(t.get_fontsize() for t in _texts(fig)) >= MIN_FONT
     import matplotlib.image
 

@@ -34,7 +34,7 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
         default = action.default
         if (text and "%(default)" not in text and not action.required
                 and default not in (None, False, argparse.SUPPRESS)
-                and action.option_strings):
+                and action.option_strings and "default" not in text):
             text += " (default: %(default)s)"
         return text
 
@@ -93,49 +93,155 @@ def unknown_flag_message(flag: str, known) -> str:
     return f"unknown option {flag}{hint}"
 
 
-def add_plant(p, *, xm=True, gamma=False, required=True, L_required=True):
-    p.add_argument("--case", required=required, type=case_type, metavar="CASE",
-                   help="collocated (the PD loop measures the secondary mass x2, the one it "
-                        "pushes) or noncollocated (it measures the primary mass x1 through "
-                        "the backlash; alias non-collocated)")
-    p.add_argument("--mu", type=float, required=required, help="mass ratio m1/m2 (> 0)")
-    p.add_argument("--m2", type=float, default=1.0, help="secondary mass m2 (> 0)")
-    p.add_argument("--omega", type=float, required=required, help="reference frequency (> 0)")
-    if gamma:
-        g = p.add_mutually_exclusive_group(required=required)
-        g.add_argument("--L", type=float, help="half clearance (> 0)")
-        g.add_argument("--gamma", type=float, help="L / x10 (> 0)")
-        p.add_argument("--x10", type=float, default=1.0,
-                       help="amplitude of the primary mass's desired motion (> 0)")
-    else:
-        p.add_argument("--L", type=float, required=L_required, help="half clearance (> 0)")
-    if xm:
-        p.add_argument("--xm", type=float, required=True, help="reference amplitude (>= 0)")
+#: The impact pair's options, in the order the help lists them.
+PAIR_OPTIONS = ("case", "mu", "m2", "omega", "L", "gamma", "x10", "xm", "e", "kp", "kv", "n")
+
+#: The help text of each impact-pair option, the same in every command (CONVENTIONS.md).
+PAIR_HELP = {
+    "case": ("collocated (the PD loop measures the secondary mass x2, the one it pushes) or "
+             "noncollocated (it measures the primary mass x1 through the backlash; alias "
+             "non-collocated)"),
+    "mu": "mass ratio mu = m1 / m2 (> 0)",
+    "m2": "secondary mass m2 (> 0; default 1)",
+    "omega": "reference frequency omega of xd = xm cos(omega t) (> 0, rad per time unit)",
+    "L": "half clearance L (> 0): the masses touch at |x1 - x2| = L",
+    "gamma": "clearance ratio gamma = L / x10 (> 0)",
+    "x10": ("amplitude x10 of the primary mass's desired motion, a triangle wave between "
+            "+x10 and -x10 (> 0; default 1)"),
+    "xm": "reference amplitude xm of xd = xm cos(omega t) (>= 0)",
+    "e": "restitution coefficient e of Newton's impact law, in [0, 1]",
+    "kp": "proportional gain kp (> 0)",
+    "kv": "derivative gain kv (> 0)",
+    "n": "odd order n of the symmetric orbit (period n T, T = 2 pi / omega)",
+}
+
+#: What a grid or a list of values adds to the help of a pair option.
+GRID_HELP = ": a grid axis of NUM points from MIN to MAX"
+LIST_HELP = ": one or more values"
+
+_PAIR_REQUIRED = ("case", "mu", "omega", "L", "gamma", "e", "kp", "kv", "xm")
 
 
-def add_model(p, *, uses: str):
-    """``--model FILE.toml`` and ``--list-params``; ``uses`` says how the command takes the
-    file's parameters (e.g. ``"--set KEY VALUE sets them"``)."""
+def add_pair(p, *, names=("case", "mu", "m2", "omega", "L", "gamma", "x10", "e", "kp", "kv",
+                          "n"),
+             required=(), clearance: str = "either", grid=(), many=(), m2=1.0, x10=1.0):
+    """The impact pair's options (:data:`PAIR_OPTIONS`), declared here once for every command.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    names : tuple of str
+        The options the command takes, a subset of :data:`PAIR_OPTIONS`.
+    required : bool or tuple of str
+        The options argparse requires (``True``: all of them but ``m2``, ``x10`` and ``n``);
+        the others default to None (or to `m2`, `x10`, 1 for ``n``) and the command checks
+        them, e.g. because ``--model`` replaces them.
+    clearance : {"either", "both"}
+        ``"either"``: ``--L`` and ``--gamma`` exclude each other; ``"both"``: both may be
+        given (the command checks that they agree).
+    grid, many : tuple of str
+        Options taking ``MIN MAX NUM`` (a grid axis) or one or more values instead of one.
+    m2, x10 : float or None
+        Defaults of ``--m2`` and ``--x10`` (None where the command must see whether they
+        were given).
+
+    Examples
+    --------
+    >>> p = Parser(prog="demo")
+    >>> add_pair(p, names=("e", "kp"), many=("e",))
+    >>> p.parse_args(["--e", "0.1", "0.5", "--kp", "10"])
+    Namespace(e=[0.1, 0.5], kp=10.0)
+    """
+    unknown = sorted(set(names) - set(PAIR_OPTIONS))
+    if unknown:
+        raise ValueError(f"names: not impact-pair options: {', '.join(unknown)}")
+    if clearance not in ("either", "both"):
+        raise ValueError(f"clearance must be 'either' or 'both', got {clearance!r}")
+    if required is True:
+        required = _PAIR_REQUIRED
+    exclusive = clearance == "either" and "L" in names and "gamma" in names
+    group = None
+    if exclusive:
+        group = p.add_mutually_exclusive_group(
+            required="L" in required or "gamma" in required)
+    for name in PAIR_OPTIONS:
+        if name not in names:
+            continue
+        target = group if exclusive and name in ("L", "gamma") else p
+        kw = {"help": PAIR_HELP[name], "default": None, "type": float}
+        if name == "case":
+            kw.update(type=case_type, metavar="CASE")
+        elif name == "n":
+            kw.update(type=int, default=1)
+        elif name == "m2":
+            kw["default"] = m2
+        elif name == "x10":
+            kw["default"] = x10
+        if name in grid:
+            kw.update(nargs=3, metavar=("MIN", "MAX", "NUM"), help=kw["help"] + GRID_HELP)
+        elif name in many:
+            kw.update(nargs="+", help=kw["help"] + LIST_HELP)
+        if name in required and target is p:
+            kw["required"] = True
+        target.add_argument(f"--{name}", **kw)
+
+
+def add_model(p, *, set_option: bool = True, section: bool = True):
+    """The model-file options: ``--model FILE.toml``, ``--list-params``, ``--set KEY VALUE``
+    (with `set_option`) and the options choosing a model file's section and orbits (with
+    `section`: ``--contact``, ``--wall``, ``--event``, ``--period``, ``--mode``,
+    ``--periods``), declared here once for every command.
+
+    Examples
+    --------
+    >>> p = Parser(prog="demo")
+    >>> add_model(p, section=False)
+    >>> p.parse_args(["--model", "m.toml", "--set", "controller.kp", "2"]).set
+    [['controller.kp', '2']]
+    """
     p.add_argument("--model", default=None, metavar="FILE.toml",
                    help="mechanical model file (then the impact-pair options are not used). "
                         "Its parameters are its numeric entries, named by dotted TOML paths "
                         "(controller.kp, contact.0.restitution, system.masses.2, "
-                        f"reference.omega, ...): --list-params lists them; {uses}")
+                        "reference.omega, ...): --list-params lists them")
     p.add_argument("--list-params", action="store_true",
                    help="with --model FILE.toml: print the file's parameters (dotted paths) "
                         "with their values, one per line (with --json: one object), and "
                         "exit 0")
+    if set_option:
+        p.add_argument("--set", nargs=2, action="append", default=None,
+                       metavar=("KEY", "VALUE"),
+                       help="--model: set the file's numeric entry KEY (a dotted path, see "
+                            "--list-params; a pattern controller.*.kp or a list a.b,c.d sets "
+                            "every entry it matches) to VALUE first; repeatable")
+    if section:
+        _add_section(p)
 
 
-def add_set(p):
-    """``--set KEY VALUE`` (repeatable): a model file's entries set before the run."""
-    p.add_argument("--set", nargs=2, action="append", default=None, metavar=("KEY", "VALUE"),
-                   help="--model: set the file's numeric entry KEY (a dotted path, see "
-                        "--list-params; a pattern controller.*.kp or a list a.b,c.d sets "
-                        "every entry it matches) to VALUE first; repeatable")
+def _add_section(p):
+    p.add_argument("--contact", type=int, default=0,
+                   help="--model: 0-based contact whose impacts (or releases) define the "
+                        "section")
+    p.add_argument("--wall", type=int, choices=[-1, 1], default=None,
+                   help="--model: +1 (hi) or -1 (lo) bound of the contact (default hi)")
+    p.add_argument("--event", default="impact", choices=["impact", "release"],
+                   help="--model: section on the contact's impacts, or on the ends of its "
+                        "sticking phases (once per burst of impacts)")
+    p.add_argument("--period", type=period_arg, default="auto", metavar="{auto,K}",
+                   help="--model: returns to the section per orbit, the k of the map P^k "
+                        "the command works with; 'auto' (default): the neighbours' or 1, "
+                        "then every K <= 4 after which the simulated motion returns with "
+                        "whole reference periods (the result says which K)")
+    p.add_argument("--mode", default=None, metavar="MODE",
+                   help="--model: the mode in which the section's guard fires, e.g. "
+                        "'stick0+1+' when contact 0 releases while contact 1 is held "
+                        "(default: the one the simulated motion takes)")
+    p.add_argument("--periods", type=int, default=None,
+                   help="--model: reference periods per orbit (default: any whole number)")
 
 
-def set_values(args) -> dict:
+def set_option_values(args) -> dict:
     """``{path: value}`` of the ``--set`` options (ValueError for a VALUE that is no
     number)."""
     values = {}
@@ -152,7 +258,7 @@ def model_of(args):
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.mechanics.params import ModelTemplate
 
-    values = set_values(args)
+    values = set_option_values(args)
     if not values:
         # deferred import: loaded only when this runs, for start-up time
         from hybridpd.mechanics.modelfile import load_model
@@ -170,7 +276,7 @@ def controllers_of(args) -> str:
     from hybridpd.mechanics.params import ModelTemplate
     from hybridpd.plotting._common import describe_controllers
 
-    return describe_controllers(ModelTemplate.load(args.model).with_values(set_values(args)))
+    return describe_controllers(ModelTemplate.load(args.model).with_values(set_option_values(args)))
 
 
 def stamp_controllers(result, args):
@@ -206,31 +312,6 @@ def require(args, *names) -> None:
     missing = [f"--{n.replace('_', '-')}" for n in names if getattr(args, n) is None]
     if missing:
         raise UsageError(f"the following arguments are required: {', '.join(missing)}")
-
-
-def add_model_section(p, *, period_help="returns to the section per orbit (k of P^k)",
-                      uses="--set KEY VALUE sets them"):
-    """``--model``, ``--list-params`` and the options choosing a model file's section and
-    orbits."""
-    add_model(p, uses=uses)
-    p.add_argument("--contact", type=int, default=0,
-                   help="--model: 0-based contact whose impacts (or releases) define the "
-                        "section")
-    p.add_argument("--wall", type=int, choices=[-1, 1], default=None,
-                   help="--model: +1 (hi) or -1 (lo) bound of the contact (default hi)")
-    p.add_argument("--event", default="impact", choices=["impact", "release"],
-                   help="--model: section on the contact's impacts, or on the ends of its "
-                        "sticking phases (once per burst of impacts)")
-    p.add_argument("--period", type=period_arg, default="auto", metavar="{auto,K}",
-                   help=f"--model: {period_help}; 'auto' (default): the neighbours' or 1, "
-                        "then every K <= 4 after which the simulated motion returns with "
-                        "whole reference periods (the result says which K)")
-    p.add_argument("--mode", default=None, metavar="MODE",
-                   help="--model: the mode in which the section's guard fires, e.g. "
-                        "'stick0+1+' when contact 0 releases while contact 1 is held "
-                        "(default: the one the simulated motion takes)")
-    p.add_argument("--periods", type=int, default=None,
-                   help="--model: reference periods per orbit (default: any whole number)")
 
 
 def period_arg(text: str):
@@ -312,21 +393,35 @@ def print_json(obj) -> None:
     print(dumps_json(obj))
 
 
-def add_sweep(p, out=(".nc", ".zarr", ".npz"), what="the result", store=True,
-              model_out=(".nc", ".zarr")):
-    add_executor(p, default="serial")
+def add_output(p, *, out=None, model_out=None, what: str = "the result", plot=None,
+               store: bool = False, json: bool = True):
+    """The output and figure options, declared here once for every command: ``--store``
+    (with `store`), ``--out FILE`` (with `out`, the suffixes the impact pair writes, and
+    `model_out`, those ``--model`` writes), ``--plot IMAGE`` (with `plot`, what the figure
+    shows) and ``--json`` (with `json`).
+
+    Examples
+    --------
+    >>> p = Parser(prog="demo")
+    >>> add_output(p, out=(".nc",), plot="the map")
+    >>> p.parse_args(["--out", "a.nc", "--json"])
+    Namespace(out='a.nc', plot=None, json=True)
+    """
     if store:
         p.add_argument("--store", default=None, metavar="DIR.zarr",
                        help="write the sweep to this Zarr store as chunks finish; a rerun "
                             "with the same arguments resumes from it")
-    p.add_argument("--out", default=None, metavar="FILE",
-                   help=f"write the result to this file, by suffix (impact pair: "
-                        f"{_either(out)}; --model: {_either(model_out)}); draw it later with "
-                        "'hybridpd plot FILE'")
-    p.add_argument("--plot", default=None, metavar="IMAGE",
-                   help=f"draw {what} to this .png, .pdf or .svg")
-    p.add_argument("--json", action="store_true", help=JSON_HELP)
-    add_quiet(p)
+    if out is not None:
+        where = (f"impact pair: {_either(out)}; --model: {_either(model_out)}"
+                 if model_out is not None else _either(out))
+        p.add_argument("--out", default=None, metavar="FILE",
+                       help=f"write {what} to this file, by suffix ({where}); draw it later "
+                            "with 'hybridpd plot FILE'")
+    if plot is not None:
+        p.add_argument("--plot", default=None, metavar="IMAGE",
+                       help=f"draw {plot} to this {_either(IMAGE_SUFFIXES)}")
+    if json:
+        p.add_argument("--json", action="store_true", help=JSON_HELP)
 
 
 def _either(suffixes) -> str:
@@ -334,8 +429,17 @@ def _either(suffixes) -> str:
         ", ".join(suffixes[:-1]) + " or " + suffixes[-1])
 
 
-def add_executor(p, default="serial"):
-    """``--executor``, ``--workers`` and ``--scheduler`` (see :func:`executor_of`)."""
+def add_executor(p, default: str = "serial", *, quiet: bool = True):
+    """The executor options, declared here once for every command: ``--executor``,
+    ``--workers``, ``--scheduler`` (see :func:`executor_of`) and, with `quiet`, ``--quiet``.
+
+    Examples
+    --------
+    >>> p = Parser(prog="demo")
+    >>> add_executor(p, default="processes")
+    >>> executor_of(p.parse_args(["--executor", "serial"]))
+    'serial'
+    """
     p.add_argument("--executor", default=None, choices=["serial", "processes", "dask"],
                    help="where the grid points run: in this process, a process pool, or a "
                         f"Dask cluster (dask.distributed) (default: {default}, or the "
@@ -345,6 +449,10 @@ def add_executor(p, default="serial"):
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="run on the existing dask.distributed cluster of this scheduler "
                         "(tcp://host:8786; default $DASK_SCHEDULER_ADDRESS if set)")
+    if quiet:
+        p.add_argument("--quiet", action="store_true",
+                       help="no progress on stderr (by default a bar on a terminal, "
+                            "otherwise a line every ~10 s)")
     p.set_defaults(_executor_default=default)
 
 
@@ -368,12 +476,6 @@ def executor_of(args):
         if env is not None:
             return env
     return chosen or getattr(args, "_executor_default", "serial")
-
-
-def add_quiet(p):
-    p.add_argument("--quiet", action="store_true",
-                   help="no progress on stderr (by default a bar on a terminal, otherwise a "
-                        "line every ~10 s)")
 
 
 def progress_wanted(args) -> bool:
@@ -415,16 +517,16 @@ def _check(path, flag, allowed):
     return path
 
 
-def save_figure(fig, path) -> None:
-    """Write `fig` to `path` (format from the suffix), creating the folder."""
+def write_figure(fig, path) -> None:
+    """Write `fig` to the one image `path` (its format from the suffix) in the house style,
+    creating the folder (:func:`hybridpd.plotting.style.save_figure` with that format)."""
     # deferred import: loaded only when this runs, for start-up time
     from pathlib import Path
 
-    from hybridpd.plotting.style import house_style
+    from hybridpd.plotting.style import house_style, save_figure
 
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
     with house_style():
-        fig.savefig(path, dpi=300)
+        save_figure(fig, path, formats=(Path(path).suffix.lstrip("."),), dpi=300)
 
 
 def check_pair_command(args, pair_options, outputs: bool = True) -> tuple:

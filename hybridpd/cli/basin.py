@@ -3,19 +3,19 @@ from __future__ import annotations
 
 from hybridpd.cli._common import (
     UsageError,
-    add_model_section,
-    add_plant,
-    add_set,
-    add_sweep,
+    add_executor,
+    add_model,
+    add_output,
+    add_pair,
     check_model_command,
     check_pair_command,
     command,
     executor_of,
     print_json,
     progress_wanted,
-    save_figure,
-    set_values,
+    set_option_values,
     stamp_controllers,
+    write_figure,
 )
 
 # the pair options: required without --model, not used with it
@@ -35,21 +35,12 @@ def register(sub):
                          "basin --model examples/models/drivetrain.toml --event release --set "
                          "controller.kv 2 --x motor -1.5 1.5 31 --y motor_dot -6 6 31 --out "
                          "basin.nc"))
-    add_plant(p, xm=False, gamma=True, required=False)
-    p.add_argument("--e", type=float, default=None,
-                   help="restitution coefficient in [0, 1]")
-    p.add_argument("--n", type=int, default=1,
-                   help="odd order of the symmetric orbit (period n T)")
-    p.add_argument("--kp", type=float, default=None,
-                   help="proportional gain kp (> 0)")
-    p.add_argument("--kv", type=float, default=None,
-                   help="derivative gain kv (> 0)")
-    add_model_section(p, period_help="returns to the section per orbit (k of P^k)")
+    add_pair(p)
+    add_model(p)
     p.add_argument("--x", nargs=4, default=None, metavar=("COORD", "MIN", "MAX", "NUM"),
                    help="--model: grid over this section coordinate (e.g. motor, motor_dot)")
     p.add_argument("--y", nargs=4, default=None, metavar=("COORD", "MIN", "MAX", "NUM"),
                    help="--model: second grid axis (as --x)")
-    add_set(p)
     p.add_argument("--x1", type=float, nargs=3, default=None, metavar=("MIN", "MAX", "NUM"),
                    help="slice window in x1 (default: the reproduction's, -3 x10 .. 5 x10, "
                         "41 points)")
@@ -65,8 +56,9 @@ def register(sub):
     p.add_argument("--max-extensions", type=int, default=3,
                    help="window extensions while the symmetric orbit's basin touches the edge "
                         "(0: keep the window)")
-    add_sweep(p, out=(".npz", ".nc", ".zarr"), what="the basin (coloured by attractor)",
-              store=False)
+    add_executor(p, default="serial")
+    add_output(p, out=(".npz", ".nc", ".zarr"), model_out=(".nc", ".zarr"),
+               plot="the basin (coloured by attractor)")
     p.set_defaults(func=run)
 
 
@@ -119,7 +111,7 @@ def run(args) -> int:
         # deferred import: loaded only when this runs, for start-up time
         from hybridpd.plotting.basins import plot_basin
 
-        save_figure(plot_basin(ab), args.plot)
+        write_figure(plot_basin(ab), args.plot)
     fp = b.fixed_point
     if args.json:
         print_json({
@@ -149,7 +141,7 @@ def _run_model(args) -> int:
     from hybridpd.sweeps.model_basins import model_basin
 
     check_model_command(args, _PAIR, "set the file's entries with --set KEY VALUE", "COORD")
-    values = set_values(args)
+    values = set_option_values(args)
     if values:
         # deferred import: loaded only when this runs, for start-up time
         from hybridpd.sweeps.model_regions import template_of
@@ -168,7 +160,7 @@ def _run_model(args) -> int:
         # deferred import: loaded only when this runs, for start-up time
         from hybridpd.plotting.model_basins import plot_model_basin
 
-        save_figure(plot_model_basin(mb), args.plot)
+        write_figure(plot_model_basin(mb), args.plot)
     if args.json:
         print_json(mb.to_dict())
         return 0

@@ -1,20 +1,21 @@
 """``hybridpd bifurcation``: a brute-force bifurcation diagram of the impact map."""
 from __future__ import annotations
 
-import argparse
 import math
 
 from hybridpd.cli._common import (
     UsageError,
     add_executor,
-    add_model_section,
+    add_model,
+    add_output,
+    add_pair,
     check_image,
     check_out,
     executor_of,
     print_json,
     require,
-    save_figure,
     stamp_controllers,
+    write_figure,
 )
 
 #: Parameters the command can sweep (``--param NAME``).
@@ -54,20 +55,10 @@ example (the paper's parameters, kv swept, following):
 
 def register(sub):
     p = sub.add_parser("bifurcation", help="brute-force bifurcation diagram of the impact map",
-                       description=_DESCRIPTION, epilog=_EPILOG,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--case", default=None, choices=["collocated", "noncollocated"],
-                   help="feedback case (required without --model)")
-    p.add_argument("--mu", type=float, help="mass ratio m1/m2 (> 0)")
-    p.add_argument("--e", type=float, help="restitution coefficient in [0, 1]")
-    p.add_argument("--gamma", type=float, help="clearance ratio L / x10 (> 0)")
-    p.add_argument("--omega", type=float, help="reference frequency (> 0, rad/time)")
-    p.add_argument("--n", type=int, default=1, help="odd order of the design orbit (default 1)")
-    p.add_argument("--m2", type=float, help="secondary mass (> 0), default 1")
-    p.add_argument("--kp", type=float, help="proportional gain (> 0)")
-    p.add_argument("--kv", type=float, help="velocity gain (> 0)")
-    p.add_argument("--x10", type=float, default=1.0,
-                   help="primary-mass amplitude of the design (> 0), default 1")
+                       description=_DESCRIPTION, epilog=_EPILOG)
+    # m2 defaults to None: with --model a given --m2 is refused
+    add_pair(p, names=("case", "mu", "m2", "omega", "gamma", "x10", "e", "kp", "kv", "n"),
+             m2=None)
     p.add_argument("--param", nargs=4, default=None, metavar=("NAME", "MIN", "MAX", "NUM"),
                    help=f"swept parameter (required), from MIN to MAX (MIN < MAX) in NUM >= 2 "
                    f"values: for the impact pair one of {', '.join(SWEEPABLE)}; with --model "
@@ -83,20 +74,13 @@ def register(sub):
                    "displaced by 1e-3 in z1)")
     p.add_argument("--max-period", type=int, default=32,
                    help="largest period detected (default 32)")
-    p.add_argument("--out", default=None, metavar="FILE",
-                   help="write the diagram (required): impact pair .npz; --model .nc or .zarr "
-                   "(by suffix); draw it later with 'hybridpd plot FILE'")
-    p.add_argument("--plot", default=None, metavar="IMAGE",
-                   help="also draw the diagram (.png, .pdf or .svg)")
+    add_output(p, out=(".npz",), model_out=(".nc", ".zarr"), what="the diagram (required)",
+               plot="the diagram")
     p.add_argument("--coordinate", default="z1",
                    choices=["phi", "z1", "z2", "z4", "x1", "y1", "x2", "y2"],
                    help="section coordinate on the plot's y axis (default z1)")
-    p.add_argument("--json", action="store_true",
-                   help="print a JSON summary (classes, periods, exponents, cycles) on stdout "
-                   "instead of the text (strict JSON: null for a number that is not finite)")
-    add_model_section(p, period_help="the diagram iterates P^k",
-                      uses="--param KEY MIN MAX NUM sweeps one of them")
-    add_executor(p, default="serial")
+    add_model(p, set_option=False)
+    add_executor(p, default="serial", quiet=False)
     p.set_defaults(func=run)
 
 
@@ -174,7 +158,7 @@ def run(args) -> int:
         from hybridpd.plotting.bifurcation import plot_bifurcation
 
         branches, branch = _symmetric_branch(pair, v0, name, hi, args)
-        save_figure(plot_bifurcation(d, coordinate=args.coordinate, branches=branches),
+        write_figure(plot_bifurcation(d, coordinate=args.coordinate, branches=branches),
                     args.plot)
     if args.json:
         lya = [None if not np.isfinite(x) else float(x) for x in d.lyapunov]
@@ -246,7 +230,7 @@ def _run_model(args) -> int:
         # deferred import: loaded only when this runs, for start-up time
         from hybridpd.plotting.model_diagrams import plot_model_diagram
 
-        save_figure(plot_model_diagram(d), args.plot)
+        write_figure(plot_model_diagram(d), args.plot)
     if args.json:
         print_json(dict(d.to_dict(), out=str(args.out), plot=args.plot))
         return 0

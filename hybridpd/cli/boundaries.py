@@ -1,7 +1,7 @@
 """``hybridpd boundaries``: traced boundary curves of the symmetric orbit in a parameter box."""
 from __future__ import annotations
 
-from hybridpd.cli._common import JSON_HELP, print_json
+from hybridpd.cli._common import add_output, add_pair, print_json
 from hybridpd.pair.testfunctions import PARAMETERS
 
 _EPILOG = """\
@@ -24,32 +24,23 @@ def register(sub):
         description="Trace the existence, grazing, fold, period-doubling and Neimark-Sacker "
         "boundaries of the simple symmetric orbit over a box of two parameters (any two of "
         f"{', '.join(PARAMETERS)}; the others fixed) by pseudo-arclength continuation of "
-        "closed-form test functions, and locate the codimension-2 points where they meet.",
+        "closed-form test functions, and locate the codimension-2 points where they meet. "
+        "Every parameter but the two swept ones is required (m2 and x10 default to 1, "
+        "L = gamma x10).",
         epilog=_EPILOG)
-    p.add_argument("--case", required=True, choices=["collocated", "noncollocated"],
-                   help="which position the PD loop feeds back")
+    # m2 defaults to None: boundary_curves then takes the pair's own default
+    add_pair(p, names=("case", "mu", "m2", "omega", "gamma", "x10", "e", "kp", "kv", "n"),
+             required=("case",), m2=None)
     p.add_argument("--x", nargs=3, required=True, metavar=("NAME", "MIN", "MAX"),
                    help=f"horizontal axis: a parameter among {', '.join(PARAMETERS)} and "
                    "its range (MIN < MAX)")
     p.add_argument("--y", nargs=3, required=True, metavar=("NAME", "MIN", "MAX"),
                    help="vertical axis, as --x (a different parameter)")
-    p.add_argument("--kp", type=float, help="proportional gain (> 0); required unless swept")
-    p.add_argument("--kv", type=float, help="velocity gain (> 0); required unless swept")
-    p.add_argument("--e", type=float, help="restitution coefficient in [0, 1]; required "
-                   "unless swept")
-    p.add_argument("--mu", type=float, help="mass ratio m1/m2 (> 0); required unless swept")
-    p.add_argument("--gamma", type=float, help="L / x10 (> 0); required unless swept")
-    p.add_argument("--omega", type=float, help="reference frequency, rad/time (> 0); "
-                   "required unless swept")
-    p.add_argument("--m2", type=float, default=None, help="secondary mass (> 0), default 1")
-    p.add_argument("--x10", type=float, default=1.0,
-                   help="primary-mass amplitude (> 0), default 1; L = gamma * x10")
-    p.add_argument("--n", type=int, default=1, help="odd orbit order (period n T), default 1")
     p.add_argument("--seed-grid", type=int, default=41,
                    help="points per axis of the coarse seeding map (>= 3), default 41")
     p.add_argument("--max-step", type=float, default=0.02,
                    help="largest step along a curve as a fraction of the box, default 0.02")
-    p.add_argument("--json", action="store_true", help=JSON_HELP)
+    add_output(p)
     p.set_defaults(func=run)
 
 

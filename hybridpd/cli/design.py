@@ -5,8 +5,8 @@ import sys
 
 from hybridpd.cli._common import (
     EXIT_INFEASIBLE,
-    JSON_HELP,
-    add_plant,
+    add_output,
+    add_pair,
     clearance,
     command,
     print_json,
@@ -16,7 +16,8 @@ DESCRIPTION = ("Chooses PD gains (kp, kv) and the reference amplitude xm so that
                "primary mass moves between +x10 and -x10 on an existing, stable "
                "symmetric orbit with the largest stability and viability margins; "
                "with --e-range/--mu-range the orbit must stay stable, with the "
-               "amplitude within --x10-tol, over the whole uncertainty box. Exit "
+               "amplitude within --x10-tol, over the whole uncertainty box (--e is then the "
+               "nominal restitution coefficient). Exit "
                "status 3 if infeasible.")
 
 
@@ -25,10 +26,8 @@ def register(sub):
                 description=DESCRIPTION,
                 example=("hybridpd design --case collocated --mu 0.1 --e 0.5 --gamma "
                          "0.75 --omega 5 --json"))
-    add_plant(p, xm=False, gamma=True)
-    p.add_argument("--e", type=float, required=True, help="nominal restitution coefficient")
-    p.add_argument("--n", type=int, default=1,
-                   help="odd order of the symmetric orbit (period n T)")
+    add_pair(p, names=("case", "mu", "m2", "omega", "L", "gamma", "x10", "e", "n"),
+             required=True)
     p.add_argument("--kp-range", type=float, nargs=2, default=(0.1, 100.0), metavar=("LO", "HI"),
                    help="search or uncertainty interval")
     p.add_argument("--kv-range", type=float, nargs=2, default=(0.1, 100.0), metavar=("LO", "HI"),
@@ -39,7 +38,7 @@ def register(sub):
                    help="search or uncertainty interval")
     p.add_argument("--x10-tol", type=float, default=0.1,
                    help="robust design: allowed relative error of the primary amplitude")
-    p.add_argument("--json", action="store_true", help=JSON_HELP)
+    add_output(p)
     p.set_defaults(func=run)
 
 

@@ -10,11 +10,10 @@ from hybridpd.cli._common import (
     EXIT_DIVERGED,
     EXIT_NO_ORBIT,
     EXIT_OK,
-    JSON_HELP,
     UsageError,
-    add_model_section,
-    add_plant,
-    add_set,
+    add_model,
+    add_output,
+    add_pair,
     check_pair_command,
     command,
     model_of,
@@ -54,13 +53,8 @@ def register(sub):
                          "--gamma 0.75 --omega 5 --kp 10 --kv 20\n  hybridpd orbit --model "
                          "examples/models/drivetrain.toml --contact 0 --event release --json"),
                 notes=NOTES)
-    add_plant(p, xm=False, gamma=True, required=False)
-    p.add_argument("--e", type=float, default=None, help="restitution coefficient in [0, 1]")
-    p.add_argument("--n", type=int, default=1, help="odd orbit order (period n T)")
-    p.add_argument("--kp", type=float, default=None, help="proportional gain kp (> 0)")
-    p.add_argument("--kv", type=float, default=None, help="derivative gain kv (> 0)")
-    add_model_section(p, period_help="returns to the section per period (k of P^k)")
-    add_set(p)
+    add_pair(p)
+    add_model(p)
     p.add_argument("--guess", type=float, nargs="+", default=None,
                    help="--model: section point (default: the last impact of a transient "
                    "simulation from the file's initial state)")
@@ -69,7 +63,7 @@ def register(sub):
     p.add_argument("--full-sequence", action="store_true",
                    help="--model: list every jump of the period (by default runs of equal "
                         "jumps are counted, e.g. 'sample x 1000'; --json always lists all)")
-    p.add_argument("--json", action="store_true", help=JSON_HELP)
+    add_output(p)
     p.set_defaults(func=run)
 
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from hybridpd.cli._common import IMAGE_SUFFIXES, check_image, command, save_figure
+from hybridpd.cli._common import IMAGE_SUFFIXES, check_image, command, write_figure
 
 DESCRIPTION = ("Draws a result file written by hybridpd to an image: a region map "
                "(existence and stability over the gains, Figs 4-5), a basin of "
@@ -53,6 +53,6 @@ def run(args) -> int:
         quantity = int(quantity)
     fig = plot_file(args.file, title=args.title, coordinate=args.coordinate,
                     quantity=quantity)
-    save_figure(fig, out)
+    write_figure(fig, out)
     print(f"wrote {out}")
     return 0

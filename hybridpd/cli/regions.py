@@ -22,16 +22,8 @@ def register(sub):
                          "--out regions.nc --plot regions.png\n  hybridpd regions --model "
                          "examples/models/drivetrain.toml --x controller.kp 5 60 40 --y "
                          "controller.kv 1 20 40 --event release --out dt.nc --plot dt.png"))
-    cli.add_plant(p, xm=False, gamma=True, required=False)
-    p.add_argument("--e", type=float, nargs="+", default=None,
-                   help="one or more restitution coefficients in [0, 1]")
-    p.add_argument("--n", type=int, default=1,
-                   help="odd order of the symmetric orbit (period n T)")
-    p.add_argument("--kp", type=float, nargs=3, default=None, metavar=("MIN", "MAX", "NUM"),
-                   help="grid axis: NUM points from MIN to MAX")
-    p.add_argument("--kv", type=float, nargs=3, default=None, metavar=("MIN", "MAX", "NUM"),
-                   help="grid axis: NUM points from MIN to MAX")
-    cli.add_model_section(p, uses="--x KEY and --y KEY sweep two of them")
+    cli.add_pair(p, grid=("kp", "kv"), many=("e",))
+    cli.add_model(p, set_option=False)
     p.add_argument("--x", nargs=4, default=None, metavar=("KEY", "MIN", "MAX", "NUM"),
                    help="--model: grid axis over the file's entry KEY (a dotted path such as "
                         "controller.kp, contact.0.restitution, system.masses.2; a pattern "
@@ -48,7 +40,9 @@ def register(sub):
                         "--out; the figure draws the proved classes)")
     p.add_argument("--certify-depth", type=int, default=3,
                    help="--certify: bisections of an undecided cell (default 3)")
-    cli.add_sweep(p, what="the region map (one panel per e)")
+    cli.add_executor(p, default="serial")
+    cli.add_output(p, out=(".nc", ".zarr", ".npz"), model_out=(".nc", ".zarr"), store=True,
+                   plot="the region map (one panel per e)")
     p.set_defaults(func=run)
 
 
@@ -76,7 +70,7 @@ def run(args) -> int:
         # deferred import: loaded only when this runs, for start-up time
         from hybridpd.plotting.regions import plot_region_panels
 
-        cli.save_figure(plot_region_panels(rm), args.plot)
+        cli.write_figure(plot_region_panels(rm), args.plot)
     if args.json:
         cli.print_json(rm.to_dict())
         return 0
@@ -112,7 +106,7 @@ def _run_model(args) -> int:
         from hybridpd.pair.regions import RegionMap
         from hybridpd.plotting.regions import plot_region_panels
 
-        cli.save_figure(plot_region_panels(RegionMap.from_dataset(rm.to_dataset())), args.plot)
+        cli.write_figure(plot_region_panels(RegionMap.from_dataset(rm.to_dataset())), args.plot)
     if args.json:
         cli.print_json(rm.to_dict())
         return 0

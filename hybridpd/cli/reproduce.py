@@ -6,7 +6,8 @@ import sys
 
 from hybridpd.cli._common import (
     add_executor,
-    add_quiet,
+    add_output,
+    add_pair,
     command,
     executor_of,
     print_json,
@@ -17,7 +18,8 @@ DESCRIPTION = ("Reproduces the paper's figures (Fig. 3 phase plane, Figs 4-5 reg
                "mass m2, runs the convention study (where the paper's orbits exist and are "
                "stable as m2 varies) and the mu and gamma studies, and checks each of the "
                "paper's conclusions with numbers, writing figures, data, summary.md and "
-               "summary.json into the output directory.")
+               "summary.json into the output directory (--json prints summary.json). The "
+               "clearance is L = 0.75 x10.")
 
 
 def register(sub):
@@ -31,17 +33,15 @@ def register(sub):
     p.add_argument("--m2", nargs="+", default=None, metavar="M2",
                    help="secondary-mass conventions (> 0, or 'auto' for the study's choice); "
                         "default: 1 auto")
-    p.add_argument("--x10", type=float, default=None,
-                   help="primary-mass amplitude (> 0), default 1; L = 0.75 x10")
+    # None: the settings' own default
+    add_pair(p, names=("x10",), x10=None)
     p.add_argument("--basin-window", type=float, nargs=4, default=None,
                    metavar=("X1MIN", "X1MAX", "Y1MIN", "Y1MAX"),
                    help="basin slice window in units of x10 (default -3 5 -2 10)")
     p.add_argument("--m2-range", type=float, nargs=2, default=None, metavar=("LO", "HI"),
                    help="range of the convention study (default 0.1 1000)")
     add_executor(p, default="processes")
-    p.add_argument("--json", action="store_true", help="print summary.json on stdout (strict JSON: null for a number that "
-                        "is not finite)")
-    add_quiet(p)
+    add_output(p)
     p.set_defaults(func=run)
 
 

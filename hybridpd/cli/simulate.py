@@ -14,11 +14,10 @@ from hybridpd.cli._common import (
     EXIT_DIVERGED,
     EXIT_OK,
     EXIT_STOPPED_EARLY,
-    JSON_HELP,
     UsageError,
     add_model,
-    add_set,
-    case_type,
+    add_output,
+    add_pair,
     check_image,
     check_out,
     command,
@@ -27,8 +26,8 @@ from hybridpd.cli._common import (
     model_of,
     print_json,
     require,
-    save_figure,
-    set_values,
+    set_option_values,
+    write_figure,
 )
 
 # the pair options: required without --model, forbidden with it
@@ -39,7 +38,11 @@ DESCRIPTION = ("Simulates the impact pair under PD control (or, with --model, an
                "mechanical model file) from an initial state: exact flows between "
                "impacts, guaranteed location of every impact, Zeno accumulation followed "
                "by sticking and release. Prints the impacts (time, contact, wall, "
-               "pre-impact state) and why the run stopped.")
+               "pre-impact state) and why the run stopped. The impact pair's clearance and "
+               "reference are --L and --xm, or --gamma and --x10 (L = gamma x10, and xm the "
+               "amplitude realising the order-n (--n) symmetric orbit of primary-mass amplitude "
+               "x10 at these gains; x10 defaults to 1 with --gamma); both may be given when "
+               "they agree.")
 
 NOTES = """\
 exit status:
@@ -62,26 +65,11 @@ def register(sub):
                          "--t-end 10\n  hybridpd simulate --model "
                          "examples/models/drivetrain.toml --t-end 20 --out run.json "
                          "--plot run.png"), notes=NOTES)
-    add_model(p, uses="--set KEY VALUE sets them")
-    add_set(p)
-    p.add_argument("--case", default=None, type=case_type, metavar="CASE",
-                   help="collocated (the PD loop measures x2) or noncollocated (it measures "
-                        "x1; alias non-collocated)")
-    p.add_argument("--mu", type=float, default=None, help="mass ratio m1/m2 (> 0)")
-    p.add_argument("--m2", type=float, default=None, help="secondary mass m2 (> 0; default 1)")
-    p.add_argument("--omega", type=float, default=None, help="reference frequency (> 0)")
-    p.add_argument("--L", type=float, default=None,
-                   help="half clearance (> 0); or give --gamma (and --x10)")
-    p.add_argument("--gamma", type=float, default=None, help="clearance ratio L / x10 (> 0)")
-    p.add_argument("--x10", type=float, default=None,
-                   help="amplitude of the primary mass's desired motion (> 0; default 1 "
-                        "with --gamma): xm is then the amplitude realising the symmetric orbit")
-    p.add_argument("--n", type=int, default=1, help="orbit order for --x10 (odd)")
-    p.add_argument("--xm", type=float, default=None,
-                   help="reference amplitude (>= 0); or give --x10 (with --gamma or --L)")
-    p.add_argument("--e", type=float, default=None, help="restitution coefficient in [0, 1]")
-    p.add_argument("--kp", type=float, default=None, help="proportional gain kp (> 0)")
-    p.add_argument("--kv", type=float, default=None, help="derivative gain kv (> 0)")
+    add_model(p, section=False)
+    # m2 and x10 default to None: a given one is refused with --model, and --x10 chooses
+    # the reference amplitude
+    add_pair(p, names=("case", "mu", "m2", "omega", "L", "gamma", "x10", "xm", "e", "kp",
+                       "kv", "n"), clearance="both", m2=None, x10=None)
     p.add_argument("--x0", type=float, nargs=4, default=None, metavar=("X1", "Y1", "X2", "Y2"),
                    help="initial positions and velocities of both masses")
     p.add_argument("--t-end", type=float, default=None,
@@ -89,16 +77,12 @@ def register(sub):
     p.add_argument("--max-impacts", type=int, default=100_000,
                    help="stop after this many impacts (with --model: jumps other than "
                         "sampling instants); the run then exits with status 5")
-    p.add_argument("--json", action="store_true", help=JSON_HELP)
-    p.add_argument("--out", default=None, metavar="FILE.json",
-                   help="write the JSON result plus dense samples of the trajectory (times, "
-                        "positions q and velocities v of every DOF), for 'hybridpd plot' "
-                        "(.json, for the pair and for --model)")
+    add_output(p, out=(".json",), what=("the JSON result plus dense samples of the "
+                                        "trajectory (times, positions q and velocities v of "
+                                        "every DOF)"),
+               plot="the trajectory (positions, gaps, impacts, phase portraits)")
     p.add_argument("--samples", type=int, default=2000,
                    help="number of sampling times written by --out and drawn by --plot")
-    p.add_argument("--plot", default=None, metavar="IMAGE",
-                   help="draw the trajectory (positions, gaps, impacts, phase portraits) "
-                        "to this .png, .pdf or .svg")
     p.set_defaults(func=run)
 
 
@@ -209,7 +193,7 @@ def _run_model(args) -> int:
     _write(args, d, traj.mechanical, model.t0, traj.t_final, model.system.dofs, contacts,
            title=model_title(model.source, {"controllers": controllers}),
            parameters={"model": str(model.source), "controllers": controllers,
-                       **set_values(args)})
+                       **set_option_values(args)})
     status = stop_status(d["termination"], traj.t_final)
     if args.json:
         print_json(d)
@@ -331,4 +315,4 @@ def _write(args, result, state, t0, t_final, dofs, contacts, *, title, parameter
             impact_contacts=[d["contact"] for d in imp],
             impact_states=[d["pre"] for d in imp] if imp else None,
             sticking=result["sticking"], title=title)
-        save_figure(fig, args.plot)
+        write_figure(fig, args.plot)

@@ -26,8 +26,10 @@ Closed forms (``m2 = 1`` not assumed; ``alpha = kv / (2 m2)``, ``D = alpha^2 - k
 State on the Poincare section (paper (21)): pre-impact at ``z3 = +L``, ``z4 > 0``, coordinates
 ``s = (phi, z1, z2, z4)`` with ``phi = t mod T``, ``z1 = x2``, ``z2 = y2``, ``z4 = y1 - y2``.
 
-Parameters are packed as ``params = [kp, kv, m2, mu, e, L, w, xm]`` and ``case`` is 0
-(collocated) or 1 (non-collocated).
+The parameters travel as one float64 array ``params`` (:meth:`PairParams.packed
+<hybridpd.pair.params.PairParams.packed>`, or :func:`pack_params` for the kernels that need
+only some of them), read by the named index constants of :mod:`hybridpd.pair.params`
+(``params[P.KP]``, ...); ``case`` is 0 (collocated) or 1 (non-collocated).
 
 Zeno and sticking: when the rebound speed of a wall contact falls below the velocity
 tolerance (impacts accumulating geometrically, or a plastic contact) while the force presses
@@ -45,10 +47,13 @@ import math
 import numpy as np
 
 from hybridpd._jit import njit
+from hybridpd.pair import params as P
 
-__all__ = ["LABELS", "STATUS_IMPACT", "STATUS_NONFINITE", "STATUS_STICK", "STATUS_TIMEOUT",
-           "STATUS_UNRESOLVED", "impact_map", "iterate_map", "map_labels", "next_impact",
-           "pack_params", "trace_once"]
+__all__ = ["KIND_GRAZING", "KIND_IMPACT", "KIND_STICKING", "LABELS", "N_REC", "REC_KIND",
+           "REC_SPEED", "REC_STICK_TIME", "REC_T", "REC_TAU", "REC_WALL", "REC_X1", "REC_X2",
+           "REC_Y1", "REC_Y2", "STATUS_IMPACT", "STATUS_NONFINITE", "STATUS_STICK",
+           "STATUS_TIMEOUT", "STATUS_UNRESOLVED", "impact_map", "iterate_map", "map_labels",
+           "next_impact", "pack_params", "trace_once"]
 
 LABELS = ("converged", "not_converged", "diverged", "zeno_sticking", "unresolved")
 
@@ -60,10 +65,48 @@ STATUS_NONFINITE = 4
 
 _MAX_SAFE_STEPS = 20000
 
+# Columns of the record of one application of P (:func:`trace_once`), one row per contact.
+REC_WALL = 0        # wall hit (+1 or -1); NaN for a flight that ended without a contact
+REC_TAU = 1         # flight time up to the contact
+REC_SPEED = 2       # approach speed
+REC_KIND = 3        # KIND_IMPACT, KIND_GRAZING or KIND_STICKING
+REC_STICK_TIME = 4  # time spent sticking after the contact
+REC_T = 5           # start of the flight: time, then the state x1, y1, x2, y2
+REC_X1 = 6
+REC_Y1 = 7
+REC_X2 = 8
+REC_Y2 = 9
+#: Columns of a record.
+N_REC = 10
+KIND_IMPACT = 0     # kinds of contact in the column REC_KIND
+KIND_GRAZING = 1
+KIND_STICKING = 2
+
 
 def pack_params(kp, kv, m2, mu, e, L, w, xm) -> np.ndarray:
-    """Pack the eight parameters into the ``params`` array the kernels take."""
-    return np.array([kp, kv, m2, mu, e, L, w, xm], dtype=np.float64)
+    """The ``params`` array the kernels take, laid out by the index constants of
+    :mod:`hybridpd.pair.params`, without validation (kernels that read only some entries
+    get placeholders for the others; :meth:`PairParams.packed
+    <hybridpd.pair.params.PairParams.packed>` packs validated parameters).
+
+    The arguments broadcast: arrays of shape ``S`` give one row per point, shape
+    ``S + (N_PACKED,)``; ``w`` is the reference frequency ``omega``.
+
+    Examples
+    --------
+    >>> from hybridpd.pair import params as P
+    >>> a = pack_params(kp=10, kv=20, m2=1, mu=0.1, e=0.5, L=0.75, w=5, xm=1.2)
+    >>> float(a[P.KV]), float(a[P.OMEGA])
+    (20.0, 5.0)
+    >>> pack_params(kp=[1, 2, 3], kv=20, m2=1, mu=0.1, e=0.5, L=0.75, w=5, xm=1.2)[:, P.KP]
+    array([1., 2., 3.])
+    """
+    named = {P.KP: kp, P.KV: kv, P.M2: m2, P.MU: mu, P.E: e, P.L: L, P.OMEGA: w, P.XM: xm}
+    cols = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in named.values()))
+    out = np.empty(cols[0].shape + (P.N_PACKED,), dtype=np.float64)
+    for index, col in zip(named, cols):
+        out[..., index] = col
+    return out
 
 
 @njit(cache=True)
@@ -101,7 +144,7 @@ def _eval(params, case, phi0, x10, y10, x20, y20, tau, dmax):
     ``M2 >= sup |x2''|`` and ``M3 >= sup |x2'''|`` on the interval (``x1'' = 0``, so these bound
     the gap's second and third derivatives).
     """
-    kp, kv, m2, w, xm = params[0], params[1], params[2], params[6], params[7]
+    kp, kv, m2, w, xm = params[P.KP], params[P.KV], params[P.M2], params[P.OMEGA], params[P.XM]
     x1 = x10 + y10 * tau
     y1 = y10
     th = w * (phi0 + tau)
@@ -172,7 +215,7 @@ def turning_margins(params, case, phi0, x1, y1, x2, y2, tau, nsamp, approached=F
     measured to ``+L`` and a minimum to ``-L`` only (a small hop away from the wall just
     left is then not a near-grazing).
     """
-    L = params[5]
+    L = params[P.L]
     m = 1.0
     m2 = 1.0
     h = tau / nsamp
@@ -289,8 +332,8 @@ def next_impact(params, case, phi0, x1, y1, x2, y2, t_max, tol):
         ``STATUS_*``, the flight time, the wall (+1/-1), the state at the contact and whether
         the contact is tangential (relative speed below ``ztol``; no velocity jump then).
     """
-    L = params[5]
-    w = params[6]
+    L = params[P.L]
+    w = params[P.OMEGA]
     dmax = 0.5 * math.pi / w
     tau = 0.0
     for _ in range(_MAX_SAFE_STEPS):
@@ -331,8 +374,8 @@ def _stick_eval(params, case, phi0, x20, y0, wall, tau, dmax):
     with the acceleration and jerk of ``x2`` and a bound on its fourth derivative over
     ``[tau, tau + dmax]``.
     """
-    kp, kv, m2, mu, L, w, xm = (params[0], params[1], params[2], params[3], params[5],
-                                params[6], params[7])
+    kp, kv, m2, mu = params[P.KP], params[P.KV], params[P.M2], params[P.MU]
+    L, w, xm = params[P.L], params[P.OMEGA], params[P.XM]
     M = m2 * (1.0 + mu)
     m1 = mu * m2
     K = kp - M * w * w
@@ -382,10 +425,10 @@ def stick_release(params, case, phi0, x2, y, wall, t_max, tol):
     Returns ``status, tau, x2, y`` (``STATUS_IMPACT`` on release, ``STATUS_TIMEOUT`` if still
     stuck at ``t_max``).
     """
-    w = params[6]
+    w = params[P.OMEGA]
     T = 2.0 * math.pi / w
     dmax = 0.25 * T
-    scale = 1.0 + params[7] * w * w + params[0] * params[5] / params[2]
+    scale = 1.0 + params[P.XM] * w * w + params[P.KP] * params[P.L] / params[P.M2]
     gtol = tol * scale
     tau = 0.0
     for _ in range(_MAX_SAFE_STEPS):
@@ -425,26 +468,28 @@ def _impact_velocities(mu, e, y1, y2):
 def _record(row, st, tau, wall, rel, graze, stick):
     """Fill the record row of one flight (see :func:`_map_once`)."""
     if st == STATUS_IMPACT or (st == STATUS_STICK and stick):
-        row[0] = wall
-        row[1] = tau
-        row[2] = abs(rel) if st == STATUS_STICK else max(wall * rel, 0.0)
-        row[3] = 2.0 if st == STATUS_STICK else (1.0 if graze else 0.0)
-        row[4] = 0.0
+        row[REC_WALL] = wall
+        row[REC_TAU] = tau
+        row[REC_SPEED] = abs(rel) if st == STATUS_STICK else max(wall * rel, 0.0)
+        row[REC_KIND] = KIND_STICKING if st == STATUS_STICK else (
+            KIND_GRAZING if graze else KIND_IMPACT)
+        row[REC_STICK_TIME] = 0.0
     else:
-        row[0] = np.nan
+        row[REC_WALL] = np.nan
 
 
 @njit(cache=True)
 def trace_once(params, case, s, tol=1e-13, max_impacts=1000, stick=True):
     """One application of P from ``s`` with its record (:func:`_map_once`).
 
-    Returns ``(image[4], status, impacts, record[rows, 10])``.
+    Returns ``(image[4], status, impacts, record[rows, N_REC])``, the record's columns
+    named by the constants ``REC_WALL``, ``REC_TAU``, ... of this module.
     """
     out = np.full(4, np.nan)
-    rec = np.full((max_impacts, 10), np.nan)
+    rec = np.full((max_impacts, N_REC), np.nan)
     st, k = _map_once(params, case, s, out, tol, max_impacts, stick, rec)
     n = 0
-    while n < max_impacts and not np.isnan(rec[n, 0]):
+    while n < max_impacts and not np.isnan(rec[n, REC_WALL]):
         n += 1
     return out, st, k, rec[:n].copy()
 
@@ -463,7 +508,7 @@ def _map_once(params, case, s, out, tol, max_impacts, stick, rec):
     1 grazing touch, 2 sticking, and the state ``t, x1 .. y2`` where its flight started;
     ``wall`` is NaN for a flight that ended without a contact.
     """
-    mu, e, L, w = params[3], params[4], params[5], params[6]
+    mu, e, L, w = params[P.MU], params[P.E], params[P.L], params[P.OMEGA]
     T = 2.0 * math.pi / w
     phi = s[0]
     x2 = s[1]
@@ -474,11 +519,11 @@ def _map_once(params, case, s, out, tol, max_impacts, stick, rec):
     t = phi
     for k in range(max_impacts):
         if k < rec.shape[0]:
-            rec[k, 5] = t
-            rec[k, 6] = x1
-            rec[k, 7] = y1
-            rec[k, 8] = x2
-            rec[k, 9] = y2
+            rec[k, REC_T] = t
+            rec[k, REC_X1] = x1
+            rec[k, REC_Y1] = y1
+            rec[k, REC_X2] = x2
+            rec[k, REC_Y2] = y2
         st, tau, wall, x1, y1, x2, y2, graze = next_impact(
             params, case, t, x1, y1, x2, y2, 50.0 * T, tol)
         if k < rec.shape[0]:
@@ -491,7 +536,7 @@ def _map_once(params, case, s, out, tol, max_impacts, stick, rec):
             yc = (mu * y1 + y2) / (1.0 + mu)
             st2, ts, x2, yc = stick_release(params, case, t, x2, yc, wall, 50.0 * T, tol)
             if k < rec.shape[0]:
-                rec[k, 4] = ts
+                rec[k, REC_STICK_TIME] = ts
             if st2 != STATUS_IMPACT:
                 out[0] = t
                 out[1] = x2
@@ -548,7 +593,7 @@ def impact_map(params, case, S, tol=1e-13, max_impacts=1000, stick=True):
     out = np.empty((N, 4))
     status = np.empty(N, dtype=np.int64)
     nimp = np.empty(N, dtype=np.int64)
-    norec = np.empty((0, 10))
+    norec = np.empty((0, N_REC))
     for i in range(N):
         st, k = _map_once(params, case, S[i], out[i], tol, max_impacts, stick, norec)
         status[i] = st
@@ -571,7 +616,7 @@ def iterate_map(params, case, s0, n_iter, tol=1e-13, max_impacts=1000, stick=Tru
     orbit[0] = s0
     cur = s0.copy()
     nxt = np.empty(4)
-    norec = np.empty((0, 10))
+    norec = np.empty((0, N_REC))
     for i in range(n_iter):
         st, _k = _map_once(params, case, cur, nxt, tol, max_impacts, stick, norec)
         if st != 0:
@@ -617,7 +662,7 @@ def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
     Returns ``labels[N]`` (see :data:`LABELS`), ``iterations[N]`` and the final points.
     """
     N = S.shape[0]
-    T = 2.0 * math.pi / params[6]
+    T = 2.0 * math.pi / params[P.OMEGA]
     labels = np.empty(N, dtype=np.int64)
     iters = np.empty(N, dtype=np.int64)
     final = np.empty((N, 4))
@@ -625,7 +670,7 @@ def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
     nxt = np.empty(4)
     d = np.empty(4)
     ring = np.empty((_CYCLE_MAX, 4))
-    norec = np.empty((0, 10))
+    norec = np.empty((0, N_REC))
     for i in range(N):
         cur[:] = S[i]
         lab = -1

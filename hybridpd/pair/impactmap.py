@@ -30,8 +30,10 @@ from hybridpd.model import (
     check_int,
     check_positive,
 )
+from hybridpd.pair import batch as B
 from hybridpd.pair import symbolic
-from hybridpd.pair.batch import impact_map, iterate_map, pack_params, trace_once
+from hybridpd.pair.batch import impact_map, iterate_map, trace_once
+from hybridpd.pair.params import PairParams
 
 __all__ = ["BatchMapResult", "ImpactMap", "MapResult", "Stability", "stability"]
 
@@ -117,8 +119,7 @@ class ImpactMap(PoincareMap):
         self.case = Case.parse(case)
         self.tol = check_positive("tol", tol)
         self.max_impacts = check_int("max_impacts", max_impacts, 1)
-        self.params = pack_params(gains.kp, gains.kv, pair.m2, pair.mu, pair.e, pair.L,
-                                  reference.omega, reference.xm)
+        self.params = PairParams.of(pair, gains, reference.omega, xm=reference.xm).packed()
         self._c = 0 if self.case is Case.COLLOCATED else 1
 
     @property
@@ -166,18 +167,20 @@ class ImpactMap(PoincareMap):
             out, st, _n, rec = trace_once(self.params, self._c, cur, self.tol, self.max_impacts)
             off = t_abs - cur[0]        # engine time (from phi) -> time since t = 0
             for q, r in enumerate(rec):
-                t = float(r[5] + r[1] + off)
-                g = "wall+" if r[0] > 0 else "wall-"
+                t = float(r[B.REC_T] + r[B.REC_TAU] + off)
+                g = "wall+" if r[B.REC_WALL] > 0 else "wall-"
+                kind = int(r[B.REC_KIND])
                 if st == 0 and q == len(rec) - 1:
                     t_abs = t
                     if i < k - 1:
-                        jumps.append((t, "free", g, "free", _KINDS[int(r[3])]))
-                elif r[3] == 2:
+                        jumps.append((t, "free", g, "free", _KINDS[kind]))
+                elif kind == B.KIND_STICKING:
                     sm = "stick" + g[-1]
                     jumps += [(t, "free", g, sm, "zeno"),
-                              (t + float(r[4]), sm, "release" + g[-1], "free", "crossing")]
+                              (t + float(r[B.REC_STICK_TIME]), sm, "release" + g[-1], "free",
+                               "crossing")]
                 else:
-                    jumps.append((t, "free", g, "free", _KINDS[int(r[3])]))
+                    jumps.append((t, "free", g, "free", _KINDS[kind]))
             if st != 0:
                 return MapResult(np.full(4, np.nan), False, STATUS_NAMES.get(int(st),
                                  str(int(st))), float(jumps[0][0]), float(out[0]),
@@ -199,13 +202,13 @@ class ImpactMap(PoincareMap):
 
     def _power_dp(self, s, k, blocks) -> np.ndarray:
         """``DP^k``: the chain of symbolic blocks when every return is simple, else FD."""
-        simple = all(len(rec) == 2 and rec[0, 0] < 0 and rec[1, 0] > 0
-                     and not np.any(rec[:, 3]) for _s, rec in blocks)
+        simple = all(len(rec) == 2 and rec[0, B.REC_WALL] < 0 and rec[1, B.REC_WALL] > 0
+                     and np.all(rec[:, B.REC_KIND] == B.KIND_IMPACT) for _s, rec in blocks)
         if not simple:
             return self.jacobian_fd(s, k=k, one_sided=True)
         DP = np.eye(4)
         for si, rec in blocks:
-            DP = self._symbolic(si, rec[0, 1], rec[1, 1]).DP.reshape(4, 4) @ DP
+            DP = self._symbolic(si, rec[0, B.REC_TAU], rec[1, B.REC_TAU]).DP.reshape(4, 4) @ DP
         return DP
 
     def _symbolic(self, s, tau1, tau2) -> symbolic.JacobianResult:
@@ -258,9 +261,9 @@ class ImpactMap(PoincareMap):
         """
         _out, st, _n, rec = trace_once(self.params, self._c, self._points(s)[0], self.tol,
                                        self.max_impacts)
-        if st != 0 or np.any(rec[:, 3] == 2):
+        if st != 0 or np.any(rec[:, B.REC_KIND] == B.KIND_STICKING):
             raise RuntimeError(f"no return to the section without sticking: status {st}")
-        return [(int(r[0]), float(r[1])) for r in rec]
+        return [(int(r[B.REC_WALL]), float(r[B.REC_TAU])) for r in rec]
 
     def jacobian(self, s) -> symbolic.JacobianResult:
         """``DP`` at ``s`` from the symbolic blocks (the return must be +L, -L, +L)."""

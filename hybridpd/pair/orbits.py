@@ -348,8 +348,8 @@ class SymmetricOrbitResult:
         # deferred import: loaded only when this runs, for start-up time
         from hybridpd.pair.batch import pack_params
 
-        p = pack_params(self.gains.kp, self.gains.kv, self.pair.m2, self.pair.mu, self.pair.e,
-                        self.pair.L, self.omega, self.xm)
+        p = pack_params(kp=self.gains.kp, kv=self.gains.kv, m2=self.pair.m2, mu=self.pair.mu,
+                        e=self.pair.e, L=self.pair.L, w=self.omega, xm=self.xm)
         c = 0 if self.case is Case.COLLOCATED else 1
         t = np.asarray(t, float)
         out = np.array([_eval(p, c, self.t0, *self.post_plus, s - self.t0, 0.0)[:4]

@@ -60,7 +60,7 @@ import numpy as np
 from hybridpd._jit import njit
 from hybridpd.model import Case, check_finite, check_odd_order, check_positive
 from hybridpd.pair import symbolic
-from hybridpd.pair.batch import _eval, turning_margins
+from hybridpd.pair.batch import _eval, pack_params, turning_margins
 
 __all__ = ["KINDS", "PARAMETERS", "Axis", "Plane", "TestValues", "make_plane"]
 
@@ -154,8 +154,10 @@ def _margin_kernel(P, case, phi0, x10, v, x20, y2p, tau, nsamp):
     acc = np.full(N, np.nan)
     for i in range(N):
         p = P[i]
-        r0 = _eval(p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i], 0.0, 0.0)
-        acc[i] = r0[4]
+        # x2'' at the start of the flight
+        _x1, _y1, _x2, _y2, a2, _a3, _M2, _M3 = _eval(p, case, phi0[i], x10[i], -v[i], x20[i],
+                                                     y2p[i], 0.0, 0.0)
+        acc[i] = a2
         marg[i], marg2[i] = turning_margins(p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i],
                                             tau[i], nsamp)
     return marg, marg2, acc
@@ -374,8 +376,9 @@ class Plane:
         lam = np.full((N, 4), np.nan + 0j)
         mu = np.full((N, 4), np.nan + 0j)
         if idx.size:
-            P = np.stack([b(safe["kp"]), b(safe["kv"]), b(safe["m2"]), b(safe["mu"]),
-                          b(safe["e"]), b(L), b(safe["omega"]), xm], axis=1)[idx]
+            P = pack_params(kp=b(safe["kp"]), kv=b(safe["kv"]), m2=b(safe["m2"]),
+                            mu=b(safe["mu"]), e=b(safe["e"]), L=b(L), w=b(safe["omega"]),
+                            xm=xm)[idx]
             sub = lambda a: np.ascontiguousarray(b(a)[idx])
             marg[idx], marg2[idx], acc[idx] = _margin_kernel(
                 np.ascontiguousarray(P), 0 if self.case is Case.COLLOCATED else 1,

@@ -28,6 +28,7 @@ from hybridpd.pair.continuation.events import (
     _Tracker,
 )
 from hybridpd.pair.orbits import REASONS, symmetric_orbits
+from hybridpd.pair.params import PairParams
 
 _SIMPLE_SIG = (((-1, "impact"), (1, "impact")),)
 
@@ -114,13 +115,8 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
     case = Case.parse(case)
     name = _check_parameter(parameter, SYMMETRIC_PARAMETERS)
     stop = check_finite("stop", stop)
-    base = {"kp": gains.kp, "kv": gains.kv, "e": pair.e, "mu": pair.mu, "L": pair.L,
-            "omega": omega, "x10": x10, "m2": pair.m2}
-    if name == "gamma":
-        # gamma = L / x10 with x10 fixed: the clearance follows the parameter
-        base["gamma"] = pair.L / x10
-        del base["L"]
-    p0 = base[name]
+    base = PairParams.of(pair, gains, omega, x10=x10)
+    p0 = pair.L if name == "L" else getattr(base, name)
     _, step, max_step, min_step, max_steps = _path_steps(
         name, p0, stop, step, max_step, min_step, max_steps, (100, 20, 1e-6))
     max_change = _positive_float("max_change", max_change)
@@ -133,12 +129,12 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
     direction = 1.0 if stop > p0 else -1.0
 
     def point(p):
-        v = dict(base)
-        v[name] = float(p)
-        if name == "gamma":
-            v["L"] = v["gamma"] * v["x10"]
-        r = symmetric_orbits(v["kp"], v["kv"], mu=v["mu"], e=v["e"], L=v["L"],
-                             omega=v["omega"], m2=v["m2"], x10=v["x10"], n=n, case=case,
+        # gamma = L / x10: x10 moves at a fixed clearance, gamma moves the clearance
+        v = base.replace(**{name: float(p)}, **({"L": pair.L} if name == "x10" else {}))
+        # the clearance exactly as swept or fixed (gamma x10 may round it)
+        L = {"L": float(p), "x10": pair.L}.get(name, v.L)
+        r = symmetric_orbits(v.kp, v.kv, mu=v.mu, e=v.e, L=L,
+                             omega=v.omega, m2=v.m2, x10=v.x10, n=n, case=case,
                              margin=True, jacobian=False, margin_samples=margin_samples)
         code = int(r.reason)
         formal = code not in (1, 2)
@@ -157,7 +153,7 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
         return _Point(u=np.append(s, p), DP=DP, mult=mult, rho=rho,
                       signature=_SIMPLE_SIG if viable else (), margin=float(r.viability_margin),
                       min_speed=float(s[3]), viable=viable, formal=formal, xm=float(r.xm),
-                      reason=code, T=2 * math.pi / v["omega"])
+                      reason=code, T=v.period)
 
     def evaluate_between(pa, pb, theta):
         return point(pa.u[-1] + theta * (pb.u[-1] - pa.u[-1]))
@@ -231,7 +227,11 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
         if pn == stop:
             termination = "reached stop"
             break
-    fixed = {k: v for k, v in base.items() if k != name}
+    # the clearance recorded as it was given: gamma when it is swept, else L
+    given = {("L" if k == "gamma" and name != "gamma" else k):
+             (pair.L if k == "gamma" and name != "gamma" else v)
+             for k, v in base.as_dict().items() if k != "xm"}
+    fixed = {k: v for k, v in given.items() if k != name}
     fixed.update({"n": n, "case": case.value})
     br = _branch_from_points(pts, evs, name, None, 1, "closed_form", termination, rejected,
                              omega=omega, case=case, fixed=fixed)

@@ -8,6 +8,7 @@ import numpy as np
 
 from hybridpd._results import compact_repr
 from hybridpd.model import check_int
+from hybridpd.pair import batch as B
 from hybridpd.pair.batch import STATUS_IMPACT, trace_once, turning_margins
 from hybridpd.pair.continuation._common import _impact_map, _min, _section_point
 from hybridpd.pair.impactmap import ImpactMap
@@ -128,15 +129,18 @@ def trace_map(impact_map_: ImpactMap, s, *, margin: bool = True,
     s = _section_point(s, "s", closure=True)
     nsamp = check_int("margin_samples", margin_samples, 2)
     out, st, _n, rec = trace_once(P.params, P._c, s, P.tol, P.max_impacts)
-    kinds = ("impact", "graze", "stick")
-    steps = tuple(ImpactStep(int(r[0]), float(r[1]), float(r[2]), kinds[int(r[3])],
-                             float(r[4])) for r in rec)
+    kinds = {B.KIND_IMPACT: "impact", B.KIND_GRAZING: "graze", B.KIND_STICKING: "stick"}
+    steps = tuple(ImpactStep(int(r[B.REC_WALL]), float(r[B.REC_TAU]), float(r[B.REC_SPEED]),
+                             kinds[int(r[B.REC_KIND])], float(r[B.REC_STICK_TIME]))
+                  for r in rec)
     marg = np.nan
     if margin:
         # smallest distance / L to the wall approached at interior turning points of z3
-        marg = min([1.0] + [turning_margins(P.params, P._c, *r[5:10], r[1], nsamp, True)[0]
-                            for r in rec if r[1] > 0.0])
-    speeds = [float(r[2]) for r in rec if r[3] != 2]
+        start = slice(B.REC_T, B.REC_Y2 + 1)      # t, x1, y1, x2, y2 where the flight starts
+        marg = min([1.0] + [turning_margins(P.params, P._c, *r[start], r[B.REC_TAU], nsamp,
+                                            True)[0]
+                            for r in rec if r[B.REC_TAU] > 0.0])
+    speeds = [float(r[B.REC_SPEED]) for r in rec if r[B.REC_KIND] != B.KIND_STICKING]
     ok = st == STATUS_IMPACT
     return MapTrace(out if ok else np.full(4, np.nan), bool(ok), int(st), steps, marg,
                     _min(speeds))

@@ -173,7 +173,8 @@ def flight_time(s, *, xm, kp, kv, m2=1.0, w, L, wall=1, case="collocated",
     res = (np.nan, 0)
     if wall * s[3] < 0:
         tmax = 100 * math.pi / w if tmax is None else float(tmax)
-        params = pack_params(kp, kv, m2, 0.0, 0.0, L, w, xm)
+        # next_impact reads neither mu nor e: placeholders
+        params = pack_params(kp=kp, kv=kv, m2=m2, mu=0.0, e=0.0, L=L, w=w, xm=xm)
         st, tau, hit, *_ = next_impact(params, 0 if collocated else 1, float(s[0]),
                                        s[1] + wall * L, s[2] + s[3], float(s[1]), float(s[2]),
                                        tmax, 1e-13)
