@@ -18,9 +18,9 @@ from _common import best_of
 
 def main(quick=False):
     from hybridpd import ImpactPair, PDGains
-    from hybridpd.analysis.orbits import symmetric_orbit
-    from hybridpd.sweeps.attractor_basins import attractor_basin
-    from hybridpd.sweeps.basins import ImpactMapper, basin_of_attraction
+    from hybridpd.pair.orbits import symmetric_orbit
+    from hybridpd.pair.attractor_basins import attractor_basin
+    from hybridpd.pair.basins import ImpactMapper, basin_of_attraction
 
     num = 40 if quick else 100
     win = ((-3, 5, num), (-2, 10, num))

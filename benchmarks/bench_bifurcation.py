@@ -11,8 +11,8 @@ import numpy as np
 from _common import best_of, naive_per_impact
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.bifdiagram import bifurcation_diagram
-from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.pair.bifdiagram import bifurcation_diagram
+from hybridpd.pair.impactmap import ImpactMap
 
 
 def main():

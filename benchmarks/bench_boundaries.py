@@ -5,7 +5,7 @@ Boxes (mu = 0.1, gamma = 0.75, omega = 5, n = 1, m2 = 1):
 * non-collocated, e = 0.5, kp in [0.1, 20], kv in [0.1, 6] (the zoom of Fig. 5);
 * collocated, e = 0.1, (kp, kv) in [0.1, 50]^2 (Fig. 4).
 
-For each box: wall time of :func:`~hybridpd.analysis.boundaries.boundary_curves` (all kinds,
+For each box: wall time of :func:`~hybridpd.pair.boundaries.boundary_curves` (all kinds,
 default settings; target <= 5 s), number of curves and points, the largest test-function
 value at the points and the implied position error ``|F| / |grad F|`` (box units); then a
 1000 x 1000 status mask from the independent orbit evaluation (time), and the largest
@@ -17,9 +17,9 @@ import time
 
 import numpy as np
 
-from hybridpd.analysis.boundaries import boundary_curves
-from hybridpd.analysis.boundarymask import compare_with_mask, region_status
-from hybridpd.analysis.tracing import Tracer
+from hybridpd.pair.boundaries import boundary_curves
+from hybridpd.pair.boundarymask import compare_with_mask, region_status
+from hybridpd.pair.tracing import Tracer
 
 BOXES = [("noncollocated", 0.5, ("kp", 0.1, 20.0), ("kv", 0.1, 6.0)),
          ("collocated", 0.1, ("kp", 0.1, 50.0), ("kv", 0.1, 50.0))]

@@ -20,7 +20,7 @@ BOX = dict(mu=0.1, gamma=0.75, omega=5.0, e=(0.1, 0.5, 0.9))
 
 def main():
     from hybridpd.pair.certified import certified_map
-    from hybridpd.sweeps.regions import region_map
+    from hybridpd.pair.regions import region_map
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--num", type=int, default=101, help="grid points per axis (101)")

@@ -10,9 +10,9 @@ import numpy as np
 from _common import best_of
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.continuation import continue_orbit, continue_symmetric, find_periodic_orbit
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.orbits import symmetric_orbit
+from hybridpd.pair.continuation import continue_orbit, continue_symmetric, find_periodic_orbit
+from hybridpd.pair.impactmap import ImpactMap
+from hybridpd.pair.orbits import symmetric_orbit
 
 
 def main():

@@ -23,7 +23,7 @@ TARGETS = {"nominal": 2.0, "robust": 20.0}
 _COLD = """
 import time
 t = time.perf_counter()
-from hybridpd.analysis.design import design
+from hybridpd.pair.design import design
 design({case!r}, **{spec!r})
 print(time.perf_counter() - t)
 """
@@ -38,7 +38,7 @@ def cold(case: str, spec: dict) -> float:
 
 def warm(case: str, spec: dict, repeat: int):
     """Median wall time over ``repeat`` designs after a warm-up (s), and the last result."""
-    from hybridpd.analysis.design import design
+    from hybridpd.pair.design import design
 
     design(case, **spec)
     times = []

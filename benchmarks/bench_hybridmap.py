@@ -7,7 +7,7 @@
      the compiled batch loop of :class:`hybridpd.analysis.periodic.SectionMapper`, one
      application per point, with the section embedding in Python; and its iterations of
      ``P`` inside the compiled loop, as a basin uses it),
-   * the compiled closed-form engine (:class:`hybridpd.analysis.impactmap.ImpactMap`, batch;
+   * the compiled closed-form engine (:class:`hybridpd.pair.impactmap.ImpactMap`, batch;
      ``DP`` from the symbolic blocks),
    * the naive ``solve_ivp`` loop (DOP853, rtol 1e-10, atol 1e-12; one ``P`` = 2 impacts;
      its ``DP`` = 8 applications of ``P`` by central differences),
@@ -37,8 +37,8 @@ from _common import best_of, naive_per_impact
 def pair_rates():
     from hybridpd import ImpactPair, PDGains
     from hybridpd.analysis.hybridmap import SectionMap
-    from hybridpd.analysis.impactmap import ImpactMap
-    from hybridpd.analysis.orbits import symmetric_orbit
+    from hybridpd.pair.impactmap import ImpactMap
+    from hybridpd.pair.orbits import symmetric_orbit
     from hybridpd.analysis.periodic import SectionMapper
     from hybridpd.analysis.sections import impact_pair_section
 

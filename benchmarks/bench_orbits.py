@@ -16,13 +16,13 @@ def main():
     imp = min(float(subprocess.run([sys.executable, "-c", code], capture_output=True,
                                    text=True, check=True).stdout) for _ in range(3))
     code = ("import time; t=time.perf_counter(); from hybridpd import ImpactPair, PDGains;"
-            "from hybridpd.analysis.orbits import symmetric_orbit;"
+            "from hybridpd.pair.orbits import symmetric_orbit;"
             "[symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0, case=c) "
             "for c in ('collocated', 'noncollocated')]; print(time.perf_counter()-t)")
     first = float(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                                  check=True).stdout)
 
-    from hybridpd.analysis.orbits import symmetric_orbits
+    from hybridpd.pair.orbits import symmetric_orbits
 
     kp = np.linspace(0.1, 50, 200)
     kv = np.linspace(0.1, 50, 200)

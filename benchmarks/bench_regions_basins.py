@@ -14,11 +14,11 @@ from _common import naive_per_impact
 
 def main(quick=False):
     from hybridpd import ImpactPair, PDGains
-    from hybridpd.analysis.impactmap import ImpactMap
-    from hybridpd.analysis.orbits import symmetric_orbit
+    from hybridpd.pair.impactmap import ImpactMap
+    from hybridpd.pair.orbits import symmetric_orbit
     from hybridpd.pair.batch import iterate_map, pack_params
-    from hybridpd.sweeps.basins import ImpactMapper, basin_of_attraction
-    from hybridpd.sweeps.regions import region_map
+    from hybridpd.pair.basins import ImpactMapper, basin_of_attraction
+    from hybridpd.pair.regions import region_map
 
     num = 60 if quick else 200
     common = dict(e=(0.1, 0.5, 0.9), mu=0.1, omega=5.0, gamma=0.75)

@@ -3,9 +3,9 @@
 The general :class:`hybridpd.analysis.hybridmap.SectionMap` (exact flows, saltation ``DP``)
 on the impact pair's automaton against
 
-* :class:`hybridpd.analysis.impactmap.ImpactMap` (PD; compiled closed-form engine, symbolic
+* :class:`hybridpd.pair.impactmap.ImpactMap` (PD; compiled closed-form engine, symbolic
   ``DP``): ``P`` per call (``apply``), ``P`` in batch (``apply_batch``), ``DP``;
-* :class:`hybridpd.analysis.lti.LTIImpactMap` (a filtered PD, one controller state): ``P``
+* :class:`hybridpd.pair.lti.LTIImpactMap` (a filtered PD, one controller state): ``P``
   per call and ``DP`` (product of the impact and flight blocks).
 
 Points: 300 section points within ``1e-3`` of the symmetric orbit of the README's parameters
@@ -44,9 +44,9 @@ def rates(G, S, ops):
 def main():
     from hybridpd import ImpactPair, PDGains
     from hybridpd.analysis.hybridmap import SectionMap
-    from hybridpd.analysis.impactmap import ImpactMap
-    from hybridpd.analysis.lti import filtered_pd, lti_symmetric_orbit
-    from hybridpd.analysis.orbits import symmetric_orbit
+    from hybridpd.pair.impactmap import ImpactMap
+    from hybridpd.pair.lti import filtered_pd, lti_symmetric_orbit
+    from hybridpd.pair.orbits import symmetric_orbit
     from hybridpd.analysis.sections import impact_pair_section
 
     pair = ImpactPair(0.1, 0.5, 0.75)

@@ -37,10 +37,10 @@ def _store_runs(run, tmp: Path, repeat=3):
 def main(quick=False):
     import hybridpd
     from hybridpd import ImpactPair, PDGains
-    from hybridpd.analysis.impactmap import ImpactMap
-    from hybridpd.analysis.orbits import symmetric_orbit
-    from hybridpd.sweeps.basins import ImpactMapper, basin_of_attraction
-    from hybridpd.sweeps.regions import region_map
+    from hybridpd.pair.impactmap import ImpactMap
+    from hybridpd.pair.orbits import symmetric_orbit
+    from hybridpd.pair.basins import ImpactMapper, basin_of_attraction
+    from hybridpd.pair.regions import region_map
 
     print(f"hybridpd from {Path(hybridpd.__file__).parent}")
     num, nb = (60, 40) if quick else (200, 100)

@@ -48,7 +48,10 @@ Examples
 """
 import importlib as _importlib
 
+from hybridpd import _deprecated
 from hybridpd._version import __version__
+
+_deprecated.install()      # old module paths import, with a DeprecationWarning
 
 # Each public name and the module that defines it. Nothing below is imported until used.
 _NAMES = {
@@ -59,10 +62,10 @@ _NAMES = {
     "Reference": "hybridpd.model",
     "virtual_restitution": "hybridpd.model",
     "ControlledImpactPair": "hybridpd.pair.impactpair",
-    "symmetric_orbit": "hybridpd.analysis.orbits",
-    "symmetric_orbits": "hybridpd.analysis.orbits",
+    "symmetric_orbit": "hybridpd.pair.orbits",
+    "symmetric_orbits": "hybridpd.pair.orbits",
     "certify_orbit": "hybridpd.pair.certified",
-    "ImpactMap": "hybridpd.analysis.impactmap",
+    "ImpactMap": "hybridpd.pair.impactmap",
     # the map protocol: any map a user writes
     "PoincareMap": "hybridpd.analysis.maps",
     "MapResult": "hybridpd.analysis.maps",
@@ -82,23 +85,23 @@ _NAMES = {
     "simulate": "hybridpd.mechanics.simulate",
     # continuation, boundaries, diagrams
     "continue_orbit": "hybridpd.analysis.hybridcont",
-    "switch_branch": "hybridpd.analysis.continuation",
-    "load_branch": "hybridpd.analysis.continuation",
+    "switch_branch": "hybridpd.pair.continuation",
+    "load_branch": "hybridpd.pair.continuation",
     "continue_family": "hybridpd.analysis.hybridcont",
-    "boundary_curves": "hybridpd.analysis.boundaries",
+    "boundary_curves": "hybridpd.pair.boundaries",
     "bifurcation_diagram": "hybridpd.analysis.diagrams",
     # sweeps and result files
     "run_sweep": "hybridpd.sweeps.sweep",
-    "region_map": "hybridpd.sweeps.regions",
-    "load_region_map": "hybridpd.sweeps.regions",
+    "region_map": "hybridpd.pair.regions",
+    "load_region_map": "hybridpd.pair.regions",
     "basin_of_attraction": "hybridpd.analysis.basins",
-    "ImpactMapper": "hybridpd.sweeps.basins",
+    "ImpactMapper": "hybridpd.pair.basins",
     "load_basin": "hybridpd.sweeps.basin_result",
-    "attractor_basin": "hybridpd.sweeps.attractor_basins",
-    "load_attractor_basin": "hybridpd.sweeps.attractor_basins",
+    "attractor_basin": "hybridpd.pair.attractor_basins",
+    "load_attractor_basin": "hybridpd.pair.attractor_basins",
     "section_basin": "hybridpd.sweeps.section_basins",
     # design, figures, the paper
-    "design": "hybridpd.analysis.design",
+    "design": "hybridpd.pair.design",
     "plot_file": "hybridpd.plotting.files"}
 
 # ``reproduce`` is both a subpackage and its main function: the package is callable (it runs

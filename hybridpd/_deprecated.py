@@ -1,44 +1,67 @@
-"""Old import paths that keep working for one release, with a ``DeprecationWarning``.
+"""Old import paths that keep working for one more release, with a ``DeprecationWarning``.
 
-Two kinds of shim, after SciPy's ``_sub_module_deprecation``:
+One import hook serves every moved module: :class:`MovedModuleFinder`, a meta path finder
+installed by ``import hybridpd``, answers each old path of :data:`MOVED_MODULES` (and any
+module below an old package path) with a small module that warns once when imported and hands
+every attribute on to the module at the new place, so an old import gives the same objects.
+Names that moved out of a module that still exists are served by that module's
+``__getattr__`` (:func:`moved_names`), which warns on each access. After SciPy's
+``_sub_module_deprecation``.
 
-* a **moved module** (``hybridpd.orbits`` is now ``hybridpd.analysis.orbits``): the old path is a
-  small module that warns once when imported and hands every attribute on to the new module;
-* a **moved name** (``hybridpd.sweeps.basins.attractor_basin`` is now in
-  ``hybridpd.sweeps.attractor_basins``): the old module's ``__getattr__`` warns on each access
-  and returns the object from its new place.
-
-The new place is named by string and imported with :mod:`importlib`, so a shim adds no import
-arrow between the package's layers. Every shim goes in version :data:`REMOVAL`.
+The new places are named by strings and imported with :mod:`importlib`, so nothing here adds
+an import arrow between the package's layers. Every old path goes in version :data:`REMOVAL`.
 """
 from __future__ import annotations
 
 import importlib
+import importlib.abc
+import importlib.util
+import sys
+import types
 import warnings
 
-__all__ = ["MOVED_MODULES", "REMOVAL", "moved_module", "moved_names"]
+__all__ = ["MOVED_MODULES", "REMOVAL", "MovedModuleFinder", "install", "moved_names"]
 
-#: The release that removes the shims.
-REMOVAL = "0.3.0"
+#: The release that removes the old paths.
+REMOVAL = "0.4.0"
 
-#: Each module path that moved (its old file is now a shim) and the module that replaced it.
+#: Each module path that moved and the module that replaced it (a package's old path also
+#: serves the modules below it).
 MOVED_MODULES = {
+    # moved in 0.2.0 (their old files at the package root are gone; the paths still import)
     "hybridpd.automaton": "hybridpd.hybrid.automaton",
-    "hybridpd.basins": "hybridpd.sweeps.basins",
+    "hybridpd.basins": "hybridpd.pair.basins",
     "hybridpd.batch": "hybridpd.pair.batch",
-    "hybridpd.continuation": "hybridpd.analysis.continuation",
-    "hybridpd.design": "hybridpd.analysis.design",
+    "hybridpd.continuation": "hybridpd.pair.continuation",
+    "hybridpd.design": "hybridpd.pair.design",
     "hybridpd.events": "hybridpd.hybrid.events",
-    "hybridpd.impactmap": "hybridpd.analysis.impactmap",
+    "hybridpd.impactmap": "hybridpd.pair.impactmap",
     "hybridpd.impactpair": "hybridpd.pair.impactpair",
-    "hybridpd.lti": "hybridpd.analysis.lti",
+    "hybridpd.lti": "hybridpd.pair.lti",
     "hybridpd.naive": "hybridpd.pair.naive",
-    "hybridpd.orbits": "hybridpd.analysis.orbits",
-    "hybridpd.regions": "hybridpd.sweeps.regions",
+    "hybridpd.orbits": "hybridpd.pair.orbits",
+    "hybridpd.regions": "hybridpd.pair.regions",
     "hybridpd.samples": "hybridpd.hybrid.samples",
     "hybridpd.sweep": "hybridpd.sweeps.sweep",
     "hybridpd.symbolic": "hybridpd.pair.symbolic",
-    "hybridpd.analysis.continuation.branchio": "hybridpd.analysis.continuation.events"}
+    # moved in 0.3.0: what only the impact pair has lives with the pair
+    "hybridpd.analysis.impactmap": "hybridpd.pair.impactmap",
+    "hybridpd.analysis.orbits": "hybridpd.pair.orbits",
+    "hybridpd.analysis.lti": "hybridpd.pair.lti",
+    "hybridpd.analysis.boundaries": "hybridpd.pair.boundaries",
+    "hybridpd.analysis.boundarymask": "hybridpd.pair.boundarymask",
+    "hybridpd.analysis.tracing": "hybridpd.pair.tracing",
+    "hybridpd.analysis.testfunctions": "hybridpd.pair.testfunctions",
+    "hybridpd.analysis.design": "hybridpd.pair.design",
+    "hybridpd.analysis.continuation": "hybridpd.pair.continuation",
+    "hybridpd.analysis.continuation.branchio": "hybridpd.pair.continuation.events",
+    "hybridpd.analysis.bifdiagram": "hybridpd.pair.bifdiagram",
+    "hybridpd.analysis.attractors": "hybridpd.pair.attractors",
+    "hybridpd.sweeps.regions": "hybridpd.pair.regions",
+    "hybridpd.sweeps.basins": "hybridpd.pair.basins",
+    "hybridpd.sweeps.attractor_basins": "hybridpd.pair.attractor_basins",
+    "hybridpd.sweeps.diagram_sweep": "hybridpd.pair.diagram_sweep",
+}
 
 
 def _message(old: str, new: str) -> str:
@@ -46,34 +69,75 @@ def _message(old: str, new: str) -> str:
             f"import it from {new} instead")
 
 
-def moved_module(old: str):
-    """Warn that module ``old`` moved; return ``(__getattr__, __dir__)`` for ``old``.
+def _target(fullname: str) -> str | None:
+    """The new module of an old path: an entry of :data:`MOVED_MODULES`, or a module below a
+    moved package (the longest moved prefix)."""
+    if fullname in MOVED_MODULES:
+        return MOVED_MODULES[fullname]
+    best = None
+    for old in MOVED_MODULES:
+        if fullname.startswith(old + ".") and (best is None or len(old) > len(best)):
+            best = old
+    return None if best is None else MOVED_MODULES[best] + fullname[len(best):]
 
-    Parameters
-    ----------
-    old : str
-        The shim's ``__name__``, a key of :data:`MOVED_MODULES` (which names the new module).
 
-    Returns
-    -------
-    tuple of callable
-        The shim module's ``__getattr__`` and ``__dir__``: every attribute comes from ``new``.
-    """
-    new = MOVED_MODULES[old]
-    warnings.warn(_message(f"the module {old}", new), DeprecationWarning, stacklevel=3)
-    target = importlib.import_module(new)
+class _Forward(importlib.abc.Loader):
+    """Makes the old module: it warns and forwards every attribute to the new one."""
 
-    def __getattr__(name):
-        try:
-            return getattr(target, name)
-        except AttributeError:
-            raise AttributeError(f"module {old!r} (deprecated, now {new!r}) has no attribute "
-                                 f"{name!r}") from None
+    def __init__(self, new: str):
+        self.new = new
 
-    def __dir__():
-        return sorted(set(dir(target)))
+    def create_module(self, spec):
+        return None          # the default module object
 
-    return __getattr__, __dir__
+    def exec_module(self, module):
+        old, new = module.__name__, self.new
+        warnings.warn(_message(f"the module {old}", new), DeprecationWarning, stacklevel=2)
+        target = importlib.import_module(new)
+
+        def __getattr__(name):
+            try:
+                return getattr(target, name)
+            except AttributeError:
+                raise AttributeError(f"module {old!r} (deprecated, now {new!r}) has no "
+                                     f"attribute {name!r}") from None
+
+        module.__getattr__ = __getattr__
+        module.__dir__ = lambda: sorted(set(dir(target)))
+        module.__doc__ = (f"Deprecated: this module moved to {new} and goes in hybridpd "
+                          f"{REMOVAL}.")
+        if hasattr(target, "__path__"):
+            module.__path__ = []      # an old package: modules below it import too
+        if callable(getattr(target, old.rsplit(".", 1)[1], None)):
+            # importing hybridpd.design binds the module to the package's attribute 'design',
+            # the flat namespace's function: calling the module keeps that name working
+            module.__class__ = _CallableModule
+
+
+class _CallableModule(types.ModuleType):
+    """An old module named like a function of its new module: calling it calls that."""
+
+    def __call__(self, *args, **kwargs):
+        target = importlib.import_module(_target(self.__name__))
+        return getattr(target, self.__name__.rsplit(".", 1)[1])(*args, **kwargs)
+
+
+class MovedModuleFinder(importlib.abc.MetaPathFinder):
+    """The meta path finder that serves the old module paths (module docstring)."""
+
+    def find_spec(self, fullname, path=None, target=None):
+        if not fullname.startswith("hybridpd."):
+            return None
+        new = _target(fullname)
+        if new is None:
+            return None
+        return importlib.util.spec_from_loader(fullname, _Forward(new))
+
+
+def install() -> None:
+    """Put the finder on ``sys.meta_path`` once (``import hybridpd`` does this)."""
+    if not any(isinstance(f, MovedModuleFinder) for f in sys.meta_path):
+        sys.meta_path.append(MovedModuleFinder())
 
 
 def moved_names(module: str, moves: dict):

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.model import Case, ImpactPair, PDGains, Reference, pd_values, sine_reference
 
 __all__ = ["ClosedLoop", "Controller", "as_controller", "closed_loop", "interconnect_matrices",

@@ -25,7 +25,7 @@ open. With SymPy, from the derivation in :mod:`hybridpd.pair.symbolic`:
   contact, so for ``e > 0`` no orbit exists as ``gamma -> 0`` (:func:`gamma0_contact_time`).
 
 The script prints these limits and checks them against maps computed with
-:func:`hybridpd.analysis.orbits.symmetric_orbits` at ``mu = 1e-4``, ``mu = 1e4`` and
+:func:`hybridpd.pair.orbits.symmetric_orbits` at ``mu = 1e-4``, ``mu = 1e4`` and
 ``gamma = 1e-4`` (the tests run the same checks).
 """
 from __future__ import annotations
@@ -40,7 +40,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np
 import sympy as sp
 
-from hybridpd.analysis.orbits import _viability_kernel, symmetric_orbits
+from hybridpd.pair.orbits import _viability_kernel, symmetric_orbits
 from hybridpd.pair import symbolic as hs
 
 PAPER = dict(e=(0.1, 0.5, 0.9), L=0.75, omega=5.0, x10=1.0, m2=1.0, n=1)

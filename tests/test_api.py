@@ -28,19 +28,19 @@ OLD_MODULES = {
         Guard HybridAutomaton HybridTrajectory Jump JumpTable Mode PackedAutomaton
         Segment SegmentTable TerminationCause ZenoOptions run_hybrid
     """),
-    "hybridpd.basins": ("hybridpd.sweeps.basins", """
+    "hybridpd.basins": ("hybridpd.pair.basins", """
         BasinResult ImpactMapper LABELS basin_of_attraction load_basin section_grid
     """),
     "hybridpd.batch": ("hybridpd.pair.batch", """
         LABELS STATUS_IMPACT STATUS_NONFINITE STATUS_STICK STATUS_TIMEOUT
         STATUS_UNRESOLVED impact_map iterate_map map_labels next_impact pack_params
     """),
-    "hybridpd.continuation": ("hybridpd.analysis.continuation", """
+    "hybridpd.continuation": ("hybridpd.pair.continuation", """
         BifurcationEvent Branch EVENT_KINDS ImpactStep MapTrace PARAMETERS PeriodicOrbit
         SYMMETRIC_PARAMETERS continue_orbit continue_symmetric find_periodic_orbit
         map_power_jacobian plot_branch trace_map
     """),
-    "hybridpd.design": ("hybridpd.analysis.design", """
+    "hybridpd.design": ("hybridpd.pair.design", """
         ComparisonRow DesignMap DesignResult InfeasibleDesignError OptimizerRun
         PLANT_STATUS RobustReport RobustnessComparison design design_objective
         robustness robustness_comparison shifted_amplitude shifted_orbit
@@ -50,23 +50,23 @@ OLD_MODULES = {
         EV_STEP_LIMIT K_DEFAULT LTIModeData THETA_DEFAULT advance first_crossing
         flow_eval flow_to lti_flow prepare_lti_mode
     """),
-    "hybridpd.impactmap": ("hybridpd.analysis.impactmap", """
+    "hybridpd.impactmap": ("hybridpd.pair.impactmap", """
         ImpactMap MapResult Stability stability
     """),
     "hybridpd.impactpair": ("hybridpd.pair.impactpair", """
         ControlledImpactPair ImpactPairTrajectory
     """),
-    "hybridpd.lti": ("hybridpd.analysis.lti", """
+    "hybridpd.lti": ("hybridpd.pair.lti", """
         LTIImpactMap LTIJacobian LTIMapResult LTIOrbitResult LTI_REASONS filtered_pd
         filtered_pid lead_lag lti_symmetric_orbit
     """),
     "hybridpd.naive": ("hybridpd.pair.naive", """
         NaiveResult naive_simulate
     """),
-    "hybridpd.orbits": ("hybridpd.analysis.orbits", """
+    "hybridpd.orbits": ("hybridpd.pair.orbits", """
         OrbitArrays REASONS SymmetricOrbitResult symmetric_orbit symmetric_orbits
     """),
-    "hybridpd.regions": ("hybridpd.sweeps.regions", """
+    "hybridpd.regions": ("hybridpd.pair.regions", """
         AXES RegionMap load_region_map region_map
     """),
     "hybridpd.samples": ("hybridpd.hybrid.samples", """
@@ -87,11 +87,11 @@ OLD_MODULES = {
 
 # Names moved out of a module that still exists: (old module, name, new module).
 MOVED_NAMES = [
-    ("hybridpd.sweeps.basins", "attractor_basin", "hybridpd.sweeps.attractor_basins"),
-    ("hybridpd.sweeps.basins", "AttractorBasin", "hybridpd.sweeps.attractor_basins"),
-    ("hybridpd.sweeps.basins", "BasinMeasure", "hybridpd.sweeps.attractor_basins"),
-    ("hybridpd.sweeps.basins", "format_percent", "hybridpd.sweeps.attractor_basins"),
-    ("hybridpd.sweeps.basins", "load_attractor_basin", "hybridpd.sweeps.attractor_basins"),
+    ("hybridpd.pair.basins", "attractor_basin", "hybridpd.pair.attractor_basins"),
+    ("hybridpd.pair.basins", "AttractorBasin", "hybridpd.pair.attractor_basins"),
+    ("hybridpd.pair.basins", "BasinMeasure", "hybridpd.pair.attractor_basins"),
+    ("hybridpd.pair.basins", "format_percent", "hybridpd.pair.attractor_basins"),
+    ("hybridpd.pair.basins", "load_attractor_basin", "hybridpd.pair.attractor_basins"),
     ("hybridpd.analysis.periodic", "section_basin", "hybridpd.sweeps.section_basins"),
     ("hybridpd.analysis.periodic", "orbit_from_model", "hybridpd.analysis.model_orbits"),
     ("hybridpd.analysis.hybridmap", "impact_pair_section", "hybridpd.analysis.sections"),
@@ -159,7 +159,7 @@ def test_old_design_module_keeps_the_flat_design_callable():
     sys.modules.pop("hybridpd.design", None)
     with pytest.deprecated_call():
         importlib.import_module("hybridpd.design")
-    from hybridpd.analysis.design import design
+    from hybridpd.pair.design import design
 
     assert callable(hp.design)
     with pytest.raises(ValueError):
@@ -168,13 +168,27 @@ def test_old_design_module_keeps_the_flat_design_callable():
         design(case="sideways", mu=0.1, e=0.5, omega=5.0)
 
 
-def test_every_shim_is_listed():
-    from hybridpd._deprecated import MOVED_MODULES
+def test_every_old_path_is_served_by_the_import_hook():
+    from hybridpd._deprecated import MOVED_MODULES, MovedModuleFinder
 
     assert set(OLD_MODULES) <= set(MOVED_MODULES)
-    for old in MOVED_MODULES:
+    assert any(isinstance(f, MovedModuleFinder) for f in sys.meta_path)
+    for old in MOVED_MODULES:      # no file at an old path: the hook serves it
         path = ROOT / (old.replace(".", "/") + ".py")
-        assert "moved_module(__name__)" in path.read_text(), old
+        assert not path.exists() and not path.with_suffix("").is_dir(), old
+    root = [p.name for p in (ROOT / "hybridpd").glob("*.py")]
+    assert len(root) <= 10, root
+
+
+def test_a_module_below_a_moved_package_imports_with_a_warning():
+    old = "hybridpd.analysis.continuation.switching"
+    sys.modules.pop(old, None)
+    sys.modules.pop("hybridpd.analysis.continuation", None)
+    with pytest.deprecated_call(match=r"hybridpd\.pair\.continuation"):
+        mod = importlib.import_module(old)
+    from hybridpd.pair.continuation.switching import switch_branch
+
+    assert mod.switch_branch is switch_branch
 
 
 @pytest.mark.parametrize("old", sorted(OLD_MODULES))
@@ -197,7 +211,7 @@ def test_moved_names_warn_and_resolve(old, name, new):
 
 
 def test_a_moved_name_warning_points_at_the_caller():
-    mod = importlib.import_module("hybridpd.sweeps.basins")
+    mod = importlib.import_module("hybridpd.pair.basins")
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
         mod.attractor_basin  # noqa: B018
@@ -206,7 +220,7 @@ def test_a_moved_name_warning_points_at_the_caller():
 
 def test_shims_do_not_hide_missing_names():
     with pytest.raises(AttributeError, match="no attribute"):
-        importlib.import_module("hybridpd.sweeps.basins").no_such_name  # noqa: B018
+        importlib.import_module("hybridpd.pair.basins").no_such_name  # noqa: B018
 
 
 def test_flat_names_have_docstrings_with_examples():

@@ -6,22 +6,22 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.attractors import (
+from hybridpd.pair.attractor_basins import attractor_basin, format_percent, load_attractor_basin
+from hybridpd.pair.attractors import (
     NO_CONVERGENCE,
     OFF_SECTION_LABEL,
     CycleCatalog,
     paper_distance2,
 )
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.orbits import symmetric_orbit
-from hybridpd.sweeps.attractor_basins import attractor_basin, format_percent, load_attractor_basin
-from hybridpd.sweeps.basins import (
+from hybridpd.pair.basins import (
     LABELS,
     ImpactMapper,
     basin_of_attraction,
     load_basin,
     section_grid,
 )
+from hybridpd.pair.impactmap import ImpactMap
+from hybridpd.pair.orbits import symmetric_orbit
 
 CASES = [("collocated", 0.5, 10.0, 20.0), ("collocated", 0.1, 10.0, 20.0),
          ("noncollocated", 0.1, 5.4, 2.5), ("noncollocated", 0.5, 10.0, 20.0)]

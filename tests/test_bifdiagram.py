@@ -13,13 +13,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.bifdiagram import (
+from hybridpd.pair.bifdiagram import (
     CLASSES,
     bifurcation_diagram,
     load_diagram,
     section_coordinate,
 )
-from hybridpd.analysis.continuation import branch_map, continue_symmetric, switch_branch
+from hybridpd.pair.continuation import branch_map, continue_symmetric, switch_branch
 
 W = 5.0
 PAIR01 = ImpactPair(0.1, 0.1, 0.75)
@@ -184,7 +184,7 @@ def test_plot_overlays_branches_with_a_legend_of_the_drawn_artists(period2_branc
        shift=st.floats(0, 1))
 def test_period_detection_finds_the_minimal_period(k, n, seed, shift):
     """Synthetic cycles (phases wrapped across T, noise far below the tolerance)."""
-    from hybridpd.analysis.bifdiagram import _period
+    from hybridpd.pair.bifdiagram import _period
 
     T = 1.2566
     rng = np.random.default_rng(seed)

@@ -8,13 +8,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.boundaries import BoundaryResult, boundary_curves
-from hybridpd.analysis.boundarymask import compare_with_mask, region_status, side_status
-from hybridpd.analysis.continuation import continue_symmetric
-from hybridpd.analysis.orbits import symmetric_orbit
-from hybridpd.analysis.testfunctions import make_plane
 from hybridpd.cli import main
 from hybridpd.pair import symbolic
+from hybridpd.pair.boundaries import BoundaryResult, boundary_curves
+from hybridpd.pair.boundarymask import compare_with_mask, region_status, side_status
+from hybridpd.pair.continuation import continue_symmetric
+from hybridpd.pair.orbits import symmetric_orbit
+from hybridpd.pair.testfunctions import make_plane
 
 PAPER = dict(mu=0.1, gamma=0.75, omega=5.0)
 BOXES = {
@@ -116,7 +116,7 @@ def test_completeness_against_a_fine_mask_all(name):
 def _crossings(res, kind, name, value):
     """The other parameter where the traced curves of ``kind`` cross ``name = value``,
     corrected onto the curve (exact, not the chord)."""
-    from hybridpd.analysis.tracing import Tracer
+    from hybridpd.pair.tracing import Tracer
 
     axis = 0 if name == res.x_name else 1
     ax = (res.plane.x, res.plane.y)
@@ -298,7 +298,7 @@ def test_existence_boundary_of_a_plastic_impact():
     res = boundary_curves("noncollocated", x=("kp", 0.1, 50.0), y=("kv", 0.1, 50.0), e=0.0,
                           **PAPER)
     (c,) = res.of_kind("existence")
-    from hybridpd.analysis.orbits import symmetric_orbits
+    from hybridpd.pair.orbits import symmetric_orbits
 
     U = c.u[1:-1]
     d = c.u[2:] - c.u[:-2]

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.bifdiagram import load_diagram
-from hybridpd.analysis.orbits import symmetric_orbit
 from hybridpd.cli import main
+from hybridpd.pair.bifdiagram import load_diagram
+from hybridpd.pair.orbits import symmetric_orbit
 
 BASE = ["bifurcation", "--case", "collocated", "--mu", "0.1", "--e", "0.1", "--gamma", "0.75",
         "--omega", "5", "--n", "1", "--kp", "10"]

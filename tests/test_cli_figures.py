@@ -101,8 +101,8 @@ def test_model_figures_name_the_pid_not_pd(pid_results, kind):
 
 
 def test_region_title_reads_the_model_file_when_the_result_does_not_say(tmp_path):
+    from hybridpd.pair.regions import RegionMap
     from hybridpd.plotting.regions import plot_region_panels, plot_regions
-    from hybridpd.sweeps.regions import RegionMap
 
     model = tmp_path / "joint.toml"
     shutil.copy(MODELS / "robot_joint.toml", model)

@@ -45,12 +45,12 @@ def one_error_line(capsys):
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     """One small file of every kind hybridpd writes (in every format it writes it in)."""
-    from hybridpd.analysis.bifdiagram import bifurcation_diagram
-    from hybridpd.analysis.continuation import continue_symmetric
-    from hybridpd.analysis.orbits import symmetric_orbit
-    from hybridpd.sweeps.attractor_basins import attractor_basin
-    from hybridpd.sweeps.basins import ImpactMapper, basin_of_attraction
-    from hybridpd.sweeps.regions import region_map
+    from hybridpd.pair.attractor_basins import attractor_basin
+    from hybridpd.pair.basins import ImpactMapper, basin_of_attraction
+    from hybridpd.pair.bifdiagram import bifurcation_diagram
+    from hybridpd.pair.continuation import continue_symmetric
+    from hybridpd.pair.orbits import symmetric_orbit
+    from hybridpd.pair.regions import region_map
 
     d = tmp_path_factory.mktemp("results")
     out = {}
@@ -178,13 +178,13 @@ def _no_compute(*args, **kwargs):
 ])
 def test_unwritable_suffixes_are_refused_before_computing(argv, allowed, files, tmp_path,
                                                           monkeypatch, capsys):
-    import hybridpd.analysis.orbits
     import hybridpd.pair.impactpair
+    import hybridpd.pair.orbits
+    import hybridpd.pair.regions
     import hybridpd.plotting.files
-    import hybridpd.sweeps.regions
 
-    monkeypatch.setattr(hybridpd.sweeps.regions, "region_map", _no_compute)
-    monkeypatch.setattr(hybridpd.analysis.orbits, "symmetric_orbit", _no_compute)
+    monkeypatch.setattr(hybridpd.pair.regions, "region_map", _no_compute)
+    monkeypatch.setattr(hybridpd.pair.orbits, "symmetric_orbit", _no_compute)
     monkeypatch.setattr(hybridpd.pair.impactpair, "ControlledImpactPair", _no_compute)
     monkeypatch.setattr(hybridpd.plotting.files, "plot_file", _no_compute)
     monkeypatch.chdir(tmp_path)
@@ -237,7 +237,7 @@ def test_plot_option_draws_right_away(tmp_path, capsys):
 
 
 def test_branch_save_load_round_trip(files):
-    from hybridpd.analysis.continuation import continue_symmetric, load_branch
+    from hybridpd.pair.continuation import continue_symmetric, load_branch
 
     br = continue_symmetric(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv", 23.0)
     back = load_branch(files["branch.npz"])

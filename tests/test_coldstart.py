@@ -279,10 +279,10 @@ def test_fast_path_builds_the_python_control_system_on_demand():
 
 @pytest.mark.parametrize("case", CASES)
 def test_interpreted_kernels_equal_compiled(case, monkeypatch):
-    from hybridpd.analysis import orbits
-    from hybridpd.analysis.orbits import symmetric_orbit
     from hybridpd.hybrid import automaton
+    from hybridpd.pair import orbits
     from hybridpd.pair.impactpair import ControlledImpactPair
+    from hybridpd.pair.orbits import symmetric_orbit
 
     def run(budget):
         monkeypatch.setattr(_jit, "_interpret_budget", lambda: budget)
@@ -338,9 +338,9 @@ _PROBE = """
 import json, sys
 import numpy as np
 from hybridpd import ImpactPair, PDGains, Reference
-from hybridpd.analysis.orbits import symmetric_orbit
+from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.pair.impactpair import ControlledImpactPair
-from hybridpd.sweeps.regions import region_map
+from hybridpd.pair.regions import region_map
 out = {}
 heavy = ("control", "scipy.signal", "matplotlib", "numba", "sympy")
 loaded = lambda: sorted(h for h in heavy if h in sys.modules)
@@ -352,12 +352,12 @@ out["simulate"] = loaded()
 region_map("collocated", x=("kp", 1, 20, 3), y=("kv", 1, 20, 3), e=(0.5,), mu=0.1,
            omega=5, L=0.75)
 out["regions"] = loaded()
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.sweeps.basins import ImpactMapper, basin_of_attraction
+from hybridpd.pair.impactmap import ImpactMap
+from hybridpd.pair.basins import ImpactMapper, basin_of_attraction
 P = ImpactMap(orb.pair, orb.gains, orb.reference(), orb.case)
 basin_of_attraction(ImpactMapper(P, orb.fixed_point, n_iter=5), (-0.5, 0.5, 2), (-0.5, 0.5, 2))
 out["basins"] = loaded()
-from hybridpd.analysis.design import design
+from hybridpd.pair.design import design
 design("collocated", mu=0.1, e=0.5, omega=5.0, L=0.75, grid=(4, 4), n_starts=1, maxiter=2)
 out["design"] = loaded()
 out["check"] = [bool(orb.exists), int(tr.n_impacts)]

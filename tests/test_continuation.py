@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains, Reference
-from hybridpd.analysis.continuation import (
+from hybridpd.pair.continuation import (
     EVENT_KINDS,
     Branch,
     continue_orbit,
@@ -20,8 +20,8 @@ from hybridpd.analysis.continuation import (
     plot_branch,
     trace_map,
 )
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.orbits import symmetric_orbit, symmetric_orbits
+from hybridpd.pair.impactmap import ImpactMap
+from hybridpd.pair.orbits import symmetric_orbit, symmetric_orbits
 
 PAPER = dict(mu=0.1, L=0.75)
 W = 5.0

@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains, Reference
-from hybridpd.analysis.continuation import (
+from hybridpd.pair.continuation import (
     SYMMETRIC_PARAMETERS,
     continue_orbit,
     continue_symmetric,
 )
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.orbits import symmetric_orbit
+from hybridpd.pair.impactmap import ImpactMap
+from hybridpd.pair.orbits import symmetric_orbit
 
 W = 5.0
 

@@ -13,13 +13,13 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from hybridpd import ImpactPair, PDGains, Reference
-from hybridpd._repr import compact_repr, short_repr
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.orbits import symmetric_orbit, symmetric_orbits
+from hybridpd._results import compact_repr, short_repr
 from hybridpd.loop import closed_loop
 from hybridpd.model import as_gains
 from hybridpd.pair import symbolic
+from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.impactpair import ControlledImpactPair
+from hybridpd.pair.orbits import symmetric_orbit, symmetric_orbits
 
 PAIR = ImpactPair(0.1, 0.5, 0.75)
 GAINS = PDGains(10, 20)
@@ -97,67 +97,67 @@ def _entry_points():
         return closed_loop(pair, controller, reference, case)
 
     def regions(case, x, y, e, mu, omega, L, m2, n):
-        from hybridpd.sweeps.regions import region_map
+        from hybridpd.pair.regions import region_map
 
         return region_map(case, x=x, y=y, e=e, mu=mu, omega=omega, L=L, m2=m2, n=n)
 
     def mapper(impact_map, fixed_point, n_iter, criterion, escape):
-        from hybridpd.sweeps.basins import ImpactMapper
+        from hybridpd.pair.basins import ImpactMapper
 
         return ImpactMapper(impact_map, fixed_point, n_iter=n_iter, criterion=criterion,
                             escape=escape, early_exit=False)
 
     def basin(mapper, x1, y1):
-        from hybridpd.sweeps.basins import basin_of_attraction
+        from hybridpd.pair.basins import basin_of_attraction
 
         return basin_of_attraction(mapper, x1, y1)
 
     def design_(case, mu, e, omega, L, kp_range, kv_range, grid, n_starts, maxiter):
-        from hybridpd.analysis.design import design
+        from hybridpd.pair.design import design
 
         return design(case, mu=mu, e=e, omega=omega, L=L, kp_range=kp_range,
                       kv_range=kv_range, grid=grid, n_starts=n_starts, maxiter=maxiter,
                       validation_grid=(2, 2), uncertainty_grid=(2, 2))
 
     def periodic(impact_map_, s0, period, tol, max_iter):
-        from hybridpd.analysis.continuation import find_periodic_orbit
+        from hybridpd.pair.continuation import find_periodic_orbit
 
         return find_periodic_orbit(impact_map_, s0, period, tol=tol, max_iter=max_iter)
 
     def lti_orbit(pair, controller, omega, x10, n, case, margin_samples):
-        from hybridpd.analysis.lti import lti_symmetric_orbit
+        from hybridpd.pair.lti import lti_symmetric_orbit
 
         return lti_symmetric_orbit(pair, controller, omega, x10=x10, n=n, case=case,
                                    margin_samples=margin_samples)
 
     def continuation(pair, gains, omega, parameter, stop, x10, n, max_steps):
-        from hybridpd.analysis.continuation import continue_symmetric
+        from hybridpd.pair.continuation import continue_symmetric
 
         return continue_symmetric(pair, gains, omega, parameter, stop, x10=x10, n=n,
                                   max_steps=max_steps)
 
     def trace(impact_map_, s, margin_samples):
-        from hybridpd.analysis.continuation import trace_map
+        from hybridpd.pair.continuation import trace_map
 
         return trace_map(impact_map_, s, margin_samples=margin_samples)
 
     def power_jacobian(impact_map_, s, period):
-        from hybridpd.analysis.continuation import map_power_jacobian
+        from hybridpd.pair.continuation import map_power_jacobian
 
         return map_power_jacobian(impact_map_, s, period)
 
     def shifted(pair, gains, xm, omega, x10_nominal, n):
-        from hybridpd.analysis.design import shifted_orbit
+        from hybridpd.pair.design import shifted_orbit
 
         return shifted_orbit(pair, gains, xm, omega, x10_nominal=x10_nominal, n=n)
 
     def robust(case, kp, kv, xm, mu, e, omega, L, uncertainty_grid):
-        from hybridpd.analysis.design import robustness
+        from hybridpd.pair.design import robustness
 
         return robustness(case, kp, kv, xm, mu=mu, e=e, omega=omega, L=L,
                           e_range=(0.4, 0.6), uncertainty_grid=uncertainty_grid)
 
-    from hybridpd.sweeps.basins import ImpactMapper
+    from hybridpd.pair.basins import ImpactMapper
 
     orb = symmetric_orbit(PAIR, GAINS, 5.0)
     P = ImpactMap(PAIR, GAINS, orb.reference())

@@ -455,8 +455,8 @@ v = [0.5, 0.0]
 
 
 def _pair_orbit():
-    from hybridpd.analysis.orbits import symmetric_orbit
     from hybridpd.model import ImpactPair, PDGains
+    from hybridpd.pair.orbits import symmetric_orbit
 
     return symmetric_orbit(ImpactPair(mu=0.1, e=0.5, L=0.75), PDGains(10, 20), 5.0)
 

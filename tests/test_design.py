@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains, Reference
-from hybridpd.analysis.design import (
+from hybridpd.pair.design import (
     InfeasibleDesignError,
     design,
     design_objective,
@@ -15,8 +15,8 @@ from hybridpd.analysis.design import (
     shifted_amplitude,
     shifted_orbit,
 )
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.orbits import symmetric_orbit, symmetric_orbits
+from hybridpd.pair.impactmap import ImpactMap
+from hybridpd.pair.orbits import symmetric_orbit, symmetric_orbits
 
 CASES = ("collocated", "noncollocated")
 PAPER = dict(mu=0.1, e=0.5, gamma=0.75, omega=5.0)

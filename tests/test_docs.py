@@ -194,7 +194,7 @@ def test_doctests_are_collected():
     # the modules with examples today; new examples are collected without a change here
     assert len(DOCTESTS) >= 40
     assert {t.name.rsplit(".", 1)[0] for t in DOCTESTS} >= {"hybridpd.model",
-                                                            "hybridpd.sweeps.regions"}
+                                                            "hybridpd.pair.regions"}
 
 
 def test_tolerant_checker():

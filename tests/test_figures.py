@@ -11,9 +11,9 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
+from hybridpd.pair.regions import region_map
 from hybridpd.plotting.regions import plot_region_panels, plot_regions
 from hybridpd.plotting.style import DOUBLE, MAX_HEIGHT, MIN_FONT, SINGLE
-from hybridpd.sweeps.regions import region_map
 
 #: Figures whose legends are built by this package from the drawn artists.
 OWN = ("fig3_orbit", "fig4_regions", "fig5_regions", "m2_study", "mu_study", "gamma_study",

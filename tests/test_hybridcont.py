@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains, Reference
-from hybridpd.analysis.continuation import continue_orbit, find_periodic_orbit
 from hybridpd.analysis.hybridcont import FAMILY_EVENTS, continue_family
 from hybridpd.analysis.hybridmap import SectionMap
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.orbits import symmetric_orbit
 from hybridpd.analysis.sections import impact_pair_section
 from hybridpd.hybrid.samples import impact_oscillator, oscillator_initial_state
+from hybridpd.pair.continuation import continue_orbit, find_periodic_orbit
+from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.impactpair import ControlledImpactPair
+from hybridpd.pair.orbits import symmetric_orbit
 
 W = 5.0
 

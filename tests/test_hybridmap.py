@@ -13,8 +13,6 @@ from hybridpd.analysis.hybridmap import (
     SectionMap,
     exosystem,
 )
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.orbits import symmetric_orbit
 from hybridpd.analysis.periodic import (
     SectionMapper,
     find_orbit,
@@ -27,7 +25,9 @@ from hybridpd.hybrid.samples import (
     impact_oscillator,
     oscillator_initial_state,
 )
-from hybridpd.sweeps.basins import ImpactMapper, section_grid
+from hybridpd.pair.basins import ImpactMapper, section_grid
+from hybridpd.pair.impactmap import ImpactMap
+from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.sweeps.section_basins import section_basin
 
 PAIR = ImpactPair(0.1, 0.5, 0.75)

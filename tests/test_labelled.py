@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.orbits import symmetric_orbit
-from hybridpd.sweeps.basins import ImpactMapper, basin_of_attraction, load_basin
+from hybridpd.pair.basins import ImpactMapper, basin_of_attraction, load_basin
+from hybridpd.pair.impactmap import ImpactMap
+from hybridpd.pair.orbits import symmetric_orbit
+from hybridpd.pair.regions import load_region_map, region_map
 from hybridpd.sweeps.labelled import check_suffix, decode_attrs, encode_attrs, write_dataset
-from hybridpd.sweeps.regions import load_region_map, region_map
 from hybridpd.sweeps.sweep import load_sweep, run_sweep
 
 xr = pytest.importorskip("xarray")
@@ -157,7 +157,7 @@ def test_files_of_earlier_versions_stay_readable():
     assert old_b.metadata["kp"] == 10.0
     np.testing.assert_allclose(old_b.converged_fraction, new_b.converged_fraction,
                                rtol=STORED_RTOL, atol=0.0)
-    from hybridpd.sweeps.regions import _region_chunk
+    from hybridpd.pair.regions import _region_chunk
 
     s = load_sweep(DATA / "sweep_v0.npz")
     pts = {"kp": np.linspace(1, 5, 6), "kv": np.linspace(1, 8, 6), "e": np.full(6, 0.5)}
@@ -175,7 +175,7 @@ def test_sweep_store_and_result_as_datasets(tmp_path):
     axes = {"e": np.array([0.1, 0.5]), "kp": np.linspace(1, 30, 4), "kv": np.linspace(1, 20, 3)}
     pts, shape = grid_points(axes)
     fixed = {"mu": 0.1, "omega": 5.0, "L": 0.75, "x10": 1.0, "m2": 1.0}
-    from hybridpd.sweeps.regions import _region_chunk
+    from hybridpd.pair.regions import _region_chunk
 
     res = run_sweep(_region_chunk, pts, executor="serial", chunk_size=5, progress=False,
                     store=tmp_path / "s.zarr", metadata={"note": "x", "flag": True},
@@ -205,7 +205,7 @@ def test_attrs_encoding_round_trips(value):
 
 
 def test_import_hybridpd_does_not_import_xarray():
-    code = ("import sys, hybridpd, hybridpd.sweeps.regions, hybridpd.sweeps.basins, "
+    code = ("import sys, hybridpd, hybridpd.pair.regions, hybridpd.pair.basins, "
             "hybridpd.sweeps.sweep; print(sorted(m for m in ('xarray', 'zarr', 'netCDF4', "
             "'tqdm') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], cwd=str(REPO), capture_output=True,
@@ -216,7 +216,9 @@ def test_import_hybridpd_does_not_import_xarray():
 def test_docstring_examples_run():
     import doctest
 
+    import hybridpd._results as res
     import hybridpd.sweeps.labelled as mod
 
     failures, tried = doctest.testmod(mod, optionflags=doctest.ELLIPSIS)
-    assert tried >= 3 and failures == 0
+    f2, t2 = doctest.testmod(res, optionflags=doctest.ELLIPSIS, extraglobs={"np": np})
+    assert tried + t2 >= 3 and failures + f2 == 0

@@ -1,10 +1,13 @@
 """The package's layers, read from the source: imports point one way and never form a cycle.
 
 Layers, lowest first: the parameter modules (``model``, ``loop`` and the private helpers) ->
-``hybrid`` -> ``pair`` and ``mechanics`` -> ``analysis`` -> ``sweeps`` -> ``plotting`` ->
-``reproduce`` -> ``cli``. The general analysis (the section map, Newton, continuation and basins
-on any automaton) does not import the impact pair. Imports under ``if TYPE_CHECKING:`` are for
-annotations only and are not arrows; the deprecation shims name their targets as strings.
+``hybrid`` (the automaton, the map protocol, the section map of any automaton) ->
+``mechanics`` -> ``analysis`` (only what works on any map) -> ``sweeps`` -> ``pair`` (the
+impact pair: a client of the generic layers that supplies maps and hooks) -> ``plotting`` ->
+``reproduce`` -> ``cli``. So no module of ``hybrid``, ``mechanics``, ``analysis`` or
+``sweeps`` imports the pair: the general modules are every module of those packages, read from
+the tree. Imports under ``if TYPE_CHECKING:`` are for annotations only and are not arrows;
+the deprecated paths are served by an import hook that names its targets as strings.
 """
 from __future__ import annotations
 
@@ -15,14 +18,15 @@ import pytest
 
 PKG = Path(__file__).resolve().parents[1] / "hybridpd"
 
-LAYER = {"model": 0, "loop": 1, "hybrid": 2, "pair": 3, "mechanics": 3, "analysis": 4,
-         "sweeps": 5, "plotting": 6, "reproduce": 7, "cli": 8, "__main__": 9}
+LAYER = {"model": 0, "loop": 1, "hybrid": 2, "mechanics": 3, "analysis": 4, "sweeps": 5,
+         "pair": 6, "plotting": 7, "reproduce": 8, "cli": 9, "__main__": 10}
 
-# Modules that make up the general path: they may not import hybridpd.pair.
-GENERAL = ("hybridpd.analysis.hybridmap", "hybridpd.analysis.sections",
-           "hybridpd.analysis.periodic", "hybridpd.analysis.hybridcont",
-           "hybridpd.analysis.floquet", "hybridpd.analysis.labels",
-           "hybridpd.sweeps.section_basins")
+# The general path: every module of these packages, found in the tree (none may import the
+# impact pair).
+GENERAL_PACKAGES = ("hybrid", "mechanics", "analysis", "sweeps")
+GENERAL = tuple(sorted(
+    ".".join(p.relative_to(PKG.parent).with_suffix("").parts).removesuffix(".__init__")
+    for pkg in GENERAL_PACKAGES for p in (PKG / pkg).rglob("*.py")))
 
 
 def _module_name(path: Path) -> str:

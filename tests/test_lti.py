@@ -7,18 +7,18 @@ import control as ct
 import numpy as np
 import pytest
 
-import hybridpd.analysis.lti as lti_mod
+import hybridpd.pair.lti as lti_mod
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.lti import (
+from hybridpd.loop import pd_controller
+from hybridpd.pair.impactmap import ImpactMap
+from hybridpd.pair.lti import (
     LTIImpactMap,
     filtered_pd,
     filtered_pid,
     lead_lag,
     lti_symmetric_orbit,
 )
-from hybridpd.analysis.orbits import symmetric_orbit, symmetric_orbits
-from hybridpd.loop import pd_controller
+from hybridpd.pair.orbits import symmetric_orbit, symmetric_orbits
 
 CASES = ("collocated", "noncollocated")
 PAIR = ImpactPair(mu=0.1, e=0.5, L=0.75)

@@ -112,7 +112,7 @@ def test_pair_file_region_map_orbits_confirmed_by_solve_ivp(tmp_path):
     np.testing.assert_allclose(back.section_point, rm.section_point, rtol=0, atol=0)
     assert back.signature_of(1, 1) == rm.signature_of(1, 1) == (("contact0+", "crossing"),
                                                                 ("contact0-", "crossing"))
-    from hybridpd.sweeps.regions import load_region_map
+    from hybridpd.pair.regions import load_region_map
 
     pr = load_region_map(path)
     assert pr.exists.shape == (1, 3, 3) and pr.x_name == "controller.kp"

@@ -8,9 +8,9 @@ from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.impactmap import ImpactMap, stability
-from hybridpd.analysis.orbits import symmetric_orbit, symmetric_orbits
 from hybridpd.loop import closed_loop
+from hybridpd.pair.impactmap import ImpactMap, stability
+from hybridpd.pair.orbits import symmetric_orbit, symmetric_orbits
 
 CASES = ("collocated", "noncollocated")
 PAPER = dict(mu=0.1, L=0.75, omega=5.0)

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.orbits import symmetric_orbit
-from hybridpd.sweeps.regions import load_region_map, region_map
+from hybridpd.pair.orbits import symmetric_orbit
+from hybridpd.pair.regions import load_region_map, region_map
 
 PAPER = dict(mu=0.1, omega=5.0, gamma=0.75, x10=1.0, n=1)
 
@@ -58,7 +58,7 @@ def test_same_results_serial_processes_dask():
 
 
 def test_interrupted_sweep_resumes_to_the_same_file(tmp_path, monkeypatch):
-    from hybridpd.sweeps import regions
+    from hybridpd.pair import regions
 
     kw = dict(x=("kp", 0.5, 30, 9), y=("kv", 0.2, 20, 8), e=(0.5,), chunk_size=10, **PAPER)
     full = region_map("collocated", store=tmp_path / "full.zarr", executor="serial", **kw)

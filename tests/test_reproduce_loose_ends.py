@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from hybridpd.analysis.continuation.events import _Tracker
 from hybridpd.cli import main
+from hybridpd.pair.continuation.events import _Tracker
 
 
 @pytest.mark.parametrize("typo, guess", [("regoins", "regions"), ("plto", "plot"),

@@ -5,8 +5,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hybridpd._format import pct as _pct
-from hybridpd.analysis.orbits import symmetric_orbit, symmetric_orbits
 from hybridpd.model import ImpactPair, PDGains
+from hybridpd.pair.orbits import symmetric_orbit, symmetric_orbits
 from hybridpd.reproduce import PAPER
 from hybridpd.reproduce.study import candidate_stability, choose_m2, intersect, stable_intervals
 

@@ -3,9 +3,9 @@
 The general :class:`~hybridpd.analysis.hybridmap.SectionMap` on the pair's automaton (exact
 flows, saltation ``DP``) is the reference. Kept specialisations:
 
-* :class:`~hybridpd.analysis.impactmap.ImpactMap` (compiled closed-form engine, symbolic
+* :class:`~hybridpd.pair.impactmap.ImpactMap` (compiled closed-form engine, symbolic
   ``DP``): 36 parameter points (both cases, three ``e``, three gain pairs, orders ``n = 1, 3``);
-* :class:`~hybridpd.analysis.lti.LTIImpactMap` (exact flights under any LTI controller):
+* :class:`~hybridpd.pair.lti.LTIImpactMap` (exact flights under any LTI controller):
   20 points (five controllers, both cases, two ``e``).
 
 At each point, near the symmetric orbit: ``P`` (phase wrapped), the return time and state,
@@ -24,14 +24,14 @@ import pytest
 
 from hybridpd import ImpactPair, PDGains
 from hybridpd.analysis.hybridmap import SectionMap
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.lti import filtered_pd, filtered_pid, lead_lag, lti_symmetric_orbit
 from hybridpd.analysis.maps import MapResult, PoincareMap
-from hybridpd.analysis.orbits import symmetric_orbit
 from hybridpd.analysis.periodic import SectionMapper, find_orbit
 from hybridpd.analysis.sections import impact_pair_section
 from hybridpd.loop import pd_controller
-from hybridpd.sweeps.basins import ImpactMapper
+from hybridpd.pair.basins import ImpactMapper
+from hybridpd.pair.impactmap import ImpactMap
+from hybridpd.pair.lti import filtered_pd, filtered_pid, lead_lag, lti_symmetric_orbit
+from hybridpd.pair.orbits import symmetric_orbit
 
 W = 5.0
 CASES = ("collocated", "noncollocated")

@@ -8,12 +8,12 @@ import numpy as np
 from hybridpd import ImpactPair, PDGains, Reference
 from hybridpd.analysis.hybridcont import continue_family
 from hybridpd.analysis.hybridmap import SectionMap
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.orbits import symmetric_orbit
 from hybridpd.analysis.pathfollow import corrector, follow_path
 from hybridpd.analysis.sections import impact_pair_section
 from hybridpd.cli import main
+from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.impactpair import ControlledImpactPair
+from hybridpd.pair.orbits import symmetric_orbit
 
 W = 5.0
 

@@ -12,15 +12,15 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains, Reference
-from hybridpd.analysis.continuation import (
+from hybridpd.pair.continuation import (
     branch_map,
     continue_orbit,
     continue_symmetric,
     find_periodic_orbit,
     switch_branch,
 )
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.orbits import symmetric_orbit
+from hybridpd.pair.impactmap import ImpactMap
+from hybridpd.pair.orbits import symmetric_orbit
 
 W = 5.0
 
@@ -173,8 +173,8 @@ def test_the_switched_2cycle_takes_most_of_the_basin_slice():
     """The paper's basin slice at kv = 20 (x1 in [-3, 5], y1 in [-2, 10], y2 and phi of the
     symmetric fixed point; 60 x 60 grid, 1500 iterations, the paper's criterion): the 2-cycle
     found by branch switching attracts about 98.5 %, the symmetric orbit the rest."""
+    from hybridpd.pair.basins import section_grid
     from hybridpd.pair.batch import impact_map
-    from hybridpd.sweeps.basins import section_grid
 
     pair = ImpactPair(0.1, 0.1, 0.75)
     br = continue_symmetric(pair, PDGains(10, 20), W, "kv", 23.0)

@@ -28,8 +28,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, Reference
-from hybridpd.analysis.design import robustness_comparison, shifted_orbit
-from hybridpd.analysis.impactmap import ImpactMap
+from hybridpd.pair.design import robustness_comparison, shifted_orbit
+from hybridpd.pair.impactmap import ImpactMap
 
 # sphinx_gallery_start_ignore
 sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py

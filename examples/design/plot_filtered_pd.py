@@ -6,8 +6,8 @@ A pure PD ``kp + kv s`` needs the velocity error; in practice the derivative is 
 (mu = 0.1, gamma = L/x10 = 0.75, n = 1, w = 5, e = 0.5, kp = 10, kv = 20, collocated):
 
 1. the symmetric orbit and its Floquet multipliers with the pure PD (symbolic fast path,
-   :func:`hybridpd.analysis.orbits.symmetric_orbit`) and with the PD given as a python-control system
-   through the general numerical path (:func:`hybridpd.analysis.lti.lti_symmetric_orbit`);
+   :func:`hybridpd.pair.orbits.symmetric_orbit`) and with the PD given as a python-control system
+   through the general numerical path (:func:`hybridpd.pair.lti.lti_symmetric_orbit`);
 2. the same with filtered PDs, ``tf`` in (0.1, 0.03, 0.01, 0.001): the required reference
    amplitude ``xm`` and the spectral radius converge to the PD values at the rate ``O(tf)``;
    the filter adds one controller state, hence a fifth multiplier;
@@ -29,8 +29,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.lti import filtered_pd, lead_lag, lti_symmetric_orbit
-from hybridpd.analysis.orbits import symmetric_orbit
+from hybridpd.pair.lti import filtered_pd, lead_lag, lti_symmetric_orbit
+from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.loop import pd_controller
 
 # sphinx_gallery_start_ignore

@@ -31,8 +31,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.bifdiagram import bifurcation_diagram
-from hybridpd.analysis.continuation import (
+from hybridpd.pair.bifdiagram import bifurcation_diagram
+from hybridpd.pair.continuation import (
     branch_map,
     continue_orbit,
     continue_symmetric,

@@ -25,14 +25,14 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains, Reference
-from hybridpd.analysis.continuation import (
+from hybridpd.pair.continuation import (
     continue_orbit,
     continue_symmetric,
     find_periodic_orbit,
     plot_branch,
 )
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.orbits import symmetric_orbit
+from hybridpd.pair.impactmap import ImpactMap
+from hybridpd.pair.orbits import symmetric_orbit
 
 # sphinx_gallery_start_ignore
 sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py

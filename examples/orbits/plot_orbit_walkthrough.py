@@ -18,8 +18,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.impactmap import ImpactMap
-from hybridpd.analysis.orbits import symmetric_orbit
+from hybridpd.pair.impactmap import ImpactMap
+from hybridpd.pair.orbits import symmetric_orbit
 
 # sphinx_gallery_start_ignore
 sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py

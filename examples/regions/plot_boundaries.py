@@ -30,9 +30,9 @@ PANELS = [("collocated", (0.1, 50.0), (0.1, 50.0), "Fig. 4: collocated"),
 
 
 def panel(ax, case, xr, yr, title):
-    from hybridpd.analysis.boundaries import boundary_curves
+    from hybridpd.pair.boundaries import boundary_curves
     from hybridpd.plotting.boundaries import draw_boundaries
-    from hybridpd.sweeps.regions import region_map
+    from hybridpd.pair.regions import region_map
 
     rm = region_map(case, x=("kp", *xr, 120), y=("kv", *yr, 120), e=ES, mu=PAPER["mu"],
                     omega=PAPER["omega"], gamma=PAPER["gamma"], n=PAPER["n"])

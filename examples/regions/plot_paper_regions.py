@@ -13,7 +13,7 @@ from pathlib import Path
 from matplotlib.figure import Figure
 
 from hybridpd.plotting import plot_regions
-from hybridpd.sweeps.regions import region_map
+from hybridpd.pair.regions import region_map
 
 # sphinx_gallery_start_ignore
 sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py

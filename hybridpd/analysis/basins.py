@@ -8,8 +8,9 @@ which a map may compile); its tail is then either periodic, of period ``k <= max
 attractors found so far (a new one is refined by Newton on ``P^k``,
 :func:`~hybridpd.analysis.periodic.find_orbit`, and named by its period and stability), or
 one of the outcomes :data:`OUTCOMES`: no convergence within the iterations, divergence
-(non-finite, or beyond ``escape``), the map stopped (its status kept), or a start off the
-map's domain. Labels ``0, 1, ...`` are the attractors in the order found; outcomes are
+(non-finite, or beyond ``escape``), sticking, the map stopped for another reason
+(``unresolved``, its status kept), a start off the map's domain, or (slices of a section with
+an admissible set) an inadmissible start. Labels ``0, 1, ...`` are the attractors in the order found; outcomes are
 negative.
 """
 from __future__ import annotations
@@ -19,16 +20,29 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.analysis.maps import PoincareMap, check_returns, detect_period
 from hybridpd.analysis.periodic import find_orbit
 from hybridpd.model import check_axis
 
-__all__ = ["OUTCOMES", "Attractor", "BasinResult", "basin_of_attraction"]
+__all__ = ["DIVERGED", "INADMISSIBLE_LABEL", "NO_CONVERGENCE", "OFF_SECTION_LABEL", "OUTCOMES",
+           "STICKING", "UNRESOLVED", "Attractor", "BasinResult", "basin_of_attraction"]
 
-#: Negative labels: what a point that reaches no periodic attractor does.
-OUTCOMES = {-1: "no convergence", -2: "diverged", -3: "the map stopped",
-            -5: "off the map's domain"}
+NO_CONVERGENCE = -1
+DIVERGED = -2
+STICKING = -3
+UNRESOLVED = -4
+OFF_SECTION_LABEL = -5
+INADMISSIBLE_LABEL = -6
+
+#: Negative labels, what a point that reaches no periodic attractor does: ``(kind, name)``.
+OUTCOMES = {
+    NO_CONVERGENCE: ("no_convergence", "no convergence"),
+    DIVERGED: ("diverged", "diverged"),
+    STICKING: ("sticking", "sticking"),
+    UNRESOLVED: ("unresolved", "unresolved flight"),
+    OFF_SECTION_LABEL: ("off_section", "off the section"),
+    INADMISSIBLE_LABEL: ("inadmissible", "inadmissible (a gap beyond its bounds)")}
 
 
 @dataclass(frozen=True, eq=False)
@@ -229,13 +243,15 @@ def basin_of_attraction(P: PoincareMap, x, y, *, axes=None, base=None, period: i
     for i in range(len(S)):
         st = status[i]
         if st:
-            lab[i] = {"off_section": -5, "nonfinite": -2}.get(st, -3)
+            lab[i] = {"off_section": OFF_SECTION_LABEL, "nonfinite": DIVERGED,
+                      "sticking": STICKING}.get(st, UNRESOLVED)
         elif np.any(np.abs(tails[i][:, off:]) > escape):
-            lab[i] = -2
+            lab[i] = DIVERGED
         else:
             lab[i] = cat.label(tails[i])
-    stops = sorted({status[i] for i in range(len(S)) if lab[i] == -3})
-    outcomes = tuple(Attractor(c, OUTCOMES[c] + (f" ({', '.join(stops)})" if c == -3 else ""))
+    stops = sorted({status[i] for i in range(len(S)) if lab[i] == UNRESOLVED})
+    outcomes = tuple(Attractor(c, OUTCOMES[c][1] + (f" ({', '.join(stops)})"
+                                                    if c == UNRESOLVED else ""))
                      for c in sorted(OUTCOMES, reverse=True) if np.any(lab == c))
     shape = (len(ys), len(xs))
     meta = {"n_iter": n_iter, "period": k, "max_period": max_period, "tol": float(tol)}

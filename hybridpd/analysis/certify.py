@@ -3,7 +3,7 @@
 :class:`BasinMapper` is the base of the two mappers (an initial condition on the section ->
 a label of :data:`hybridpd.analysis.labels.LABELS`):
 :class:`hybridpd.analysis.periodic.SectionMapper` (any automaton, the reference) and the
-pair's :class:`hybridpd.sweeps.basins.ImpactMapper` (the compiled closed-form engine).
+pair's :class:`hybridpd.pair.basins.ImpactMapper` (the compiled closed-form engine).
 
 For a stable fixed point ``s*`` of a map with Jacobian ``DP`` (spectral radius ``rho < 1``),
 ``Q`` solving the Lyapunov equation of ``DP / rho_t`` (``rho_t = (1 + rho) / 2``) defines a

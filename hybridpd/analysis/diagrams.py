@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridpd._jit import njit
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.analysis.maps import PoincareMap, check_returns, detect_period
 
 __all__ = ["CLASSES", "BifurcationDiagram", "bifurcation_diagram", "lyapunov_exponents"]

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import Section, SectionMap
 from hybridpd.analysis.maps import PoincareMap, minimal_period

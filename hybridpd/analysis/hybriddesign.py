@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.analysis.hybridcont import _map_factory
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
 

@@ -48,6 +48,16 @@ projection onto the contact that is consistent with the flows (``R_z f- = f+`` a
 accumulation point, as for the pair's and the samples' sticking modes), the dependence of the
 accumulation time drops out. A grazing jump (``c . f- ~ 0``) has no saltation matrix:
 :attr:`MapResult.grazing` flags it and the Jacobian is then infinite or meaningless.
+
+Modes on demand
+---------------
+A map builds the modes its runs enter, as a simulation does: the compiled return loop hands
+back when a run enters a mode not built yet (or takes a Zeno switch whose reset is not packed
+yet), the tables are completed and the run is made again (each mode is built once, so this is
+bounded by the automaton's ``max_modes``). :class:`SectionMap`, its Jacobian, ``apply_many``
+and the basin labeller of :class:`~hybridpd.analysis.periodic.SectionMapper` read only the
+modes built so far; the exosystem is found over those and every mode built later is checked
+against it.
 """
 from __future__ import annotations
 
@@ -59,7 +69,7 @@ from scipy.linalg import expm
 from hybridpd._deprecated import moved_names
 from hybridpd._jit import njit
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
-from hybridpd.hybrid._kernel import _other_active
+from hybridpd.hybrid._kernel import _RC_NEED_MODE, _other_active
 from hybridpd.hybrid.automaton import HybridAutomaton, ZenoOptions, run_hybrid
 from hybridpd.model import check_finite
 
@@ -67,9 +77,11 @@ __all__ = ["MAP_STATUS", "MapResult", "Section", "SectionMap", "common_multiple"
 
 #: Codes of :attr:`MapResult.status`.
 MAP_STATUS = {0: "returned", 1: "jump_limit", 2: "zeno", 3: "nonfinite", 4: "step_limit",
-              6: "end_time", 7: "bad_start", 8: "simultaneous"}
+              6: "end_time", 7: "bad_start", 8: "simultaneous", 10: "too_many_modes"}
 ST_RETURNED, ST_JUMP_LIMIT, ST_ZENO, ST_NONFINITE, ST_STEP_LIMIT = 0, 1, 2, 3, 4
 ST_END_TIME, ST_BAD_START, ST_SIMULTANEOUS = 6, 7, 8
+ST_NEED_MODE = 9           # internal: the run entered a mode not built yet
+ST_TOO_MANY_MODES = 10
 _ON_GUARD_RTOL = 1e-9      # |g| below this (relative) at a pending event: on that guard
 #: Why a return within one burst of impacts is no orbit, and what to do.
 FAST_RETURN_HINT = ("the section's guard fires again within one burst of impacts (rebounds); "
@@ -85,7 +97,10 @@ def exosystem(automaton: HybridAutomaton, atol: float = 0.0) -> tuple:
 
     The exosystem is the largest set of states that evolve on their own in every mode
     (``A[i, j] = 0`` for ``i`` in the set, ``j`` outside; the same block and no constant input
-    in every mode) and that no reset (nor Zeno reset) changes.
+    in every mode) and that no reset (nor Zeno reset) changes. It is found over the modes
+    built so far (every mode, for an automaton without a mode builder); a map of a section
+    checks each mode built later (:meth:`SectionMap.apply` raises ``ValueError`` for one that
+    moves the exosystem).
 
     Returns
     -------
@@ -101,32 +116,37 @@ def exosystem(automaton: HybridAutomaton, atol: float = 0.0) -> tuple:
     (2, 3)
     """
     n = automaton.n_states
-    S = set(range(n))
-    modes = automaton.modes
+    modes = automaton._slim()
     pk = automaton.packed
+    S = set(range(n))
     changed = True
     while changed:
         changed = False
         for i in sorted(S):
-            out = [j for j in range(n) if j not in S]
-            bad = False
-            for mi, m in enumerate(modes):
-                if np.any(np.abs(m.A[i, out]) > atol) or abs(m.b[i]) > atol:
-                    bad = True
-                if np.any(np.abs(m.A[i, sorted(S)] - modes[0].A[i, sorted(S)]) > atol):
-                    bad = True
-                for gi, g in enumerate(m.guards):
-                    for Rh in (pk.Rh[mi, gi], pk.Rz[mi, gi]):
-                        row = np.zeros(n + 1)
-                        row[i] = 1.0
-                        if np.any(np.abs(Rh[i] - row) > atol):
-                            bad = True
-            if bad:
+            if any(_moves(m, mi, pk, i, S, modes[0], atol) for mi, m in enumerate(modes)):
                 S.discard(i)
                 changed = True
     idx = tuple(sorted(S))
     E = modes[0].A[np.ix_(idx, idx)].copy() if idx else np.zeros((0, 0))
     return idx, E
+
+
+def _moves(m, mi, pk, i, S, first, atol) -> bool:
+    """Whether mode ``m`` (row ``mi`` of ``pk``) moves state ``i`` otherwise than the
+    exosystem ``S`` of ``first`` does (its flow or a reset)."""
+    n = m.A.shape[0]
+    out = [j for j in range(n) if j not in S]
+    if np.any(np.abs(m.A[i, out]) > atol) or abs(m.b[i]) > atol:
+        return True
+    if np.any(np.abs(m.A[i, sorted(S)] - first.A[i, sorted(S)]) > atol):
+        return True
+    row = np.zeros(n + 1)
+    row[i] = 1.0
+    for gi in range(len(m.guards)):
+        for Rh in (pk.Rh[mi, gi], pk.Rz[mi, gi]):
+            if np.any(np.abs(Rh[i] - row) > atol):
+                return True
+    return False
 
 
 def _exo_period(E) -> float | None:
@@ -540,17 +560,21 @@ def _any_joint(G, ng, h, groups, jt, jg, jsrc, jkind, jpre, nb, simtol):
 
 
 @njit(cache=True)
-def _pending_guard(w, mode, gc, gdir, ng):
-    """The unique guard of ``mode`` on which the pending state ``w`` sits, or -1 / -2 (ties)."""
+def _pending_guard(w, mode, G, ng):
+    """The unique guard of ``mode`` on which the pending state ``w`` sits, or -1 / -2 (ties).
+
+    ``G[mode, g, 0]`` is the guard's row ``-direction [c, d]``: the value is on the firing
+    side or within ``_ON_GUARD_RTOL`` of it, relative to the terms that make it up.
+    """
     found = -1
     N1 = w.shape[0]
     for g in range(ng[mode]):
         val = 0.0
         scale = 0.0
         for i in range(N1):
-            val += gc[mode, g, i] * w[i]
-            scale += abs(gc[mode, g, i] * w[i])
-        if -gdir[mode, g] * val <= _ON_GUARD_RTOL * max(scale, 1e-300):
+            val += G[mode, g, 0, i] * w[i]
+            scale += abs(G[mode, g, 0, i] * w[i])
+        if val <= _ON_GUARD_RTOL * max(scale, 1e-300):
             if found >= 0:
                 return -2
             found = g
@@ -558,13 +582,16 @@ def _pending_guard(w, mode, gc, gdir, ng):
 
 
 @njit(cache=True)
-def _to_return(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target, zt, Rz,
-               dt_min, zf, zi, gc, gdir, w0, t0, gm, gi, k, t_max, J0, J_max, max_steps, w, fc,
+def _to_return(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh, target, zt, rz,
+               dt_min, zf, zi, w0, t0, gm, gi, k, t_max, J0, J_max, max_steps, w, fc,
                ic, jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out):
     """Run from the pre-jump state ``w0`` (mode ``gm``) to the ``(k+1)``-th firing of ``gi``.
 
     Returns ``(status, n_before, J)``: ``n_before`` jumps precede the target firing; its
     pre-jump state is left in ``w`` and its time in ``fc[0]``; the tables hold the run.
+    ``ST_NEED_MODE``: the run entered a mode not built yet (its code in ``ic[0]``), or took a
+    Zeno switch whose reset is not packed (``ic[16]``, ``ic[17]``): complete the tables
+    (:meth:`SectionMap._complete`) and run again.
     """
     N1 = w0.shape[0]
     J = min(max(J0, k), J_max)
@@ -577,8 +604,8 @@ def _to_return(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, targ
         ic[0] = gm
         ic[2] = -1
         ic[3] = -1
-        rc = run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target, zt,
-                        Rz, dt_min, t0 + t_max, J, max_steps, zf, zi, w, fc, ic, jt, jj, jg,
+        rc = run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh, target,
+                        zt, rz, dt_min, t0 + t_max, J, max_steps, zf, zi, w, fc, ic, jt, jj, jg,
                         jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out)
         nj = ic[9]
         if nj == 0 or jsrc[0] != gm or jg[0] != gi or jt[0] != t0 or jkind[0] == 3:
@@ -595,10 +622,12 @@ def _to_return(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, targ
                         w[i] = jpre[q, i]
                     fc[0] = jt[q]
                     return ST_RETURNED, q, J
+        if rc == _RC_NEED_MODE:
+            return ST_NEED_MODE, nj, J
         if rc != 1:
             return ST_END_TIME if rc == 0 else rc, nj, J
         if count == k and ic[11] == nzj and ic[0] == gm:
-            pg = _pending_guard(w, gm, gc, gdir, ng)
+            pg = _pending_guard(w, gm, G, ng)
             if pg == gi:
                 return ST_RETURNED, nj, J
             if pg == -2 or pg == -1:
@@ -640,13 +669,19 @@ class SectionMap(PoincareMap):
         applies jumps one at a time, so where that happens :meth:`apply` reports status
         ``"simultaneous"`` (no image) instead of a sequential answer. ``None`` skips the check.
         The compiled iterations of basins do not check.
+    max_table_bytes : float
+        Bound on the automaton's packed tables (:attr:`HybridAutomaton.table_bytes`, bytes)
+        up to which the map builds the modes its runs enter (default 256 MB). A run that
+        needs one more beyond it has status ``"too_many_modes"`` (a point of a basin is then
+        ``unresolved``): an orbit search that wanders through very many sets of held
+        contacts stops and says so instead of filling the memory.
 
     Examples
     --------
     The pair's symmetric orbit is a fixed point of the general map:
 
     >>> from hybridpd import ImpactPair, PDGains
-    >>> from hybridpd.analysis.orbits import symmetric_orbit
+    >>> from hybridpd.pair.orbits import symmetric_orbit
     >>> from hybridpd.analysis.sections import impact_pair_section
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> P = SectionMap(impact_pair_section(orb.system()))
@@ -656,9 +691,12 @@ class SectionMap(PoincareMap):
 
     def __init__(self, section: Section, *, t_max: float | None = None, max_jumps: int = 10_000,
                  max_steps: int = 10_000_000, zeno: ZenoOptions | None = None,
-                 simtol: float | None = 1e-12):
+                 simtol: float | None = 1e-12, max_table_bytes: float = 256e6):
         if not isinstance(section, Section):
             raise ValueError(f"section must be a Section, got {type(section).__name__}")
+        if not (math.isfinite(float(max_table_bytes)) and float(max_table_bytes) > 0):
+            raise ValueError(f"max_table_bytes must be finite and > 0, got {max_table_bytes!r}")
+        self.max_table_bytes = float(max_table_bytes)
         self.section = section
         if t_max is not None and not (float(t_max) > 0 and math.isfinite(float(t_max))):
             raise ValueError(f"t_max must be finite and > 0, got {t_max!r}")
@@ -679,28 +717,66 @@ class SectionMap(PoincareMap):
         if simtol is not None and not (math.isfinite(float(simtol)) and float(simtol) >= 0):
             raise ValueError(f"simtol must be >= 0 or None, got {simtol!r}")
         self.simtol = None if simtol is None else float(simtol)
-        ha = section.automaton
-        pk = ha.packed
-        M, GM = pk.ng.shape[0], pk.G.shape[1]
-        N1 = ha.n_states + 1
-        gc = np.zeros((M, GM, N1))
-        gdir = np.zeros((M, GM))
-        self._groups = np.zeros((M, GM), np.int64)
-        for mi, m in enumerate(ha.modes):
-            for gi, g in enumerate(m.guards):
-                gc[mi, gi, :-1] = g.c
-                gc[mi, gi, -1] = g.d
-                gdir[mi, gi] = g.direction
-                self._groups[mi, gi] = g.group
-        dt_min = pk.h * 1e-9 if zeno.dt_min is None else np.full(M, float(zeno.dt_min))
-        self._kernel_args = (
-            pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs, pk.gsum, pk.cnorm, pk.prio,
-            pk.ng, pk.Rh, pk.target, pk.zt, pk.Rz, dt_min,
-            np.array([zeno.ratio_max, zeno.ratio_rtol,
-                      -1.0 if zeno.tail_tol is None else float(zeno.tail_tol), -1.0], float),
-            np.array([int(bool(zeno.enabled)), int(zeno.min_ratios),
-                      int(zeno.max_instant_jumps)], np.int64), gc, gdir)
+        self._zf = np.array([zeno.ratio_max, zeno.ratio_rtol,
+                             -1.0 if zeno.tail_tol is None else float(zeno.tail_tol), -1.0],
+                            float)
+        self._zi = np.array([int(bool(zeno.enabled)), int(zeno.min_ratios),
+                             int(zeno.max_instant_jumps)], np.int64)
+        self._tables_for = -1           # the tables' version when the kernel's were taken
+        self._checked = 0               # modes checked against the section's exosystem
         self._hint = {}
+
+    @property
+    def _kernel_args(self) -> tuple:
+        """The jump loop's tables over the modes built so far (taken afresh whenever they
+        changed: a mode built or a reset packed may make them new arrays), ``dt_min`` and
+        the Zeno options, in the order of ``_to_return``."""
+        ha = self.section.automaton
+        if self._tables_for != ha._store.version:
+            self._check_exosystem()
+            pk = ha.packed
+            dt_min = (pk.h * 1e-9 if self.zeno.dt_min is None
+                      else np.full(pk.h.shape[0], float(self.zeno.dt_min)))
+            self._args = (pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs, pk.gsum,
+                          pk.cnorm, pk.prio, pk.ng, pk.R, pk.rh, pk.target, pk.zt, pk.rz, dt_min,
+                          self._zf, self._zi)
+            self._groups = ha._store.gkind()
+            self._tables_for = ha._store.version
+        return self._args
+
+    def _check_exosystem(self):
+        """Every mode built since the section was made moves its exosystem as the first
+        mode does (the phase coordinate assumes it); ``ValueError`` otherwise."""
+        sec = self.section
+        ha = sec.automaton
+        if not sec.exo:
+            self._checked = ha.n_built
+            return
+        modes, pk = ha._slim(), ha.packed
+        S = set(sec.exo)
+        for mi in range(self._checked, len(modes)):
+            for i in sec.exo:
+                if _moves(modes[mi], mi, pk, i, S, modes[0], 0.0):
+                    raise ValueError(
+                        f"mode {modes[mi].name!r} moves the exosystem state {i} of the "
+                        "section (its flow or a reset): the phase coordinate needs states "
+                        "that evolve alike in every mode")
+        self._checked = len(modes)
+
+    def _complete(self, ic) -> bool:
+        """What a run handed back for (``ST_NEED_MODE``): the Zeno reset of ``ic[16] - 1``,
+        ``ic[17]`` is packed and the mode ``ic[0]`` built if it is a reserved code; the run
+        is then made again. False (nothing done) when a mode is needed and the tables have
+        reached ``max_table_bytes``."""
+        ha = self.section.automaton
+        if ic[0] < -1 and ha.table_bytes >= self.max_table_bytes:
+            return False
+        if ic[16]:
+            ha._zeno_reset(int(ic[16]) - 1, int(ic[17]))
+            ic[16] = 0
+        if ic[0] < -1:
+            ha.build_code(int(ic[0]))
+        return True
 
     @property
     def dim(self) -> int:
@@ -842,7 +918,7 @@ class SectionMap(PoincareMap):
     def _buffers(self):
         cap = self.max_jumps + 4
         N1 = self.section.automaton.n_states + 1
-        return (np.empty(N1), np.zeros(8), np.zeros(16, np.int64), np.empty(cap),
+        return (np.empty(N1), np.zeros(8), np.zeros(18, np.int64), np.empty(cap),
                 np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap, np.int64),
                 np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty((cap, N1)),
                 np.empty((cap, N1)), np.empty(cap + 2), np.empty(cap + 2),
@@ -857,9 +933,17 @@ class SectionMap(PoincareMap):
         if not sec.fires(z0) > 0:
             return ST_BAD_START, 0, z0, t0, bufs
         J0 = self._hint.get(k, k + 1)
-        st, nb, _J = _to_return(*self._kernel_args, w0, t0, sec.mode_index, sec.guard_index,
-                                int(k), self._t_max(k), J0, self.max_jumps, self.max_steps,
-                                *bufs)
+        # modes on demand: a run that enters a mode not built yet stops there; the mode is
+        # built and the run made again (each mode is built once: bounded by max_modes)
+        while True:
+            st, nb, _J = _to_return(*self._kernel_args, w0, t0, sec.mode_index,
+                                    sec.guard_index, int(k), self._t_max(k), J0,
+                                    self.max_jumps, self.max_steps, *bufs)
+            if st != ST_NEED_MODE:
+                break
+            if not self._complete(bufs[2]):
+                st = ST_TOO_MANY_MODES
+                break
         if st == ST_RETURNED:
             self._hint[k] = max(int(nb), 1)   # next time: stop right at the return
         return int(st), int(nb), z0, t0, bufs
@@ -887,19 +971,19 @@ class SectionMap(PoincareMap):
         jt, jg, jsrc, jdst, jkind = bufs[3], bufs[5], bufs[6], bufs[7], bufs[8]
         ha = sec.automaton
         n = ha.n_states
-        mn = ha.mode_names
+        mn = ha.built_mode_names
         if st == ST_BAD_START:
             return MapResult(np.full(self.dim, np.nan), False, MAP_STATUS[st], t0, t0, z0,
                              sec.mode, (), False)
-        modes = ha.modes                  # assembled afresh on every access
+        modes = ha._slim()
         kinds = {1: "crossing", 2: "grazing", 3: "zeno"}
-        jumps = tuple((float(jt[q]), mn[jsrc[q]], modes[jsrc[q]].guards[jg[q]].name, mn[jdst[q]],
-                       kinds[int(jkind[q])]) for q in range(nb))
+        jumps = tuple((float(jt[q]), mn[jsrc[q]], modes[jsrc[q]].guards[jg[q]].name,
+                       ha._name_of(int(jdst[q])), kinds[int(jkind[q])]) for q in range(nb))
         z_hit = w[:n].copy()
         t_hit = float(fc[0])
         if self._joint_jump(bufs, nb):     # the sequential answer is not the model's
             st = ST_SIMULTANEOUS
-        mode_final = mn[int(ic[0])] if st != ST_RETURNED else sec.mode
+        mode_final = ha._name_of(int(ic[0])) if st != ST_RETURNED else sec.mode
         if st != ST_RETURNED:
             return MapResult(np.full(self.dim, np.nan), False, MAP_STATUS[st], t0, t_hit,
                              z_hit, mode_final, jumps, any(j[4] == "grazing" for j in jumps))
@@ -920,9 +1004,9 @@ class SectionMap(PoincareMap):
     def _joint_jump(self, bufs, nb) -> bool:
         """Whether one of the first ``nb`` jumps fired while another guard of its group was
         on its guard or closing onto it within ``simtol (1 + |t|)`` (the simulation's rule)."""
+        ka = self._kernel_args                 # h, ..., G (index 5), ..., ng (index 10)
         if self.simtol is None or not self._groups.any():
             return False
-        ka = self._kernel_args                 # h, ..., G (index 5), ..., ng (index 10)
         return _any_joint(ka[5], ka[10], ka[0], self._groups, bufs[3], bufs[5], bufs[6],
                           bufs[8], bufs[9], int(nb), self.simtol)
 
@@ -938,13 +1022,13 @@ class SectionMap(PoincareMap):
         tangent = False
         tgrad = []        # d t_jump / d z0 of every jump so far
         burst = _accumulating(bufs, nb)
-        modes, pk = ha.modes, ha.packed   # both are assembled afresh on every access
+        modes, pk = ha._slim(), ha.packed     # the modes of the run are all built
         for m in range(nb + 1):
             # flows of the segments at jump count m, then jump m + 1 (table index m)
             while q < nseg and sj[q] == m:
                 tau = st1[q] - st0[q]
                 if tau > 0.0:
-                    Z = expm(modes[smode[q]].A * tau) @ Z
+                    Z = _flow_sensitivity(modes[smode[q]].A, tau, Z)
                 q += 1
             if m == nb:
                 break
@@ -1010,6 +1094,23 @@ class SectionMap(PoincareMap):
         dD = tgrad[k] - tgrad[k1]
         dr = (dD - r * (tgrad[k1] - tgrad[k2])) / D1
         return tgrad[k] + (dD * r + D * dr / (1 - r)) / (1 - r)
+
+
+def _flow_sensitivity(A, tau, Z) -> np.ndarray:
+    """``expm(A tau) @ Z``: by its Taylor series where ``|A tau|_1 <= 1/2`` (the short flights
+    between the impacts of a burst: a few products with ``Z``, each term below 1e-17 of the
+    sum ends it), else by ``scipy.linalg.expm``."""
+    At = A * tau
+    if float(np.abs(At).sum(axis=0).max()) > 0.5:
+        return expm(At) @ Z
+    out = Z.copy()
+    term = Z
+    for j in range(1, 40):
+        term = (At @ term) / j
+        out += term
+        if float(np.abs(term).max()) <= 1e-17 * float(np.abs(out).max()):
+            break
+    return out
 
 
 def _accumulating(bufs, nb) -> np.ndarray:

@@ -12,8 +12,8 @@ derives everything else once: ``__call__``, :meth:`~PoincareMap.jacobian`,
 
 The reference implementation is :class:`hybridpd.analysis.hybridmap.SectionMap` (any hybrid
 automaton, ``DP`` from saltation matrices). The named specialisations for the impact pair
-(:class:`hybridpd.analysis.impactmap.ImpactMap`, the compiled closed-form engine with the
-symbolic ``DP``; :class:`hybridpd.analysis.lti.LTIImpactMap`, exact flights under any LTI
+(:class:`hybridpd.pair.impactmap.ImpactMap`, the compiled closed-form engine with the
+symbolic ``DP``; :class:`hybridpd.pair.lti.LTIImpactMap`, exact flights under any LTI
 controller) implement the same protocol; each states its measured speed-up over the general
 path in its docstring and is compared with it in ``tests/test_specialisations.py``.
 """
@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 
 __all__ = ["MapResult", "PoincareMap", "check_returns", "detect_period", "minimal_period"]
 

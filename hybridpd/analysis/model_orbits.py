@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.maps import minimal_period
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
@@ -158,18 +158,11 @@ def orbit_status(po: PeriodicOrbit) -> int:
 def signature_table(automaton) -> tuple:
     """All ``(guard, kind)`` pairs a signature of `automaton` can hold, in a fixed order.
 
-    For a mechanical automaton the guard names follow from its contacts and its free mode
-    (no other mode is built); for any other automaton every mode's guards are read.
+    The guard names are those its mode builder declares, so no mode is built (a mechanical
+    automaton's hybrid automaton is read through its ``automaton`` attribute).
     """
-    contacts = getattr(automaton, "contacts", None)
-    if contacts is None:
-        names = {g.name for m in automaton.modes for g in m.guards}
-    else:
-        names = {g.name for g in automaton.automaton.mode(automaton.free_mode).guards}
-        for k, c in enumerate(contacts):
-            for wall, _ in c.bounds:
-                names.add(automaton.guard_name(k, wall, "release" if c.rigid else "leave"))
-    return tuple((g, k) for g in sorted(names) for k in _KINDS)
+    hybrid = getattr(automaton, "automaton", automaton)
+    return tuple((g, k) for g in hybrid.guard_names() for k in _KINDS)
 
 
 def signature_codes(signature, table, length: int) -> np.ndarray:

@@ -19,7 +19,7 @@ with ``DP`` from exact flows and saltation matrices):
   :func:`hybridpd.sweeps.section_basins.section_basin` applies it over a 2-D slice.
 
 Stability: stable iff every multiplier has modulus < 1; hyperbolic iff none is within
-``1e-9`` of the unit circle (the convention of :mod:`hybridpd.analysis.impactmap`).
+``1e-9`` of the unit circle (the convention of :mod:`hybridpd.pair.impactmap`).
 """
 from __future__ import annotations
 
@@ -30,10 +30,11 @@ import numpy as np
 
 from hybridpd._deprecated import moved_names
 from hybridpd._jit import njit
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.analysis.certify import BasinMapper, certify_ball
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import (
+    ST_NEED_MODE,
     ST_RETURNED,
     SectionMap,
     _to_return,
@@ -223,7 +224,7 @@ def find_orbit(P: PoincareMap, s0, period: int = 1, *, tol: float = 1e-11, max_i
     Examples
     --------
     >>> from hybridpd import ImpactPair, PDGains
-    >>> from hybridpd.analysis.orbits import symmetric_orbit
+    >>> from hybridpd.pair.orbits import symmetric_orbit
     >>> from hybridpd.analysis.sections import impact_pair_section
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> P = SectionMap(impact_pair_section(orb.system()))
@@ -450,29 +451,40 @@ def _dist(s, fp, T, Q):
 
 
 @njit(cache=True)
-def _label_kernel(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target, zt, Rz,
-                  dt_min, zf, zi, gc, gdir, W0, T0, gm, gi, k, t_max, J_max, max_steps, C, T,
-                  FP, n_iter, criterion, QS, R2, escape, S_out, w, fc, ic, jt, jj, jg, jsrc,
-                  jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out):
+def _label_kernel(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh, target, zt, rz,
+                  dt_min, zf, zi, W0, T0, gm, gi, k, t_max, J_max, max_steps, C, T,
+                  FP, n_iter, criterion, QS, R2, escape, S_out, lab, its, p0, w, fc, ic, jt,
+                  jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out):
+    """Label the points ``p0, p0 + 1, ...`` (rows of ``W0``, ``T0``) into ``lab``, ``its``.
+
+    Returns ``(p, code)``: ``p = N`` when every point is labelled; otherwise the run of
+    point ``p`` handed back (``ST_NEED_MODE``: a mode not built yet, code ``code``, or a Zeno
+    reset not packed): its current iterate is left in ``W0[p]``, ``T0[p]`` and its
+    iterations so far in ``its[p]``, so that a call from ``p`` (the tables completed)
+    resumes it there.
+    """
     N = W0.shape[0]
     N1 = W0.shape[1]
-    lab = np.empty(N, np.int64)
-    its = np.zeros(N, np.int64)
     w0 = np.empty(N1)
     s = np.empty(S_out.shape[1])
     Jh = k + 1
-    for p in range(N):
+    for p in range(p0, N):
         for i in range(N1):
             w0[i] = W0[p, i]
         t0 = T0[p]
         label = -1
         e2 = np.inf
-        for it in range(n_iter):
+        for it in range(its[p], n_iter):
             st, nb, _J = _to_return(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng,
-                                    Rh, target, zt, Rz, dt_min, zf, zi, gc, gdir, w0, t0, gm,
-                                    gi, k, t_max, Jh, J_max, max_steps, w, fc, ic, jt, jj, jg,
-                                    jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw,
-                                    zt_out)
+                                    R, rh, target, zt, rz, dt_min, zf, zi, w0, t0, gm, gi, k,
+                                    t_max, Jh, J_max, max_steps, w, fc, ic, jt, jj, jg, jsrc,
+                                    jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out)
+            if st == ST_NEED_MODE:
+                for i in range(N1):
+                    W0[p, i] = w0[i]
+                T0[p] = t0
+                its[p] = it
+                return p, ic[0]
             its[p] = it + 1
             if st != ST_RETURNED:
                 if st == 6:
@@ -511,7 +523,7 @@ def _label_kernel(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, t
         if label < 0:
             label = _CONVERGED if e2 < criterion else _NOT_CONVERGED
         lab[p] = label
-    return lab, its
+    return N, 0
 
 
 class SectionMapper(BasinMapper):
@@ -526,7 +538,7 @@ class SectionMapper(BasinMapper):
     ``unresolved`` (jump or step bound); ``off_section`` (the flow does not fire the guard at
     the point).
 
-    **Early exit** as in :mod:`hybridpd.sweeps.basins`: an iterate inside the certified
+    **Early exit** as in :mod:`hybridpd.pair.basins`: an iterate inside the certified
     contraction ball of a cycle point (:func:`hybridpd.analysis.certify.certify_ball`, one
     ball per cycle point; numerical, sampled) is labelled ``converged`` at once.
 
@@ -545,7 +557,7 @@ class SectionMapper(BasinMapper):
     Examples
     --------
     >>> from hybridpd import ImpactPair, PDGains
-    >>> from hybridpd.analysis.orbits import symmetric_orbit
+    >>> from hybridpd.pair.orbits import symmetric_orbit
     >>> from hybridpd.analysis.sections import impact_pair_section
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> m = SectionMapper(SectionMap(impact_pair_section(orb.system())), orb.fixed_point)
@@ -593,16 +605,36 @@ class SectionMapper(BasinMapper):
             if sec.fires(z) > 0:
                 W0[i, :n], W0[i, n], T0[i], valid[i] = z, 1.0, t, True
         if np.any(valid):
-            bufs = P._buffers()
-            lv, iv = _label_kernel(*P._kernel_args, np.ascontiguousarray(W0[valid]),
-                                   T0[valid], sec.mode_index, sec.guard_index, self.period,
-                                   P._t_max(self.period), P.max_jumps, P.max_steps,
-                                   np.ascontiguousarray(sec.C), sec.period or 0.0,
-                                   targets, int(n_iter), self.criterion, Qs, r2s,
-                                   self.escape, sub := np.full((int(valid.sum()), P.dim), np.nan),
-                                   *bufs)
-            lab[valid], its[valid], out[valid] = lv, iv, sub
+            lab[valid], its[valid], out[valid] = self._label(
+                np.ascontiguousarray(W0[valid]), T0[valid], n_iter, Qs, r2s, targets)
         return lab, its, out
+
+    def _label(self, W0, T0, n_iter, Qs, r2s, targets):
+        """Labels, iterations and last section points of the valid start states ``W0``.
+
+        Modes on demand: where a point's run enters a mode not built yet, the kernel hands
+        back; the mode is built and the labelling resumes at that point's iterate (each
+        mode is built once, so this repeats at most ``max_modes`` times).
+        """
+        P = self.map
+        sec = P.section
+        N = W0.shape[0]
+        lab = np.empty(N, np.int64)
+        its = np.zeros(N, np.int64)
+        sub = np.full((N, P.dim), np.nan)
+        bufs = P._buffers()
+        p = 0
+        while p < N:
+            p, _code = _label_kernel(*P._kernel_args, W0, T0, sec.mode_index, sec.guard_index,
+                                    self.period, P._t_max(self.period), P.max_jumps,
+                                    P.max_steps, np.ascontiguousarray(sec.C),
+                                    sec.period or 0.0, targets, int(n_iter), self.criterion,
+                                    Qs, r2s, self.escape, sub, lab, its, p, *bufs)
+            if p < N and not P._complete(bufs[2]):
+                lab[p] = _UNRESOLVED        # its run needs a mode beyond the tables' bound
+                its[p] += 1
+                p += 1
+        return lab, its, sub
 
     def labels(self, S) -> tuple:
         """Labels and iterations used for section points ``S`` of shape ``(N, dim)``."""

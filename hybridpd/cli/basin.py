@@ -72,10 +72,10 @@ def register(sub):
 
 def run(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.orbits import symmetric_orbit
     from hybridpd.model import ImpactPair, PDGains
-    from hybridpd.sweeps.attractor_basins import attractor_basin
-    from hybridpd.sweeps.basins import LABELS, ImpactMapper
+    from hybridpd.pair.attractor_basins import attractor_basin
+    from hybridpd.pair.basins import LABELS, ImpactMapper
+    from hybridpd.pair.orbits import symmetric_orbit
 
     if args.model is not None:
         return _run_model(args)

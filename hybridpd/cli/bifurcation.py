@@ -133,8 +133,8 @@ def run(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
     import numpy as np
 
-    from hybridpd.analysis.bifdiagram import bifurcation_diagram
     from hybridpd.model import ImpactPair, PDGains
+    from hybridpd.pair.bifdiagram import bifurcation_diagram
 
     name, lo, hi, num = _sweep(args)
     if args.iterations < 1:
@@ -163,7 +163,7 @@ def run(args) -> int:
                          "over --executor/--scheduler workers")
     else:
         # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.sweeps.diagram_sweep import pair_diagram
+        from hybridpd.pair.diagram_sweep import pair_diagram
 
         d = pair_diagram(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name, values,
                          executor=executor, max_workers=args.workers, **opts)
@@ -208,8 +208,8 @@ def _symmetric_branch(pair, v0, name, stop, args):
     (``termination``: why the continuation stopped, with the parameter value; ``note``: a
     line saying what was drawn or why not)."""
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.continuation import continue_symmetric
     from hybridpd.model import PDGains
+    from hybridpd.pair.continuation import continue_symmetric
 
     try:
         br = continue_symmetric(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name,

@@ -1,8 +1,8 @@
 """``hybridpd boundaries``: traced boundary curves of the symmetric orbit in a parameter box."""
 from __future__ import annotations
 
-from hybridpd.analysis.testfunctions import PARAMETERS
 from hybridpd.cli._common import JSON_HELP, print_json
+from hybridpd.pair.testfunctions import PARAMETERS
 
 _EPILOG = """\
 examples:
@@ -63,7 +63,7 @@ def _parse_axis(which, spec):
 
 def run(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.boundaries import boundary_curves
+    from hybridpd.pair.boundaries import boundary_curves
 
     x = _parse_axis("x", args.x)
     y = _parse_axis("y", args.y)

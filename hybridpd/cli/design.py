@@ -45,7 +45,7 @@ def register(sub):
 
 def run(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.design import InfeasibleDesignError, design
+    from hybridpd.pair.design import InfeasibleDesignError, design
 
     L, x10 = clearance(args)
     try:

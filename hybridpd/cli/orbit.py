@@ -80,8 +80,8 @@ def run(args) -> int:
         raise UsageError("--set and --full-sequence need --model FILE.toml")
     L, x10 = check_pair_command(args, _PAIR, outputs=False)
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.orbits import symmetric_orbit
     from hybridpd.model import ImpactPair, PDGains
+    from hybridpd.pair.orbits import symmetric_orbit
 
     orb = symmetric_orbit(ImpactPair(args.mu, args.e, L, args.m2), PDGains(args.kp, args.kv),
                           args.omega, x10=x10, n=args.n, case=args.case)

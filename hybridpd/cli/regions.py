@@ -59,7 +59,7 @@ def run(args) -> int:
         raise cli.UsageError("--x and --y need --model FILE.toml (the pair's axes are --kp, --kv)")
     L, x10 = cli.check_pair_command(args, _PAIR)
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.regions import region_map
+    from hybridpd.pair.regions import region_map
 
     for nm in ("kp", "kv"):
         num = getattr(args, nm)[2]
@@ -109,8 +109,8 @@ def _run_model(args) -> int:
         rm.save(args.out)
     if args.plot:
         # deferred import: loaded only when this runs, for start-up time
+        from hybridpd.pair.regions import RegionMap
         from hybridpd.plotting.regions import plot_region_panels
-        from hybridpd.sweeps.regions import RegionMap
 
         cli.save_figure(plot_region_panels(RegionMap.from_dataset(rm.to_dataset())), args.plot)
     if args.json:

@@ -135,8 +135,8 @@ def _agree(a, b, rtol=1e-6):
 def geometry(args):
     """``(L, xm)`` from ``--L/--xm`` or ``--gamma/--x10`` (see the module docstring)."""
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.orbits import symmetric_orbit
     from hybridpd.model import ImpactPair, PDGains, check_positive
+    from hybridpd.pair.orbits import symmetric_orbit
 
     relative = args.gamma is not None or args.x10 is not None
     if args.L is None and args.gamma is None:

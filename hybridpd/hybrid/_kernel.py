@@ -8,19 +8,20 @@ compiled lazily (:mod:`hybridpd._jit`).
 
 Calling contract
 ----------------
-``run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target, zt, Rz, dt_min,
+``run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh, target, zt, rz, dt_min,
 t_end, max_jumps, max_steps, zf, zi, w, fc, ic, jt, jj, jg, jsrc, jdst, jkind, jpre, jpost,
 st0, st1, smode, sj, sw, zt_out) -> code``
 
 The per-mode arrays are stacked over ``M`` modes and padded to ``GM`` guards
 (:attr:`HybridAutomaton.packed`, a :class:`PackedAutomaton`): ``h (M,)``, ``Phi, Ah (M, N1, N1)``,
 ``dinv (M, N1)``, ``trunc (M,)``, ``G, gabs (M, GM, Kp1, N1)``, ``gsum (M, GM, N1)``,
-``cnorm (M, GM)``, ``prio (M, GM) int64``, ``ng (M,) int64``, homogeneous resets
-``Rh, Rz (M, GM, N1, N1)`` (``[[R, r], [0, 1]]``), ``target, zt (M, GM) int64`` (``zt = -1``: no
-Zeno target), ``dt_min (M,)``. Scalars: ``t_end``, ``max_jumps``, ``max_steps``;
+``cnorm (M, GM)``, ``prio (M, GM) int64``, ``ng (M,) int64``, the distinct homogeneous
+resets ``R (P, N1, N1)`` (``[[R, r], [0, 1]]``; many guards share one, so each is stored once)
+and each guard's row in it, ``rh, rz (M, GM) int64`` (reset, Zeno reset),
+``target, zt (M, GM) int64`` (``zt = -1``: no Zeno target), ``dt_min (M,)``. Scalars: ``t_end``, ``max_jumps``, ``max_steps``;
 ``zf = [ratio_max, ratio_rtol]``, ``zi = [enabled, min_ratios, max_instant_jumps]`` (int64).
 Carried state (read and updated, so a full buffer can be resumed): ``w (N1,)`` homogeneous
-state, ``fc (8,)`` float (``fc[0]`` time), ``ic (16,)`` int64 (``ic[0]`` mode, ``ic[1]`` jump
+state, ``fc (8,)`` float (``fc[0]`` time), ``ic (18,)`` int64 (``ic[0]`` mode, ``ic[1]`` jump
 count ``j``, ``ic[2] = -1``, ``ic[3] = -1`` initially, ``ic[8]`` steps taken, ``ic[9..11]`` entries
 written to the jump/segment/Zeno buffers, reset them to 0 before resuming). Output buffers
 (capacity = first dimension): jumps ``jt, jj, jg, jsrc, jdst, jkind`` (kind 1 crossing,
@@ -34,16 +35,27 @@ until then); a negative or missing entry accepts it at once. A fourth entry ``ma
 stops the run with code 8 (diverged) when a state component exceeds it in magnitude at the
 start of a flow.
 
-``run_hybrid_ex(..., zt_out, gkind, simtol)`` adds two returns to the same loop: code 6 when
-the current mode ``ic[0]`` is not built: a target (or Zeno target) ``-2 - r`` names the
-mode reserved as number ``r`` (the jump is applied and recorded with that code as target,
-then the loop returns; build the mode, set ``ic[0]`` to its index, patch the tables and
-resume), and code 7
+``run_hybrid_ex(..., zt_out, gkind, simtol, gid, fired)`` adds two returns to the same loop:
+code 6 when the current mode ``ic[0]`` is not built: a target (or Zeno target) ``-2 - r``
+names the mode reserved as number ``r`` (the jump is applied and recorded with that code as
+target, then the loop returns; build the mode, set ``ic[0]`` to its index, patch the tables
+and resume), and code 7
 when a guard of non-zero group ``gkind[mode, g]`` (shape ``(M, GM)``) fires while another
 guard of the same group is on its guard or closing onto it within ``simtol (1 + |t|)``: the
 joint jump is then the caller's (``w`` holds the pre-jump state, ``fc[0]`` its time and
 ``ic[12]`` the guard; apply the jump, set ``ic[0]``, ``ic[2] = ic[3] = -1`` and resume).
-``simtol < 0`` disables the groups.
+``simtol < 0`` disables the groups. ``gid (M, GM)`` names each guard across modes and
+``fired`` holds the guards of groups fired at the current instant ``fc[5]`` (``ic[14]`` of
+them): a guard of a group that fires there after ``_REFIRE_AFTER`` firings of it returns
+code 7 with ``ic[13] = 1`` (the joint jump then resolves the contacts' accumulation;
+``ic[15]`` counts those at the instant, ``fc[6]`` is the start of the flow that ended
+there).
+
+Code 6 also comes back (in both loops) from a Zeno switch whose reset is not packed yet
+(``rz[mode, g] = -1``): the jump is recorded with the state flowed to the accumulation time
+as its post state, ``ic[16] = mode + 1``, ``ic[17] = g``; the caller applies the reset to
+``w`` (and the recorded post state), packs it, sets ``ic[16] = 0`` and resumes (building
+``ic[0]`` first if it is a reserved code). ``ic`` has at least 18 entries.
 """
 from __future__ import annotations
 
@@ -72,10 +84,18 @@ _RC_NEED_MODE = 6
 _RC_SIMULTANEOUS = 7
 _RC_DIVERGED = 8
 _KIND_NAMES = {1: "crossing", 2: "grazing", 3: "zeno", 4: "simultaneous"}
+# a guard of a group firing at one instant after this many firings of it there goes to the
+# resolver: a short cascade of impacts (a contact hit twice) stays in the loop, impacts
+# that keep coming back are resolved together
+_REFIRE_AFTER = 2
 
 
 class PackedAutomaton(NamedTuple):
-    """Stacked per-mode arrays (the inputs of :func:`run_hybrid`; see the module docstring)."""
+    """Stacked per-mode arrays (the inputs of :func:`run_hybrid`; see the module docstring).
+
+    ``Rh[m, g]`` and ``Rz[m, g]`` (also with further indices) are the homogeneous reset and
+    Zeno reset of guard ``g`` of mode ``m``: rows of the shared table ``R``.
+    """
 
     h: np.ndarray
     Phi: np.ndarray
@@ -88,10 +108,36 @@ class PackedAutomaton(NamedTuple):
     cnorm: np.ndarray
     prio: np.ndarray
     ng: np.ndarray
-    Rh: np.ndarray
+    R: np.ndarray
+    rh: np.ndarray
     target: np.ndarray
     zt: np.ndarray
-    Rz: np.ndarray
+    rz: np.ndarray
+
+    @property
+    def Rh(self) -> _Resets:
+        return _Resets(self.R, self.rh)
+
+    @property
+    def Rz(self) -> _Resets:
+        return _Resets(self.R, self.rz)
+
+
+class _Resets:
+    """``[m, g, ...]`` -> ``R[rows[m, g], ...]``: the resets of every guard, as if stacked."""
+
+    def __init__(self, R, rows):
+        self._R, self._rows = R, rows
+
+    @property
+    def shape(self) -> tuple:
+        return self._rows.shape + self._R.shape[1:]
+
+    def __getitem__(self, key):
+        key = key if isinstance(key, tuple) else (key,)
+        if len(key) < 2:
+            raise IndexError("index the resets by [mode, guard, ...]")
+        return self._R[(self._rows[key[0], key[1]],) + key[2:]]
 
 
 
@@ -132,7 +178,7 @@ def _finite(w):
 
 
 @njit(cache=True)
-def _zeno_switch(mode, g, t_k, t_inf, h, Phi, Ah, Rz, zt, max_jumps, Kp1, w, fc, ic,
+def _zeno_switch(mode, g, t_k, t_inf, h, Phi, Ah, R, rz, zt, max_jumps, Kp1, w, fc, ic,
                  jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out):
     """Accumulation of guard ``g`` of ``mode`` at ``t_inf`` from state ``w`` at ``t_k``.
 
@@ -157,7 +203,14 @@ def _zeno_switch(mode, g, t_k, t_inf, h, Phi, Ah, Rz, zt, max_jumps, Kp1, w, fc,
     else:
         for i in range(N1):
             wz[i] = w[i]
-    _matvec(Rz[mode, g], wz, post)
+    lazy = rz[mode, g] < 0
+    if lazy:
+        # the Zeno reset is not packed yet: the jump is recorded with the state at t_inf
+        # and handed back (code 6, ic[16] = mode + 1, ic[17] = g), the caller applies it
+        for i in range(N1):
+            post[i] = wz[i]
+    else:
+        _matvec(R[rz[mode, g]], wz, post)
     post[N1 - 1] = 1.0
     ic[1] += 1
     _add_jump(jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, ic, t_inf, ic[1], g, mode, target, 3,
@@ -175,6 +228,10 @@ def _zeno_switch(mode, g, t_k, t_inf, h, Phi, Ah, Rz, zt, max_jumps, Kp1, w, fc,
         ic[7] = 0           # an instant accumulation still counts towards an instant loop
     else:
         ic[7] += 1
+    if lazy:
+        ic[16] = mode + 1
+        ic[17] = g
+        return _RC_NEED_MODE
     if not _finite(post):
         _add_seg(st0, st1, smode, sj, sw, ic, t_inf, t_inf, target, ic[1], w)
         return 3
@@ -182,10 +239,10 @@ def _zeno_switch(mode, g, t_k, t_inf, h, Phi, Ah, Rz, zt, max_jumps, Kp1, w, fc,
 
 
 @njit(cache=True)
-def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target, zt, Rz,
+def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh, target, zt, rz,
                   dt_min, t_end, max_jumps, max_steps, zf, zi, w, fc, ic,
                   jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out,
-                  gkind, simtol):
+                  gkind, simtol, gid, fired):
     """:func:`run_hybrid` with modes built on demand and simultaneity groups (module docstring)."""
     # One function on purpose: numba compiles the whole jump loop into one native loop.
     N1 = w.shape[0]
@@ -231,7 +288,7 @@ def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, t
             return 4
         if code == EV_START and g == ic[2] and zon:
             # immediate accumulation: the guard that just fired fires again at once
-            rc = _zeno_switch(mode, g, t, t, h, Phi, Ah, Rz, zt, max_jumps, Kp1, w, fc, ic,
+            rc = _zeno_switch(mode, g, t, t, h, Phi, Ah, R, rz, zt, max_jumps, Kp1, w, fc, ic,
                               jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode,
                               sj, sw, zt_out)
             if rc >= 0:
@@ -242,14 +299,19 @@ def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, t
                 w[i] = wout[i]
             fc[0] = tev
             return 1
-        if simtol >= 0.0 and gkind[mode, g] != 0 and _other_active(
-                G[mode], ng[mode], gkind[mode], g, wout, h[mode], simtol * (1.0 + abs(tev))):
-            for i in range(N1):
-                w[i] = wout[i]
-            fc[0] = tev
-            ic[12] = g
-            return _RC_SIMULTANEOUS
-        _matvec(Rh[mode, g], wout, post)
+        if simtol >= 0.0 and gkind[mode, g] != 0:
+            again = _fired_before(gid[mode, g], tev, fc, ic, fired) >= _REFIRE_AFTER
+            if again or _other_active(G[mode], ng[mode], gkind[mode], g, wout, h[mode],
+                                      simtol * (1.0 + abs(tev))):
+                for i in range(N1):
+                    w[i] = wout[i]
+                fc[0] = tev
+                fc[6] = t
+                ic[12] = g
+                ic[13] = 1 if again else 0
+                return _RC_SIMULTANEOUS
+            _note_fired(gid[mode, g], ic, fired)
+        _matvec(R[rh[mode, g]], wout, post)
         post[N1 - 1] = 1.0
         tgt = target[mode, g]
         kind = 2 if code == EV_GRAZING else 1
@@ -317,11 +379,38 @@ def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, t
             if dt <= dt_min[mode] and t_inf > t_end:
                 t_inf = t_end
             if t_inf <= t_end:
-                rc = _zeno_switch(mode, g, tev, t_inf, h, Phi, Ah, Rz, zt, max_jumps, Kp1, w,
+                rc = _zeno_switch(mode, g, tev, t_inf, h, Phi, Ah, R, rz, zt, max_jumps, Kp1, w,
                                   fc, ic, jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1,
                                   smode, sj, sw, zt_out)
                 if rc >= 0:
                     return rc
+
+
+@njit(cache=True)
+def _fired_before(me, tev, fc, ic, fired):
+    """How often the guard of identity ``me`` has fired already at the instant ``tev``.
+
+    The guards of groups that fired at one instant ``fc[5]`` are kept in ``fired[:ic[14]]``
+    (beyond its capacity further ones are not kept: the instant-jump bound still holds);
+    a later instant starts afresh (``ic[15]``, the joint jumps of the instant, too).
+    """
+    if fc[5] != tev:
+        fc[5] = tev
+        ic[14] = 0
+        ic[15] = 0
+        return 0
+    count = 0
+    for q in range(min(ic[14], fired.shape[0])):
+        if fired[q] == me:
+            count += 1
+    return count
+
+
+@njit(cache=True)
+def _note_fired(me, ic, fired):
+    if ic[14] < fired.shape[0]:
+        fired[ic[14]] = me
+    ic[14] += 1
 
 
 @njit(cache=True)
@@ -349,11 +438,12 @@ def _other_active(Gm, ngm, gk, g, w, hm, tau):
 
 
 @njit(cache=True)
-def run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target, zt, Rz,
+def run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh, target, zt, rz,
                dt_min, t_end, max_jumps, max_steps, zf, zi, w, fc, ic,
                jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out):
     """Run the automaton from the carried state; see the module docstring for the contract."""
-    return run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, Rh, target,
-                         zt, Rz, dt_min, t_end, max_jumps, max_steps, zf, zi, w, fc, ic, jt, jj,
+    return run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh,
+                         target, zt, rz, dt_min, t_end, max_jumps, max_steps, zf, zi, w, fc, ic, jt, jj,
                          jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out,
-                         np.zeros((1, 1), np.int64), -1.0)
+                         np.zeros((1, 1), np.int64), -1.0, np.zeros((1, 1), np.int64),
+                         np.zeros(1, np.int64))

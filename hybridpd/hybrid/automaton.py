@@ -45,16 +45,25 @@ Conventions
   packed into the kernel's tables) the first time a run enters it or a caller names it; a
   guard naming a mode not built yet carries a reservation code, and the jump loop hands
   control back to build it. :meth:`HybridAutomaton.materialize` builds every reachable mode
-  (``modes`` and ``packed`` do so first, for analyses that need them all).
+  (iterating ``modes`` does so first, for analyses that need them all); ``packed`` holds the
+  tables of the modes built so far, and every map of a section builds modes as it enters
+  them, as a simulation does.
 * **Simultaneity groups**: a guard of a non-zero ``group`` that fires while another guard of
   its group is on its guard (or closing onto it within ``simtol (1 + |t|)``) hands the joint
   jump to the ``resolver`` of :meth:`HybridAutomaton.simulate` (jumps of kind
   ``'simultaneous'``, one per guard the resolver names, all at one instant); a resolver that
-  finds no joint jump stops the run with ``SIMULTANEOUS``.
+  finds no joint jump stops the run with ``SIMULTANEOUS``. A guard of a group that fires
+  again at an instant where it (a guard of the same name, in any mode) has fired already is
+  handed to the resolver too, with ``refire = 1, 2, ...`` (how often this happened at the
+  instant): impacts that keep coming back in no time accumulate, and the resolver resolves
+  them together (it may answer with kind ``'zeno'``). The resolver's jumps count towards
+  ``max_instant_jumps`` like the loop's own, so a joint jump that changes nothing cannot
+  repeat without bound.
 * **Divergence**: with ``max_state`` the run stops with ``DIVERGED`` when a state component
   exceeds it at a jump or the start of a flow.
 * **Bounds**: every loop is bounded (``max_jumps``, ``max_steps``, the bisection budget); the
-  trajectory always says why it stopped (:class:`TerminationCause`). When the jump limit is
+  trajectory always says why it stopped (:class:`TerminationCause`, and in one line
+  :attr:`HybridTrajectory.reason`). When the jump limit is
   reached the run stops at the event that would have been jump ``max_jumps + 1``, with the
   pre-jump state.
 
@@ -70,6 +79,7 @@ inputs :class:`PackedAutomaton`; the calling contract is documented there).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 
@@ -89,7 +99,7 @@ from hybridpd.hybrid._kernel import (  # noqa: F401 (the kernel helpers keep the
     run_hybrid,
     run_hybrid_ex,
 )
-from hybridpd.hybrid._store import ModeStore
+from hybridpd.hybrid._store import ModeStore, reset_matrix
 from hybridpd.hybrid.events import K_DEFAULT, THETA_DEFAULT
 from hybridpd.hybrid.modes import Guard, Mode, TerminationCause, ZenoOptions
 from hybridpd.hybrid.trajectory import (
@@ -122,6 +132,8 @@ __all__ = [
 # 1 ms per jump), in chunks bounded by both; the run carries its state between chunks.
 _INTERP_MAX_STEPS = 2000
 _INTERP_JUMPS = 64
+# guards of simultaneity groups remembered per instant (to see one fire again there)
+_FIRED_CAP = 64
 
 
 
@@ -241,7 +253,11 @@ class HybridAutomaton:
         self._store = ModeStore(n, K, theta)
         self._index = {}                 # name -> row of a built mode
         self._names = []                 # row -> name
-        self._built = []                 # row -> Mode
+        self._built = []                 # row -> Mode, its guards without resets (_full)
+        self._full_cache = {}            # row -> Mode with resets, the last few asked for
+        # a builder that gives a guard's Zeno reset on its own: those are packed when first
+        # used (most Zeno targets are never entered, their resets would be most of the tables)
+        self._lazy_zeno = callable(getattr(mode_builder, "zeno_reset", None))
         self._reserved = {}              # name -> reservation number r (target code -2 - r)
         self._res_names = []             # r -> name
         self._code_rows = {}             # target code -> row, once built
@@ -282,10 +298,14 @@ class HybridAutomaton:
             raise ValueError(
                 f"max_modes: more than {self._max_modes} modes would be built; simulate builds "
                 "the modes it visits, an analysis of every mode needs them all")
-        row = self._store.add(m, self._reserve)
+        row = self._store.add(m, self._reserve, lazy_zeno=self._lazy_zeno)
         self._index[name] = row
         self._names.append(name)
-        self._built.append(m)
+        # the resets live in the packed tables (stored once each, shared between modes);
+        # a mode keeps its guards without them (mode() puts them back), so that an automaton
+        # with many modes does not hold every reset matrix twice
+        self._built.append(dataclasses.replace(m, guards=tuple(
+            dataclasses.replace(g, reset=None, zeno_reset=None) for g in m.guards)))
         r = self._reserved.get(name)
         if r is not None:
             self._store.patch(-2 - r, row)
@@ -322,11 +342,79 @@ class HybridAutomaton:
         return self._store.nbytes
 
     @property
-    def modes(self) -> tuple:
-        """The modes, in order (their index is the mode code of the kernels); all reachable
-        modes are built first (:meth:`materialize`)."""
+    def modes(self) -> Sequence:
+        """The modes, in order (their index is the mode code of the kernels).
+
+        Indexing a mode that is built (an index a kernel or :meth:`mode_index` gave) builds
+        nothing; its length, iteration or any other index build every reachable mode first
+        (:meth:`materialize`). :attr:`built_mode_names` names the modes built so far. The
+        guards' resets are read back from the packed tables, where each is stored once.
+        """
+        return _Modes(self)
+
+    def _slim(self) -> list:
+        """The modes built so far, their guards without resets (flows, guard rows, names and
+        targets: what an analysis reads besides the packed tables; nothing is built)."""
+        return self._built
+
+    def _zeno_reset(self, i, gi) -> np.ndarray:
+        """The homogeneous Zeno reset of guard ``gi`` of mode ``i``, packed if it was not."""
+        pk = self._store.packed()
+        if pk.rz[i, gi] < 0:
+            where = f"mode {self._names[i]!r} guard {self._built[i].guards[gi].name!r}"
+            self._store.set_zeno(i, gi, reset_matrix(
+                f"{where} zeno_reset", self._builder.zeno_reset(
+                    self._names[i], self._built[i].guards[gi].name), self._n))
+            pk = self._store.packed()
+        return pk.Rz[i, gi]
+
+    def _full(self, i) -> Mode:
+        """Built mode ``i`` with its guards' resets, from the packed tables."""
+        m = self._full_cache.pop(i, None)
+        if m is None:
+            n = self._n
+            pk = self._store.packed()
+            guards = []
+            for gi, g in enumerate(self._built[i].guards):
+                Rh = pk.Rh[i, gi]
+                zr = None
+                if g.zeno_target is not None:
+                    Rz = self._zeno_reset(i, gi)
+                    zr = (Rz[:n, :n].copy(), Rz[:n, n].copy())
+                guards.append(dataclasses.replace(g, reset=(Rh[:n, :n].copy(), Rh[:n, n].copy()),
+                                                  zeno_reset=zr))
+            m = dataclasses.replace(self._built[i], guards=tuple(guards))
+        self._full_cache[i] = m                 # the most recent few, most recent last
+        while len(self._full_cache) > 16:
+            self._full_cache.pop(next(iter(self._full_cache)))
+        return m
+
+    def _name_of(self, code) -> str:
+        """Name of the mode of row or reservation code ``code`` (a run may stop right after
+        a jump into a mode not built yet, e.g. on the instant-jump bound)."""
+        return self._names[code] if code >= 0 else self._res_names[-2 - int(code)]
+
+    @property
+    def built_mode_names(self) -> tuple:
+        """Names of the modes built so far, in order (nothing is built)."""
+        return tuple(self._names)
+
+    def build_code(self, code: int) -> int:
+        """Build the mode a kernel reported as not built (its target code ``< -1``, the
+        kernels' return code 6 with ``ic[0] = code``) and return its index."""
+        r = -2 - int(code)
+        if not 0 <= r < len(self._res_names):
+            raise ValueError(f"code must be a reserved mode code (< -1), got {code!r}")
+        return self.mode_index(self._res_names[r])
+
+    def guard_names(self) -> tuple:
+        """Sorted names of the guards of every mode: declared by the mode builder (its
+        ``guard_names`` attribute, when it has one) or found by :meth:`materialize`."""
+        declared = getattr(self._builder, "guard_names", None)
+        if declared is not None:
+            return tuple(sorted(set(declared)))
         self.materialize()
-        return tuple(self._built)
+        return tuple(sorted({g.name for m in self._built for g in m.guards}))
 
     @property
     def mode_names(self) -> tuple:
@@ -343,9 +431,10 @@ class HybridAutomaton:
 
     @property
     def packed(self) -> PackedAutomaton:
-        """Stacked arrays for :func:`run_hybrid` over all reachable modes (read-only by
-        convention; :meth:`materialize` first)."""
-        self.materialize()
+        """Stacked arrays for :func:`run_hybrid` over the modes built so far (read-only by
+        convention). A target or Zeno target ``< -1`` names a mode not built yet: the jump
+        loop returns code 6 on entering it (:meth:`build_code` builds it; the tables are then
+        new arrays). Call :meth:`materialize` first for the tables of every mode."""
         return self._store.packed()
 
     def _packed_now(self) -> PackedAutomaton:
@@ -363,7 +452,7 @@ class HybridAutomaton:
 
     def mode(self, name: str) -> Mode:
         """The mode called ``name`` (built on demand)."""
-        return self._built[self.mode_index(name)]
+        return self._full(self.mode_index(name))
 
     def simulate(self, x0, mode0: str, t_span, max_jumps: int = 10_000,
                  max_steps: int | None = None, zeno: ZenoOptions | None = None,
@@ -391,7 +480,11 @@ class HybridAutomaton:
             :class:`Guard`): ``z`` the pre-jump state (shape ``(n,)``), ``names`` the guard
             names to record (one jump of kind ``'simultaneous'`` each, all at ``t`` with the
             joint post state). It returns ``None`` when the joint jump has no solution: the
-            run stops there with ``SIMULTANEOUS``. Without a resolver groups are ignored.
+            run stops there with ``SIMULTANEOUS``. A guard of the group that fires again at
+            one instant is handed over as ``resolver(mode, guard, t, z, refire=k)`` (module
+            docstring); the answer may then carry a fourth entry, the kind ``'zeno'`` (an
+            accumulation resolved) or ``'simultaneous'``. Without a resolver groups are
+            ignored.
         simtol : float
             Guards of a group closing within ``simtol (1 + |t|)`` are simultaneous.
         max_state : float, optional
@@ -415,13 +508,15 @@ class HybridAutomaton:
         w = np.append(x0, 1.0)
         fc = np.zeros(8)
         fc[0] = t0
-        ic = np.zeros(16, np.int64)
+        ic = np.zeros(18, np.int64)
         ic[0] = mi
         ic[2] = -1
         ic[3] = -1
         opts = (zeno, resolver, float(simtol), -1.0 if max_state is None else float(max_state))
         rc, cat = self._run_chunks(t0, t1, max_jumps, max_steps, opts, w, fc, ic)
-        return self._make_trajectory(t0, rc, cat, w, fc, ic)
+        traj = self._make_trajectory(t0, rc, cat, w, fc, ic)
+        reason = _stop_reason(traj, max_jumps, max_steps, zeno)
+        return traj if not reason else dataclasses.replace(traj, reason=reason)
 
     def _run_chunks(self, t0, t1, max_jumps, max_steps, opts, w, fc, ic):
         """Run the jump loop from the carried state ``(w, fc, ic)`` until it stops.
@@ -443,6 +538,8 @@ class HybridAutomaton:
         small = (t1 - t0) <= _INTERP_MAX_STEPS * hmin or max_jumps <= _INTERP_JUMPS
         if resolver is None:
             simtol = -1.0
+        fired = np.zeros(_FIRED_CAP, np.int64)
+        bufs = None
         while True:
             pk = self._store.packed()
             gk = self._store.gkind() if simtol >= 0 else None
@@ -450,75 +547,126 @@ class HybridAutomaton:
                       else np.full(pk.h.shape[0], float(zeno.dt_min)))
             # without groups the plain loop (the same code) is the kernel to compile
             kern = run_hybrid if simtol < 0 else run_hybrid_ex
-            extra = {} if simtol < 0 else {"gkind": gk, "simtol": simtol}
+            extra = {} if simtol < 0 else {"gkind": gk, "simtol": simtol,
+                                           "gid": self._store.gid(), "fired": fired}
             interp = small and kern.prefer_interpreter()
             steps = min(max_steps, int(ic[8]) + _INTERP_MAX_STEPS) if interp else max_steps
             if interp:
                 cap = min(cap, _INTERP_JUMPS + 4)
-            bufs = _buffers(cap, N1)
+            if bufs is None or bufs["jt"].shape[0] != cap:
+                bufs = _buffers(cap, N1)
             ic[9:12] = 0
             run = kern.interpret if interp else kern
             rc = run(pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs, pk.gsum, pk.cnorm,
-                     pk.prio, pk.ng, pk.Rh, pk.target, pk.zt, pk.Rz, dt_min, t1, max_jumps,
+                     pk.prio, pk.ng, pk.R, pk.rh, pk.target, pk.zt, pk.rz, dt_min, t1, max_jumps,
                      steps, zf, zi, w, fc, ic, **bufs, **extra)
             nj, ns, nz = int(ic[9]), int(ic[10]), int(ic[11])
+            # the records are copied out: the buffers serve the next chunk, and a run that
+            # returns often (joint jumps, modes built) holds only what it recorded
             chunks.append({k: (v[:nj] if k.startswith("j") else v[:ns] if k.startswith("s")
-                               else v[:nz]) for k, v in bufs.items()})
+                               else v[:nz]).copy() for k, v in bufs.items()})
             if rc == _RC_NEED_MODE:
-                code = int(ic[0])
-                ic[0] = self._build(self._res_names[-2 - code])
+                if ic[16]:
+                    self._apply_zeno(w, ic, chunks[-1])
+                if ic[0] < 0:
+                    ic[0] = self.build_code(int(ic[0]))
                 continue
             if rc == _RC_SIMULTANEOUS:
                 if int(ic[1]) >= max_jumps:
                     rc = 1
                     break
-                done = self._resolve(resolver, w, fc, ic, chunks)
-                if not done:
-                    rc = TerminationCause.SIMULTANEOUS.value
+                rc = self._resolve(resolver, w, fc, ic, chunks, fired, int(zeno.max_instant_jumps))
+                if rc is not None:
                     break
                 continue
             if rc == _RC_BUFFER_FULL or (rc == _RC_STEP_LIMIT and steps < max_steps):
                 cap = min(max(max_jumps - int(ic[1]), 0) + 4, 65536)
                 continue
             break
-        cat = {k: np.concatenate([c[k] for c in chunks]) for k in chunks[0] if k != "jname"}
         names = []
         for c in chunks:
-            names.extend(c["jname"] if "jname" in c else [None] * len(c["jt"]))
+            names.extend(c.pop("jname") if "jname" in c else [None] * len(c["jt"]))
+        # one record at a time, each chunk's part let go as it is joined: the peak is the
+        # records once and one of them twice, not all twice
+        cat = {k: np.concatenate([c.pop(k) for c in chunks]) for k in list(chunks[0])}
         cat["jname"] = names
         return rc, cat
 
-    def _resolve(self, resolver, w, fc, ic, chunks) -> bool:
-        """Apply the resolver's joint jump to the carried state; False if it has none."""
+    def _apply_zeno(self, w, ic, chunk) -> None:
+        """Apply the Zeno reset the jump loop handed back (``ic[16] = mode + 1``, ``ic[17]``
+        the guard) to ``w`` and to the post state of the last jump recorded."""
+        Rz = self._zeno_reset(int(ic[16]) - 1, int(ic[17]))
+        w[:] = Rz @ w
+        w[-1] = 1.0
+        chunk["jpost"][-1] = w
+        ic[16] = 0
+
+    def _resolve(self, resolver, w, fc, ic, chunks, fired, max_inst):
+        """Apply the resolver's joint jump to the carried state.
+
+        Returns ``None`` to resume the run, else its termination code: ``SIMULTANEOUS`` when
+        the resolver has no joint jump, ``ZENO`` past ``max_instant_jumps`` jumps at one
+        instant (the joint jumps count like the kernel's own).
+        """
         n = self._n
         mode = int(ic[0])
         g = int(ic[12])
         src = self._names[mode]
         t = float(fc[0])
-        out = resolver(src, self._built[mode].guards[g].name, t, w[:n].copy())
+        gname = self._built[mode].guards[g].name
+        if ic[13]:
+            # a guard of the group fires again at this instant: the resolver is told how
+            # often this happened, so that it can resolve the contacts' accumulation
+            ic[15] += 1
+            out = resolver(src, gname, t, w[:n].copy(), refire=int(ic[15]))
+        else:
+            out = resolver(src, gname, t, w[:n].copy())
         if out is None:
-            return False
-        z_post, target, names = out
+            return TerminationCause.SIMULTANEOUS.value
+        z_post, target, names, *more = out
+        kind = more[0] if more else "simultaneous"
+        if kind not in ("simultaneous", "zeno") or not names:
+            raise ValueError("resolver must return (z_post, target, names[, kind]) with at "
+                             "least one name and kind 'simultaneous' or 'zeno'")
         z_post = np.asarray(z_post, dtype=float)
         tgt = self.mode_index(target)
         k = len(names)
         pre = w.copy()
         post = np.append(z_post, 1.0)
+        zeno = kind == "zeno"
         chunks.append({
             "jt": np.full(k, t), "jj": int(ic[1]) + 1 + np.arange(k, dtype=np.int64),
             "jg": np.full(k, -1, np.int64), "jsrc": np.full(k, mode, np.int64),
-            "jdst": np.full(k, tgt, np.int64), "jkind": np.full(k, 4, np.int64),
+            "jdst": np.full(k, tgt, np.int64), "jkind": np.full(k, 3 if zeno else 4, np.int64),
             "jpre": np.tile(pre, (k, 1)), "jpost": np.tile(post, (k, 1)),
             "st0": np.empty(0), "st1": np.empty(0), "smode": np.empty(0, np.int64),
-            "sj": np.empty(0, np.int64), "sw": np.empty((0, n + 1)), "zt_out": np.empty(0),
-            "jname": list(names)})
+            "sj": np.empty(0, np.int64), "sw": np.empty((0, n + 1)),
+            "zt_out": np.full(1 if zeno else 0, t), "jname": list(names)})
         ic[1] += k
         w[:] = post
         ic[0] = tgt
         ic[2] = -1
         ic[3] = -1
         fc[1] = 0.0
-        return True
+        ids = self._store.guard_ids
+        for nm in names:       # the joint jump fires each named guard at this instant
+            if nm in ids:
+                if ic[14] < fired.shape[0]:
+                    fired[ic[14]] = ids[nm]
+                ic[14] += 1
+        # fc[6]: the start of the flow that ended here; no flow between: one more jump at
+        # this instant
+        ic[7] = ic[7] + 1 if fc[0] == fc[6] else 0
+        if ic[7] > max_inst:
+            chunks.append({
+                "jt": np.empty(0), "jj": np.empty(0, np.int64), "jg": np.empty(0, np.int64),
+                "jsrc": np.empty(0, np.int64), "jdst": np.empty(0, np.int64),
+                "jkind": np.empty(0, np.int64), "jpre": np.empty((0, n + 1)),
+                "jpost": np.empty((0, n + 1)), "st0": np.array([t]), "st1": np.array([t]),
+                "smode": np.array([tgt], np.int64), "sj": np.array([ic[1]], np.int64),
+                "sw": post[None, :].copy(), "zt_out": np.array([t]), "jname": []})
+            return TerminationCause.ZENO.value
+        return None
 
     def _make_trajectory(self, t0, rc, cat, w, fc, ic) -> HybridTrajectory:
         n = self._n
@@ -526,24 +674,58 @@ class HybridAutomaton:
         gnames = [[g.name for g in m.guards] for m in self._built]
         for key in ("jdst", "smode"):
             for code in np.unique(cat[key][cat[key] < 0]):
+                if int(code) not in self._code_rows:
+                    # the run stopped right after entering it (e.g. on the instant-jump
+                    # bound): built now, so that the trajectory's modes all have tables
+                    self.build_code(int(code))
                 cat[key][cat[key] == code] = self._code_rows[int(code)]
+        if ic[0] < 0:
+            ic[0] = self.build_code(int(ic[0]))
         jsrc = cat["jsrc"]
         guard = tuple(nm if nm is not None else gnames[s][g]
                       for s, g, nm in zip(jsrc, cat["jg"], cat["jname"]))
+        # views, not copies: a long run's records are its largest memory
         jumps = JumpTable(
-            t=cat["jt"].copy(), j=cat["jj"].copy(), guard=guard,
-            pre=cat["jpre"][:, :n].copy(), post=cat["jpost"][:, :n].copy(),
+            t=cat["jt"], j=cat["jj"], guard=guard,
+            pre=cat["jpre"][:, :n], post=cat["jpost"][:, :n],
             source=tuple(mn[s] for s in jsrc), target=tuple(mn[d] for d in cat["jdst"]),
             kind=tuple(_KIND_NAMES[int(k)] for k in cat["jkind"]))
-        segs = SegmentTable(t_start=cat["st0"].copy(), t_end=cat["st1"].copy(),
-                            mode=tuple(mn[m] for m in cat["smode"]), j=cat["sj"].copy(),
-                            x_start=cat["sw"][:, :n].copy())
+        segs = SegmentTable(t_start=cat["st0"], t_end=cat["st1"],
+                            mode=tuple(mn[m] for m in cat["smode"]), j=cat["sj"],
+                            x_start=cat["sw"][:, :n])
         return HybridTrajectory(
             t0=t0, t_final=float(fc[0]), termination=TerminationCause(int(rc)),
             segments=segs, jumps=jumps, zeno_times=cat["zt_out"].copy(),
             x_final=w[:n].copy(), mode_final=mn[int(ic[0])], j_final=int(ic[1]),
             n_steps=int(ic[8]), state_names=self._state_names, _automaton=self,
             _seg_mode_idx=cat["smode"].copy(), _seg_w=np.ascontiguousarray(cat["sw"]))
+
+
+class _Modes(Sequence):
+    """:attr:`HybridAutomaton.modes`: a built mode by index builds nothing; everything else
+    builds every reachable mode first."""
+
+    def __init__(self, automaton):
+        self._ha = automaton
+
+    def __getitem__(self, i):
+        ha = self._ha
+        if isinstance(i, (int, np.integer)) and 0 <= i < len(ha._built):
+            return ha._full(int(i))
+        n = ha.materialize()
+        if isinstance(i, slice):
+            return tuple(ha._full(j) for j in range(n)[i])
+        return ha._full(range(n)[i])
+
+    def __len__(self):
+        return self._ha.materialize()
+
+    def __iter__(self):
+        n = self._ha.materialize()
+        return (self._ha._full(j) for j in range(n))
+
+    def __repr__(self):
+        return f"<modes of an automaton: {len(self._ha._built)} built>"
 
 
 def _buffers(cap, N1):
@@ -554,3 +736,31 @@ def _buffers(cap, N1):
         "jpost": np.empty((cap, N1)), "st0": np.empty(cap + 2), "st1": np.empty(cap + 2),
         "smode": np.empty(cap + 2, np.int64), "sj": np.empty(cap + 2, np.int64),
         "sw": np.empty((cap + 2, N1)), "zt_out": np.empty(cap)}
+
+
+def _stop_reason(traj, max_jumps, max_steps, zeno) -> str:
+    """One line saying why ``traj`` stopped before its end time ("" if it did not)."""
+    cause = traj.termination
+    t = f"t = {traj.t_final:.12g}"
+    jt = traj.jumps
+    last = jt.t.size and jt.t[-1] == traj.t_final
+    at = f" (last jump: {jt.guard[-1]} in mode {jt.source[-1]!r})" if last else ""
+    if cause is TerminationCause.END_TIME:
+        return ""
+    if cause is TerminationCause.JUMP_LIMIT:
+        return f"jump_limit: max_jumps = {max_jumps} jumps reached at {t}{at}"
+    if cause is TerminationCause.ZENO:
+        n_inst = int(np.sum(jt.t == traj.t_final)) if last else 0
+        if n_inst > zeno.max_instant_jumps:
+            return (f"zeno: more than max_instant_jumps = {zeno.max_instant_jumps} jumps at "
+                    f"the one instant {t}{at}")
+        return (f"zeno: jumps accumulate at {traj.zeno_times[-1]:.12g} in mode "
+                f"{traj.mode_final!r}, whose guard has no zeno_target (stopped at {t})")
+    if cause is TerminationCause.SIMULTANEOUS:
+        return (f"simultaneous: the resolver found no joint jump at {t} in mode "
+                f"{traj.mode_final!r}")
+    if cause is TerminationCause.STEP_LIMIT:
+        return f"step_limit: max_steps = {max_steps} flow steps taken by {t}"
+    if cause is TerminationCause.NONFINITE:
+        return f"nonfinite: the state overflowed or became NaN at {t} in mode {traj.mode_final!r}"
+    return f"diverged: a state component exceeded max_state at {t} in mode {traj.mode_final!r}"

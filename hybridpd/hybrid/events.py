@@ -94,7 +94,7 @@ from typing import NamedTuple
 import numpy as np
 
 from hybridpd._jit import njit
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 
 # re-exported: the kernels below and their users share these
 from hybridpd.hybrid._poly import (
@@ -206,7 +206,11 @@ def _balance(A, b):
     if n and np.any(A):
         from scipy.linalg import matrix_balance
 
-        _, (scale, _) = matrix_balance(A, permute=False, separate=True)
+        # entries at the rounding level of the largest (residues of a projection, zero in
+        # exact arithmetic, as in a sticking mode) would have the balancing scale a state by
+        # up to 2^32, and the truncation bound of every guard reading it grow with it
+        As = np.where(np.abs(A) > 64.0 * _EPS * float(np.abs(A).max()), A, 0.0)
+        _, (scale, _) = matrix_balance(As, permute=False, separate=True)
         D[:n] = scale
     bh = b / D[:n] if n else b
     Ahat = A * D[None, :n] / D[:n, None] if n else A

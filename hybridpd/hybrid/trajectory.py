@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.hybrid.events import flow_eval
 from hybridpd.hybrid.modes import TerminationCause
 
@@ -149,6 +149,9 @@ class HybridTrajectory:
     n_steps : int
         Flow steps taken (exact matrix-exponential steps, not ODE steps).
     state_names : tuple of str
+    reason : str
+        Why the run stopped before the end time, in one line (the bound reached, the guard
+        or the instant involved); empty when it reached the end time.
 
     Calling the trajectory, ``traj(t)`` (= :meth:`state_at`), gives the exact state at any
     time(s) in ``[t0, t_final]``, right-continuous at jumps.
@@ -167,6 +170,7 @@ class HybridTrajectory:
     j_final: int
     n_steps: int
     state_names: tuple
+    reason: str = ""
     _automaton: HybridAutomaton = field(repr=False, compare=False, default=None)
     _seg_mode_idx: np.ndarray = field(repr=False, compare=False, default=None)
     _seg_w: np.ndarray = field(repr=False, compare=False, default=None)

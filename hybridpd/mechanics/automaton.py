@@ -35,10 +35,18 @@ Guards (``g > 0`` admissible, all with ``direction = -1`` except sampling):
   mode is built (:meth:`_Geometry.impact_held`); target the mode holding what stays held (the
   same mode if all do); accumulating impacts enter the mode that also holds ``k`` through the
   plastic projection onto all of its contacts (``zeno_target``; none if the normals are
-  dependent: the run then ends with ``ZENO``). Impact guards form simultaneity group 1: when
+  dependent: the run then ends with ``ZENO``; the projection is the mode builder's
+  ``zeno_reset``, packed the first time an accumulation uses it). Impact guards form
+  simultaneity group 1: when
   another rigid contact is on its bound or closing onto it at the same instant, the joint
   impact is solved by :func:`~hybridpd.mechanics.impact.multi_impact` at run time
-  (:meth:`MechanicalAutomaton.resolver`).
+  (:meth:`MechanicalAutomaton.resolver`); the contacts it leaves at rest are held if their
+  forces push (a complementarity problem in the contact forces, so that no contact enters a
+  sticking phase whose force already pulls). A contact that fires again at one instant (its
+  impacts alternating with a neighbour's faster than time resolves them) goes to the
+  resolver as well, with every contact on its bound: their impacts follow each other to the
+  end (:func:`~hybridpd.mechanics.impact.impact_cascade`), or where they accumulate to their
+  plastic limit, the contacts then at rest held as above (kind ``'zeno'``).
 * ``release{k}{+|-}`` (``k`` in ``S``): ``g = -wall * lambda_k + delta_k``: the contact force
   pulls by the margin ``delta_k = RELEASE_MARGIN (|c_k|_1 max(1, |bounds|) + |d_k|)`` (``c_k,
   d_k`` the affine force row), so that the free flow entered at the release separates
@@ -72,10 +80,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode, ZenoOptions
 from hybridpd.mechanics.contacts import Contact
-from hybridpd.mechanics.impact import multi_impact, solve_lcp
+from hybridpd.mechanics.impact import impact_cascade, multi_impact, solve_lcp
 from hybridpd.mechanics.loop import MechanicalLoop
 
 __all__ = ["GuardInfo", "MechanicalAutomaton", "ModeInfo", "build_automaton"]
@@ -87,6 +95,10 @@ _GUARD_KIND = {"contact": "impact", "release": "release", "enter": "enter", "lea
 RELEASE_MARGIN = 1e-9
 #: resolve an accumulation until its extrapolated tail is this short (relative to 1 + |t|)
 ZENO_TAIL_TOL = 1e-12
+_EPS = float(np.finfo(float).eps)
+#: contacts within this (relative) of their bounds take part in an accumulation's limit
+_TOUCH_RTOL = 1e-12
+_CACHE_SIZE = 512              # impact laws and projections kept for the next modes built
 
 
 @dataclass(frozen=True)
@@ -193,8 +205,12 @@ class MechanicalAutomaton:
         ``time_tol (1 + |t|)``, and every held one), solves their joint impact
         (:func:`~hybridpd.mechanics.impact.multi_impact`) and returns ``(z_post, target
         mode, impact guard names)``, or ``None`` when the LCP has no non-degenerate solution.
+        ``resolver(..., refire=k)`` (a contact firing again at one instant, the ``k``-th time
+        there) resolves the contacts on their bounds together (module docstring) and may
+        return a fourth entry, the kind ``'zeno'``.
         """
-        return lambda mode, guard, t, z: _resolve(self, time_tol, mode, guard, t, z)
+        return lambda mode, guard, t, z, refire=0: _resolve(self, time_tol, mode, guard, t, z,
+                                                            refire)
 
     def initial_state(self, q0, v0, t0: float = 0.0, controller_state=None) -> np.ndarray:
         """Full state at ``t0`` (see :meth:`MechanicalLoop.initial_state`)."""
@@ -218,8 +234,10 @@ class MechanicalAutomaton:
         return self.free_mode
 
 
-def _active(model, z, t, time_tol, stick, fired):
-    """Rigid contacts on a bound (or closing onto it within the tolerance) at state ``z``."""
+def _active(model, z, t, time_tol, stick, fired, touching=False):
+    """Rigid contacts on a bound (or closing onto it within the tolerance) at state ``z``:
+    ``(k, wall, held)``. With ``touching`` a contact on its bound takes part even while it
+    separates (the contacts of an accumulation, which must not close again)."""
     iv = model.layout["v"]
     v = z[iv]
     held = dict(stick)
@@ -242,39 +260,119 @@ def _active(model, z, t, time_tol, stick, fired):
         for wall, bound in c.bounds:
             dist = wall * (bound - s)               # > 0 inside
             closing = wall * sd
-            if closing < -64 * np.finfo(float).eps * sdscale:
+            if closing < -64 * _EPS * sdscale and not touching:
                 continue
-            if dist <= 64 * np.finfo(float).eps * (scale + abs(bound)) + max(closing, 0) * tau:
+            # an accumulation's contacts are on their bounds to the precision of the event
+            # location (the guard's rounding bound, ~1e-13 relative), not to a few ulps
+            rtol = _TOUCH_RTOL if touching else 64 * _EPS
+            if dist <= rtol * (scale + abs(bound)) + max(closing, 0) * tau:
                 out.append((k, wall, False))
     return out
 
 
-def _resolve(model, time_tol, mode, guard, t, z):
+def _resolve(model, time_tol, mode, guard, t, z, refire=0):
+    """The joint jump of the active contacts (``refire = 0``), or of every contact on its
+    bound when a contact fires again at one instant (``refire`` times so far).
+
+    The first time the impacts of those contacts follow each other to their end
+    (:func:`~hybridpd.mechanics.impact.impact_cascade`: one at a time, with the held ones,
+    to the plastic limit where they accumulate); after that the contacts are at rest on
+    their bounds and pushed in, and their limit is the plastic joint impact. Contacts left
+    at zero relative velocity whose forces push are held (:func:`_hold`); where impacts
+    accumulated the jump has kind ``'zeno'``, one record per newly held contact, and the
+    state is projected onto the held contacts (as the plastic projection of a single
+    contact's accumulation).
+    """
     info = model.modes[mode]
     gi = model.guards[(mode, guard)]
-    act = _active(model, z, t, time_tol, info.stick, (gi.contact, gi.wall))
+    geo = model._geometry
+    fired = (gi.contact, gi.wall)
+    act = _active(model, z, t, time_tol, info.stick, fired, refire > 0)
     iv = model.layout["v"]
     W = np.array([-wall * model.contacts[k].normal for k, wall, _ in act])
     e = np.array([model.contacts[k].restitution for k, _, _ in act])
     held = np.array([h for *_, h in act])
-    out = multi_impact(model._geometry.Minv, W, z[iv], e, held)
-    if out is None:
-        return None
-    scale = float(out.impulses.max(initial=0.0))
-    b = np.where(held, 0.0, e * np.maximum(-out.u_pre, 0.0))
-    keep = []
-    for i, (k, wall, h) in enumerate(act):
-        pushing = out.impulses[i] > 1e-12 * scale
-        if (h and (pushing or abs(out.u_post[i]) <= 1e-12 * (1 + abs(out.u_pre).max()))) or (
-                not h and pushing and b[i] == 0.0):
-            keep.append((k, wall))
-    keep = tuple(sorted(keep))
-    if keep and model._geometry.held(keep) is None:
-        return None
+    if refire == 1:
+        cas = impact_cascade(geo.Minv, W, z[iv], e, held)
+        if cas is None:
+            return None
+        v1, still, limit = cas.v, cas.held, cas.accumulated
+        hit = sorted(set(cas.hits))
+    else:
+        limit = refire >= 2
+        out = multi_impact(geo.Minv, W, z[iv], np.zeros_like(e) if limit else e, held)
+        if out is None:
+            return None
+        v1 = out.v
+        # at zero relative velocity, relative to the velocities that make it up (as the
+        # jump loop judges it)
+        vscale = np.abs(W) @ (np.abs(z[iv]) + np.abs(v1))
+        still = np.abs(out.u_post) <= 1e-10 * (
+            vscale + float(np.abs(out.u_pre).max(initial=0.0)))
+        scale = float(out.impulses.max(initial=0.0))
+        hit = [i for i, (k, _, h) in enumerate(act) if not h and (
+            k == gi.contact or out.u_pre[i] < 0.0 or out.impulses[i] > 1e-12 * scale)]
     z1 = np.array(z, dtype=float)
-    z1[iv] = out.v
-    names = [f"contact{k}{_sign(wall)}" for k, wall, h in act if not h]
-    return z1, _mode_name(info.config, keep), names
+    z1[iv] = v1
+    cand = [(k, wall) for (k, wall, _), s in zip(act, still) if s]
+    # the contact that keeps firing is held at last, whatever the forces say: the jump loop
+    # sees it at rest on its bound and pushed in (their judgements differ by rounding)
+    forced = (fired,) if refire >= 3 and fired in cand else ()
+    keep = _hold(geo, info.config, z1, cand, forced)
+    if keep and geo.held(keep) is None:
+        return None
+    target = _mode_name(info.config, keep)
+    new = sorted(set(keep) - set(info.stick))
+    if limit and new:
+        R, r = geo.projection(keep)
+        return R @ z1 + r, target, [f"contact{k}{_sign(w)}" for k, w in new], "zeno"
+    names = [f"contact{act[i][0]}{_sign(act[i][1])}" for i in hit if not act[i][2]]
+    return z1, target, names or [f"contact{fired[0]}{_sign(fired[1])}"]
+
+
+def _hold(geo, config, z, cand, always=()):
+    """The contacts of ``cand`` (on their bounds at zero relative velocity) that stay held.
+
+    Their forces ``f >= 0`` solve the LCP of the separating accelerations
+    ``a = W a0 + W M^-1 W^T f >= 0``, ``f . a = 0`` (``a0``: the accelerations without the
+    contacts, ``W`` the oriented normals): a contact that pushes, or whose acceleration
+    apart is zero to a relative ``RELEASE_MARGIN``, stays held; one that accelerates apart
+    is free. The set is then checked against the release guards of the mode that holds it
+    (the same forces, with their margin): a contact they would release at once is dropped,
+    so no contact enters a sticking phase whose force already pulls (a sticking interval of
+    zero length). The contacts of ``always`` stay held whatever their forces.
+    """
+    if not cand:
+        return ()
+    A, b, _, _ = geo.flow(config, ())
+    a0 = (A @ z + b)[geo.iv]
+    W = np.array([-wall * geo.contacts[k].normal for k, wall in cand])
+    Aw = W @ geo.Minv @ W.T
+    q = W @ a0
+    f = solve_lcp(Aw, q)
+    if f is None:
+        keep = list(cand)
+    else:
+        acc = Aw @ f + q
+        # relative to the terms that make up the accelerations, as the release margin is
+        # relative to the force's terms: near rest both vanish, and a contact the jump loop
+        # sees at rest and pushed in must not be judged free on rounding
+        terms = np.abs(A[geo.iv]) @ np.abs(z) + np.abs(b[geo.iv])
+        tol = RELEASE_MARGIN * (np.abs(W) @ terms + np.abs(Aw) @ f)
+        keep = [c for c, a, tl in zip(cand, acc, tol) if a <= tl or c in always]
+    for _ in range(len(keep)):
+        keep.sort()
+        if not keep or geo.held(tuple(keep)) is None:
+            break
+        _, _, lam_rows, lam_b = geo.flow(config, tuple(keep))
+        pull = np.array([w for _, w in keep]) * (lam_rows @ z + lam_b)
+        margin = RELEASE_MARGIN * (np.abs(lam_rows).sum(axis=1) * geo.scale + np.abs(lam_b))
+        excess = np.where([c in always for c in keep], -np.inf, pull - margin)
+        worst = int(np.argmax(excess))
+        if not excess[worst] > 0.0:
+            break
+        keep.pop(worst)
+    return tuple(sorted(keep))
 
 
 def _label(c):
@@ -325,6 +423,7 @@ class _Geometry:
         self.iq, self.iv = lay["q"], lay["v"]
         self.Minv = np.linalg.inv(sysm.M)
         self._held = {}
+        self._cache = {}
         self.scale = max([1.0] + [abs(b) for c in contacts for _, b in c.bounds])
         self.gap = np.zeros((len(contacts), N))
         self.Mw = np.zeros((len(contacts), sysm.n))
@@ -353,8 +452,33 @@ class _Geometry:
         beta = np.array([self.bound(k, w) for k, w in stick])
         return W, MW, np.linalg.inv(G), beta
 
+    def _cached(self, key, fn, *args):
+        # a contact's impact law and a projection recur in the modes built one after the
+        # other: the last few are kept (the packed tables keep every one, once)
+        out = self._cache.pop(key, self)
+        if out is self:
+            out = fn(*args)
+        self._cache[key] = out
+        while len(self._cache) > _CACHE_SIZE:
+            self._cache.pop(next(iter(self._cache)))
+        return out
+
     def projection(self, stick):
         """Plastic projection onto every contact of ``stick``: ``(R, r)`` or None."""
+        return self._cached(("projection", tuple(stick)), self._projection, tuple(stick))
+
+    def impact_held(self, k, wall, stick):
+        """The contacts of ``stick`` that stay held through an impact of ``k`` at ``wall``
+        (:meth:`_impact_held`)."""
+        return self._cached(("held", k, wall, tuple(stick)), self._impact_held, k, wall,
+                            tuple(stick))
+
+    def impact(self, k, stick):
+        """Newton's law of contact ``k`` with the contacts of ``stick`` held: ``(R, r)``, or
+        None when the others hold ``k`` too (:meth:`_impact`)."""
+        return self._cached(("impact", k, tuple(stick)), self._impact, k, tuple(stick))
+
+    def _projection(self, stick):
         h = self.held(stick)
         if h is None:
             return None
@@ -367,7 +491,7 @@ class _Geometry:
         r[self.iq] = MW @ (Gi @ beta)
         return R, r
 
-    def impact_held(self, k, wall, stick):
+    def _impact_held(self, k, wall, stick):
         """The contacts of ``stick`` that stay held through an impact of ``k`` at ``wall``.
 
         The joint impact of ``k`` and the held contacts (zero normal velocity) is an LCP
@@ -391,8 +515,7 @@ class _Geometry:
         u = A @ lam + q
         return tuple(s for i, s in enumerate(stick) if u[i] <= 1e-12 * float(lam.max()))
 
-    def impact(self, k, stick):
-        """Newton's law of contact ``k`` with the contacts of ``stick`` held: ``(R, r)``."""
+    def _impact(self, k, stick):
         c = self.contacts[k]
         mw = self.Mw[k]
         if stick:
@@ -486,6 +609,24 @@ class _ModeBuilder:
 
     def __init__(self, geo):
         self.geo = geo
+        # the guards of every mode, known without building them (signature tables)
+        names = ["sample"] if geo.loop.sampled else []
+        for k, c in enumerate(geo.contacts):
+            for wall, _ in c.bounds:
+                kinds = ("contact", "release") if c.rigid else ("enter", "leave")
+                names += [f"{kind}{k}{_sign(wall)}" for kind in kinds]
+        self.guard_names = tuple(sorted(names))
+
+    def zeno_reset(self, mode, guard):
+        """The Zeno reset ``(R, r)`` of the impact guard ``guard`` of ``mode``: the plastic
+        projection onto the contacts held after the accumulation."""
+        geo = self.geo
+        _, stick = _parse_mode(mode, geo.contacts, geo)
+        m = _GUARD_RE.match(guard)
+        if m is None or m.group(1) != "contact":
+            raise ValueError(f"guard {guard!r} of mode {mode!r} has no Zeno reset")
+        k, wall = int(m.group(2)), 1 if m.group(3) == "+" else -1
+        return geo.projection(_add(geo.impact_held(k, wall, stick), k, wall))
 
     def __call__(self, name):
         geo = self.geo
@@ -643,9 +784,10 @@ def _guards(geo, config, stick, lam_rows, lam_b):
                 reset = geo.impact(k, kept)
                 gname = f"contact{k}{_sign(wall)}"
                 to = _add(kept, k, wall)
-                proj = geo.projection(to)
-                zt = (dict(zeno_target=_mode_name(config, to), zeno_reset=proj)
-                      if proj is not None else {})
+                # its Zeno reset, the projection onto `to`, is asked for when first used
+                # (_ModeBuilder.zeno_reset): most accumulations never happen in most modes
+                zt = ({"zeno_target": _mode_name(config, to)}
+                      if geo.held(to) is not None else {})
                 out.append(Guard(gname, c=-wall * gap[k], d=wall * bound, direction=-1,
                                  reset=reset, target=_mode_name(config, kept), priority=2,
                                  group=1, **zt))

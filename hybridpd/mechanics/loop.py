@@ -54,7 +54,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.loop import Controller, as_controller, interconnect_matrices
 from hybridpd.mechanics.system import MechanicalSystem
 from hybridpd.model import Reference, check_finite

@@ -65,7 +65,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.loop import Controller
 from hybridpd.mechanics.automaton import MechanicalAutomaton, build_automaton
 from hybridpd.mechanics.contacts import Contact

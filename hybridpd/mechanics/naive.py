@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 
 __all__ = ["NaiveMechanicalResult", "naive_mechanical"]
 

@@ -24,7 +24,7 @@ import difflib
 import math
 from dataclasses import dataclass, field
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.mechanics.modelfile import model_from_dict, read_model_file
 
 __all__ = ["ModelTemplate", "check_path", "get_value", "numeric_paths", "resolve_path",

@@ -3,6 +3,7 @@
 :func:`mass_chain`: ``N`` masses in a line, neighbours joined by a spring-damper in parallel
 with a rigid clearance (``m = N - 1`` contacts), a PD loop on the first mass tracking a sine:
 a drivetrain with a clearance per stage, or an impact damper with many cells.
+:func:`chain_model_text` writes the same system as a model file (TOML text).
 """
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from hybridpd.mechanics.contacts import Contact
 from hybridpd.mechanics.loop import Reference, mechanical_loop
 from hybridpd.mechanics.system import MechanicalSystem
 
-__all__ = ["chain_matrices", "mass_chain"]
+__all__ = ["chain_matrices", "chain_model_text", "mass_chain"]
 
 
 def chain_matrices(n_masses: int, stiffness: float = 20.0, damping: float = 0.1):
@@ -78,3 +79,47 @@ def mass_chain(n_masses: int, clearance: float = 0.05, restitution: float = 0.8,
     return build_automaton(loop, [Contact(eye[i] - eye[i + 1], -clearance, clearance,
                                           restitution=restitution, name=f"link{i}")
                                   for i in range(N - 1)])
+
+
+def chain_model_text(n_masses: int, clearance: float = 0.05, restitution: float = 0.8,
+                     stiffness: float = 20.0, damping: float = 0.1, kp: float = 50.0,
+                     kv: float = 5.0, amplitude: float = 1.0, omega: float = 3.0) -> str:
+    """The chain of :func:`mass_chain` as a model file (TOML text, for ``--model``).
+
+    Parameters are those of :func:`mass_chain`; DOFs ``m0 ... m{N-1}``, contacts
+    ``link0 ...`` (``lo = -clearance``, ``hi = clearance`` on ``m_i - m_{i+1}``).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from hybridpd.mechanics.modelfile import load_model
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     path = pathlib.Path(d) / "chain.toml"
+    ...     _ = path.write_text(chain_model_text(4))
+    ...     model = load_model(path)
+    >>> len(model.automaton.contacts), model.system.n
+    (3, 4)
+    """
+    if not clearance > 0:
+        raise ValueError(f"clearance must be > 0, got {clearance!r}")
+    if not 0.0 <= restitution <= 1.0:
+        raise ValueError(f"restitution must be in [0, 1], got {restitution!r}")
+    M, C, K, B = chain_matrices(n_masses, stiffness, damping)
+    N = M.shape[0]
+
+    def mat(A):
+        return "[" + ",\n  ".join("[" + ", ".join(f"{float(x)!r}" for x in row) + "]"
+                                    for row in A) + "]"
+
+    lines = ["[system]", "dofs = [" + ", ".join(f'"m{i}"' for i in range(N)) + "]",
+             "masses = [" + ", ".join("1.0" for _ in range(N)) + "]",
+             f"damping = {mat(C)}", f"stiffness = {mat(K)}",
+             "input = [" + ", ".join(f"{x:.1f}" for x in B) + "]", ""]
+    for i in range(N - 1):
+        lines += ["[[contact]]", f'name = "link{i}"', f'between = ["m{i}", "m{i + 1}"]',
+                  f"lo = {-float(clearance)!r}", f"hi = {float(clearance)!r}",
+                  f"restitution = {float(restitution)!r}", ""]
+    lines += ["[controller]", 'type = "pd"', f"kp = {float(kp)!r}", f"kv = {float(kv)!r}",
+              'measure = "m0"', "", "[reference]", 'type = "sine"',
+              f"amplitude = {float(amplitude)!r}", f"omega = {float(omega)!r}", ""]
+    return "\n".join(lines)

@@ -20,7 +20,14 @@ Impacts accumulating on one contact are resolved one by one until the tail extra
 from their (verified, geometric) ratios is shorter than ``1e-12 (1 + |t|)``, or a flight is
 shorter than ``1e-9`` flow steps; the sticking phase starts at the accumulation time with the
 state projected onto the contact (gap at its bound, zero normal velocity):
-:attr:`MechanicalTrajectory.accumulations`. A run whose state grows past ``max_state``
+:attr:`MechanicalTrajectory.accumulations`. Impacts alternating between coupled contacts
+(a chain at low restitution) shrink until they follow each other in no time; a contact that
+fires again at one instant hands the contacts on their bounds to the resolver, which lets
+their impacts follow each other to the end (:func:`~hybridpd.mechanics.impact.impact_cascade`)
+or, where they accumulate, takes their plastic limit and holds those whose forces push (the
+held set solves the contact-force complementarity problem, so no contact enters a sticking
+phase whose force already pulls). Every run reaches its end time or says why not
+(:attr:`MechanicalTrajectory.reason`). A run whose state grows past ``max_state``
 (default ``1e12 max(1, |z0|, |bounds|)``) stops with termination ``"diverged"``.
 
 Contact tolerance
@@ -44,7 +51,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.mechanics.automaton import ZENO_TAIL_TOL, MechanicalAutomaton  # noqa: F401 (old path)
 
 __all__ = ["MechanicalTrajectory", "simulate", "simulate_state"]
@@ -71,7 +78,10 @@ class MechanicalTrajectory:
         Impacts located as tangential touches (closing velocity ~ 0).
     sticking : list of (t_start, t_end, contact)
         Intervals held on a rigid contact (``t_start``: the accumulation time of the impacts
-        that led to it; ``t_end``: the release, or ``t_final`` if still held).
+        that led to it; ``t_end``: the release, or ``t_final`` if still held), each of
+        positive length: the held set is read after the last jump of every instant, so a
+        contact held and set free again among the jumps of one instant (a plastic impact
+        in a cascade of impacts there) is not sticking.
     sticking_walls : list of int
         Wall of each sticking interval.
     zeno_tails : list of (t_k, t_inf, contact)
@@ -85,6 +95,9 @@ class MechanicalTrajectory:
     termination : str
         ``"end_time"``, ``"jump_limit"``, ``"zeno"``, ``"nonfinite"``, ``"step_limit"``,
         ``"simultaneous_contact"`` or ``"diverged"``.
+    reason : str
+        Why the run stopped before the end time, in one line (empty if it did not; see
+        :attr:`HybridTrajectory.reason <hybridpd.hybrid.trajectory.HybridTrajectory.reason>`).
     t_final : float
         Time reached.
     n_dofs : int
@@ -107,6 +120,7 @@ class MechanicalTrajectory:
     t_final: float
     n_dofs: int
     hybrid: object = field(repr=False)
+    reason: str = ""
     __repr__ = compact_repr
 
     @property
@@ -275,16 +289,20 @@ def _wrap(model, traj) -> MechanicalTrajectory:
     for k, wall in (held(traj.segments.mode[0]) if len(traj.segments) else {}).items():
         opened[k] = (traj.t0, wall)
     for i in range(stop):
+        if i + 1 < stop and jt.t[i + 1] == jt.t[i]:
+            continue               # what is held after the last jump of an instant counts
         after = held(jt.target[i])
         t = float(jt.t[i])
         for k in list(opened):
-            if k not in after:
+            if after.get(k) != opened[k][1]:
                 t_open, wall = opened.pop(k)
-                spans.append((t_open, t, k, wall))
+                if t > t_open:
+                    spans.append((t_open, t, k, wall))
         for k, wall in after.items():
             if k not in opened:
                 opened[k] = (t, wall)
-    spans += [(t_open, t_final, k, wall) for k, (t_open, wall) in opened.items()]
+    spans += [(t_open, t_final, k, wall) for k, (t_open, wall) in opened.items()
+              if t_final > t_open]
     spans.sort()
     sticking = [(a, b, k) for a, b, k, _ in spans]
     sticking_walls = [w for *_, w in spans]
@@ -311,4 +329,4 @@ def _wrap(model, traj) -> MechanicalTrajectory:
         grazing=np.asarray([jt.kind[i] == "grazing" for i in imp], dtype=bool),
         sticking=sticking, sticking_walls=sticking_walls, zeno_tails=tails, samples=samples,
         accumulations=accum, termination=termination, t_final=float(t_final), n_dofs=n,
-        hybrid=traj)
+        hybrid=traj, reason=traj.reason)

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.model import (
     Case,
     ImpactPair,
@@ -363,7 +363,7 @@ def _arb_orbit_at(case, n, kp, kv, mu, e, L, m2, omega, x10):
 def certify_orbit(pair: ImpactPair, gains, omega: float, *, x10: float = 1.0, n: int = 1,
                   case="collocated") -> OrbitCertificate:
     """Certify the symmetric orbit at one parameter point (signature of
-    :func:`hybridpd.analysis.orbits.symmetric_orbit`).
+    :func:`hybridpd.pair.orbits.symmetric_orbit`).
 
     Parameters
     ----------
@@ -629,7 +629,7 @@ def certified_map(case="collocated", *, x=("kp", 0.1, 50.0, 101), y=("kv", 0.1, 
     e : sequence of float
         Restitution coefficients in [0, 1], one map each.
     mu, omega, L or gamma, x10, m2, n, kp, kv
-        The fixed parameters (as for :func:`hybridpd.sweeps.regions.region_map`).
+        The fixed parameters (as for :func:`hybridpd.pair.regions.region_map`).
     spacing : {"linear", "log"} or (x_spacing, y_spacing)
         The cells' convention of :func:`cell_edges`.
     depth : int

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode, TerminationCause
 from hybridpd.loop import ClosedLoop, closed_loop
 from hybridpd.model import Case, ImpactPair, Reference, check_array, check_int, check_pair

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from hybridpd.analysis.attractors import (
+from hybridpd.pair.attractor_basins import AttractorBasin, format_percent
+from hybridpd.pair.attractors import (
     DIVERGED,
     INADMISSIBLE_LABEL,
     NO_CONVERGENCE,
@@ -18,10 +19,9 @@ from hybridpd.analysis.attractors import (
     UNRESOLVED,
     outcome,
 )
+from hybridpd.pair.basins import BasinResult
 from hybridpd.plotting._common import figure, patch_proxy, register, set_all
 from hybridpd.plotting.style import axis_label, house_figure, styled
-from hybridpd.sweeps.attractor_basins import AttractorBasin, format_percent
-from hybridpd.sweeps.basins import BasinResult
 
 __all__ = ["basin_colors", "basin_hatches", "basin_title", "plot_basin"]
 
@@ -94,7 +94,7 @@ def _as_attractor_basin(b):
         for k in sorted(set(np.unique(lab).tolist()) | {0}, reverse=True):
             if k == 0:
                 # deferred import: loaded only when this runs, for start-up time
-                from hybridpd.analysis.attractors import Attractor
+                from hybridpd.pair.attractors import Attractor
 
                 entries.insert(0, Attractor(0, "symmetric", "converged to the symmetric orbit",
                                             1, b.fixed_point.reshape(1, 4)))
@@ -111,8 +111,8 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     Parameters
     ----------
     basin : AttractorBasin or BasinResult
-        An attractor-labelled basin (:func:`hybridpd.sweeps.attractor_basins.attractor_basin`), or the
-        paper's labels only (:func:`hybridpd.sweeps.basins.basin_of_attraction`).
+        An attractor-labelled basin (:func:`hybridpd.pair.attractor_basins.attractor_basin`), or the
+        paper's labels only (:func:`hybridpd.pair.basins.basin_of_attraction`).
     ax : matplotlib Axes, optional
         Draw there (legend below the axes); else a new figure 7.2 in wide in the house style
         (legend beside the axes).
@@ -128,7 +128,7 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     Notes
     -----
     The legend lists every label present on the grid with its share of the on-section grid
-    (:func:`hybridpd.sweeps.attractor_basins.format_percent`), then the markers: the symmetric orbit's
+    (:func:`hybridpd.pair.attractor_basins.format_percent`), then the markers: the symmetric orbit's
     fixed point and the section points of the other periodic orbits, projected on the slice
     (they have their own ``phi`` and ``y2``). The slice's fixed coordinates ``phi*`` and
     ``y2*`` are stated under the axes.

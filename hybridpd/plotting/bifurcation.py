@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from hybridpd.analysis.bifdiagram import COORDINATES, section_coordinate
-from hybridpd.analysis.continuation.plot import _grow
+from hybridpd.pair.bifdiagram import COORDINATES, section_coordinate
+from hybridpd.pair.continuation.plot import _grow
 from hybridpd.plotting._common import _COLORS, figure
 from hybridpd.plotting.style import DOUBLE, styled
 
@@ -37,7 +37,7 @@ _SYMBOLS = {"kp": "k_p", "kv": "k_v", "e": "e", "mu": r"\mu", "omega": r"\omega"
 def _branch_cycles(branch):
     """The ``k`` section points of every orbit of a branch, shape (N, k, 4), and ``L``."""
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.continuation import branch_map
+    from hybridpd.pair.continuation import branch_map
 
     k = int(branch.period)
     N = len(branch)
@@ -82,7 +82,7 @@ def plot_bifurcation(diagram, ax=None, coordinate: str = "z1", branches=(), *,
     """A bifurcation diagram in the impact-oscillator style, with continued branches.
 
     Small dots: for every parameter value, the recorded iterates of ``P`` (one coordinate of
-    the section points). Continued branches (:class:`~hybridpd.analysis.continuation.Branch`)
+    the section points). Continued branches (:class:`~hybridpd.pair.continuation.Branch`)
     are drawn over them, every point of a period-``k`` cycle, stable parts solid and unstable
     parts dashed (non-viable formal orbits of a symmetric family are not drawn), with their
     events marked.
@@ -93,7 +93,7 @@ def plot_bifurcation(diagram, ax=None, coordinate: str = "z1", branches=(), *,
     ax : matplotlib Axes, optional
         Drawn into when given, else a new Figure (no pyplot).
     coordinate : str
-        One of :data:`~hybridpd.analysis.bifdiagram.COORDINATES` (``phi, z1, z2, z4`` or the
+        One of :data:`~hybridpd.pair.bifdiagram.COORDINATES` (``phi, z1, z2, z4`` or the
         physical ``x1, y1, x2, y2``).
     branches : sequence of Branch or (Branch, label)
         Continued branches in the diagram's parameter (on the same parameter path); pieces
@@ -121,7 +121,7 @@ def plot_bifurcation(diagram, ax=None, coordinate: str = "z1", branches=(), *,
     --------
     >>> import numpy as np
     >>> from hybridpd import ImpactPair, PDGains
-    >>> from hybridpd.analysis.bifdiagram import bifurcation_diagram
+    >>> from hybridpd.pair.bifdiagram import bifurcation_diagram
     >>> d = bifurcation_diagram(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0, "kv",
     ...                         np.linspace(18, 20, 3), iterations=100, keep=10)
     >>> fig = plot_bifurcation(d, coordinate="x1")

@@ -1,7 +1,7 @@
 """Traced boundary curves and codimension-2 points on a matplotlib Axes.
 
 :func:`draw_boundaries` draws the curves of a
-:class:`~hybridpd.analysis.boundaries.BoundaryResult` with one style per kind (colours from
+:class:`~hybridpd.pair.boundaries.BoundaryResult` with one style per kind (colours from
 the colour-blind-safe Okabe-Ito palette *and* distinct line styles, so the kinds stay apart in
 grey-scale too) and marks the codimension-2 points with one marker per kind. With ``color``
 all kinds share that colour and differ by line style only (to superpose several results,
@@ -68,7 +68,7 @@ def draw_boundaries(ax, result, *, color=None, codim2: bool = True, legend: bool
 
     Examples
     --------
-    >>> from hybridpd.analysis.boundaries import boundary_curves
+    >>> from hybridpd.pair.boundaries import boundary_curves
     >>> res = boundary_curves("noncollocated", x=("kp", 0.1, 20), y=("kv", 0.1, 6), e=0.5,
     ...                       mu=0.1, gamma=0.75, omega=5.0, seed_grid=21)
     >>> fig = draw_boundaries(None, res)

@@ -5,7 +5,7 @@ The kind of a file is read from the file itself, never from its name:
 * ``.nc`` / ``.zarr`` datasets: their ``kind`` attribute (``region_map``, ``basin``);
 * ``.npz`` archives: the ``kind`` of their JSON metadata (``region_map``, ``basin``,
   ``attractor_basin``, ``branch``; see :mod:`hybridpd.sweeps.npz`), or the ``meta`` entry of
-  a bifurcation diagram (:meth:`~hybridpd.analysis.bifdiagram.BifurcationDiagram.save`);
+  a bifurcation diagram (:meth:`~hybridpd.pair.bifdiagram.BifurcationDiagram.save`);
 * ``.json`` documents: their ``kind`` key (``trajectory``, written by
   ``hybridpd simulate --out``).
 
@@ -105,7 +105,7 @@ def plot_file(path: str | os.PathLike, **options):
     **options
         ``title`` (any kind); ``coordinate`` (bifurcation diagrams: ``phi, z1, z2, z4, x1,
         y1, x2, y2``); ``quantity`` (branches: see
-        :func:`hybridpd.analysis.continuation.plot_branch`). ``None`` means the default.
+        :func:`hybridpd.pair.continuation.plot_branch`). ``None`` means the default.
 
     Returns
     -------
@@ -116,7 +116,7 @@ def plot_file(path: str | os.PathLike, **options):
     >>> import tempfile
     >>> from pathlib import Path
     >>> from hybridpd import ImpactPair, PDGains
-    >>> from hybridpd.analysis.continuation import continue_symmetric
+    >>> from hybridpd.pair.continuation import continue_symmetric
     >>> br = continue_symmetric(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv", 23.0)
     >>> p = br.save(Path(tempfile.mkdtemp()) / "branch.npz")
     >>> file_kind(p)
@@ -137,31 +137,31 @@ def plot_file(path: str | os.PathLike, **options):
 
 def _region_map(path, title=None):
     # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.pair.regions import load_region_map
     from hybridpd.plotting.regions import plot_region_panels
-    from hybridpd.sweeps.regions import load_region_map
 
     return plot_region_panels(load_region_map(path), title=title)
 
 
 def _basin(path, title=None):
     # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.pair.basins import load_basin
     from hybridpd.plotting.basins import plot_basin
-    from hybridpd.sweeps.basins import load_basin
 
     return plot_basin(load_basin(path), title=title)
 
 
 def _attractor_basin(path, title=None):
     # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.pair.attractor_basins import load_attractor_basin
     from hybridpd.plotting.basins import plot_basin
-    from hybridpd.sweeps.attractor_basins import load_attractor_basin
 
     return plot_basin(load_attractor_basin(path), title=title)
 
 
 def _diagram(path, title=None, coordinate="z1"):
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.bifdiagram import load_diagram
+    from hybridpd.pair.bifdiagram import load_diagram
     from hybridpd.plotting.bifurcation import plot_bifurcation
 
     return plot_bifurcation(load_diagram(path), coordinate=coordinate, title=title)
@@ -174,7 +174,7 @@ _BRANCH_UNITS = {"spectral_radius": "(1)", "multipliers": "(1)", "margin": "(len
 
 def _branch(path, title=None, quantity="spectral_radius"):
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.continuation import load_branch, plot_branch
+    from hybridpd.pair.continuation import load_branch, plot_branch
     from hybridpd.plotting.style import DOUBLE, axis_label, house_figure, house_style
 
     br = load_branch(path)

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from hybridpd._format import format_percent
 from hybridpd.plotting._common import figure, model_title
 from hybridpd.plotting.basins import _MARKERS, basin_colors, basin_hatches
-from hybridpd.sweeps.attractor_basins import format_percent
 
 __all__ = ["plot_model_basin"]
 

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 
 __all__ = ["SharedWindowBasins", "boundary_distance", "shared_window_basins"]
 
@@ -51,7 +51,7 @@ class SharedWindowBasins:
 
 def _label_all(mappers, window, grid, **kw):
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.attractor_basins import attractor_basin
+    from hybridpd.pair.attractor_basins import attractor_basin
 
     x0, x1, y0, y1 = window
     nx, ny = grid
@@ -78,7 +78,7 @@ def shared_window_basins(orbits: dict, window, grid, *, n_iter=1500, max_growths
     max_growths : int
         The cap: times the window may grow.
     executor, max_workers, progress
-        As in :func:`hybridpd.sweeps.attractor_basins.attractor_basin`.
+        As in :func:`hybridpd.pair.attractor_basins.attractor_basin`.
     log : callable, optional
         Receives a line per growth.
 
@@ -87,8 +87,8 @@ def shared_window_basins(orbits: dict, window, grid, *, n_iter=1500, max_growths
     SharedWindowBasins
     """
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.attractor_basins import _grow
-    from hybridpd.sweeps.basins import ImpactMapper
+    from hybridpd.pair.attractor_basins import _grow
+    from hybridpd.pair.basins import ImpactMapper
 
     if not (int(max_growths) == max_growths and max_growths >= 0):
         raise ValueError(f"max_growths must be an integer >= 0, got {max_growths!r}")
@@ -122,7 +122,7 @@ def relabel(orbits: dict, window, grid, *, n_iter=1500, **kw) -> dict:
     """Every orbit's basin on ``window`` with ``grid`` points (no growth): the resolution
     check of a :class:`SharedWindowBasins`."""
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.basins import ImpactMapper
+    from hybridpd.pair.basins import ImpactMapper
 
     mappers = {k: ImpactMapper.from_orbit(o, n_iter=n_iter) if o.exists and o.stable else None
                for k, o in orbits.items()}
@@ -155,9 +155,9 @@ def boundary_distance(basin, *, x10, omega) -> dict:
     Examples
     --------
     >>> from hybridpd import ImpactPair, PDGains
-    >>> from hybridpd.analysis.orbits import symmetric_orbit
-    >>> from hybridpd.sweeps.attractor_basins import attractor_basin
-    >>> from hybridpd.sweeps.basins import ImpactMapper
+    >>> from hybridpd.pair.orbits import symmetric_orbit
+    >>> from hybridpd.pair.attractor_basins import attractor_basin
+    >>> from hybridpd.pair.basins import ImpactMapper
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> b = attractor_basin(ImpactMapper.from_orbit(orb, n_iter=200), (-3, 5, 9), (-2, 10, 9))
     >>> d = boundary_distance(b, x10=1.0, omega=5.0)
@@ -165,7 +165,7 @@ def boundary_distance(basin, *, x10, omega) -> dict:
     True
     """
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.attractors import OFF_SECTION_LABEL
+    from hybridpd.pair.attractors import OFF_SECTION_LABEL
 
     from_x = lambda v: np.asarray(v, float) / x10
     from_y = lambda v: np.asarray(v, float) / (omega * x10)

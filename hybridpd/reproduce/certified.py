@@ -48,7 +48,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.model import Case, check_in_range, check_int, check_odd_order, check_positive
 
 __all__ = ["CLASSES", "MU_LIMIT", "PROPERTIES", "CertifiedShare", "Leaves", "ShareTarget",

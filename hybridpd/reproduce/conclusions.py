@@ -130,7 +130,7 @@ def _fractions(comparison) -> dict:
 
 
 def check_5(comparison, check=None) -> dict:
-    """Conclusion 5 from a :class:`~hybridpd.analysis.design.RobustnessComparison` under
+    """Conclusion 5 from a :class:`~hybridpd.pair.design.RobustnessComparison` under
     both criteria of :data:`CRITERIA_5`: the share of the gain grid that survives the
     uncertainty box is smaller for the non-collocated case.
 

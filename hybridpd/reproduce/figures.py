@@ -50,7 +50,7 @@ class ScaledMap:
 def scaled_map(case, settings, num) -> ScaledMap:
     """The regions in ``(kp/m2, kv/m2)``: computed at ``m2 = 1`` (only the ratios matter)."""
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.orbits import symmetric_orbits
+    from hybridpd.pair.orbits import symmetric_orbits
 
     (xa, xb), (ya, yb) = SCALED_WINDOW
     x, y = np.logspace(xa, xb, num), np.logspace(ya, yb, num)
@@ -301,8 +301,8 @@ def _trace_key(case, row, e, box):
 
 def _trace(case, e, box, settings):
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.boundaries import boundary_curves
-    from hybridpd.analysis.boundarymask import stable_region_edges
+    from hybridpd.pair.boundaries import boundary_curves
+    from hybridpd.pair.boundarymask import stable_region_edges
 
     res = boundary_curves(case, e=float(e), mu=PAPER["mu"], gamma=settings.gamma,
                           omega=PAPER["omega"], m2=1.0, x10=settings.x10, n=PAPER["n"],

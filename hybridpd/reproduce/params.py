@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
-from hybridpd.analysis.orbits import symmetric_orbits
+from hybridpd._results import compact_repr
 from hybridpd.model import Case
+from hybridpd.pair.orbits import symmetric_orbits
 from hybridpd.reproduce.study import candidate_stability
 
 __all__ = ["LIMIT_POINTS", "ParamStudy", "check_study", "param_shares", "param_study"]

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.model import ImpactPair, PDGains
 from hybridpd.reproduce import conclusions as C
 from hybridpd.reproduce.settings import AUTO, PAPER, Settings
@@ -121,7 +121,7 @@ def _say(log):
 
 def _comparison(m2, settings, grid, n_starts, maxiter, *, scaled=True, uncertainty=None):
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.design import robustness_comparison
+    from hybridpd.pair.design import robustness_comparison
 
     P = PAPER
     s = m2 if scaled else 1.0
@@ -141,7 +141,7 @@ def m2_study(settings: Settings, *, log=None) -> M2Study:
     the located interval ends (exact).
     """
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.orbits import symmetric_orbits
+    from hybridpd.pair.orbits import symmetric_orbits
 
     say = _say(log)
     P = PAPER
@@ -175,7 +175,7 @@ def m2_study(settings: Settings, *, log=None) -> M2Study:
 def _regions(run, settings, common, *, progress):
     """Region maps of Figs 4-5 on the scaled box (saved as .nc)."""
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.regions import region_map
+    from hybridpd.pair.regions import region_map
 
     s, d = run.scale, run.directory
     kpm, kvm, num = settings.gains
@@ -253,7 +253,7 @@ def run_convention(m2, settings: Settings, out, *, executor="processes", max_wor
     conventions share the traced boundaries, which depend on ``kp/m2, kv/m2`` only.
     """
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.orbits import symmetric_orbit
+    from hybridpd.pair.orbits import symmetric_orbit
     from hybridpd.reproduce.figures import convention_figures
     from hybridpd.reproduce.rules import resolution
 

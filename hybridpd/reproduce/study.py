@@ -8,7 +8,7 @@ law involves ``mu`` only, so at fixed ``mu`` every result depends on ``(kp, kv, 
   orbit exists and is stable. Their end points are bifurcation points of the orbit (a
   multiplier crossing the unit circle, or a grazing that ends viability); each is bracketed on
   a fine log grid of the vectorised closed form
-  (:func:`hybridpd.analysis.orbits.symmetric_orbits`) and then located by Brent's method on the
+  (:func:`hybridpd.pair.orbits.symmetric_orbits`) and then located by Brent's method on the
   exact test function (``spectral radius - 1`` or the viability margin), and verified by
   recomputing that test function at the located point.
 * :func:`choose_m2` — the documented rule for the second convention of a reproduction: the
@@ -25,9 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from hybridpd._repr import compact_repr
-from hybridpd.analysis.orbits import REASONS, symmetric_orbits
+from hybridpd._results import compact_repr
 from hybridpd.model import Case, check_positive
+from hybridpd.pair.orbits import REASONS, symmetric_orbits
 
 __all__ = ["EndPoint", "StableInterval", "box_fractions", "choose_m2", "series_125",
            "stable_intervals"]

@@ -394,7 +394,7 @@ def _feedback(m2, settings) -> dict | None:
     if m2 is None:
         return None
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.orbits import symmetric_orbits
+    from hybridpd.pair.orbits import symmetric_orbits
 
     P = PAPER
     rho = {}

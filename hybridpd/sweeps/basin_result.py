@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.analysis.labels import LABELS
 from hybridpd.sweeps.labelled import (
     axis_attrs,
@@ -45,7 +45,7 @@ def load_basin(path) -> BasinResult:
     >>> import tempfile, os
     >>> import hybridpd as hp
     >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
-    >>> from hybridpd.sweeps.basins import basin_of_attraction
+    >>> from hybridpd.pair.basins import basin_of_attraction
     >>> b = basin_of_attraction(hp.ImpactMapper.from_orbit(orb, n_iter=100),
     ...                         (-1, 3, 3), (-1, 5, 2), progress=False)
     >>> path = b.save(os.path.join(tempfile.mkdtemp(), "basin.nc"))

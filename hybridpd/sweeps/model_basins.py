@@ -7,7 +7,7 @@ the map takes each point: ``0`` the orbit; ``1, 2, ...`` other periodic attracto
 among the points that do not reach it (each found by iterating the map from one such point
 and solving ``P^k(s) = s`` for ``k`` up to ``max_period``, then every remaining point is
 labelled against it by the compiled mapper); negative codes the outcomes of
-:data:`hybridpd.analysis.attractors.OUTCOMES` (no convergence, divergence, sticking,
+:data:`hybridpd.analysis.basins.OUTCOMES` (no convergence, divergence, sticking,
 unresolved, off the section). The grid runs as a sweep on any executor (a scheduler address
 runs it on an existing Dask cluster). The result converts to a labelled xarray Dataset
 (``.nc``, ``.zarr``) that ``hybridpd plot`` draws.
@@ -19,12 +19,12 @@ from pathlib import Path
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
-from hybridpd.analysis.attractors import OUTCOMES
+from hybridpd._format import format_percent
+from hybridpd._results import compact_repr
+from hybridpd.analysis.basins import OUTCOMES
 from hybridpd.analysis.labels import LABELS
 from hybridpd.analysis.model_orbits import SectionSpec, solve_at
 from hybridpd.analysis.periodic import SectionMapper, find_orbit
-from hybridpd.sweeps.attractor_basins import format_percent
 from hybridpd.sweeps.labelled import decode_attrs, encode_attrs, load_result, save_result
 from hybridpd.sweeps.model_regions import _grid_spec, template_of
 from hybridpd.sweeps.section_basins import off_section_axis

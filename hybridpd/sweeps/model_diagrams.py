@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.analysis.model_orbits import SectionSpec, simulated_returns
 from hybridpd.mechanics.params import ModelTemplate
 from hybridpd.sweeps.labelled import decode_attrs, encode_attrs, load_result, save_result

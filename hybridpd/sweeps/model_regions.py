@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.analysis.model_orbits import (
     STATUS,
     OrbitSearch,

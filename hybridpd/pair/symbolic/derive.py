@@ -13,7 +13,7 @@ import functools
 from dataclasses import dataclass
 from typing import Any
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.model import Case
 from hybridpd.pair.symbolic.damped import dch, dsh
 

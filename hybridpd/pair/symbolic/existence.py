@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridpd._repr import compact_repr, short_repr
+from hybridpd._results import compact_repr, short_repr
 from hybridpd.model import check_array
 from hybridpd.pair.symbolic._numeric import _as_float_arrays, _case, kernel
 

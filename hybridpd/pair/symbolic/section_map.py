@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridpd._repr import compact_repr
+from hybridpd._results import compact_repr
 from hybridpd.pair.symbolic._numeric import _as_float_arrays, _case, _stack, kernel
 from hybridpd.pair.symbolic.existence import SymmetricOrbit
 

@@ -1,8 +1,0 @@
-"""Deprecated: this module moved to :mod:`hybridpd.pair.impactpair` and goes in hybridpd 0.3.0.
-
-Kept for one release so that code written for earlier versions runs; importing it warns with
-``DeprecationWarning``. Import from ``hybridpd.pair.impactpair`` (or the flat ``hybridpd`` namespace) instead.
-"""
-from hybridpd._deprecated import moved_module
-
-__getattr__, __dir__ = moved_module(__name__)

@@ -1,0 +1,319 @@
+"""Basins of attraction of the impact map (paper Figs 6-7), labelled by attractor and measured.
+
+Two layers, after Attractors.jl: a **mapper** that takes one initial condition on the section
+to a label, and **basins** as a thin layer that applies a mapper over a 2-D grid.
+
+Labels (:data:`LABELS`): ``converged`` (the paper's criterion holds after ``n_iter``
+iterations of ``P``), ``not_converged``, ``diverged`` (left the bounded region, non-finite,
+or no further impact), ``zeno_sticking`` (impacts accumulated and the masses stay stuck
+on a wall for 50 periods), ``unresolved`` (an
+iteration bound inside one flight was hit), ``off_section`` (the grid point is not a
+pre-impact state: ``z4 = y1 - y2 <= 0``).
+
+The paper's criterion: converged if ``(x1*-x1)^2 + (y1*-y1)^2 + (y2*-y2)^2 + (phi*-phi)^2 <
+0.001`` after 1500 iterations of ``P`` (3000 impacts); phase differences are taken modulo
+``T`` (nearest representative), which the paper leaves implicit.
+
+**Early exit.** For a stable fixed point, ``Q`` solving ``DP^T Q DP - Q = -I`` defines a norm
+in which ``DP`` contracts. The mapper searches the largest radius ``r`` (up to the one whose
+``Q``-ball lies inside the criterion ball) for which ``P`` maps the ``Q``-ball into a strictly
+smaller one, checked on sampled points of nested spheres with a safety factor. A trajectory
+entering that ball stays in it, hence satisfies the criterion at iteration ``n_iter``: it is
+labelled ``converged`` at once. (``Q`` solves the Lyapunov equation of ``DP / rho_t`` with
+``rho_t = (1 + rho) / 2``, so ``DP`` contracts by about ``rho_t`` in the ``Q``-norm; the sampled
+images must fall inside ``(1 + rho_t) / 2`` of the radius, and the ball used is 0.9 of the
+largest radius that passed.) This certification is numerical (sampled), not
+interval-rigorous. A second early exit reads the label off a cycle: once an iterate repeats one
+of the previous 32 to within ``1e-12`` (relative), the trajectory sits on a periodic cycle of
+``P`` and iterate ``n_iter`` is known; it is used only when that iterate's criterion value is
+not within ``1e-6`` (relative) of the threshold. The tests compare labels with and without the
+early exits on grids, and ``early_exit=False`` runs every trajectory to the end.
+
+**Attractors** (:mod:`hybridpd.pair.attractor_basins`): :func:`attractor_basin` labels each point with the attractor it reaches:
+``0`` the symmetric orbit (the paper's criterion above), ``1, 2, ...`` other periodic orbits of
+``P`` found in the iterates ``n_iter .. n_iter + max_period + 2`` of the unconverged points and
+refined by Newton on ``P^k`` (:class:`hybridpd.pair.attractors.CycleCatalog`), negative
+codes for sticking, divergence, no convergence within the iterations, unresolved flights and
+points off the section. The result lists the attractors (section points, period, multipliers,
+stability) and measures each basin (grid count, share of the on-section grid, area). While the
+symmetric orbit's basin touches the window's edge the window is extended (a bounded number of
+times); the result says whether it still does. :func:`format_percent` never rounds a share to
+``100 %`` or ``0 %`` when some points differ.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hybridpd._deprecated import moved_names
+from hybridpd.analysis.certify import BasinMapper, certify_ball
+from hybridpd.analysis.labels import LABELS, OFF_SECTION
+from hybridpd.model import check_array, check_axis
+from hybridpd.pair.batch import impact_map, map_labels
+from hybridpd.pair.impactmap import ImpactMap
+from hybridpd.sweeps.basin_result import BasinResult, load_basin
+
+__all__ = ["LABELS", "BasinResult", "ImpactMapper", "basin_of_attraction", "load_basin",
+           "section_grid"]
+
+
+class ImpactMapper(BasinMapper):
+    """Map a section point to a label by iterating the impact map (Attractors.jl's mapper).
+
+    Parameters
+    ----------
+    impact_map : ImpactMap
+    fixed_point : array_like, shape (4,)
+        ``s* = (phi*, z1*, z2*, z4*)``, a fixed point of ``P``.
+    n_iter : int
+        Iterations of ``P`` (the paper: 1500, i.e. 3000 impacts).
+    criterion : float
+        Threshold on the squared distance in ``(x1, y1, y2, phi)`` (the paper: 0.001).
+    early_exit : bool
+        Use the certified contraction ball (see the module docstring).
+    escape : float
+        Bound on ``|z1|, |z2|, |z4|`` beyond which a trajectory is ``diverged``.
+
+    Examples
+    --------
+    >>> from hybridpd import ImpactPair, PDGains
+    >>> from hybridpd.pair.orbits import symmetric_orbit
+    >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
+    >>> m = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
+    >>> m.label_name(m(orb.fixed_point + [0, 0.01, 0, 0]))
+    'converged'
+    """
+
+    def __init__(self, impact_map: ImpactMap, fixed_point, *, n_iter: int = 1500,
+                 criterion: float = 1e-3, early_exit: bool = True, escape: float = 1e3):
+        if not isinstance(impact_map, ImpactMap):
+            raise ValueError(f"impact_map must be an ImpactMap, got {type(impact_map).__name__}")
+        self.fixed_point = check_array("fixed_point", fixed_point, shape=(4,))
+        self._limits(n_iter, criterion, escape)
+        self.map = impact_map
+        self.cert_Q = np.eye(4)
+        self.cert_r2 = 0.0
+        self.cycle_tol = 1e-12 if early_exit else 0.0
+        # conventions the map does not hold (order n, x10, gamma), for metadata and titles
+        self.conventions: dict = {}
+        if early_exit:
+            self.cert_Q, self.cert_r2 = self._certify()
+
+    @classmethod
+    def from_orbit(cls, orbit, **kw) -> ImpactMapper:
+        """Mapper for the fixed point of a :class:`~hybridpd.pair.orbits.SymmetricOrbitResult`.
+
+        Keyword arguments go to the constructor; the orbit's ``n``, ``x10`` and ``gamma = L /
+        x10`` are kept in :attr:`conventions` (they reach the basin's metadata).
+        """
+        if not getattr(orbit, "exists", False):
+            raise ValueError(f"orbit must be an existing symmetric orbit, got "
+                             f"{getattr(orbit, 'reason', orbit)!r}")
+        m = cls(ImpactMap(orbit.pair, orbit.gains, orbit.reference(), orbit.case),
+                orbit.fixed_point, **kw)
+        m.conventions = {"n": int(orbit.n), "x10": float(orbit.x10),
+                         "gamma": float(orbit.pair.L / orbit.x10)}
+        return m
+
+    def _criterion_matrix(self) -> np.ndarray:
+        # (dx1, dy1, dy2, dphi) = C (dphi, dz1, dz2, dz4)
+        return np.array([[0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 1, 0], [1, 0, 0, 0]], float)
+
+    def _certify(self):
+        """Largest sampled-invariant Q-ball inside the criterion ball (r^2 = 0: none)."""
+        P = self.map
+        try:
+            DP = np.asarray(P.jacobian(self.fixed_point).DP, float).reshape(4, 4)
+        except (ValueError, RuntimeError):
+            return np.eye(4), 0.0
+
+        def images(pts):
+            if np.any(pts[:, 3] <= 0):
+                return pts, np.zeros(len(pts), bool)
+            res = P.apply_batch(pts)
+            return res.s, res.ok
+
+        return certify_ball(DP, self.fixed_point, self.criterion, images, P.wrap,
+                            C=self._criterion_matrix(), n_dirs=400)
+
+    def labels(self, S) -> tuple[np.ndarray, np.ndarray]:
+        """Labels and iterations used for section points ``S`` of shape ``(N, 4)``.
+
+        Points with ``z4 <= 0`` get ``off_section``.
+        """
+        S = np.asarray(S, float).reshape(-1, 4)
+        lab = np.full(S.shape[0], OFF_SECTION, dtype=np.int64)
+        its = np.zeros(S.shape[0], dtype=np.int64)
+        valid = np.isfinite(S).all(axis=1) & (S[:, 3] > 0)
+        if np.any(valid):
+            m = self.map
+            lv, iv, _ = map_labels(m.params, m._c, np.ascontiguousarray(S[valid]),
+                                   self.fixed_point, self.n_iter, self.criterion, self.cert_Q,
+                                   self.cert_r2, self.escape, m.tol, m.max_impacts, True,
+                                   self.cycle_tol)
+            lab[valid] = lv
+            its[valid] = iv
+        return lab, its
+
+
+def section_grid(fixed_point, L, x1, y1) -> np.ndarray:
+    """Section points of the paper's basin slice: ``(x1, y1)`` with ``y2 = y2*``, ``phi = phi*``.
+
+    On the section ``x1 = z1 + L``, ``y1 = z2 + z4``, ``y2 = z2``, so a grid point maps to
+    ``(phi*, x1 - L, z2*, y1 - z2*)``. Returns shape ``(len(y1), len(x1), 4)``.
+    """
+    fp = np.asarray(fixed_point, float)
+    X1, Y1 = np.meshgrid(np.asarray(x1, float), np.asarray(y1, float))
+    return np.stack([np.full_like(X1, fp[0]), X1 - L, np.full_like(X1, fp[2]), Y1 - fp[2]],
+                    axis=-1)
+
+
+def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chunk_size=None,
+                        store=None, progress=True, max_workers=None) -> BasinResult:
+    """Label a grid of the paper's slice ``(x1, y1)``, ``y2 = y2*``, ``phi = phi*``.
+
+    Parameters
+    ----------
+    mapper : ImpactMapper
+    x1, y1 : (min, max, num)
+        Grid axes.
+    executor, chunk_size, store, progress, max_workers
+        Passed to :func:`hybridpd.sweeps.sweep.run_sweep` (a ``store``, a ``.zarr`` directory,
+        makes the sweep write as it goes and resume); the labels do not depend on them.
+        Progress is labelled e.g. ``basin noncollocated e=0.1``.
+
+    Returns
+    -------
+    BasinResult
+        Labels of shape ``(len(y1), len(x1))``.
+
+    Raises
+    ------
+    ValueError
+        If ``mapper`` is not an :class:`ImpactMapper` or a grid axis is malformed.
+
+    Examples
+    --------
+    >>> import hybridpd as hp
+    >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
+    >>> mapper = hp.ImpactMapper.from_orbit(orb, n_iter=200)
+    >>> b = basin_of_attraction(mapper, (-1, 3, 5), (-1, 5, 4), progress=False)
+    >>> b.labels.shape, b.converged_fraction
+    ((4, 5), 1.0)
+    """
+    if not isinstance(mapper, ImpactMapper):
+        raise ValueError(f"mapper must be an ImpactMapper, got {type(mapper).__name__}")
+    xs = check_axis("x1", x1)
+    ys = check_axis("y1", y1)
+    out = _label_grid(mapper, xs, ys, 0, executor=executor, chunk_size=chunk_size, store=store,
+                      progress=progress, max_workers=max_workers)
+    return _basin_result(mapper, xs, ys, out["label"], out["iterations"])
+
+
+def _basin_result(mapper, xs, ys, lab, its) -> BasinResult:
+    on = lab != OFF_SECTION
+    frac = float((lab[on] == 0).mean()) if np.any(on) else 0.0
+    m = mapper.map
+    meta = {
+        "case": m.case.value, "kp": m.gains.kp, "kv": m.gains.kv, "mu": m.pair.mu,
+        "e": m.pair.e, "L": m.pair.L, "m2": m.pair.m2, "omega": m.reference.omega,
+        "xm": m.reference.xm, "n_iter": mapper.n_iter, "criterion": mapper.criterion,
+        "certified_radius": mapper.certified_radius}
+    meta.update(mapper.conventions)
+    return BasinResult(xs, ys, lab, its, mapper.fixed_point.copy(), frac, meta)
+
+
+def _label_grid(mapper: ImpactMapper, xs, ys, tail: int, *, executor="serial", chunk_size=None,
+                store=None, progress=False, max_workers=None) -> dict:
+    """Labels, iterations (and tails) of the slice grid, each reshaped to ``(ny, nx, ...)``."""
+    grid = section_grid(mapper.fixed_point, mapper.map.pair.L, xs, ys)
+    pts = grid.reshape(-1, 4)
+    spec = _MapperSpec.of(mapper)
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.sweeps.sweep import run_sweep
+
+    res = run_sweep(_label_chunk, {"phi": pts[:, 0], "z1": pts[:, 1], "z2": pts[:, 2],
+                                   "z4": pts[:, 3]},
+                    chunk_size=chunk_size, executor=executor, max_workers=max_workers,
+                    store=store, progress=progress,
+                    func_kwargs={"mapper": spec, "tail": tail}, metadata={"kind": "basin"},
+                    label=f"basin {mapper.map.case.value} e={mapper.map.pair.e:g}")
+    out = res.outputs
+    shape = (len(ys), len(xs))
+    return {k: np.asarray(v).reshape(shape + np.shape(v)[1:]) for k, v in out.items()}
+
+
+@dataclass(frozen=True)
+class _MapperSpec:
+    """Picklable description of a mapper (rebuilt in worker processes)."""
+
+    params: tuple
+    case: str
+    fixed_point: tuple
+    n_iter: int
+    criterion: float
+    escape: float
+    cert_Q: tuple
+    cert_r2: float
+    cycle_tol: float
+    tol: float
+    max_impacts: int
+
+    @classmethod
+    def of(cls, m: ImpactMapper) -> _MapperSpec:
+        return cls(tuple(m.map.params.tolist()), m.map.case.value, tuple(m.fixed_point.tolist()),
+                   m.n_iter, m.criterion, m.escape, tuple(m.cert_Q.ravel().tolist()),
+                   m.cert_r2, m.cycle_tol, m.map.tol, m.map.max_impacts)
+
+
+def _label_chunk(chunk, mapper: _MapperSpec, tail: int = 0):
+    S = np.stack([chunk["phi"], chunk["z1"], chunk["z2"], chunk["z4"]], axis=1)
+    lab = np.full(S.shape[0], OFF_SECTION, dtype=np.int64)
+    its = np.zeros(S.shape[0], dtype=np.int64)
+    final = np.full(S.shape, np.nan)
+    valid = np.isfinite(S).all(axis=1) & (S[:, 3] > 0)
+    params = np.array(mapper.params)
+    c = 0 if mapper.case == "collocated" else 1
+    if np.any(valid):
+        lv, iv, fv = map_labels(params, c, np.ascontiguousarray(S[valid]),
+                                np.array(mapper.fixed_point), mapper.n_iter, mapper.criterion,
+                                np.array(mapper.cert_Q).reshape(4, 4), mapper.cert_r2,
+                                mapper.escape, mapper.tol, mapper.max_impacts, True,
+                                mapper.cycle_tol)
+        lab[valid] = lv
+        its[valid] = iv
+        final[valid] = fv
+    out = {"label": lab, "iterations": its}
+    if tail > 0:
+        # only the trajectories that did not meet the criterion need their tail
+        out["tail"] = _tails(params, c, final, lab == 1, tail, mapper)
+    return out
+
+
+def _tails(params, c, final, which, n, mapper: _MapperSpec) -> np.ndarray:
+    """Iterates ``0..n`` of ``P`` from ``final[which]`` (NaN elsewhere and after a failure)."""
+    tails = np.full((final.shape[0], n + 1, 4), np.nan)
+    idx = np.flatnonzero(which)
+    tails[idx, 0] = final[idx]
+    cur = final[idx]
+    for j in range(1, n + 1):
+        if idx.size == 0:
+            break
+        out, status, _ = impact_map(params, c, np.ascontiguousarray(cur), mapper.tol,
+                                    mapper.max_impacts)
+        ok = (status == 0) & (out[:, 3] > 0)
+        idx, cur = idx[ok], out[ok]
+        tails[idx, j] = cur
+    return tails
+
+
+# ----------------------------------------------------------------------------------------
+# Attractor-labelled basins with a measure
+# ----------------------------------------------------------------------------------------
+
+
+__getattr__ = moved_names(__name__, {
+    name: "hybridpd.pair.attractor_basins"
+    for name in ("AttractorBasin", "BasinMeasure", "attractor_basin", "format_percent",
+                 "load_attractor_basin")})

@@ -1,0 +1,75 @@
+"""Periodic orbits of the impact map by Newton's method, and their parameter continuation.
+
+Two complementary tools:
+
+* :func:`find_periodic_orbit` solves ``P^k(s) = s`` for a fixed point of the ``k``-th iterate
+  of the impact map ``P`` (:class:`~hybridpd.pair.impactmap.ImpactMap`), from any start: symmetric
+  or not, simple impact pattern or not (double impacts, grazing contacts, sticking phases).
+  The phase residual is unwrapped modulo ``T``. The Jacobian of ``P^k`` is the product of the
+  symbolic ``DP`` blocks of :mod:`hybridpd.pair.symbolic` when every iterate has the simple pattern
+  ``(+L, -L, +L)``, otherwise central finite differences of the simulated map. Damped Newton
+  with a backtracking line search.
+* :func:`continue_orbit` follows a fixed point of ``P^k`` in one parameter among
+  :data:`PARAMETERS` (natural-parameter continuation with a secant predictor, or
+  pseudo-arclength continuation which passes folds); :func:`continue_symmetric` follows the
+  closed-form symmetric orbit family of :mod:`hybridpd.pair.orbits` (``x10`` fixed, ``xm``
+  follows) in one of :data:`SYMMETRIC_PARAMETERS`.
+
+Both record, at every accepted step, the parameter, the fixed point, the Floquet multipliers
+and the spectral radius, and detect and locate these events between consecutive steps
+(:data:`EVENT_KINDS`), by the Illinois (safeguarded regula falsi) method on a test function,
+or by bisection where the test is a discrete change:
+
+========================  ==========================================================
+``fold``                  ``det(DP - I)`` changes sign: a real multiplier crosses +1
+                          (a fold if the parameter turns back; otherwise a branch
+                          point, e.g. the symmetry-breaking pitchfork of a symmetric
+                          orbit)
+``period_doubling``       ``det(DP + I)`` changes sign: a real multiplier crosses -1
+``neimark_sacker``        a complex pair crosses the unit circle (test ``|lambda| - 1``
+                          of the non-real multiplier nearest the circle)
+``grazing``               symmetric family: the viability margin crosses 0 (paper (19));
+                          map continuation: the impact pattern changes (an extra
+                          contact appears with zero velocity, or one disappears)
+``stability_change``      the spectral radius crosses 1
+``existence``             symmetric family only: the conditions (13)-(14) stop having a
+                          solution, or viability is lost otherwise than by grazing
+========================  ==========================================================
+
+Every loop is bounded (Newton iterations, continuation steps, step-size halvings, location
+iterations) and every result carries the reason it stopped. Nothing here keeps global
+mutable state; the compiled helper is cached on disk by numba like the rest of the package.
+
+Coordinates: a section point is ``s = (phi, z1, z2, z4)`` (pre-impact at ``z3 = +L``,
+``z4 > 0``), ``phi`` in time units in ``[0, T)``, ``T = 2 pi / omega``; positions in length
+units, velocities in length/time.
+
+Modules: :mod:`.trace` (one application of ``P`` with its impact pattern), :mod:`.newton`
+(``P^k``, its Jacobian, damped Newton), :mod:`.periodic` (:func:`find_periodic_orbit`),
+:mod:`.events` (:class:`Branch`, :class:`BifurcationEvent`, event location), :mod:`.branch`
+(:func:`continue_orbit`), :mod:`.symmetric` (:func:`continue_symmetric`), :mod:`.switching`
+(:func:`switch_branch`: the period-doubled branch at a flip, the crossing branch at a branch
+point, the motion reached past a grazing point) and :mod:`.plot` (:func:`plot_branch`).
+"""
+from __future__ import annotations
+
+from hybridpd.pair.continuation._common import (
+    DESIGN_PARAMETERS,
+    EVENT_KINDS,
+    PARAMETERS,
+    SYMMETRIC_PARAMETERS,
+    design_xm,
+)
+from hybridpd.pair.continuation.branch import continue_orbit
+from hybridpd.pair.continuation.events import BifurcationEvent, Branch, load_branch
+from hybridpd.pair.continuation.newton import map_power_jacobian
+from hybridpd.pair.continuation.periodic import PeriodicOrbit, find_periodic_orbit
+from hybridpd.pair.continuation.plot import plot_branch
+from hybridpd.pair.continuation.switching import BranchSwitch, branch_map, switch_branch
+from hybridpd.pair.continuation.symmetric import continue_symmetric
+from hybridpd.pair.continuation.trace import ImpactStep, MapTrace, trace_map
+
+__all__ = ["DESIGN_PARAMETERS", "EVENT_KINDS", "PARAMETERS", "SYMMETRIC_PARAMETERS",
+           "BifurcationEvent", "Branch", "BranchSwitch", "ImpactStep", "MapTrace", "PeriodicOrbit",
+           "branch_map", "continue_orbit", "continue_symmetric", "design_xm", "find_periodic_orbit",
+           "load_branch", "map_power_jacobian", "plot_branch", "switch_branch", "trace_map"]

@@ -1,0 +1,257 @@
+"""Continuation of the closed-form symmetric orbit family (:func:`continue_symmetric`)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from hybridpd.analysis.floquet import stability
+from hybridpd.analysis.pathfollow import _MAX_HALVINGS, bisect_predicate
+from hybridpd.model import Case, ImpactPair, PDGains, as_gains, check_finite, check_odd_order
+from hybridpd.pair import symbolic
+from hybridpd.pair.continuation._common import (
+    EVENT_KINDS,
+    SYMMETRIC_PARAMETERS,
+    _check_parameter,
+    _in_domain,
+    _path_steps,
+    _positive_float,
+    _positive_int,
+    _wrap_diff,
+)
+from hybridpd.pair.continuation.events import (
+    BifurcationEvent,
+    Branch,
+    _branch_from_points,
+    _changes,
+    _Point,
+    _Tracker,
+)
+from hybridpd.pair.orbits import REASONS, symmetric_orbits
+
+_SIMPLE_SIG = (((-1, "impact"), (1, "impact")),)
+
+
+def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter: str,
+                       stop: float, *, x10: float = 1.0, n: int = 1, case="collocated",
+                       step: float | None = None, min_step: float | None = None,
+                       max_step: float | None = None, max_steps: int = 2000,
+                       max_change: float = 0.05, locate: bool = True,
+                       event_tol: float = 1e-10, margin_samples: int = 256,
+                       events: tuple = EVENT_KINDS) -> Branch:
+    """Continue the simple symmetric orbit family (closed form) in one parameter.
+
+    Along the family the desired primary-mass amplitude ``x10`` stays fixed (unless it is the
+    parameter) and the reference amplitude ``xm`` follows from (20), as in
+    :func:`hybridpd.pair.orbits.symmetric_orbit`. Every point is closed form (conditions
+    (13)-(14), viability by guaranteed contact location, symbolic ``DP``), so the family is a
+    graph over the parameter and no corrector is needed; the step adapts to the change of
+    the fixed point, the spectral radius and the viability margin.
+
+    Where viability fails the *formal* orbit (the solution of (13)-(14), which crosses a
+    wall) is still followed: its multipliers are reported (``viable`` False), and events on
+    it are flagged ``viable=False``.
+
+    Parameters
+    ----------
+    pair : ImpactPair
+    gains : PDGains
+    omega : float
+        Reference frequency (rad/time).
+    parameter : str
+        One of :data:`SYMMETRIC_PARAMETERS`.
+    stop : float
+        End value of the parameter (the start is its value in the inputs).
+    x10 : float
+        Primary-mass amplitude (length); ``gamma = L / x10``. With ``parameter="gamma"`` it
+        stays fixed and the clearance follows, ``L = gamma * x10`` (the paper's convention,
+        CONVENTIONS.md); the start is ``gamma = pair.L / x10``.
+    n : int
+        Odd orbit order.
+    case : {"collocated", "noncollocated"}
+    step, min_step, max_step : float, optional
+        Parameter steps; defaults ``|stop - p0| / 100``, ``|stop - p0| * 1e-6`` and
+        ``|stop - p0| / 20``.
+    max_steps : int
+        Bound on accepted steps.
+    max_change : float
+        Largest accepted change per step of ``|s|_inf / (1 + |s|_inf)``, of
+        ``min(spectral radius, 2)`` and of the viability margin.
+    locate : bool
+        Locate the events (Illinois method on the closed-form test functions).
+    event_tol : float
+        Location tolerance, relative to ``max(1, |p|)``.
+    margin_samples : int
+        Grid of the viability-margin search.
+    events : tuple of str
+        Kinds to detect (subset of :data:`EVENT_KINDS`).
+
+    Returns
+    -------
+    Branch
+        ``family == "symmetric"``, ``method == "closed_form"``.
+
+    Raises
+    ------
+    ValueError
+        Unknown parameter, non-finite or out-of-domain ``stop``, zero or negative steps.
+
+    Examples
+    --------
+    The collocated symmetric orbit (``e = 0.1``, paper parameters) grazes near ``kv = 21.9``:
+
+    >>> from hybridpd import ImpactPair, PDGains
+    >>> br = continue_symmetric(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv", 23.0)
+    >>> ev = br.events_of("grazing")[0]
+    >>> round(ev.parameter, 3)
+    21.938
+    """
+    if not isinstance(pair, ImpactPair):
+        raise ValueError(f"pair must be an ImpactPair, got {type(pair).__name__}")
+    gains = as_gains(gains)
+    omega = _positive_float("omega", omega)
+    x10 = _positive_float("x10", x10)
+    case = Case.parse(case)
+    name = _check_parameter(parameter, SYMMETRIC_PARAMETERS)
+    stop = check_finite("stop", stop)
+    base = {"kp": gains.kp, "kv": gains.kv, "e": pair.e, "mu": pair.mu, "L": pair.L,
+            "omega": omega, "x10": x10, "m2": pair.m2}
+    if name == "gamma":
+        # gamma = L / x10 with x10 fixed: the clearance follows the parameter
+        base["gamma"] = pair.L / x10
+        del base["L"]
+    p0 = base[name]
+    _, step, max_step, min_step, max_steps = _path_steps(
+        name, p0, stop, step, max_step, min_step, max_steps, (100, 20, 1e-6))
+    max_change = _positive_float("max_change", max_change)
+    event_tol = _positive_float("event_tol", event_tol)
+    margin_samples = _positive_int("margin_samples", margin_samples)
+    bad = [kd for kd in events if kd not in EVENT_KINDS]
+    if bad:
+        raise ValueError(f"events must be a subset of {EVENT_KINDS}, got {bad}")
+    n = check_odd_order(n)
+    direction = 1.0 if stop > p0 else -1.0
+
+    def point(p):
+        v = dict(base)
+        v[name] = float(p)
+        if name == "gamma":
+            v["L"] = v["gamma"] * v["x10"]
+        r = symmetric_orbits(v["kp"], v["kv"], mu=v["mu"], e=v["e"], L=v["L"],
+                             omega=v["omega"], m2=v["m2"], x10=v["x10"], n=n, case=case,
+                             margin=True, jacobian=False, margin_samples=margin_samples)
+        code = int(r.reason)
+        formal = code not in (1, 2)
+        s = np.asarray(r.fixed_point, float).reshape(4)
+        mult = np.full(4, np.nan + 0j)
+        rho = np.nan
+        DP = None
+        if formal:
+            DP = np.asarray(symbolic.orbit_jacobian(r.candidate).DP, float).reshape(4, 4)
+            if np.all(np.isfinite(DP)):
+                st = stability(DP)
+                mult, rho = st.multipliers, st.spectral_radius
+            else:
+                formal = False
+        viable = bool(r.exists)
+        return _Point(u=np.append(s, p), DP=DP, mult=mult, rho=rho,
+                      signature=_SIMPLE_SIG if viable else (), margin=float(r.viability_margin),
+                      min_speed=float(s[3]), viable=viable, formal=formal, xm=float(r.xm),
+                      reason=code, T=2 * math.pi / v["omega"])
+
+    def evaluate_between(pa, pb, theta):
+        return point(pa.u[-1] + theta * (pb.u[-1] - pa.u[-1]))
+
+    def to_event(kind, pt, index, detail, fv, ok):
+        T = 2 * math.pi / (pt.u[-1] if name == "omega" else omega)
+        s = pt.u[:4].copy()
+        s[0] %= T
+        if not pt.viable and kind not in ("grazing", "existence"):
+            detail += " [formal orbit, not viable]"
+        return BifurcationEvent(kind=kind, parameter=float(pt.u[-1]), point=s,
+                                multipliers=pt.mult.copy(), index=index, detail=detail,
+                                test_value=float(fv), located=bool(ok), viable=pt.viable,
+                                xm=pt.xm)
+
+    def size(pa, pb):
+        return abs(pb.u[-1] - pa.u[-1]) / max(1.0, abs(pa.u[-1]))
+
+    tracker = _Tracker(events, evaluate_between, size, event_tol, 80, locate, to_event)
+
+    def extra_events(pa, pb, index):
+        out = []
+        ma, mb = pa.margin, pb.margin
+        grazed = _changes(ma, mb)
+        if "grazing" in events and grazed:
+            out.append(tracker._root(
+                "grazing", lambda pt: pt.margin, pa, pb, index,
+                lambda pt: ("viability margin crosses 0: the orbit "
+                            f"{'stops' if mb < ma else 'starts'} existing by grazing (19)")))
+        if "existence" in events and (pa.formal != pb.formal
+                                      or (pa.viable != pb.viable and not grazed)):
+            def same(pt):
+                return (pt.formal, pt.viable) == (pa.formal, pa.viable)
+            if locate:
+                la, lb, ok = bisect_predicate(lambda th: evaluate_between(pa, pb, th), same,
+                                               pa, pb, size=size(pa, pb), tol=event_tol,
+                                               max_iter=80)
+            else:
+                la, lb, ok = pa, pb, False
+            pt = la if la.formal else lb
+            ev = to_event("existence", pt, index,
+                          f"{REASONS[pa.reason]} -> {REASONS[pb.reason]}", np.nan, ok)
+            out.append(ev)
+        return out
+
+    pts = [point(p0)]
+    evs = []
+    rejected = 0
+    termination = f"max_steps = {max_steps} reached"
+    h = min(step, max_step)
+    for _ in range(max_steps):
+        cur = pts[-1]
+        pc = cur.u[-1]
+        for _h in range(_MAX_HALVINGS):
+            pn = pc + direction * h
+            if (pn - stop) * direction > 0:
+                pn = stop
+            if not _in_domain(name, pn):
+                pn = stop
+            new = point(pn)
+            ch = _change(cur, new)
+            if ch <= max_change or h <= min_step:
+                break
+            rejected += 1
+            h = max(0.5 * h, min_step)
+        idx = len(pts) - 1
+        evs.extend(tracker.detect(cur, new, idx, extra_events(cur, new, idx)))
+        pts.append(new)
+        if ch <= max_change / 3:
+            h = min(1.5 * h, max_step)
+        if pn == stop:
+            termination = "reached stop"
+            break
+    fixed = {k: v for k, v in base.items() if k != name}
+    fixed.update({"n": n, "case": case.value})
+    br = _branch_from_points(pts, evs, name, None, 1, "closed_form", termination, rejected,
+                             omega=omega, case=case, fixed=fixed)
+    return br
+
+
+def _change(a, b):
+    """Size of the change between two closed-form points (for the step control)."""
+    if a.formal != b.formal or a.viable != b.viable:
+        return math.inf
+    sa, sb = a.u[:4], b.u[:4]
+    if not (np.all(np.isfinite(sa)) and np.all(np.isfinite(sb))):
+        return 0.0
+    ch = float(np.max(np.abs(sb[1:] - sa[1:]))) / (1.0 + float(np.max(np.abs(sa[1:]))))
+    # the phase lives on a circle of length T: a wrap from T to 0 is no change
+    ch = max(ch, abs(_wrap_diff(sb[0] - sa[0], a.T)) / (1.0 + abs(sa[0])))
+    if np.isfinite(a.rho) and np.isfinite(b.rho):
+        # only the neighbourhood of the unit circle matters for the step: far outside it the
+        # radius may grow by orders of magnitude without any event
+        ch = max(ch, abs(min(b.rho, 2.0) - min(a.rho, 2.0)))
+    if np.isfinite(a.margin) and np.isfinite(b.margin):
+        ch = max(ch, abs(b.margin - a.margin))
+    return ch
