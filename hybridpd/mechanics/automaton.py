@@ -610,7 +610,7 @@ class _ModeBuilder:
     def __init__(self, geo):
         self.geo = geo
         # the guards of every mode, known without building them (signature tables)
-        names = ["sample"] if geo.loop.sampled else []
+        names = [g for g, *_ in geo.loop.samplers]
         for k, c in enumerate(geo.contacts):
             for wall, _ in c.bounds:
                 kinds = ("contact", "release") if c.rigid else ("enter", "leave")
