@@ -17,7 +17,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from hybridpd.plotting._common import legend_from_gids, line_proxy, patch_proxy, register, set_all
+from hybridpd.plotting._common import (
+    legend_from_gids,
+    legend_handles,
+    line_proxy,
+    patch_proxy,
+    register,
+    set_all,
+)
 from hybridpd.plotting.style import DOUBLE, house_figure, series, styled
 
 __all__ = ["LABELS", "VERDICT_STYLES", "plot_m2_study", "plot_param_study",
@@ -86,27 +93,34 @@ def _rho_panel(ax, study, case, runs):
         ln = ax.axvline(m, color="k", lw=0.9, ls=(0, (6, 2)))
         register(ax, ln, "m2 of the figures", line_proxy(color="k", lw=0.9, ls=(0, (6, 2))))
     ax.set_xscale("log")
-    ax.set_yscale("log")
-    _plain_log(ax)
+    vals = np.concatenate([np.asarray(v, float)[np.isfinite(v)] for (c, _), v in
+                           study.rho.items() if c == case] + [np.array([1.0])])
+    if vals.max() / max(vals.min(), 1e-300) > 20:
+        ax.set_yscale("log")
+        _plain_log(ax)
+    else:
+        # a narrow range: a log axis would label one tick in it
+        _plain_log(ax, "x")
     ax.set_xlabel(LABELS["m2"])
     ax.set_ylabel(LABELS["rho"])
 
 
 def _reading_rows(readings) -> list:
-    """``[(row label, runs)]``: one row per conclusion, one per criterion of a split one."""
+    """``[(row label, runs, criterion)]``: one row per conclusion, one per criterion of a
+    claim read under two criteria (labelled a, b; the criteria are named in the key)."""
     rows = []
     for key, runs in readings.items():
         if isinstance(runs, dict):
-            for crit, r in runs.items():
-                rows.append((f"{key}: {crit}", r))
+            for k, (crit, r) in enumerate(runs.items()):
+                rows.append((f"{key}, criterion {'ab'[k]}", r, crit))
         else:
-            rows.append((f"conclusion {key}", runs))
+            rows.append((f"conclusion {key}", runs, None))
     return rows
 
 
 def _verdict_panel(ax, readings, m2_range):
     rows = _reading_rows(readings)
-    for row, (label, runs) in enumerate(rows):
+    for row, (label, runs, _) in enumerate(rows):
         for r in runs:
             st = VERDICT_STYLES[r["verdict"]]
             if r.get("exact"):
@@ -117,7 +131,7 @@ def _verdict_panel(ax, readings, m2_range):
                                   edgecolor=st["color"], hatch=_EXACT_HATCH[r["verdict"]],
                                   lw=0.8, zorder=4)
                 ax.add_patch(patch)
-                register(ax, patch, f"{r['verdict']} on the whole interval (located ends)",
+                register(ax, patch, f"{r['verdict']} on the whole bar (its ends located exactly)",
                          patch_proxy(facecolor="white", edgecolor=st["color"],
                                      hatch=_EXACT_HATCH[r["verdict"]], lw=0.8))
                 continue
@@ -125,7 +139,7 @@ def _verdict_panel(ax, readings, m2_range):
             (ln,) = ax.plot(xs, np.full(xs.size, row), ls="none", marker=st["marker"],
                             color=st["color"], mfc=st["mfc"], mec=st["color"], ms=6,
                             zorder=5)
-            register(ax, ln, f"{r['verdict']} (computed at this m2)",
+            register(ax, ln, f"{r['verdict']} at this m2 (computed here only)",
                      line_proxy(ls="none", marker=st["marker"], color=st["color"],
                                 mfc=st["mfc"], mec=st["color"], ms=6))
     ax.set_xscale("log")
@@ -133,7 +147,7 @@ def _verdict_panel(ax, readings, m2_range):
     if m2_range is not None:
         ax.set_xlim(m2_range[0] / 1.6, m2_range[1] * 1.6)
     ax.set_ylim(len(rows) - 0.5, -0.5)
-    ax.set_yticks(range(len(rows)), [lab for lab, _ in rows])
+    ax.set_yticks(range(len(rows)), [lab for lab, _, _ in rows])
     ax.grid(axis="x", color="0.85", lw=0.5)
     ax.set_xlabel(LABELS["m2"] + ": the paper's gain box read at this secondary mass")
 
@@ -156,19 +170,28 @@ def plot_m2_study(study, *, readings, m2_range=None, runs=()):
         The ``m2`` of the figures, marked.
     """
     rows = _reading_rows(readings)
-    fig = house_figure(DOUBLE, 4.4 + 0.22 * len(rows))
-    gs = fig.add_gridspec(2, 2, height_ratios=[2.0, 0.25 + 0.16 * len(rows)])
+    fig = house_figure(DOUBLE, min(8.6, 5.2 + 0.2 * len(rows)))
+    gs = fig.add_gridspec(3, 2, height_ratios=[2.0, 0.25 + 0.16 * len(rows), 0.5])
     axes = []
     for col, case in enumerate(("noncollocated", "collocated")):
         ax = fig.add_subplot(gs[0, col])
         _rho_panel(ax, study, case, runs)
-        ax.set_title(f"{_CASE[case]}, kp = 10, kv = 20 (no line: no orbit)")
+        ax.set_title(f"{_CASE[case]}, kp = 10, kv = 20\n(no line: no orbit)")
         axes.append(ax)
     ax = fig.add_subplot(gs[1, :])
     _verdict_panel(ax, readings, m2_range)
-    ax.set_title("verdict on the gain box as printed, at the m2 where it was computed")
-    axes.append(ax)
+    ax.set_title("each claim's verdict on the gain box as printed, read at m2")
     legend_from_gids(fig, axes, ncol=3)
+    # the verdicts' own key, under their panel: what a marker and a bar mean
+    key = fig.add_subplot(gs[2, :])
+    key.set_axis_off()
+    pairs = legend_handles([ax])
+    crit = [f"{lab}: {c}" for lab, _, c in rows if c is not None]
+    if pairs:
+        labels, handles = zip(*pairs)
+        key.legend(list(handles), list(labels), loc="upper center", ncol=2,
+                   title="verdict key" + ("\n" + "; ".join(crit) if crit else ""),
+                   frameon=False)
     fig.suptitle("Convention study: μ = 0.1, γ = 0.75, ω = 5, n = 1, m2 varied")
     return fig
 

@@ -276,8 +276,9 @@ def _certify_case(case, targets, *, grid, levels, width, gamma, omega, n, chunk,
     kept = []
     inherited = {p: np.zeros(tid.size, np.int8) for p in PROPERTIES}
     for level in range(levels + 1):
-        edge = lambda k: lo[tid] + span[tid] * (k / F)
-        kp, kv = (edge(i0), edge(i0 + size)), (edge(j0), edge(j0 + size))
+        a, b = lo[tid], span[tid]
+        kp = (a + b * (i0 / F), a + b * ((i0 + size) / F))
+        kv = (a + b * (j0 / F), a + b * ((j0 + size) / F))
         st = _classify(case, n, kp, kv, mus[tid], es[tid], gamma, omega, chunk)
         # what was proved on a parent holds on its parts (a smaller box's enclosure may
         # still fail to show it)

@@ -7,7 +7,7 @@ and its denominator, and a caption for every figure.
 """
 from __future__ import annotations
 
-__all__ = ["CAPTIONS", "render"]
+__all__ = ["CAPTIONS", "render", "terminal_lines"]
 
 _CASE = {"collocated": "collocated", "noncollocated": "non-collocated"}
 
@@ -308,3 +308,30 @@ def render(d: dict) -> str:
             w(f"- m2 = {r['m2']:g}, {k}: {v:.2f}")
     w("")
     return "\n".join(lines)
+
+
+def terminal_lines(d: dict) -> list:
+    """The terminal summary of ``hybridpd reproduce``: one line per claim of the lead table
+    (its id, the verdict in the scaled gains, the paper's words, the readings of the printed
+    gain box along ``m2``) and the stable intervals of the non-collocated orbits.
+
+    Examples
+    --------
+    >>> from hybridpd.reproduce.markdown import terminal_lines
+    >>> d = {"table": [{"id": 3, "verdict": "agrees", "paper": "collocated range large",
+    ...                 "m2_text": "agrees at m2 = 1"}],
+    ...      "m2_stable_intervals": {"noncollocated": {"0.5": [[3.7, 1000.0]]}}}
+    >>> print("\\n".join(terminal_lines(d)))
+    claim         verdict (scaled gains)  the paper says | printed box read at m2
+    3             agrees                  collocated range large | agrees at m2 = 1
+    non-collocated orbit at kp = 10, kv = 20 exists and is stable for m2 in: e = 0.5: [3.7, 1000]
+    """
+    out = [f"{'claim':<13} {'verdict (scaled gains)':<23} the paper says | printed box read at m2"]
+    for row in d["table"]:
+        out.append(f"{row['id']!s:<13} {row['verdict']:<23} {row['paper']} | "
+                   f"{row['m2_text']}")
+    ivs = d["m2_stable_intervals"]["noncollocated"]
+    out.append("non-collocated orbit at kp = 10, kv = 20 exists and is stable for m2 in: "
+               + "; ".join(f"e = {e}: " + (", ".join(f"[{a:.6g}, {b:.6g}]" for a, b in v)
+                                          or "never") for e, v in ivs.items()))
+    return out

@@ -393,10 +393,12 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     parallel = executor != "serial"
-    bg = _Background({"certified collocated": (_certified_job, (settings, ("collocated",))),
+    # the traced boundaries first: the first convention's figures wait for them, the
+    # certified shares are needed only at the end
+    bg = _Background({"traced boundaries": (_traced_job, (settings,)),
+                      "certified collocated": (_certified_job, (settings, ("collocated",))),
                       "certified noncollocated": (_certified_job,
-                                                  (settings, ("noncollocated",))),
-                      "traced boundaries": (_traced_job, (settings,))}, parallel)
+                                                  (settings, ("noncollocated",)))}, parallel)
     try:
         return _reproduce(out, mode, settings, bg, executor=executor, max_workers=max_workers,
                           progress=progress, log=log, figure_hook=figure_hook)
@@ -409,7 +411,7 @@ def _reproduce(out, mode, settings, bg, *, executor, max_workers, progress, log,
     from hybridpd.reproduce.certified import merge_shares
     from hybridpd.reproduce.figures import study_figures
     from hybridpd.reproduce.params import param_study
-    from hybridpd.reproduce.summary import write_summary
+    from hybridpd.reproduce.summary import build_summary, write_summary
     from hybridpd.sweeps.progress import Progress
 
     say = _say(log)
@@ -467,18 +469,22 @@ def _reproduce(out, mode, settings, bg, *, executor, max_workers, progress, log,
     timings["waiting for the certified shares"] = time.perf_counter() - t0
     tick("certified shares")
     t0 = time.perf_counter()
+    # the figures draw the summary's table (its readings along m2): the summary first
+    data = build_summary(settings=settings, mode=mode, study=study, studies=studies, runs=runs,
+                         shares=shares, check5=check5, timings=timings)
+    timings["summary"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
     study_figures(out, study=study, studies=studies, settings=settings, runs=runs,
-                  shares=shares, hook=figure_hook)
+                  table=data["table"], shares=shares, hook=figure_hook)
     timings["figures of the studies"] = time.perf_counter() - t0
     tick("figures of the studies")
     timings["traced boundaries (background)"] = traced_seconds
     for k, v in shares["seconds"].items():
         timings[f"certified {k} (background)"] = v
     timings["total"] = time.perf_counter() - t_start
-    figures = sorted(p.relative_to(out).as_posix() for p in out.rglob("*.png"))
-    path = write_summary(out, settings=settings, mode=mode, study=study, studies=studies,
-                         runs=runs, shares=shares, check5=check5, timings=timings,
-                         figures=figures)
+    data["timings"] = {k: float(v) for k, v in timings.items()}
+    data["figures"] = sorted(p.relative_to(out).as_posix() for p in out.rglob("*.png"))
+    path = write_summary(out, data=data)
     tick(f"summary written to {path}")
     bar.close()
     return path

@@ -19,6 +19,7 @@ The conclusion-specific thresholds live in :mod:`hybridpd.reproduce.conclusions`
 """
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -291,7 +292,7 @@ def m2_readings(m2, verdicts) -> list:
     vs = [_check_verdict(v) for v in verdicts]
     if len(x) != len(vs) or not x:
         raise ValueError("m2 and verdicts must have the same non-zero length")
-    if any(b <= a for a, b in zip(x, x[1:])):
+    if any(b <= a for a, b in itertools.pairwise(x)):
         raise ValueError("m2 must be increasing")
     runs = []
     for m, v in zip(x, vs):

@@ -5,6 +5,7 @@ rendered from the same dict that is written as JSON, so the two cannot disagree.
 """
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from pathlib import Path
@@ -241,8 +242,8 @@ def _readings_123(shares, es, settings) -> dict:
         chk = {1: C.check_1(sh["collocated"], sh["noncollocated"], es),
                2: C.check_2(sh["collocated"], sh["noncollocated"], es),
                3: C.check_3(sh["collocated"], es)}
-        for k in per:
-            per[k].append(chk[k]["verdict"])
+        for k, lst in per.items():
+            lst.append(chk[k]["verdict"])
         evidence.append({"m2": m2, "collocated": sh["collocated"],
                          "noncollocated": sh["noncollocated"],
                          "verdicts": {str(k): chk[k]["verdict"] for k in chk}})
@@ -263,7 +264,7 @@ def readings_4(intervals, m2_range, runs) -> list:
     ends = sorted({lo, hi} | {x.m2 for d in intervals.values() for ivs in d.values()
                               for i in ivs for x in (i.lo, i.hi) if lo < x.m2 < hi})
     out = []
-    for a, b in zip(ends, ends[1:]):
+    for a, b in itertools.pairwise(ends):
         m = math.sqrt(a * b)
         st = {c: [_stable_at(intervals[c][e], m) for e in es] for c in CASES}
         v = C.check_4_necessary(st["collocated"], st["noncollocated"])
@@ -407,10 +408,12 @@ def _feedback(m2, settings) -> dict | None:
             "spectral_radius": rho}
 
 
-def write_summary(out, **kw) -> Path:
-    """Write ``summary.json`` and ``summary.md`` into ``out``; return the markdown's path."""
+def write_summary(out, data=None, **kw) -> Path:
+    """Write ``summary.json`` and ``summary.md`` into ``out``; return the markdown's path.
+
+    ``data`` is a :func:`build_summary` dict; without it one is built from ``kw``."""
     out = Path(out)
-    data = build_summary(**kw)
+    data = build_summary(**kw) if data is None else data
     errs = validate(data)
     if errs:
         raise RuntimeError("summary.json does not match its schema: " + "; ".join(errs[:5]))

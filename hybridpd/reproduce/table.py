@@ -173,7 +173,7 @@ def _row_5(c, readings_by):
 
 def _row_mu_existence(c, grid):
     parts = []
-    for key, t in c["trends"].items():
+    for key in c["trends"]:
         case, e = key.split(" ")
         ivs = [c["first"][case][_idx(c, case, e)], c["last"][case][_idx(c, case, e)]]
         a, b = pct_interval(ivs[0]), pct_interval(ivs[1])
