@@ -425,8 +425,8 @@ def reproduction_shares(settings, cases=("collocated", "noncollocated")) -> dict
     """Every certified share the reproduction's verdicts need, for ``cases``.
 
     * ``"main"``: the scaled box (``kp/m2``, ``kv/m2`` in ``[0.1, 50]``) at the paper's
-      ``mu``, every ``e``: existence with stability and existence alone
-      (:attr:`Settings.certified`); conclusions 1-3, the ``m2 = 1`` reading;
+      ``mu``, every ``e``, refined until every class (:data:`PROPERTIES`) is within the
+      width (:attr:`Settings.certified`); conclusions 1-3, the ``m2 = 1`` reading;
     * ``"limit"``: the same box at ``mu = 1e-4`` (the remark ``mu -> 0``), same resolution;
     * ``"mu_ends"``: existence at both ends of :attr:`Settings.mu_range` (the remark on
       existence against ``mu``; :attr:`Settings.certified_readings`);
@@ -447,9 +447,9 @@ def reproduction_shares(settings, cases=("collocated", "noncollocated")) -> dict
     common = dict(gamma=settings.gamma, omega=PAPER["omega"], n=PAPER["n"])
     fine = dict(zip(("grid", "levels", "width"), settings.certified))
     coarse = dict(zip(("grid", "levels", "width"), settings.certified_readings))
-    both, es_only, ex_only = ("exists_stable", "exists"), ("exists_stable",), ("exists",)
+    es_only, ex_only = ("exists_stable",), ("exists",)
     groups = {
-        "main": ([ShareTarget(c, e, mu0, properties=both, key=(c, e)) for c in cases
+        "main": ([ShareTarget(c, e, mu0, properties=PROPERTIES, key=(c, e)) for c in cases
                   for e in es], fine),
         "limit": ([ShareTarget(c, e, MU_LIMIT, properties=es_only, key=(c, e)) for c in cases
                    for e in es], fine),

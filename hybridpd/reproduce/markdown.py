@@ -220,8 +220,9 @@ def _runs(d, w):
     w("Each point of the slice is labelled by what it reaches (the symmetric orbit by the "
       "paper's criterion; other periodic orbits of P found by Newton on P^k), or as off the "
       "section. One window per convention, shared by every panel and both cases. Every "
-      "share below is of the window's grid points.\n")
-    w("| m2 | case | e | points | symmetric orbit | everything else |")
+      "percentage in a row has one denominator, that row's grid points (third column).\n")
+    w("| m2 | case | e | grid points (the denominator) | symmetric orbit: % of the points "
+      "(count) | other outcomes: % of the points (count) |")
     w("|---|---|---|---|---|---|")
     for r in d["runs"]:
         for b in r["basins"]:

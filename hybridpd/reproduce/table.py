@@ -97,8 +97,10 @@ def _row_1(c, readings, grid):
             f"{ratios} against the threshold {c['threshold']:g} ({_cert(grid)})")
     ex = c.get("existence_alone")
     if ex is not None and ex["verdict"] != R.AGREES:
-        text += (f". Existence alone is not much smaller: {side(ex['noncollocated'])} "
-                 f"against {side(ex['collocated'])}")
+        how = ("is not much smaller" if ex["verdict"] == R.CONTRADICTED
+               else "is not shown much smaller")
+        text += (f". Existence alone (stable or not) {how}: {side(ex['noncollocated'])} "
+                 f"(non-collocated) against {side(ex['collocated'])} (collocated)")
     return _row(1, c["verdict"], text, readings, m2_text(readings))
 
 
