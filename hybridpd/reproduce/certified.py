@@ -427,9 +427,10 @@ def reproduction_shares(settings, cases=("collocated", "noncollocated")) -> dict
     * ``"main"``: the scaled box (``kp/m2``, ``kv/m2`` in ``[0.1, 50]``) at the paper's
       ``mu``, every ``e``, refined until every class (:data:`PROPERTIES`) is within the
       width (:attr:`Settings.certified`); conclusions 1-3, the ``m2 = 1`` reading;
-    * ``"limit"``: the same box at ``mu = 1e-4`` (the remark ``mu -> 0``), same resolution;
+    * ``"limit"``: the same box at ``mu = 1e-4`` (the remark ``mu -> 0``;
+      :attr:`Settings.certified_ends`);
     * ``"mu_ends"``: existence at both ends of :attr:`Settings.mu_range` (the remark on
-      existence against ``mu``; :attr:`Settings.certified_readings`);
+      existence against ``mu``; :attr:`Settings.certified_ends`);
     * ``"readings"``: the printed box read at every other value of :func:`reading_values`
       (:attr:`Settings.certified_readings`).
 
@@ -447,14 +448,15 @@ def reproduction_shares(settings, cases=("collocated", "noncollocated")) -> dict
     common = dict(gamma=settings.gamma, omega=PAPER["omega"], n=PAPER["n"])
     fine = dict(zip(("grid", "levels", "width"), settings.certified))
     coarse = dict(zip(("grid", "levels", "width"), settings.certified_readings))
+    ends = dict(zip(("grid", "levels", "width"), settings.certified_ends))
     es_only, ex_only = ("exists_stable",), ("exists",)
     groups = {
         "main": ([ShareTarget(c, e, mu0, properties=PROPERTIES, key=(c, e)) for c in cases
                   for e in es], fine),
         "limit": ([ShareTarget(c, e, MU_LIMIT, properties=es_only, key=(c, e)) for c in cases
-                   for e in es], fine),
+                   for e in es], ends),
         "mu_ends": ([ShareTarget(c, e, m, properties=ex_only, key=(c, e, m)) for c in cases
-                     for e in es for m in settings.mu_range], coarse),
+                     for e in es for m in settings.mu_range], ends),
         "readings": ([ShareTarget(c, e, mu0, m2, properties=es_only, key=(c, e, m2))
                       for c in cases for e in es for m2 in reading_values(settings)
                       if m2 != 1.0], coarse)}

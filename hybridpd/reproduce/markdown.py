@@ -91,7 +91,8 @@ def _intro(d, w):
 def _table(d, w):
     cert = d["certified"]
     g, base, lev = cert["main"]["grid"], cert["main"]["base_grid"], cert["main"]["levels"]
-    rg = cert["readings"]["grid"] or cert["mu_ends"]["grid"]
+    rg = cert["readings"]["grid"] or g
+    eg = cert["mu_ends"]["grid"]
     w("## What the paper says and what holds\n")
     w("| # | the paper says | what holds in the scaled gains, free of m2 | for which readings "
       "of the printed gain box (m2) |")
@@ -117,8 +118,9 @@ def _table(d, w):
     w(f"- The printed box read at m2 is the box [0.1/m2, 50/m2]^2 of the scaled gains "
       f"(certified on {rg[0]} × {rg[1]} cells, m2 = 1 on the finer grid above); m2 is read "
       f"at {', '.join(f'{v:.3g}' for v in cert['readings_m2'])}, and a change of verdict "
-      "lies somewhere between two computed values. Rows 4 and 5 are sampled (basins, a "
-      "gain grid), each checked on a second grid.\n")
+      "lies somewhere between two computed values. The remarks on mu are certified on "
+      f"{eg[0]} × {eg[1]} cells (mu = {cert['mu_limit']:g} and the ends of the mu range). "
+      "Rows 4 and 5 are sampled (basins, a gain grid), each checked on a second grid.\n")
 
 
 def _m2_section(d, w):

@@ -102,8 +102,12 @@ class Settings:
         region verdicts (:func:`~hybridpd.reproduce.certified.certified_shares`): base cells
         per axis, refinement levels at most, the undecided share at which refinement stops.
     certified_readings : (int, int, float)
-        The same for the readings of the printed box along ``m2`` and the ends of the
-        ``mu`` range (where the verdicts need less resolution).
+        The same for the readings of the printed box along ``m2`` (where the verdicts need
+        less resolution).
+    certified_ends : (int, int, float)
+        The same for the remarks on ``mu``: the scaled box at ``mu = 1e-4`` and at both ends
+        of :attr:`mu_range` (a coarse base grid refined deeper: the proofs at extreme ``mu``
+        need smaller cells).
     mu_range, gamma_range : (lo, hi)
         Ranges of the ``mu`` and ``gamma`` studies (log axes).
     param_points : int
@@ -134,6 +138,7 @@ class Settings:
     m2_robust_grid: tuple = (12, 12)
     certified: tuple = (16, 3, 0.02)
     certified_readings: tuple = (8, 2, 0.05)
+    certified_ends: tuple = (8, 5, 0.05)
     mu_range: tuple = (0.01, 10.0)
     gamma_range: tuple = (0.05, 2.0)
     param_points: int = 41
@@ -179,7 +184,7 @@ class Settings:
         _count("m2_robust", self.m2_robust, 1)
         for v in self.m2_robust_grid:
             _count("m2_robust_grid", v)
-        for nm in ("certified", "certified_readings"):
+        for nm in ("certified", "certified_readings", "certified_ends"):
             v = getattr(self, nm)
             if len(v) != 3:
                 raise ValueError(f"{nm} must be (grid, levels, width), got {v!r}")
@@ -197,6 +202,7 @@ class Settings:
                     comparison_grid=(12, 12), uncertainty_grid=(3, 3), design_search=(1, 40),
                     basin_extensions=1, check_scale=0.5, m2_verdicts=5,
                     certified=(16, 3, 0.08), certified_readings=(8, 2, 0.08),
+                    certified_ends=(8, 5, 0.08),
                     param_points=25, param_grid=21)
         return cls(**{**base, **kw})
 
@@ -206,7 +212,8 @@ class Settings:
         base = dict(gains=(50.0, 50.0, 201), zoom=(20.0, 6.0, 201), basin=(201, 201),
                     basin_extensions=1, m2_grid=8001, m2_verdicts=9, m2_robust=5,
                     m2_robust_grid=(16, 16), certified=(32, 4, 0.01),
-                    certified_readings=(16, 3, 0.02), param_points=61, param_grid=31)
+                    certified_readings=(16, 3, 0.02),
+                    certified_ends=(16, 5, 0.02), param_points=61, param_grid=31)
         return cls(**{**base, **kw})
 
     def check_num(self, num: int, scale: float | None = None) -> int:

@@ -304,8 +304,8 @@ def _certified_section(shares, settings) -> dict:
                        "arithmetic on the paper's closed forms (hybridpd.pair.proofs), "
                        "undecided cells cut in four up to the level cap"),
             "box": {"kp/m2": [0.1, settings.gains[0]], "kv/m2": [0.1, settings.gains[1]]},
-            "main": cfg(settings.certified, "main"), "limit": cfg(settings.certified, "limit"),
-            "mu_ends": cfg(settings.certified_readings, "mu_ends"),
+            "main": cfg(settings.certified, "main"), "limit": cfg(settings.certified_ends, "limit"),
+            "mu_ends": cfg(settings.certified_ends, "mu_ends"),
             "readings": cfg(settings.certified_readings, "readings"),
             "mu_limit": MU_LIMIT, "mu_ends_values": list(settings.mu_range),
             "readings_m2": reading_values(settings)}
@@ -335,11 +335,10 @@ def build_summary(*, settings, mode, study, studies, runs, shares, check5, timin
     measured = [{"m2": r.m2, "verdict": r.verdict_4, "window": list(r.basin_window),
                  "grid": list(settings.basin)} for r in runs
                 if all(o.exists and o.stable for o in r.orbits.values())]
-    any_main = next(iter(shares["main"].values()))
-    any_read = next(iter(shares["mu_ends"].values()))
+    finest = {g: (next(iter(shares[g].values())).finest,) * 2
+              for g in ("main", "limit", "mu_ends")}
     table = build_table(checks=checks, readings=readings, basins_measured=measured,
-                        grids={"main": (any_main.finest,) * 2,
-                               "readings": (any_read.finest,) * 2})
+                        grids=finest)
     conclusions = []
     for k in range(1, 6):
         ev = checks.get(k) if k != 4 else {

@@ -192,7 +192,7 @@ def _idx(c, case, e):
     return [f"e={v:g}" for v in es].index(e)
 
 
-def _row_mu_small(c, grid):
+def _row_mu_small(c, grid_limit, grid):
     easier, same, harder = [], [], []
     for key, t in c["trends"].items():
         case, e = key.split(" ")
@@ -208,7 +208,8 @@ def _row_mu_small(c, grid):
         parts.append("harder: " + "; ".join(harder))
     if same:
         parts.append(R.NO_CHANGE + ": " + "; ".join(same))
-    text = ("exists and stable, " + ". ".join(parts) + f" ({_cert(grid)})")
+    text = ("exists and stable, " + ". ".join(parts) + f" ({_cert(grid_limit)} at mu = "
+            f"{c['mu'][0]:g}, {grid[0]} × {grid[1]} at mu = {c['mu'][1]:g})")
     return _row("mu-small", c["verdict"], text, readings_text="read on the scaled box (m2 = 1)")
 
 
@@ -225,13 +226,13 @@ def build_table(*, checks: dict, readings: dict, basins_measured: list, grids: d
         Conclusion 4 at the conventions where all six orbits are stable: ``{"m2",
         "verdict", "window", "grid"}``.
     grids : dict
-        Cells ``(n, n)`` of the certified boxes: ``"main"`` (the scaled box, also at
-        ``mu = 1e-4``) and ``"readings"`` (the printed box along ``m2``, the ends of the
+        Cells ``(n, n)`` of the finest grids of the certified boxes: ``"main"`` (the scaled
+        box), ``"limit"`` (the same at ``mu = 1e-4``) and ``"mu_ends"`` (the ends of the
         ``mu`` range).
     """
     g = grids["main"]
     return [_row_1(checks[1], readings[1], g), _row_2(checks[2], readings[2], g),
             _row_3(checks[3], readings[3], g), _row_4(readings[4], basins_measured),
             _row_5(checks[5], readings[5]),
-            _row_mu_existence(checks["mu-existence"], grids["readings"]),
-            _row_mu_small(checks["mu-small"], g)]
+            _row_mu_existence(checks["mu-existence"], grids["mu_ends"]),
+            _row_mu_small(checks["mu-small"], grids["limit"], g)]
