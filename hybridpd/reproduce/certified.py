@@ -36,9 +36,12 @@ viability (18), its multipliers):
 Examples
 --------
 >>> from hybridpd.reproduce.certified import ShareTarget, certified_shares
->>> (r,) = certified_shares([ShareTarget("collocated", e=0.5, box=(9.0, 11.0))], grid=2,
-...                         levels=0)
->>> r.interval("exists_stable"), r.stop                 # the whole box is proved stable
+>>> t = ShareTarget("collocated", e=0.5, box=(9.0, 11.0))
+>>> (r,) = certified_shares([t], grid=2, levels=0)
+>>> r.interval("exists_stable"), r.stop       # the four cells too large for the proofs
+((0.0, 1.0), 'levels')
+>>> (r,) = certified_shares([t], grid=2, levels=1)
+>>> r.interval("exists_stable"), r.stop       # their quarters: the whole box is stable
 ((1.0, 1.0), 'width')
 """
 from __future__ import annotations
