@@ -7,8 +7,9 @@ from hybridpd.reproduce import Settings
 
 SMALL = Settings(gains=(50.0, 50.0, 9), zoom=(20.0, 6.0, 9), basin=(6, 5), iterations=300,
                  comparison_grid=(6, 6), uncertainty_grid=(2, 2), design_search=(1, 10),
-                 m2_robust_grid=(6, 6),
-                 m2_grid=201, m2_verdicts=3, m2_robust=1, verdict_grid=9, param_points=5,
+                 m2_robust_grid=(6, 6), m2_grid=201, m2_verdicts=3, m2_robust=1,
+                 certified=(4, 1, 0.3), certified_readings=(2, 1, 0.5),
+                 certified_ends=(2, 2, 0.5), param_points=5,
                  param_grid=5)
 
 

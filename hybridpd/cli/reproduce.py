@@ -83,15 +83,11 @@ def run(args) -> int:
     if args.json:
         print_json(data)
         return 0
-    conv = ", ".join(f"m2 = {m:g}" for m in data["conventions"]["m2"])
-    print(f"conclusion  verdict       by convention ({conv})")
-    for c in data["conclusions"]:
-        by = ", ".join(c["by_convention"].values())
-        print(f"{c['id']:>10}  {c['verdict']:<12}  {by}")
-    ivs = data["m2_stable_intervals"]["noncollocated"]
-    print("non-collocated orbit at kp = 10, kv = 20 exists and is stable for m2 in: "
-          + "; ".join(f"e = {e}: " + (", ".join(f"[{a:.6g}, {b:.6g}]" for a, b in v) or "never")
-                      for e, v in ivs.items()))
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.reproduce.markdown import terminal_lines
+
+    for line in terminal_lines(data):
+        print(line)
     print(f"written to {path.parent} (summary.md, summary.json, figures)")
     return 0
 

@@ -153,9 +153,11 @@ def _panel(ax, X, Y, ex, st, *, curves=None, mark=None, title=None, outline=None
             cs = ax.contour(X, Y, ex.astype(float), levels=[0.5], colors=[EXIST],
                             linewidths=1.1, linestyles="--")
             register(ax, cs, "existence boundary", line_proxy(color=EXIST, ls="--", lw=1.1))
-        if st.any() and not st.all():
-            cs = ax.contour(X, Y, st.astype(float), levels=[0.5], colors=[FILL_EDGE],
-                            linewidths=1.1)
+        if (st & ex).any() and (ex & ~st).any():
+            # the stability boundary separates stable from unstable orbits: where the orbit
+            # does not exist on one side the boundary is the existence one, drawn dashed
+            cs = ax.contour(X, Y, np.ma.masked_where(~ex, st.astype(float)), levels=[0.5],
+                            colors=[FILL_EDGE], linewidths=1.1)
             register(ax, cs, LAB_ST, line_proxy(color=FILL_EDGE, ls="-", lw=1.1))
     else:
         _draw_curves(ax, curves)
@@ -171,8 +173,9 @@ def _panel(ax, X, Y, ex, st, *, curves=None, mark=None, title=None, outline=None
     if mark is not None:
         xl, yl = (X[0, 0], X[0, -1]), (Y[0, 0], Y[-1, 0])
         if xl[0] <= mark[0] <= xl[1] and yl[0] <= mark[1] <= yl[1]:
+            # not clipped: on the box's edge (m2 = 100: kp = 10 is its lower end) it shows whole
             (ln,) = ax.plot(*mark, marker="*", ms=9, color="#D55E00", mec="k", ls="none",
-                            zorder=5)
+                            zorder=5, clip_on=False)
             register(ax, ln, PAPER_GAINS, line_proxy(marker="*", ms=9, color="#D55E00",
                                                      mec="k", ls="none"))
     ax.set_xlim(X[0, 0], X[0, -1])

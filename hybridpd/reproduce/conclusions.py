@@ -1,23 +1,21 @@
-"""The paper's five conclusions (section 5) as computed tests.
+"""The paper's five conclusions (section 5) and its two remarks on ``mu`` as computed tests.
 
-Each ``check_*`` function takes computed numbers and returns a dict with a ``"verdict"`` (one
+Each ``check_*`` function takes measured numbers and returns a dict with a ``"verdict"`` (one
 of :data:`~hybridpd.reproduce.rules.VERDICTS`, by the rules of
-:mod:`hybridpd.reproduce.rules`) and the numbers it rests on, every share with its cell count
-and grid. The thresholds that turn a qualitative statement into a test are module constants,
-so that a reader can see and change them. Region statements are tested on three quantities:
-existence alone, stability alone (of the orbit candidate, viability ignored) and both (the
-paper's shaded regions); the verdict of a conclusion is that of "both", the others are
-evidence.
+:mod:`hybridpd.reproduce.rules`) and the numbers it rests on. Region statements (1-3 and the
+remarks) are decided by **certified shares** ``(lo, hi)`` of the scaled gain box
+(:mod:`hybridpd.reproduce.certified`) where the orbit exists and is stable (the paper's shaded
+regions); existence alone is evidence. The thresholds that turn a qualitative statement into
+a test are module constants, so that a reader can see and change them.
 """
 from __future__ import annotations
 
-import numpy as np
-
 from hybridpd.reproduce import rules as R
-from hybridpd.reproduce.rules import AGREES, CONTRADICTED, DEPENDS, UNRESOLVED, combine
+from hybridpd.reproduce.rules import AGREES, CONTRADICTED, SPLIT, UNRESOLVED
 
-__all__ = ["LARGE", "MUCH_SMALLER", "QUANTITIES", "SIMILAR", "STATEMENTS", "check_1",
-           "check_2", "check_3", "check_4", "check_4_necessary", "check_5", "combine"]
+__all__ = ["AGREES", "CONTRADICTED", "CRITERIA_5", "LARGE", "MUCH_SMALLER", "REMARKS", "SHORT",
+           "SIMILAR", "SPLIT", "STATEMENTS", "UNRESOLVED", "check_1", "check_2", "check_3",
+           "check_4", "check_4_necessary", "check_5", "check_mu_existence", "check_mu_small"]
 
 STATEMENTS = {
     1: "The existence and stability regions are much smaller for the non-collocated case "
@@ -28,6 +26,17 @@ STATEMENTS = {
     4: "The basins of attraction have a similar size in both cases.",
     5: "Uncertainties on the physical parameters will be an obstacle to the non-collocated "
        "control, due to the smallness of its admissible gain regions."}
+#: The paper's remarks on ``mu`` (section 5).
+REMARKS = {"mu-existence": "The existence region tends to decrease with increasing mu.",
+           "mu-small": "As mu tends to zero control becomes easier."}
+#: The statements in a few words, for the summary's table.
+SHORT = {1: "non-collocated regions much smaller than collocated ones",
+         2: "as e grows the non-collocated region shrinks, the collocated one grows",
+         3: "collocated admissible gain range large",
+         4: "basins of similar size in both cases",
+         5: "uncertainty an obstacle for non-collocated PD",
+         "mu-existence": "existence region tends to shrink as mu grows",
+         "mu-small": "control easier as mu -> 0"}
 
 #: "Much smaller": non-collocated / collocated share of the same gain box below this, every e.
 MUCH_SMALLER = 0.2
@@ -35,56 +44,48 @@ MUCH_SMALLER = 0.2
 LARGE = 0.3
 #: "Similar size": basin-measure ratio non-collocated / collocated inside this range, every e.
 SIMILAR = (0.5, 2.0)
-#: The region quantities of conclusions 1-3.
-QUANTITIES = ("exists", "stability", "both")
-
-__all__ += ["AGREES", "CONTRADICTED", "DEPENDS", "UNRESOLVED"]
+#: The two readings of "an obstacle" (conclusion 5): what must survive the uncertainty.
+CRITERIA_5 = ("robust stability", "robust stability and amplitude within 10 %")
 
 
-def _v(ok) -> str:
-    return AGREES if ok else CONTRADICTED
+def _ivs(x):
+    return [list(map(float, iv)) for iv in x]
 
 
-def _shares(a, grid):
-    return [R.share(x, grid) for x in np.asarray(a, float)]
+def check_1(col, non, e, *, col_exists=None, non_exists=None) -> dict:
+    """Conclusion 1 from certified shares per ``e`` (``[(lo, hi)]``) of the region where the
+    orbit exists and is stable: non-collocated / collocated below :data:`MUCH_SMALLER` for
+    every ``e`` (:func:`~hybridpd.reproduce.rules.ratio_below`). The same test on existence
+    alone (``*_exists``) is evidence."""
+    r = R.ratio_below(non, col, MUCH_SMALLER)
+    out = {"verdict": r["verdict"], "per_e": r["per_item"], "ratio": r["ratio"],
+           "threshold": MUCH_SMALLER, "e": [float(v) for v in e],
+           "collocated": _ivs(col), "noncollocated": _ivs(non)}
+    if col_exists is not None and non_exists is not None:
+        x = R.ratio_below(non_exists, col_exists, MUCH_SMALLER)
+        out["existence_alone"] = {"verdict": x["verdict"], "per_e": x["per_item"],
+                                  "ratio": x["ratio"], "collocated": _ivs(col_exists),
+                                  "noncollocated": _ivs(non_exists)}
+    return out
 
 
-def check_1(col: dict, non: dict, grid) -> dict:
-    """Conclusion 1 from box shares ``{quantity: (len(e),)}`` of both cases on one ``grid``
-    ``(nx, ny)``: the ratio non-collocated / collocated is below :data:`MUCH_SMALLER` for
-    every ``e``."""
-    out = {}
-    for q in QUANTITIES:
-        c, n = np.asarray(col[q], float), np.asarray(non[q], float)
-        with np.errstate(all="ignore"):
-            ratio = np.where(c > 0, n / c, np.where(n > 0, np.inf, np.nan))
-        ok = bool(np.all(np.isfinite(ratio) & (ratio < MUCH_SMALLER)))
-        out[q] = {"collocated": _shares(c, grid), "noncollocated": _shares(n, grid),
-                  "ratio": [None if not np.isfinite(r) else float(r) for r in ratio],
-                  "verdict": _v(ok)}
-    return {"verdict": out["both"]["verdict"], "by_quantity": out, "grid": list(grid)}
-
-
-def check_2(col: dict, non: dict, grid, e) -> dict:
+def check_2(col, non, e) -> dict:
     """Conclusion 2 by the trend rule (:func:`~hybridpd.reproduce.rules.trend`) along ``e``:
-    the non-collocated share does not increase with ``e`` and the collocated one does not
-    decrease, each within two cells of ``grid``."""
-    cells = int(grid[0]) * int(grid[1])
-    out = {}
-    for q in QUANTITIES:
-        tn = R.trend(e, non[q], cells, direction="decreasing")
-        tc = R.trend(e, col[q], cells, direction="increasing")
-        out[q] = {"noncollocated": _shares(non[q], grid), "collocated": _shares(col[q], grid),
-                  "noncollocated_trend": tn, "collocated_trend": tc,
-                  "verdict": _v(tn["verdict"] == AGREES and tc["verdict"] == AGREES)}
-    return {"verdict": out["both"]["verdict"], "by_quantity": out, "grid": list(grid)}
+    the non-collocated share falls from the smallest to the largest ``e`` and the
+    collocated one rises."""
+    tn = R.trend(e, non, direction="decreasing")
+    tc = R.trend(e, col, direction="increasing")
+    return {"verdict": R.all_of([tn["verdict"], tc["verdict"]]), "e": [float(v) for v in e],
+            "noncollocated": _ivs(non), "collocated": _ivs(col), "noncollocated_trend": tn,
+            "collocated_trend": tc}
 
 
-def check_3(col: dict, grid) -> dict:
-    """Conclusion 3: the collocated shares are at least :data:`LARGE` for every ``e``."""
-    out = {q: {"collocated": _shares(col[q], grid),
-               "verdict": _v(bool(np.min(col[q]) >= LARGE))} for q in QUANTITIES}
-    return {"verdict": out["both"]["verdict"], "by_quantity": out, "grid": list(grid)}
+def check_3(col, e) -> dict:
+    """Conclusion 3: the collocated share is at least :data:`LARGE` for every ``e``
+    (:func:`~hybridpd.reproduce.rules.at_least`)."""
+    r = R.at_least(col, LARGE)
+    return {"verdict": r["verdict"], "per_e": r["per_item"], "threshold": LARGE,
+            "e": [float(v) for v in e], "collocated": _ivs(col)}
 
 
 def check_4(col: list, non: list, touches_edge=None, *, window=None, grid=None,
@@ -118,18 +119,76 @@ def check_4_necessary(col_stable: list, non_stable: list) -> str:
     return UNRESOLVED
 
 
-def check_5(comparison) -> dict:
-    """Conclusion 5 from a :class:`~hybridpd.pair.design.RobustnessComparison`: the share
-    of the gain box that stays existing and stable over the uncertainty box is smaller for the
-    non-collocated case (the amplitude-constrained share is evidence)."""
+def _fractions(comparison) -> dict:
     rows = {r.case: r for r in comparison.rows}
     c, n = rows["collocated"], rows["noncollocated"]
-    ok = n.robust_stable_fraction < c.robust_stable_fraction
-    return {"verdict": _v(ok),
-            "robust_stable_fraction": {"collocated": c.robust_stable_fraction,
-                                       "noncollocated": n.robust_stable_fraction},
-            "robust_fraction_with_amplitude": {"collocated": c.robust_fraction,
-                                               "noncollocated": n.robust_fraction},
-            "nominal_fraction": {"collocated": c.nominal_fraction,
-                                 "noncollocated": n.nominal_fraction},
-            "amplitude_verdict": _v(n.robust_fraction < c.robust_fraction)}
+    return {CRITERIA_5[0]: {"collocated": c.robust_stable_fraction,
+                            "noncollocated": n.robust_stable_fraction},
+            CRITERIA_5[1]: {"collocated": c.robust_fraction,
+                            "noncollocated": n.robust_fraction},
+            "nominal": {"collocated": c.nominal_fraction, "noncollocated": n.nominal_fraction}}
+
+
+def check_5(comparison, check=None) -> dict:
+    """Conclusion 5 from a :class:`~hybridpd.pair.design.RobustnessComparison` under
+    both criteria of :data:`CRITERIA_5`: the share of the gain grid that survives the
+    uncertainty box is smaller for the non-collocated case.
+
+    With ``check`` (the same comparison on another grid) each criterion's verdict is
+    :func:`~hybridpd.reproduce.rules.resolution` of the two; the verdict is
+    :func:`~hybridpd.reproduce.rules.criteria` of the criteria (``"split"`` when they
+    disagree).
+    """
+    f = _fractions(comparison)
+    g = _fractions(check) if check is not None else None
+    by = {}
+    for crit in CRITERIA_5:
+        v = R.AGREES if f[crit]["noncollocated"] < f[crit]["collocated"] else R.CONTRADICTED
+        if g is not None:
+            v2 = R.AGREES if g[crit]["noncollocated"] < g[crit]["collocated"] else \
+                R.CONTRADICTED
+            v = R.resolution(v, v2)
+        by[crit] = v
+    s = comparison.settings
+    return {"verdict": R.criteria(by), "by_criterion": by, "fractions": f,
+            "check_fractions": g, "grid": list(s["grid"]),
+            "uncertainty_grid": list(s["uncertainty_grid"]),
+            "check_grid": None if check is None else list(check.settings["grid"]),
+            "box": {"e": list(s["e_range"]), "mu": list(s["mu_range"])},
+            "gains": {"kp": list(s["kp_range"]), "kv": list(s["kv_range"])},
+            "x10_tol": s["x10_tol"], "e": s["e"]}
+
+
+def _per_case(trends) -> dict:
+    per = {key: t["verdict"] for key, t in trends.items()}
+    return {"verdict": R.all_of(per.values()), "per_case": per, "trends": trends}
+
+
+def check_mu_existence(mu_ends, first: dict, last: dict, e) -> dict:
+    """"The existence region tends to decrease with increasing mu": per case and ``e`` the
+    certified existence share at the end of the studied range of ``mu`` is below the share
+    at its start (:func:`~hybridpd.reproduce.rules.trend` on the two ends), for every case
+    and ``e``. ``first``, ``last``: ``{case: [(lo, hi) per e]}``."""
+    out = {}
+    for case in first:
+        for k, ev in enumerate(e):
+            out[f"{case} e={ev:g}"] = R.trend(mu_ends, [first[case][k], last[case][k]],
+                                              direction="decreasing")
+    return {**_per_case(out), "mu": [float(v) for v in mu_ends], "e": [float(v) for v in e],
+            "first": {c: _ivs(v) for c, v in first.items()},
+            "last": {c: _ivs(v) for c, v in last.items()}}
+
+
+def check_mu_small(mu_points, limit: dict, paper: dict, e) -> dict:
+    """"As mu tends to zero control becomes easier": per case and ``e`` the certified share
+    where the orbit exists and is stable is larger at the limit point ``mu_points[0]``
+    (1e-4) than at the paper's ``mu_points[1]`` (0.1), for every case and ``e``.
+    ``limit``, ``paper``: ``{case: [(lo, hi) per e]}``."""
+    out = {}
+    for case in limit:
+        for k, ev in enumerate(e):
+            out[f"{case} e={ev:g}"] = R.trend(mu_points, [limit[case][k], paper[case][k]],
+                                              direction="decreasing")
+    return {**_per_case(out), "mu": [float(v) for v in mu_points], "e": [float(v) for v in e],
+            "limit": {c: _ivs(v) for c, v in limit.items()},
+            "paper": {c: _ivs(v) for c, v in paper.items()}}

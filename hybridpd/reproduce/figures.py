@@ -9,7 +9,10 @@ and the figures of the ``m2``, ``mu`` and ``gamma`` studies.
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
+from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -58,15 +61,79 @@ def scaled_map(case, settings, num) -> ScaledMap:
     return ScaledMap(x, y, es, np.asarray(r.exists, bool), np.asarray(r.stable, bool), case)
 
 
-def save(fig, path, hook=None) -> None:
-    """Show ``fig`` to ``hook`` and write it as PNG (300 dpi) and PDF."""
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.plotting.style import house_style, save_figure
+_MATH = re.compile(r"\$([^$]*)\$")
+_GREEK = {r"\mu": "μ", r"\gamma": "γ", r"\omega": "ω", r"\phi": "φ", r"\cdot": "·",
+          r"\lambda": "λ", r"\rho": "ρ", r"\tau": "τ", r"\infty": "∞", r"\to": "→",
+          r"\times": "×", r"\leq": "≤", r"\geq": "≥", r"\pm": "±"}
 
+
+def plain_text(text: str) -> str:
+    """``text`` without mathtext sub- and superscripts (drawn at 70 % of the font size,
+    under 7 pt in these figures): ``"$k_p/m_2$"`` becomes ``"kp/m2"``; a formula without scripts
+    (a Greek letter) stays, one with scripts gets its Greek letters as Unicode.
+
+    Examples
+    --------
+    >>> from hybridpd.reproduce.figures import plain_text
+    >>> plain_text("$k_p$ (force/length), $x_{10}$ = 1, $m_1/m_2$ = 0.1, e = 0.5")
+    'kp (force/length), x10 = 1, m1/m2 = 0.1, e = 0.5'
+    """
+    def sub(m):
+        body = m.group(1)
+        if "_" not in body and "^" not in body:
+            return m.group(0)
+        body = re.sub(r"\\mathdefault\{([^}]*)\}", r"\1", body)
+        for cmd, ch in _GREEK.items():
+            body = re.sub(re.escape(cmd) + r"(?![A-Za-z])", ch, body)
+        body = re.sub(r"_\{([^}]*)\}|_(.)", lambda k: k.group(1) or k.group(2), body)
+        body = re.sub(r"\^\{([^}]*)\}|\^(.)", lambda k: "^" + (k.group(1) or k.group(2)),
+                      body)
+        body = body.replace("\\", "").replace("{", "").replace("}", "")
+        return body
+    return _MATH.sub(sub, text)
+
+
+def _plain_figure(fig) -> None:
+    """Every text of ``fig`` through :func:`plain_text` (the legend's gids too, so that a
+    legend entry still names its artists), and plain numbers on log axes (no ``10^k``)."""
+    from matplotlib.ticker import FuncFormatter, NullFormatter
+
+    texts = list(fig.texts) + ([fig._suptitle] if fig._suptitle is not None else [])
+    for lg in fig.legends:
+        texts += list(lg.get_texts())
+    for ax in fig.axes:
+        texts += [ax.title, ax._left_title, ax._right_title, ax.xaxis.label, ax.yaxis.label,
+                  *ax.texts]
+        if ax.get_legend() is not None:
+            texts += list(ax.get_legend().get_texts())
+        for a in ax.get_children():
+            g = a.get_gid() if hasattr(a, "get_gid") else None
+            if g:
+                a.set_gid(plain_text(g))
+        for axis, scale in ((ax.xaxis, ax.get_xscale()), (ax.yaxis, ax.get_yscale())):
+            if scale == "log":
+                axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+                axis.set_minor_formatter(NullFormatter())
+    for t in texts:
+        t.set_text(plain_text(t.get_text()))
+
+
+def save(fig, path, hook=None) -> None:
+    """Make ``fig``'s text plain (:func:`_plain_figure`), show it to ``hook`` and write it as
+    PNG (300 dpi) and PDF (the layout computed for the PNG is kept for the PDF)."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.plotting.style import house_style
+
+    _plain_figure(fig)
     if hook is not None:
         hook(path, fig)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
     with house_style():
-        save_figure(fig, path)
+        fig.savefig(path.with_suffix(".png"), dpi=300)
+        # the constrained layout is settled by the first draw: the PDF reuses it
+        fig.set_layout_engine("none")
+        fig.savefig(path.with_suffix(".pdf"))
 
 
 def _params(run) -> dict:
@@ -97,8 +164,32 @@ def _ray_events(study) -> dict:
     return out
 
 
-def study_figures(out, *, study, studies, settings, runs, hook=None) -> None:
-    """The m2-free scaled figures and the three study figures, into ``out``."""
+def certified_points(shares) -> dict:
+    """The certified intervals the remarks on ``mu`` rest on, for the ``mu`` study's figure:
+    ``{"exists" | "exists_stable": {case: {mu: [(lo, hi) per e]}}}``."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.reproduce.certified import MU_LIMIT
+
+    es = [float(e) for e in PAPER["e"]]
+    out = {"exists": {}, "exists_stable": {}}
+    for case in CASES:
+        ex = out["exists"].setdefault(case, {})
+        st = out["exists_stable"].setdefault(case, {})
+        ex[PAPER["mu"]] = [shares["main"][(case, e)].interval("exists") for e in es]
+        st[PAPER["mu"]] = [shares["main"][(case, e)].interval("exists_stable") for e in es]
+        st[MU_LIMIT] = [shares["limit"][(case, e)].interval("exists_stable") for e in es]
+        for (c, e, mu), r in shares["mu_ends"].items():
+            if c == case:
+                ex.setdefault(mu, [None] * len(es))[es.index(e)] = r.interval("exists")
+    return out
+
+
+def study_figures(out, *, study, studies, settings, runs, table, shares, hook=None) -> None:
+    """The m2-free scaled figures and the three study figures, into ``out``.
+
+    ``table`` is the summary's lead table (its ``m2_readings`` are drawn in the ``m2``
+    study), ``shares`` the certified shares (:func:`certified_points` in the ``mu`` study).
+    """
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting.studies import plot_m2_study, plot_param_study, plot_scaled_regions
 
@@ -107,19 +198,24 @@ def study_figures(out, *, study, studies, settings, runs, hook=None) -> None:
     lo, hi = settings.m2_range
     par = dict(mu=PAPER["mu"], gamma=PAPER["gamma"], omega=PAPER["omega"], n=PAPER["n"])
     zk, zv, _ = settings.zoom
+    box = (0.1, settings.gains[0], 0.1, settings.gains[1])
     for case, label in (("collocated", "Fig. 4"), ("noncollocated", "Fig. 5")):
         sm = scaled_map(case, settings, num)
         ray = {"kp": PAPER["kp"], "kv": PAPER["kv"],
                "m2": np.logspace(np.log10(lo), np.log10(hi), 200), "events": events[case]}
         fig = plot_scaled_regions(sm, ray=ray, zoom=(zk, zv) if case == "noncollocated" else None,
-                                  params=par,
+                                  params=par, box=box,
                                   title=f"{label}, {case.replace('non', 'non-')} PD in scaled "
-                                        "gains, every $m_2$")
+                                        "gains, every m2")
         save(fig, out / f"scaled_regions_{case}.png", hook)
-    save(plot_m2_study(study, m2_range=settings.m2_range, runs=[r.m2 for r in runs]),
-         out / "m2_study.png", hook)
+    readings = {f"{row['id']}": row["m2_readings"] for row in table
+                if isinstance(row["id"], int)}
+    save(plot_m2_study(study, readings=readings, m2_range=settings.m2_range,
+                       runs=[r.m2 for r in runs]), out / "m2_study.png", hook)
+    cert = certified_points(shares)
     for name, ps in studies.items():
-        save(plot_param_study(ps), out / f"{name}_study.png", hook)
+        save(plot_param_study(ps, certified=cert if name == "mu" else None),
+             out / f"{name}_study.png", hook)
 
 
 def convention_figures(run, settings, *, study=None, hook=None, cache=None) -> None:
@@ -189,21 +285,56 @@ def _basin_figure(run, case, label, par, study):
     return fig
 
 
-def _traced(run, case: str, settings, cache=None):
-    """``{(row, e): curves}`` bounding the exists-and-stable region in each panel's box
-    (row 1: the zoom), or None (grid contours) if not wanted.
+def _scaled_boxes(settings, case) -> list:
+    """``(row, box)`` of the panels of Figs 4-5 in scaled gains (row 1: the zoom)."""
+    kpm, kvm, _ = settings.gains
+    out = [(0, (0.1, kpm, 0.1, kvm))]
+    if case == "noncollocated":
+        zk, zv, _ = settings.zoom
+        out.append((1, (0.1, zk, 0.1, zv)))
+    return out
 
-    Traced once in scaled gains (at ``m2 = 1``, on the box divided by ``m2``) and scaled back:
-    at fixed ``mu`` only ``kp/m2`` and ``kv/m2`` matter.
-    """
-    if not settings.traced_boundaries:
-        return None
-    from types import SimpleNamespace
 
+def _trace_key(case, row, e, box):
+    return (case, row, float(e), tuple(round(float(v), 12) for v in box))
+
+
+def _trace(case, e, box, settings):
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.pair.boundaries import boundary_curves
     from hybridpd.pair.boundarymask import stable_region_edges
 
+    res = boundary_curves(case, e=float(e), mu=PAPER["mu"], gamma=settings.gamma,
+                          omega=PAPER["omega"], m2=1.0, x10=settings.x10, n=PAPER["n"],
+                          x=("kp", box[0], box[1]), y=("kv", box[2], box[3]))
+    return [SimpleNamespace(kind=c.kind, x=np.asarray(c.x, float), y=np.asarray(c.y, float))
+            for c in stable_region_edges(res)]
+
+
+def trace_scaled(settings) -> dict:
+    """The traced boundaries of every panel of Figs 4-5 in scaled gains (``m2 = 1``), as the
+    ``cache`` of :func:`convention_figures`: one tracing serves every convention, the gain
+    boxes being scaled by ``m2``. Nothing when :attr:`Settings.traced_boundaries` is off."""
+    cache = {}
+    if not settings.traced_boundaries:
+        return cache
+    for case in CASES:
+        for row, box in _scaled_boxes(settings, case):
+            for e in PAPER["e"]:
+                cache[_trace_key(case, row, e, box)] = _trace(case, e, box, settings)
+    return cache
+
+
+def _traced(run, case: str, settings, cache=None):
+    """``{(row, e): curves}`` bounding the exists-and-stable region in each panel's box
+    (row 1: the zoom), or None (grid contours) if not wanted.
+
+    Traced once in scaled gains (at ``m2 = 1``, on the box divided by ``m2``; see
+    :func:`trace_scaled`) and scaled back: at fixed ``mu`` only ``kp/m2`` and ``kv/m2``
+    matter.
+    """
+    if not settings.traced_boundaries:
+        return None
     cache = {} if cache is None else cache
     s = run.m2
     out = {}
@@ -214,13 +345,9 @@ def _traced(run, case: str, settings, cache=None):
         box = (float(rm.x[0]) / s, float(rm.x[-1]) / s, float(rm.y[0]) / s,
                float(rm.y[-1]) / s)
         for e in rm.e:
-            key = (case, row, float(e), tuple(round(v, 12) for v in box))
+            key = _trace_key(case, row, e, box)
             if key not in cache:
-                res = boundary_curves(case, e=float(e), mu=PAPER["mu"], gamma=run.gamma,
-                                      omega=PAPER["omega"], m2=1.0, x10=run.x10, n=PAPER["n"],
-                                      x=("kp", box[0], box[1]), y=("kv", box[2], box[3]))
-                cache[key] = stable_region_edges(res)
-            out[(row, float(e))] = [SimpleNamespace(kind=c.kind, x=np.asarray(c.x) * s,
-                                                    y=np.asarray(c.y) * s)
+                cache[key] = _trace(case, e, box, settings)
+            out[(row, float(e))] = [SimpleNamespace(kind=c.kind, x=c.x * s, y=c.y * s)
                                     for c in cache[key]]
     return out

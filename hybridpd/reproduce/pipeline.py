@@ -1,15 +1,21 @@
-"""The reproduction pipeline: both ``m2`` conventions, the studies, the figures, the summary.
+"""The reproduction pipeline: the certified shares, both ``m2`` conventions, the studies, the
+figures, the summary.
 
 Layout of the output directory (every figure as PNG at 300 dpi and as PDF)::
 
     summary.md, summary.json          verdicts and every number behind them
+    robustness.json                   the comparison of conclusion 5 (scaled gains)
     scaled_regions_collocated.png, scaled_regions_noncollocated.png
                                       Figs 4-5 in (kp/m2, kv/m2), valid for every m2
     m2_study.png, mu_study.png, gamma_study.png
     m2=<value>/                       one directory per convention:
         fig3_orbit.png, fig4_regions_collocated.png, fig5_regions_noncollocated.png,
         fig6_basins_collocated.png, fig7_basins_noncollocated.png,
-        regions_*.nc, basin_*.nc, robustness.json
+        regions_*.nc, basin_*.nc
+
+The certified shares (:func:`~hybridpd.reproduce.certified.reproduction_shares`) and the
+traced region boundaries depend on nothing else the run computes: with a process executor
+they are computed in two background processes while the rest runs.
 """
 from __future__ import annotations
 
@@ -25,7 +31,7 @@ from hybridpd._results import compact_repr
 from hybridpd.model import ImpactPair, PDGains
 from hybridpd.reproduce import conclusions as C
 from hybridpd.reproduce.settings import AUTO, PAPER, Settings
-from hybridpd.reproduce.study import box_fractions, choose_m2, stable_intervals
+from hybridpd.reproduce.study import choose_m2, stable_intervals
 
 __all__ = ["ConventionRun", "M2Study", "m2_study", "reproduce", "run_convention"]
 
@@ -34,7 +40,7 @@ CASES = ("collocated", "noncollocated")
 
 @dataclass
 class ConventionRun:
-    """Everything computed under one convention ``(m2, x10)``.
+    """Figs 3-7 and the basins of conclusion 4 under one convention ``(m2, x10)``.
 
     Attributes
     ----------
@@ -43,23 +49,16 @@ class ConventionRun:
         Factor applied to the paper's gain box (``= m2``).
     maps : dict
         ``{case: RegionMap}`` on the scaled box, plus ``"zoom"`` (non-collocated).
-    shares : dict
-        ``{case: {"exists" | "stability" | "both": [share per e]}}`` on the scaled box.
     orbits : dict
         ``{(case, e): SymmetricOrbitResult}`` at the paper's gains.
     basins : dict
-        ``{(case, e): BasinResult or None}`` (None: no orbit, or not stable).
-    comparison : RobustnessComparison
-    checks : dict
-        ``{1..5: result of conclusions.check_*}`` on the run's grids.
-    check_grid_checks : dict
-        The same on the resolution-check grids.
-    check_grids : dict
-        ``{1..5: [[nx, ny], [nx2, ny2]]}``: the grids behind the two.
-    verdicts : dict
-        ``{1..5: verdict}``: the run's, or ``"unresolved"`` if the check grid's differs.
-    check_shares : dict
-        :attr:`shares` on the check grid.
+        ``{(case, e): AttractorBasin or None}`` (None: no orbit, or not stable).
+    check_4 : dict
+        Conclusion 4 at this ``m2`` (:func:`~hybridpd.reproduce.conclusions.check_4`) on
+        the run's basin grid; ``check_4_check_grid`` on the resolution-check grid;
+        ``verdict_4`` the two by :func:`~hybridpd.reproduce.rules.resolution`.
+    basin_grids : list
+        ``[run grid, check grid]``.
     basin_window : tuple
         The window shared by every basin (physical units); ``basin_windows`` all tried.
     touches_edge : dict
@@ -74,15 +73,12 @@ class ConventionRun:
     L: float
     scale: float
     maps: dict = field(default_factory=dict)
-    shares: dict = field(default_factory=dict)
     orbits: dict = field(default_factory=dict)
     basins: dict = field(default_factory=dict)
-    comparison: object = None
-    checks: dict = field(default_factory=dict)
-    check_grid_checks: dict = field(default_factory=dict)
-    check_grids: dict = field(default_factory=dict)
-    verdicts: dict = field(default_factory=dict)
-    check_shares: dict = field(default_factory=dict)
+    check_4: dict = None
+    check_4_check_grid: dict = None
+    verdict_4: str = None
+    basin_grids: list = None
     basin_window: tuple = None
     basin_windows: list = field(default_factory=list)
     touches_edge: dict = field(default_factory=dict)
@@ -101,31 +97,21 @@ class M2Study:
         ``{case: {e: [StableInterval]}}`` at the paper's gains.
     chosen_m2 : float or None
         By :func:`~hybridpd.reproduce.study.choose_m2`.
-    grid : ndarray
-        ``m2`` values of the verdicts.
-    verdicts : dict
-        ``{id: [verdict per grid value]}`` (conclusion 5 on :attr:`robust_grid`).
-    evidence : dict
-        ``{id: [check result per grid value]}``.
-    robust_grid : ndarray
+    rho_grid : ndarray
     rho : dict
-        ``{(case, e): spectral radius along a fine grid}`` for the figure, with ``rho_grid``.
-    checked : dict
-        ``{id: [verdict per grid value]}`` on the resolution-check grids.
-    gain_grids : (int, int)
-        Points per axis of the verdict grid and of the check grid.
+        ``{(case, e): spectral radius along rho_grid}`` for the figure (NaN: no orbit).
+    robust_grid : ndarray
+        ``m2`` values at which conclusion 5 is read on the printed gain box.
+    robust : list
+        :func:`~hybridpd.reproduce.conclusions.check_5` at each (run and check grid).
     """
 
     intervals: dict
     chosen_m2: float | None
-    grid: np.ndarray
-    verdicts: dict
-    evidence: dict
-    robust_grid: np.ndarray
     rho_grid: np.ndarray
     rho: dict
-    checked: dict = None
-    gain_grids: tuple = None
+    robust_grid: np.ndarray
+    robust: list
     __repr__ = compact_repr
 
 
@@ -133,26 +119,28 @@ def _say(log):
     return log or (lambda *_: None)
 
 
-def _verdicts_at(m2, kp_axis, kv_axis, common) -> dict:
-    """Checks 1-3 on one gain grid at one ``m2``."""
+def _comparison(m2, settings, grid, n_starts, maxiter, *, scaled=True, uncertainty=None):
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.pair.design import robustness_comparison
+
     P = PAPER
-    grid = (len(kp_axis), len(kv_axis))
-    sh = {case: box_fractions(case, kp_axis, kv_axis, e=P["e"], m2=m2, **common)
-          for case in CASES}
-    return {1: C.check_1(sh["collocated"], sh["noncollocated"], grid),
-            2: C.check_2(sh["collocated"], sh["noncollocated"], grid, P["e"]),
-            3: C.check_3(sh["collocated"], grid)}
+    s = m2 if scaled else 1.0
+    return robustness_comparison(
+        mu=P["mu"], gamma=P["gamma"], x10=settings.x10, m2=m2, n=P["n"], omega=P["omega"],
+        e=0.5, grid=tuple(grid), uncertainty_grid=uncertainty or settings.uncertainty_grid,
+        n_starts=n_starts, maxiter=maxiter, kp_range=(0.1 * s, 100.0 * s),
+        kv_range=(0.1 * s, 100.0 * s))
 
 
 def m2_study(settings: Settings, *, log=None) -> M2Study:
-    """Stable ``m2`` intervals at the paper's gains and every verdict against ``m2``.
+    """Stable ``m2`` intervals at the paper's gains, the spectral radii along ``m2`` and
+    conclusion 5 read on the printed gain box at :attr:`M2Study.robust_grid`.
 
-    The verdicts use the paper's gain box **as printed** (``kp, kv`` in ``[0.1, max]``, not
-    scaled), so they show what Figs 4-7 would say for each ``m2``; each is computed on the
-    verdict grid and on the resolution-check grid (:meth:`Settings.check_num`).
+    The readings of conclusions 1-3 are certified shares
+    (:func:`~hybridpd.reproduce.certified.reproduction_shares`); conclusion 4's follow from
+    the located interval ends (exact).
     """
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.design import robustness_comparison
     from hybridpd.pair.orbits import symmetric_orbits
 
     say = _say(log)
@@ -172,64 +160,32 @@ def m2_study(settings: Settings, *, log=None) -> M2Study:
         for e in P["e"]:
             r = symmetric_orbits(P["kp"], P["kv"], m2=rho_grid, e=e, case=case, **common)
             rho[(case, e)] = np.where(r.exists, r.spectral_radius, np.nan)
-    grid = np.logspace(math.log10(lo), math.log10(hi), settings.m2_verdicts)
-    axes = [(np.linspace(0.1, settings.gains[0], g), np.linspace(0.1, settings.gains[1], g))
-            for g in (settings.verdict_grid, settings.check_num(settings.verdict_grid))]
-    verdicts = {k: [] for k in range(1, 6)}
-    checked = {k: [] for k in range(1, 6)}
-    evidence = {k: [] for k in range(1, 6)}
-    for m2 in grid:
-        run_g, check_g = (_verdicts_at(m2, kp, kv, common) for kp, kv in axes)
-        for k in (1, 2, 3):
-            verdicts[k].append(run_g[k]["verdict"])
-            checked[k].append(check_g[k]["verdict"])
-            evidence[k].append(run_g[k])
-        st = {case: [bool(symmetric_orbits(P["kp"], P["kv"], m2=m2, e=e, case=case,
-                                           **common).stable) for e in P["e"]]
-              for case in CASES}
-        v4 = C.check_4_necessary(st["collocated"], st["noncollocated"])
-        verdicts[4].append(v4)
-        checked[4].append(v4)
-        evidence[4].append({"verdict": v4, "stable": st})
-    say(f"m2 study: verdicts on {len(grid)} values of m2")
     robust_grid = np.logspace(math.log10(lo), math.log10(hi), settings.m2_robust)
+    robust = []
+    g2 = tuple(settings.check_num(v) for v in settings.m2_robust_grid)
     for m2 in robust_grid:
-        for g, out in ((settings.m2_robust_grid, verdicts[5]),
-                       (tuple(settings.check_num(v) for v in settings.m2_robust_grid),
-                        checked[5])):
-            cmp = robustness_comparison(mu=P["mu"], gamma=P["gamma"], x10=settings.x10, m2=m2,
-                                        n=P["n"], omega=P["omega"], e=0.5, grid=g,
-                                        uncertainty_grid=(3, 3), n_starts=1, maxiter=40)
-            chk = C.check_5(cmp)
-            out.append(chk["verdict"])
-            if out is verdicts[5]:
-                evidence[5].append(chk)
+        # the printed box: only the gain grid's shares matter, not the local searches
+        a, b = (_comparison(m2, settings, g, 1, 1, scaled=False, uncertainty=(3, 3))
+                for g in (settings.m2_robust_grid, g2))
+        robust.append(C.check_5(a, b))
     say(f"m2 study: conclusion 5 on {len(robust_grid)} values of m2")
-    return M2Study(intervals, chosen, grid, verdicts, evidence, robust_grid, rho_grid, rho,
-                   checked, (settings.verdict_grid, settings.check_num(settings.verdict_grid)))
+    return M2Study(intervals, chosen, rho_grid, rho, robust_grid, robust)
 
 
-def _regions(run, settings, common, *, progress, tick):
-    """Region maps of Figs 4-5 on the scaled box (saved as .nc) and their shares on the
-    run's grid and on the resolution-check grid."""
+def _regions(run, settings, common, *, progress):
+    """Region maps of Figs 4-5 on the scaled box (saved as .nc)."""
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.pair.regions import region_map
 
-    s, d, m2 = run.scale, run.directory, run.m2
+    s, d = run.scale, run.directory
     kpm, kvm, num = settings.gains
-    num2 = settings.check_num(num)
     for case in CASES:
         t0 = time.perf_counter()
         rm = region_map(case, x=("kp", 0.1 * s, kpm * s, num), y=("kv", 0.1 * s, kvm * s, num),
                         progress=progress, **common)
         rm.save(d / f"regions_{case}.nc")
         run.maps[case] = rm
-        run.shares[case] = box_fractions(case, rm.x, rm.y, **common)
-        run.check_shares[case] = box_fractions(
-            case, np.linspace(0.1 * s, kpm * s, num2), np.linspace(0.1 * s, kvm * s, num2),
-            **common)
         run.timings[f"regions {case}"] = time.perf_counter() - t0
-        tick(f"m2 = {m2:g}: regions {case}")
     zk, zv, zn = settings.zoom
     run.maps["zoom"] = region_map("noncollocated", x=("kp", 0.1 * s, zk * s, zn),
                                   y=("kv", 0.1 * s, zv * s, zn), progress=progress, **common)
@@ -283,28 +239,18 @@ def _check_4(run, basins, grid, settings):
                      window=run.basin_window, grid=grid, distance=dist)
 
 
-def _comparison(m2, settings, grid, n_starts, maxiter):
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.design import robustness_comparison
-
-    P = PAPER
-    return robustness_comparison(
-        mu=P["mu"], gamma=P["gamma"], x10=settings.x10, m2=m2, n=P["n"], omega=P["omega"],
-        e=0.5, grid=grid, uncertainty_grid=settings.uncertainty_grid, n_starts=n_starts,
-        maxiter=maxiter, kp_range=(0.1 * m2, 100.0 * m2), kv_range=(0.1 * m2, 100.0 * m2))
-
-
 def run_convention(m2, settings: Settings, out, *, executor="processes", max_workers=None,
                    progress=False, log=None, tick=None, figure_hook=None,
                    study=None, cache=None) -> ConventionRun:
-    """Figs 3-7, their data and the conclusions' checks under one ``m2`` (see module doc).
+    """Figs 3-7, their data and conclusion 4's basins under one ``m2`` (see module doc).
 
-    Every check is computed on the run's grids and on the resolution-check grids
-    (:meth:`Settings.check_num`); the convention's verdict is
+    Conclusion 4 is measured on the run's basin grid and on the resolution-check grid
+    (:attr:`Settings.basin_check_scale`); the convention's verdict is
     :func:`~hybridpd.reproduce.rules.resolution` of the two. ``figure_hook(path, fig)``, if
-    given, sees every figure before it is saved; ``study`` (an :class:`M2Study`) lets a basin
-    panel with no stable orbit show the orbit's spectral radius along ``m2``; ``cache`` (a
-    dict) lets conventions share work that depends on ``kp/m2, kv/m2`` only.
+    given, sees every figure before it is saved; ``study`` (an :class:`M2Study`) lets a
+    basin panel with no stable orbit show the orbit's spectral radius along ``m2``;
+    ``cache`` (a dict, see :func:`~hybridpd.reproduce.figures.trace_scaled`) lets
+    conventions share the traced boundaries, which depend on ``kp/m2, kv/m2`` only.
     """
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.pair.orbits import symmetric_orbit
@@ -321,7 +267,8 @@ def run_convention(m2, settings: Settings, out, *, executor="processes", max_wor
     run.directory = d
     common = dict(mu=P["mu"], omega=P["omega"], L=settings.L, x10=settings.x10, m2=m2,
                   n=P["n"], e=P["e"])
-    _regions(run, settings, common, progress=progress, tick=tick)
+    _regions(run, settings, common, progress=progress)
+    tick(f"m2 = {m2:g}: regions")
     for case in CASES:
         for e in P["e"]:
             run.orbits[(case, e)] = symmetric_orbit(
@@ -329,30 +276,11 @@ def run_convention(m2, settings: Settings, out, *, executor="processes", max_wor
                 x10=settings.x10, n=P["n"], case=case)
     check_basins, grid2 = _basins(run, settings, executor=executor, max_workers=max_workers,
                                   progress=progress, say=say)
+    run.check_4 = _check_4(run, run.basins, settings.basin, settings)
+    run.check_4_check_grid = _check_4(run, check_basins, grid2, settings)
+    run.verdict_4 = resolution(run.check_4["verdict"], run.check_4_check_grid["verdict"])
+    run.basin_grids = [list(settings.basin), list(grid2)]
     tick(f"m2 = {m2:g}: basins")
-    t0 = time.perf_counter()
-    ds = settings.design_search
-    run.comparison = _comparison(m2, settings, settings.comparison_grid, *ds)
-    g5 = tuple(settings.check_num(v) for v in settings.comparison_grid)
-    check_cmp = _comparison(m2, settings, g5, 1, ds[1])
-    (d / "robustness.json").write_text(json.dumps([r.to_dict() for r in run.comparison.rows],
-                                                  indent=1))
-    run.timings["robustness comparison"] = time.perf_counter() - t0
-    tick(f"m2 = {m2:g}: robustness comparison")
-    num = settings.gains[2]
-    g1, g2 = (num, num), (settings.check_num(num),) * 2
-    for sh, g, out_, bas, gb, cmp in (
-            (run.shares, g1, run.checks, run.basins, settings.basin, run.comparison),
-            (run.check_shares, g2, run.check_grid_checks, check_basins, grid2, check_cmp)):
-        col, non = sh["collocated"], sh["noncollocated"]
-        out_.update({1: C.check_1(col, non, g), 2: C.check_2(col, non, g, P["e"]),
-                     3: C.check_3(col, g), 4: _check_4(run, bas, gb, settings),
-                     5: C.check_5(cmp)})
-    run.check_grids = {1: [list(g1), list(g2)], 2: [list(g1), list(g2)],
-                       3: [list(g1), list(g2)], 4: [list(settings.basin), list(grid2)],
-                       5: [list(settings.comparison_grid), list(g5)]}
-    run.verdicts = {k: resolution(run.checks[k]["verdict"], run.check_grid_checks[k]["verdict"])
-                    for k in run.checks}
     t0 = time.perf_counter()
     convention_figures(run, settings, study=study, hook=figure_hook, cache=cache)
     run.timings["figures"] = time.perf_counter() - t0
@@ -373,6 +301,57 @@ def resolve_conventions(settings: Settings, study: M2Study | None) -> list:
     return list(dict.fromkeys(out))
 
 
+def _certified_job(settings, cases):
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.reproduce.certified import reproduction_shares
+
+    return reproduction_shares(settings, cases)
+
+
+def _traced_job(settings):
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.reproduce.figures import trace_scaled
+
+    t0, c0 = time.perf_counter(), time.process_time()
+    return trace_scaled(settings), time.perf_counter() - t0, time.process_time() - c0
+
+
+class _Background:
+    """The work that depends on nothing else of the run: in worker processes (``parallel``)
+    started at once, or inline when first needed."""
+
+    def __init__(self, jobs: dict, parallel: bool):
+        self._jobs, self._done, self._pool, self._futures = dict(jobs), {}, None, {}
+        if parallel:
+            import concurrent.futures as cf
+
+            self._pool = cf.ProcessPoolExecutor(max_workers=2)
+            self._futures = {k: self._pool.submit(fn, *args) for k, (fn, args) in jobs.items()}
+
+    def get(self, name):
+        if name not in self._done:
+            if self._pool is not None:
+                self._done[name] = self._futures[name].result()
+            else:
+                fn, args = self._jobs[name]
+                self._done[name] = fn(*args)
+        return self._done[name]
+
+    def close(self):
+        if self._pool is not None:
+            for f in self._futures.values():
+                f.cancel()
+            self._pool.shutdown(wait=True)
+            self._pool = None
+
+
+def _steps(n_conv: int) -> int:
+    """Progress steps of a run: the m2, mu and gamma studies, conclusion 5, three per
+    convention (regions, basins, figures), the certified shares, the figures of the studies
+    and the summary."""
+    return 4 + 3 * n_conv + 3
+
+
 def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_workers=None,
               progress=True, log=print, settings: Settings | None = None,
               figure_hook=None) -> Path:
@@ -383,9 +362,11 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
     out : path
         Output directory (created).
     mode : {"quick", "full"}
-        :meth:`Settings.quick` (about a minute on 2 cores) or :meth:`Settings.full`.
+        :meth:`Settings.quick` (under a minute on 2 cores) or :meth:`Settings.full`.
     executor : {"serial", "processes", "dask"}
-        For the basin sweeps (region maps are vectorised and run in-process).
+        For the basin sweeps (region maps are vectorised and run in-process); with
+        ``"processes"`` or ``"dask"`` the certified shares and the traced boundaries are
+        computed in two local background processes meanwhile.
     max_workers : int, optional
     progress : bool
         Progress on stderr: the steps, and the points of the sweeps inside them (a bar on a
@@ -403,10 +384,6 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
     Path
         ``summary.md`` (``summary.json`` is beside it).
     """
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.reproduce.params import check_study, param_study
-    from hybridpd.reproduce.summary import write_summary
-
     if mode not in ("quick", "full"):
         raise ValueError(f"mode must be 'quick' or 'full', got {mode!r}")
     if settings is None:
@@ -415,20 +392,40 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
         raise ValueError(f"settings must be a Settings, got {type(settings).__name__}")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    say = _say(log)
-    n_conv = len(settings.m2)
+    parallel = executor != "serial"
+    # the traced boundaries first: the first convention's figures wait for them, the
+    # certified shares are needed only at the end
+    bg = _Background({"traced boundaries": (_traced_job, (settings,)),
+                      "certified collocated": (_certified_job, (settings, ("collocated",))),
+                      "certified noncollocated": (_certified_job,
+                                                  (settings, ("noncollocated",)))}, parallel)
+    try:
+        return _reproduce(out, mode, settings, bg, executor=executor, max_workers=max_workers,
+                          progress=progress, log=log, figure_hook=figure_hook)
+    finally:
+        bg.close()
+
+
+def _reproduce(out, mode, settings, bg, *, executor, max_workers, progress, log, figure_hook):
     # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.reproduce.certified import merge_shares
+    from hybridpd.reproduce.figures import study_figures
+    from hybridpd.reproduce.params import param_study
+    from hybridpd.reproduce.summary import build_summary, write_summary
     from hybridpd.sweeps.progress import Progress
 
-    # the steps; the sweeps inside a step report their own points
-    bar = Progress(3 + 6 * n_conv + 1, "reproduce", unit="step", enabled=bool(progress))
+    say = _say(log)
+    n_conv = len(settings.m2)
+    bar = Progress(_steps(n_conv), "reproduce", unit="step", enabled=bool(progress))
     bar.__enter__()
+    ticks = [0]
 
     def tick(msg):
         say(msg)
         bar.update(1)
+        ticks[0] += 1
 
-    t_start = time.perf_counter()
+    t_start, c_start = time.perf_counter(), time.process_time()
     timings = {}
     t0 = time.perf_counter()
     study = m2_study(settings, log=say)
@@ -438,39 +435,60 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
     if not conventions:
         raise ValueError(f"m2: 'auto' found no m2 in {list(settings.m2_range)} where all "
                          "non-collocated orbits are stable; give a value of m2 as well")
-    fixed = dict(mu=PAPER["mu"], gamma=PAPER["gamma"], x10=settings.x10,
-                 m2=conventions[0], omega=PAPER["omega"], n=PAPER["n"])
-    s = fixed["m2"]
+    # the studies' gain box is the first convention's, scaled by its m2: the scaled box
+    s = conventions[0]
+    fixed = dict(mu=PAPER["mu"], gamma=PAPER["gamma"], x10=settings.x10, m2=s,
+                 omega=PAPER["omega"], n=PAPER["n"])
     kp_axis = np.linspace(0.1 * s, settings.gains[0] * s, settings.param_grid)
     kv_axis = np.linspace(0.1 * s, settings.gains[1] * s, settings.param_grid)
     studies = {}
     for name, rng in (("mu", settings.mu_range), ("gamma", settings.gamma_range)):
         t0 = time.perf_counter()
-        ps = param_study(name, values_range=rng, points=settings.param_points,
-                         kp_axis=kp_axis, kv_axis=kv_axis, e=PAPER["e"], fixed=fixed,
-                         map_kp=PAPER["kp"] * s)
-        g2 = settings.check_num(settings.param_grid)
-        studies[name] = check_study(ps, np.linspace(kp_axis[0], kp_axis[-1], g2),
-                                    np.linspace(kv_axis[0], kv_axis[-1], g2))
+        studies[name] = param_study(name, values_range=rng, points=settings.param_points,
+                                    kp_axis=kp_axis, kv_axis=kv_axis, e=PAPER["e"],
+                                    fixed=fixed, map_kp=PAPER["kp"] * s)
         timings[f"{name} study"] = time.perf_counter() - t0
         tick(f"{name} study")
-    runs = []
-    cache = {}
-    for m2 in conventions:
-        runs.append(run_convention(m2, settings, out, executor=executor,
-                                   max_workers=max_workers, progress=progress, log=say, tick=tick,
-                                   figure_hook=figure_hook, study=study, cache=cache))
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.reproduce.figures import study_figures
-
+    t0 = time.perf_counter()
+    ds = settings.design_search
+    comparison = _comparison(1.0, settings, settings.comparison_grid, *ds)
+    g5 = tuple(settings.check_num(v) for v in settings.comparison_grid)
+    check5 = C.check_5(comparison, _comparison(1.0, settings, g5, 1, 1))
+    (out / "robustness.json").write_text(json.dumps(comparison.to_dict(), indent=1))
+    timings["robustness comparison"] = time.perf_counter() - t0
+    tick("conclusion 5: robustness comparison")
+    t0 = time.perf_counter()
+    cache, traced_seconds, traced_cpu = bg.get("traced boundaries") \
+        if settings.traced_boundaries else ({}, 0.0, 0.0)
+    timings["waiting for the traced boundaries"] = time.perf_counter() - t0
+    runs = [run_convention(m2, settings, out, executor=executor, max_workers=max_workers,
+                           progress=progress, log=say, tick=tick, figure_hook=figure_hook,
+                           study=study, cache=cache) for m2 in conventions]
+    t0 = time.perf_counter()
+    shares = merge_shares([bg.get("certified collocated"), bg.get("certified noncollocated")])
+    timings["waiting for the certified shares"] = time.perf_counter() - t0
+    tick("certified shares")
+    t0 = time.perf_counter()
+    # the figures draw the summary's table (its readings along m2): the summary first
+    data = build_summary(settings=settings, mode=mode, study=study, studies=studies, runs=runs,
+                         shares=shares, check5=check5, timings=timings)
+    timings["summary"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     study_figures(out, study=study, studies=studies, settings=settings, runs=runs,
-                  hook=figure_hook)
+                  table=data["table"], shares=shares, hook=figure_hook)
     timings["figures of the studies"] = time.perf_counter() - t0
+    tick("figures of the studies")
+    timings["traced boundaries (background)"] = traced_seconds
+    for k, v in shares["seconds"].items():
+        timings[f"certified {k} (background)"] = v
     timings["total"] = time.perf_counter() - t_start
-    figures = sorted(p.relative_to(out).as_posix() for p in out.rglob("*.png"))
-    path = write_summary(out, settings=settings, mode=mode, study=study, studies=studies,
-                         runs=runs, timings=timings, figures=figures)
+    # CPU apart from the wall time: the machine may be shared; with two idle cores the run
+    # takes about the larger of this process's CPU and the background's per worker
+    timings["CPU of this process"] = time.process_time() - c_start
+    timings["CPU of the background work"] = traced_cpu + sum(shares["cpu_seconds"].values())
+    data["timings"] = {k: float(v) for k, v in timings.items()}
+    data["figures"] = sorted(p.relative_to(out).as_posix() for p in out.rglob("*.png"))
+    path = write_summary(out, data=data)
     tick(f"summary written to {path}")
     bar.close()
     return path

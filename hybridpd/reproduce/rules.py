@@ -3,26 +3,36 @@
 A verdict is one of four words (:data:`VERDICTS`):
 
 * ``"agrees"`` / ``"contradicted"`` — the measurement decides the paper's statement;
-* ``"depends"`` — decided, but differently between conventions or along ``m2``;
-* ``"unresolved"`` — the measurement cannot decide (window- or grid-limited).
+* ``"unresolved"`` — it cannot: the certified intervals overlap (no change within the
+  certified resolution), or a window or a grid limits the measurement;
+* ``"split"`` — two readings of the paper's words that are both reasonable (two robustness
+  criteria) give opposite decided verdicts; both are reported.
 
-The rules are applied literally; the conclusion-specific thresholds live in
-:mod:`hybridpd.reproduce.conclusions`.
+Shares that decide verdicts are **certified intervals** ``(lo, hi)``: the true share of the
+box lies inside (:mod:`hybridpd.reproduce.certified`). A rule says *agrees* or
+*contradicted* only when the intervals separate, so two enclosures of the same boxes (a
+coarse and a fine certification) can never give opposite decided verdicts; where they
+overlap the rule says *unresolved*. Sampled shares (basins, the robustness comparison) are
+checked on two grids instead (:func:`resolution`).
+
+The conclusion-specific thresholds live in :mod:`hybridpd.reproduce.conclusions`.
 """
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
 
-__all__ = ["AGREES", "CONTRADICTED", "DEPENDS", "TREND_TOLERANCE_CELLS", "UNRESOLVED",
-           "VERDICTS", "basin_comparison", "combine", "resolution", "share", "trend"]
+__all__ = ["AGREES", "CONTRADICTED", "NO_CHANGE", "SPLIT", "UNRESOLVED", "VERDICTS", "all_of",
+           "at_least", "basin_comparison", "criteria", "m2_readings", "ratio_below",
+           "resolution", "separation", "share", "trend"]
 
-AGREES, CONTRADICTED, DEPENDS, UNRESOLVED = "agrees", "contradicted", "depends", "unresolved"
+AGREES, CONTRADICTED, UNRESOLVED, SPLIT = "agrees", "contradicted", "unresolved", "split"
 #: The only verdicts.
-VERDICTS = (AGREES, CONTRADICTED, DEPENDS, UNRESOLVED)
-#: A trend may go the wrong way by at most this many grid cells of the box.
-TREND_TOLERANCE_CELLS = 2
+VERDICTS = (AGREES, CONTRADICTED, UNRESOLVED, SPLIT)
+#: What overlapping certified intervals mean.
+NO_CHANGE = "no change within the certified resolution"
 
 
 def _check_verdict(v):
@@ -31,8 +41,18 @@ def _check_verdict(v):
     return v
 
 
+def _interval(name, iv) -> tuple:
+    try:
+        lo, hi = (float(v) for v in iv)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a (lo, hi) pair, got {iv!r}") from None
+    if not 0.0 <= lo <= hi <= 1.0:
+        raise ValueError(f"{name} must satisfy 0 <= lo <= hi <= 1, got {iv!r}")
+    return lo, hi
+
+
 def share(fraction, grid) -> dict:
-    """A share of a grid with its cell count: ``{"share", "cells", "of", "grid"}``.
+    """A sampled share of a grid with its cell count: ``{"share", "cells", "of", "grid"}``.
 
     Parameters
     ----------
@@ -56,32 +76,179 @@ def share(fraction, grid) -> dict:
     return {"share": f, "cells": round(f * nx * ny), "of": nx * ny, "grid": [nx, ny]}
 
 
-def combine(verdicts) -> str:
-    """Verdict of a statement measured several times (conventions, values of ``m2``, cases).
-
-    ``"depends"`` if the decided verdicts differ (or one of them already depends), else
-    ``"unresolved"`` if any measurement is unresolved (or there is none), else the common
-    decided verdict.
+def separation(a, b) -> str:
+    """Where certified interval ``a`` lies against ``b``: ``"below"`` (``a_hi < b_lo``),
+    ``"above"`` (``a_lo > b_hi``) or ``"overlap"`` (no change within the certified
+    resolution).
 
     Examples
     --------
-    >>> from hybridpd.reproduce.rules import combine
-    >>> combine(["agrees", "agrees"]), combine(["agrees", "contradicted"])
-    ('agrees', 'depends')
-    >>> combine(["agrees", "unresolved"])
+    >>> from hybridpd.reproduce.rules import separation
+    >>> separation((0.1, 0.2), (0.3, 0.4)), separation((0.1, 0.35), (0.3, 0.4))
+    ('below', 'overlap')
+    """
+    (alo, ahi), (blo, bhi) = _interval("a", a), _interval("b", b)
+    if ahi < blo:
+        return "below"
+    if alo > bhi:
+        return "above"
+    return "overlap"
+
+
+def trend(values, intervals, *, direction="decreasing") -> dict:
+    """"The share tends to decrease (increase) with the parameter": a trend over the range.
+
+    The trend is the change from the first to the last value of the range: *agrees* when the
+    last interval lies wholly below (``"decreasing"``) or above (``"increasing"``) the
+    first, *contradicted* when it lies wholly on the other side, *unresolved* when they
+    overlap. A proved move the other way inside the range (``lo_j > hi_i`` for a decrease,
+    ``i < j``) is reported, the largest one with its interval ``[values[i], values[j]]``,
+    but does not decide: "tends to" is not "at every step".
+
+    Parameters
+    ----------
+    values : array_like, shape (N,)
+        The parameter, increasing, ``N >= 2``.
+    intervals : sequence of (lo, hi)
+        Certified shares at ``values``.
+    direction : {"decreasing", "increasing"}
+
+    Returns
+    -------
+    dict
+        ``verdict``, ``direction``, ``change`` (``[lo, hi]`` of last minus first),
+        ``against`` (``{"interval": [p_i, p_j], "by": d}``, the largest proved move the
+        other way, ``d`` its smallest size; or None).
+
+    Examples
+    --------
+    >>> from hybridpd.reproduce.rules import trend
+    >>> t = trend([1, 2, 3], [(0.5, 0.6), (0.7, 0.8), (0.1, 0.2)])
+    >>> t["verdict"], t["against"]["interval"]
+    ('agrees', [1.0, 2.0])
+    >>> trend([1, 2], [(0.5, 0.6), (0.55, 0.65)])["verdict"]
     'unresolved'
     """
+    if direction not in ("decreasing", "increasing"):
+        raise ValueError(f"direction must be 'decreasing' or 'increasing', got {direction!r}")
+    x = np.asarray(values, float).ravel()
+    ivs = [_interval(f"intervals[{k}]", iv) for k, iv in enumerate(intervals)]
+    if x.size != len(ivs) or x.size < 2:
+        raise ValueError(f"values and intervals must have the same length >= 2, got {x.size} "
+                         f"and {len(ivs)}")
+    if not np.all(np.diff(x) > 0):
+        raise ValueError("values must be increasing")
+    sign = 1.0 if direction == "decreasing" else -1.0
+    sep = separation(ivs[-1], ivs[0])
+    wanted, opposite = ("below", "above") if sign > 0 else ("above", "below")
+    verdict = AGREES if sep == wanted else CONTRADICTED if sep == opposite else UNRESOLVED
+    best = None
+    for i in range(len(ivs)):
+        for j in range(i + 1, len(ivs)):
+            # a proved move against the direction: the later share is surely on the wrong side
+            d = (ivs[j][0] - ivs[i][1]) if sign > 0 else (ivs[i][0] - ivs[j][1])
+            if d > 0 and (best is None or d > best[0]):
+                best = (d, i, j)
+    return {"verdict": verdict, "direction": direction,
+            "change": [ivs[-1][0] - ivs[0][1], ivs[-1][1] - ivs[0][0]],
+            "against": None if best is None else
+            {"interval": [float(x[best[1]]), float(x[best[2]])], "by": float(best[0])}}
+
+
+def at_least(intervals, threshold) -> dict:
+    """"The share is at least ``threshold``" for every interval: *agrees* when every lower
+    bound is ``>= threshold``, *contradicted* when some upper bound is below it,
+    *unresolved* otherwise. ``per_item`` gives each interval's own verdict.
+
+    Examples
+    --------
+    >>> from hybridpd.reproduce.rules import at_least
+    >>> at_least([(0.4, 0.5), (0.9, 1.0)], 0.3)["verdict"]
+    'agrees'
+    >>> at_least([(0.4, 0.5), (0.1, 0.2)], 0.3)["per_item"]
+    ['agrees', 'contradicted']
+    """
+    t = float(threshold)
+    per = []
+    for k, iv in enumerate(intervals):
+        lo, hi = _interval(f"intervals[{k}]", iv)
+        per.append(AGREES if lo >= t else CONTRADICTED if hi < t else UNRESOLVED)
+    return {"verdict": all_of(per), "per_item": per, "threshold": t}
+
+
+def ratio_below(num, den, threshold) -> dict:
+    """"``num`` is much smaller than ``den``": the ratio ``num / den`` below ``threshold``
+    for every pair of intervals.
+
+    The ratio is bracketed by ``[num_lo / den_hi, num_hi / den_lo]`` (an upper bound of
+    ``inf`` when ``den_lo = 0``): *agrees* when every upper bound is below the threshold,
+    *contradicted* when some lower bound is at or above it, *unresolved* otherwise.
+
+    Examples
+    --------
+    >>> from hybridpd.reproduce.rules import ratio_below
+    >>> r = ratio_below([(0.01, 0.05)], [(0.4, 0.5)], 0.2)
+    >>> r["verdict"], r["ratio"]
+    ('agrees', [[0.02, 0.125]])
+    >>> ratio_below([(0.01, 0.05)], [(0.0, 0.5)], 0.2)["verdict"]
+    'unresolved'
+    """
+    t = float(threshold)
+    nums = [_interval(f"num[{k}]", iv) for k, iv in enumerate(num)]
+    dens = [_interval(f"den[{k}]", iv) for k, iv in enumerate(den)]
+    if len(nums) != len(dens):
+        raise ValueError("num and den must have one interval each per item")
+    per, ratios = [], []
+    for (nlo, nhi), (dlo, dhi) in zip(nums, dens):
+        lo = nlo / dhi if dhi > 0 else (math.inf if nlo > 0 else 0.0)
+        hi = nhi / dlo if dlo > 0 else math.inf   # a share that may be 0 bounds no ratio
+        ratios.append([lo, None if math.isinf(hi) else hi])
+        per.append(AGREES if hi < t else CONTRADICTED if lo >= t else UNRESOLVED)
+    return {"verdict": all_of(per), "per_item": per, "ratio": ratios, "threshold": t}
+
+
+def all_of(verdicts) -> str:
+    """A statement that must hold for every item (every ``e``, both cases): *contradicted*
+    if some item is, *agrees* if every item agrees, else *unresolved*.
+
+    Examples
+    --------
+    >>> from hybridpd.reproduce.rules import all_of
+    >>> all_of(["agrees", "unresolved"]), all_of(["agrees", "contradicted", "unresolved"])
+    ('unresolved', 'contradicted')
+    """
     vs = [_check_verdict(v) for v in verdicts]
+    if CONTRADICTED in vs:
+        return CONTRADICTED
+    if vs and all(v == AGREES for v in vs):
+        return AGREES
+    return UNRESOLVED
+
+
+def criteria(verdicts: dict) -> str:
+    """One statement under several reasonable criteria (``{criterion: verdict}``): their
+    common verdict, *split* when decided verdicts differ, *unresolved* when none decides.
+
+    Examples
+    --------
+    >>> from hybridpd.reproduce.rules import criteria
+    >>> criteria({"stability": "agrees", "stability and amplitude": "contradicted"})
+    'split'
+    >>> criteria({"stability": "agrees", "stability and amplitude": "unresolved"})
+    'agrees'
+    """
+    vs = [_check_verdict(v) for v in verdicts.values()]
+    if SPLIT in vs:
+        return SPLIT
     decided = {v for v in vs if v in (AGREES, CONTRADICTED)}
-    if DEPENDS in vs or len(decided) == 2:
-        return DEPENDS
-    if not vs or UNRESOLVED in vs:
-        return UNRESOLVED
-    return decided.pop()
+    if len(decided) == 2:
+        return SPLIT
+    return decided.pop() if decided else UNRESOLVED
 
 
 def resolution(at_run_grid: str, at_check_grid: str) -> str:
-    """The verdict at the run's grid if the second grid gives the same, else ``"unresolved"``.
+    """A sampled measurement on two grids: the run grid's verdict if the second grid gives
+    the same, else ``"unresolved"``.
 
     Examples
     --------
@@ -93,65 +260,50 @@ def resolution(at_run_grid: str, at_check_grid: str) -> str:
     return a if a == b else UNRESOLVED
 
 
-def trend(values, shares, cells, *, direction="decreasing",
-          tolerance_cells=TREND_TOLERANCE_CELLS) -> dict:
-    """A trend statement ("the share decreases with the parameter") over the whole range.
+def m2_readings(m2, verdicts) -> list:
+    """The readings of the printed gain box along ``m2`` as intervals of ``m2``.
 
-    It agrees only if the share is monotone in ``direction`` over the whole studied range
-    within ``tolerance_cells`` cells: no later value exceeds (``"decreasing"``) or falls below
-    (``"increasing"``) an earlier one by more than the tolerance. Otherwise it is contradicted
-    and the evidence names the interval ``[values[i], values[j]]`` with the largest violation.
+    Consecutive computed values with the same verdict form one run ``[first, last]``; a
+    change of verdict lies somewhere between the last value of one run and the first of the
+    next (never drawn or stated as known there).
 
     Parameters
     ----------
-    values : array_like, shape (N,)
-        The parameter, increasing.
-    shares : array_like, shape (N,)
-        Shares of a grid of ``cells`` cells.
-    cells : int
-        Cells of the grid behind each share.
-    direction : {"decreasing", "increasing"}
-    tolerance_cells : int
+    m2 : array_like
+        The computed values of ``m2`` (increasing).
+    verdicts : sequence of str
+        The verdict at each.
 
     Returns
     -------
-    dict
-        ``verdict``, ``violation_cells`` (largest violation, in cells; 0 when none),
-        ``interval`` (``[values[i], values[j]]`` of the largest violation, or None).
+    list of dict
+        ``{"verdict", "m2": [first, last], "computed": [values], "change_after": (last,
+        next first) or None}``.
 
     Examples
     --------
-    >>> from hybridpd.reproduce.rules import trend
-    >>> trend([1, 2, 3], [0.5, 0.4, 0.6], 100)["interval"]
-    [2.0, 3.0]
-    >>> trend([1, 2, 3], [0.5, 0.51, 0.4], 100)["verdict"]
-    'agrees'
+    >>> from hybridpd.reproduce.rules import m2_readings
+    >>> r = m2_readings([0.1, 1, 10, 100], ["agrees", "agrees", "contradicted",
+    ...                                      "contradicted"])
+    >>> [(x["verdict"], x["m2"], x["change_after"]) for x in r]
+    [('agrees', [0.1, 1.0], [1.0, 10.0]), ('contradicted', [10.0, 100.0], None)]
     """
-    if direction not in ("decreasing", "increasing"):
-        raise ValueError(f"direction must be 'decreasing' or 'increasing', got {direction!r}")
-    x = np.asarray(values, float).ravel()
-    s = np.asarray(shares, float).ravel()
-    if x.size != s.size or x.size < 2:
-        raise ValueError(f"values and shares must have the same length >= 2, got {x.size} "
-                         f"and {s.size}")
-    if not (int(cells) == cells and cells >= 1):
-        raise ValueError(f"cells must be an integer >= 1, got {cells!r}")
-    # shares of a grid are whole cells: count them exactly (no rounding error at the
-    # tolerance)
-    c = np.round(s * int(cells), 6) * (1.0 if direction == "decreasing" else -1.0)
-    # the largest rise of a later value over the running minimum of the earlier ones
-    best, where = 0.0, None
-    k_min = 0
-    for j in range(1, c.size):
-        if c[j - 1] < c[k_min]:
-            k_min = j - 1
-        rise = c[j] - c[k_min]
-        if rise > best:
-            best, where = float(rise), (k_min, j)
-    ok = best <= tolerance_cells
-    return {"verdict": AGREES if ok else CONTRADICTED, "violation_cells": best,
-            "interval": None if where is None else [float(x[where[0]]), float(x[where[1]])],
-            "direction": direction, "tolerance_cells": int(tolerance_cells)}
+    x = [float(v) for v in m2]
+    vs = [_check_verdict(v) for v in verdicts]
+    if len(x) != len(vs) or not x:
+        raise ValueError("m2 and verdicts must have the same non-zero length")
+    if any(b <= a for a, b in itertools.pairwise(x)):
+        raise ValueError("m2 must be increasing")
+    runs = []
+    for m, v in zip(x, vs):
+        if runs and runs[-1]["verdict"] == v:
+            runs[-1]["computed"].append(m)
+            runs[-1]["m2"][1] = m
+        else:
+            if runs:
+                runs[-1]["change_after"] = [runs[-1]["m2"][1], m]
+            runs.append({"verdict": v, "m2": [m, m], "computed": [m], "change_after": None})
+    return runs
 
 
 def basin_comparison(collocated, noncollocated, touches_edge, similar=(0.5, 2.0)) -> dict:
@@ -218,10 +370,5 @@ def basin_comparison(collocated, noncollocated, touches_edge, similar=(0.5, 2.0)
             per_e.append(CONTRADICTED)
         else:
             per_e.append(UNRESOLVED)
-    if CONTRADICTED in per_e:
-        v = CONTRADICTED
-    elif per_e and all(p == AGREES for p in per_e):
-        v = AGREES
-    else:
-        v = UNRESOLVED
-    return {"verdict": v, "per_e": per_e, "ratio_bounds": bounds}
+    return {"verdict": all_of(per_e) if per_e else UNRESOLVED, "per_e": per_e,
+            "ratio_bounds": bounds}

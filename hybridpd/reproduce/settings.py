@@ -62,9 +62,11 @@ class Settings:
         distance from the fixed point) while some symmetric orbit's basin touches its edge.
         If a basin still touches it after the last growth, its area is a lower bound.
     check_scale : float
-        The resolution check: every verdict is recomputed on grids with this many times the
-        cells per axis (about twice as fine in full mode, half as fine in quick mode); a
-        verdict that changes is ``"unresolved"``.
+        The resolution check of the sampled verdicts (the robustness comparison of
+        conclusion 5): recomputed on grids with this many times the cells per axis (about
+        twice as fine in full mode, half as fine in quick mode); a verdict that changes is
+        ``"unresolved"``. The region verdicts need no such check: they are decided by
+        certified shares.
     basin_check_scale : float
         The same for the basin slices, whose cost grows with their cells and with the
         iterations of the weakly damped orbits: half as fine in both modes by default.
@@ -90,12 +92,22 @@ class Settings:
     m2_grid : int
         Points of the log grid on which the stable intervals are bracketed.
     m2_verdicts : int
-        Points of the log grid of ``m2`` on which the conclusions are re-evaluated.
+        Points of the log grid of ``m2`` at which the paper's gain box as printed is read
+        (conclusions 1-3, certified shares of the box ``[0.1/m2, 50/m2]^2``).
     m2_robust : int
-        Points of that grid on which conclusion 5 (a design optimisation) is re-evaluated,
-        with a gain grid of ``m2_robust_grid``, 3 x 3 plants and one short local search.
-    verdict_grid : int
-        Gain-grid size (per axis) of the region maps behind the verdicts against ``m2``.
+        Points of that grid on which conclusion 5 (a sampled robustness comparison) is
+        re-evaluated, with a gain grid of ``m2_robust_grid`` and 3 x 3 plants.
+    certified : (int, int, float)
+        ``(grid, levels, width)`` of the certified shares of the scaled box that decide the
+        region verdicts (:func:`~hybridpd.reproduce.certified.certified_shares`): base cells
+        per axis, refinement levels at most, the undecided share at which refinement stops.
+    certified_readings : (int, int, float)
+        The same for the readings of the printed box along ``m2`` (where the verdicts need
+        less resolution).
+    certified_ends : (int, int, float)
+        The same for the remarks on ``mu``: the scaled box at ``mu = 1e-4`` and at both ends
+        of :attr:`mu_range` (a coarse base grid refined deeper: the proofs at extreme ``mu``
+        need smaller cells).
     mu_range, gamma_range : (lo, hi)
         Ranges of the ``mu`` and ``gamma`` studies (log axes).
     param_points : int
@@ -124,7 +136,9 @@ class Settings:
     m2_verdicts: int = 9
     m2_robust: int = 3
     m2_robust_grid: tuple = (12, 12)
-    verdict_grid: int = 41
+    certified: tuple = (16, 3, 0.02)
+    certified_readings: tuple = (8, 2, 0.05)
+    certified_ends: tuple = (8, 5, 0.05)
     mu_range: tuple = (0.01, 10.0)
     gamma_range: tuple = (0.05, 2.0)
     param_points: int = 41
@@ -170,15 +184,25 @@ class Settings:
         _count("m2_robust", self.m2_robust, 1)
         for v in self.m2_robust_grid:
             _count("m2_robust_grid", v)
-        for nm in ("verdict_grid", "param_points", "param_grid"):
+        for nm in ("certified", "certified_readings", "certified_ends"):
+            v = getattr(self, nm)
+            if len(v) != 3:
+                raise ValueError(f"{nm} must be (grid, levels, width), got {v!r}")
+            _count(f"{nm} grid", v[0])
+            _count(f"{nm} levels", v[1] + 1, 1)
+            if not 0.0 <= float(v[2]) <= 1.0:
+                raise ValueError(f"{nm} width must lie in [0, 1], got {v[2]!r}")
+        for nm in ("param_points", "param_grid"):
             _count(nm, getattr(self, nm))
 
     @classmethod
     def quick(cls, **kw) -> Settings:
-        """Coarse grids: about a minute on 2 cores."""
+        """Coarse grids: under a minute on 2 cores (warm)."""
         base = dict(gains=(50.0, 50.0, 61), zoom=(20.0, 6.0, 61), basin=(41, 41),
                     comparison_grid=(12, 12), uncertainty_grid=(3, 3), design_search=(1, 40),
-                    verdict_grid=31, basin_extensions=1, check_scale=0.5,
+                    basin_extensions=1, check_scale=0.5, m2_verdicts=5,
+                    certified=(16, 3, 0.08), certified_readings=(8, 2, 0.08),
+                    certified_ends=(8, 5, 0.08),
                     param_points=25, param_grid=21)
         return cls(**{**base, **kw})
 
@@ -186,8 +210,10 @@ class Settings:
     def full(cls, **kw) -> Settings:
         """The 200 x 200 grids of the paper's figures (a few minutes on 2 cores)."""
         base = dict(gains=(50.0, 50.0, 201), zoom=(20.0, 6.0, 201), basin=(201, 201),
-                    basin_extensions=1, m2_grid=8001, m2_verdicts=9, m2_robust=5, m2_robust_grid=(16, 16),
-                    verdict_grid=61, param_points=61, param_grid=31)
+                    basin_extensions=1, m2_grid=8001, m2_verdicts=9, m2_robust=5,
+                    m2_robust_grid=(16, 16), certified=(32, 4, 0.01),
+                    certified_readings=(16, 3, 0.02),
+                    certified_ends=(16, 5, 0.02), param_points=61, param_grid=31)
         return cls(**{**base, **kw})
 
     def check_num(self, num: int, scale: float | None = None) -> int:

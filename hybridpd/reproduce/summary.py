@@ -5,6 +5,7 @@ rendered from the same dict that is written as JSON, so the two cannot disagree.
 """
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from pathlib import Path
@@ -15,27 +16,33 @@ from hybridpd.reproduce import conclusions as C
 from hybridpd.reproduce import rules as R
 from hybridpd.reproduce.settings import PAPER
 
+CASES = ("collocated", "noncollocated")
+
 __all__ = ["SCHEMA", "build_summary", "render_markdown", "validate", "write_summary"]
 
 _NUM = {"type": ["number", "null"]}
 _VERDICT = {"type": "string", "enum": list(R.VERDICTS)}
-_RESOLUTION = {"type": "object", "required": ["grids", "verdicts"], "properties": {
-    "grids": {"type": "array", "minItems": 2, "maxItems": 2,
-              "items": {"type": "array", "items": {"type": "integer"}, "minItems": 2,
-                        "maxItems": 2}},
-    "verdicts": {"type": "array", "minItems": 2, "maxItems": 2, "items": _VERDICT}}}
+_PAIR = {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2}
 _INTERVALS = {"type": "object", "required": [f"{e:g}" for e in PAPER["e"]],
-              "additionalProperties": {"type": "array", "items": {
-                  "type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2}}}
+              "additionalProperties": {"type": "array", "items": _PAIR}}
+_SHARE = {"type": "object", "required": ["exists_stable", "exists", "exists_unstable",
+                                         "no_orbit", "cells", "grid"],
+          "properties": {"exists_stable": _PAIR, "exists": _PAIR, "exists_unstable": _PAIR,
+                         "no_orbit": _PAIR, "grid": {"type": "array", "items":
+                                                     {"type": "integer"}}}}
+_PER_E = {"type": "object", "required": [f"{e:g}" for e in PAPER["e"]],
+          "additionalProperties": _SHARE}
+_READING = {"type": "object", "required": ["verdict", "m2"],
+            "properties": {"verdict": _VERDICT, "m2": _PAIR}}
 
 #: JSON schema (draft 2020-12 subset) of ``summary.json``; checked by :func:`validate`.
 SCHEMA = {
     "type": "object",
-    "required": ["schema_version", "mode", "paper", "conventions", "conclusions",
-                 "m2_stable_intervals", "m2_interval_ends", "m2_study", "runs", "studies",
-                 "remarks", "timings"],
+    "required": ["schema_version", "mode", "paper", "conventions", "table", "certified",
+                 "certified_shares", "conclusions", "remarks", "m2_stable_intervals",
+                 "m2_interval_ends", "m2_study", "runs", "studies", "timings"],
     "properties": {
-        "schema_version": {"type": "integer", "enum": [1]},
+        "schema_version": {"type": "integer", "enum": [2]},
         "mode": {"type": "string"},
         "paper": {"type": "object", "required": ["mu", "gamma", "n", "omega", "e", "kp", "kv"]},
         "conventions": {
@@ -45,38 +52,36 @@ SCHEMA = {
                            "x10": {"type": "number"}, "gamma": {"type": "number"},
                            "L": {"type": "number"}, "chosen_m2": _NUM,
                            "chosen_m2_rule": {"type": "string"}}},
+        "table": {"type": "array", "minItems": 7, "maxItems": 7, "items": {
+            "type": "object", "required": ["id", "paper", "verdict", "finding", "m2_text",
+                                           "m2_readings"],
+            "properties": {"verdict": _VERDICT, "paper": {"type": "string"},
+                           "finding": {"type": "string"}, "m2_text": {"type": "string"}}}},
+        "certified": {"type": "object", "required": ["box", "main", "readings"]},
+        "certified_shares": {"type": "object", "required": ["collocated", "noncollocated"],
+                             "additionalProperties": _PER_E},
         "conclusions": {
             "type": "array", "minItems": 5, "maxItems": 5,
             "items": {"type": "object",
-                      "required": ["id", "statement", "verdict", "by_convention", "vs_m2",
-                                   "evidence", "resolution_check"],
+                      "required": ["id", "statement", "verdict", "evidence", "m2_readings"],
                       "properties": {
                           "id": {"type": "integer", "enum": [1, 2, 3, 4, 5]},
                           "statement": {"type": "string"},
                           "verdict": _VERDICT,
-                          "by_convention": {"type": "object",
-                                            "additionalProperties": _VERDICT},
-                          "resolution_check": _RESOLUTION,
-                          "vs_m2": {"type": "object", "required": ["m2", "verdict"],
-                                    "properties": {
-                                        "m2": {"type": "array", "items": {"type": "number"}},
-                                        "verdict": {"type": "array",
-                                                    "items": _VERDICT}}},
                           "evidence": {"type": "object"}}}},
         "m2_stable_intervals": {"type": "object", "required": ["noncollocated", "collocated"],
                                 "properties": {"noncollocated": _INTERVALS,
                                                "collocated": _INTERVALS}},
         "m2_interval_ends": {"type": "object"},
-        "m2_study": {"type": "object", "required": ["range", "grid"]},
+        "m2_study": {"type": "object", "required": ["range", "readings"]},
         "runs": {"type": "array", "minItems": 1, "items": {
             "type": "object", "required": ["m2", "gain_box_scale", "orbits", "regions",
                                            "basins", "directory"]}},
         "studies": {"type": "object", "required": ["mu", "gamma"], "additionalProperties": {
             "type": "object", "required": ["values", "fractions", "box"]}},
-        "remarks": {"type": "array", "items": {
-            "type": "object", "required": ["id", "statement", "verdict", "evidence",
-                                           "resolution_check"],
-            "properties": {"verdict": _VERDICT, "resolution_check": _RESOLUTION}}},
+        "remarks": {"type": "array", "minItems": 2, "maxItems": 2, "items": {
+            "type": "object", "required": ["id", "statement", "verdict", "evidence"],
+            "properties": {"verdict": _VERDICT}}},
         "timings": {"type": "object", "additionalProperties": {"type": "number"}}}}
 
 _TYPES = {"object": dict, "array": list, "string": str, "boolean": bool, "null": type(None)}
@@ -157,20 +162,22 @@ def _orbit_row(o) -> dict:
 
 
 def _run_dict(r) -> dict:
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.basins import LABELS
-
     basins = []
     for (case, e), b in r.basins.items():
         o = r.orbits[(case, e)]
         row = {"case": case, "e": e, "measured": b is not None,
-               "converged_fraction": 0.0 if b is None else b.basin.converged_fraction,
                "window": None if b is None else [float(v) for v in b.window],
                "why_empty": None if b is not None else (
                    o.reason if not o.exists else "orbit unstable")}
         if b is not None:
-            cnt = np.bincount(b.basin.labels.ravel(), minlength=len(LABELS))
-            row["label_counts"] = {n: int(c) for n, c in zip(LABELS, cnt)}
+            N = int(b.labels.size)
+            # one denominator for every share: the points of the window
+            row["points"] = N
+            row["grid"] = [len(b.x1), len(b.y1)]
+            row["shares"] = [{"label": int(a.label), "name": a.name,
+                              "count": int((b.labels == a.label).sum()),
+                              "share": float((b.labels == a.label).sum()) / N}
+                             for a in b.attractors]
             row["converged_area"] = b.measure(0).area
             row["reaches_edge"] = b.reaches_edge
             row["attractors"] = b.to_dict()["attractors"]
@@ -183,101 +190,203 @@ def _run_dict(r) -> dict:
                          "exists_fraction": rm.fraction("exists"),
                          "stable_fraction": rm.fraction("stable"),
                          "stable_area": rm.area("stable")}
-        if case in r.shares:
-            regions[case]["stability_alone_fraction"] = r.shares[case]["stability"]
     return {"m2": r.m2, "x10": r.x10, "gamma": r.gamma, "L": r.L, "gain_box_scale": r.scale,
             "basin_window": list(r.basin_window),
             "basin_windows": [list(w) for w in r.basin_windows],
-            "touches_edge": r.touches_edge,
-            "directory": r.directory.name, "orbits": [_orbit_row(o) for o in r.orbits.values()],
-            "regions": regions, "basins": basins, "timings": r.timings}
+            "touches_edge": r.touches_edge, "directory": r.directory.name,
+            "orbits": [_orbit_row(o) for o in r.orbits.values()], "regions": regions,
+            "basins": basins,
+            "conclusion_4": {"verdict": r.verdict_4, "grids": r.basin_grids,
+                             "verdicts": [r.check_4["verdict"],
+                                          r.check_4_check_grid["verdict"]],
+                             "run_grid": r.check_4, "check_grid": r.check_4_check_grid},
+            "timings": r.timings}
 
 
-def _remark_verdicts(per_key: dict) -> str:
-    """A universal statement over cases and ``e``: agrees only if every one agrees."""
-    return R.AGREES if all(v == R.AGREES for v in per_key.values()) else R.CONTRADICTED
+def _intervals(shares, group, keys, prop="exists_stable") -> list:
+    return [shares[group][k].interval(prop) for k in keys]
 
 
-def remarks(studies) -> list:
-    """The paper's remarks on ``mu`` (section 5) as verdicts by the trend rule, per case and
-    ``e``, on the study's gain grid and on the resolution-check grid.
+def _checks(shares, es, settings, check5) -> dict:
+    """Every claim's check in scaled gains, from the certified shares."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.reproduce.certified import MU_LIMIT
 
-    * "existence decreases with mu": the existence share is non-increasing over the whole
-      studied range of ``mu``, within two cells (:func:`~hybridpd.reproduce.rules.trend`);
-    * "mu -> 0 facilitates control": the exists-and-stable share is non-increasing in ``mu``
-      from ``mu = 1e-4`` (the limit point) to the paper's ``mu``, within two cells.
-    """
-    s = studies["mu"]
-    vals = np.asarray(s.values)
-    k01 = int(np.argmin(np.abs(np.log(vals / PAPER["mu"]))))
-    layers = [(s.box, s.fractions, s.limits)]
-    if s.check is not None:
-        layers.append((s.check["box"], s.check["fractions"], s.check["limits"]))
-    ev_a, ev_b = {}, {}
-    va, vb = [], []
-    for layer, (box, fr, lim) in enumerate(layers):
-        cells = int(box["kp"][2]) * int(box["kv"][2])
-        grid = [int(box["kp"][2]), int(box["kv"][2])]
-        per_a, per_b = {}, {}
-        for case, q in fr.items():
-            ex, both = np.asarray(q["exists"]), np.asarray(q["both"])
-            lim0, liminf = lim["0.0001"][case], lim["10000"][case]
-            for k, e in enumerate(s.e):
-                key = f"{case} e={e:g}"
-                ta = R.trend(vals, ex[k], cells, direction="decreasing")
-                xb = np.r_[1e-4, vals[:k01 + 1]]
-                tb = R.trend(xb, np.r_[lim0["both"][k], both[k, :k01 + 1]], cells,
-                             direction="decreasing")
-                per_a[key], per_b[key] = ta["verdict"], tb["verdict"]
-                if layer == 0:
-                    ev_a[key] = {"exists_at_min_mu": R.share(ex[k, 0], grid),
-                                 "exists_at_max_mu": R.share(ex[k, -1], grid),
-                                 "exists_at_1e4": R.share(liminf["exists"][k], grid),
-                                 "trend": ta}
-                    ev_b[key] = {"both_at_1e-4": R.share(lim0["both"][k], grid),
-                                 "mu_paper": float(vals[k01]),
-                                 "both_at_mu_paper": R.share(both[k, k01], grid), "trend": tb}
-                else:
-                    ev_a[key]["verdict_check_grid"] = ta["verdict"]
-                    ev_b[key]["verdict_check_grid"] = tb["verdict"]
-        va.append(_remark_verdicts(per_a))
-        vb.append(_remark_verdicts(per_b))
-    for ev in (ev_a, ev_b):
-        for row in ev.values():
-            v = row["trend"]["verdict"]
-            row["verdict"] = R.resolution(v, row.get("verdict_check_grid", v))
-    grids = [[int(b["kp"][2]), int(b["kv"][2])] for b, _, _ in layers]
-    if len(grids) == 1:
-        grids, va, vb = grids * 2, va * 2, vb * 2
+    main = {c: _intervals(shares, "main", [(c, e) for e in es]) for c in CASES}
+    exist = {c: _intervals(shares, "main", [(c, e) for e in es], "exists") for c in CASES}
+    lo_mu, hi_mu = settings.mu_range
+    ends = {m: {c: _intervals(shares, "mu_ends", [(c, e, m) for e in es], "exists")
+                for c in CASES} for m in (lo_mu, hi_mu)}
+    limit = {c: _intervals(shares, "limit", [(c, e) for e in es]) for c in CASES}
+    return {1: C.check_1(main["collocated"], main["noncollocated"], es,
+                         col_exists=exist["collocated"], non_exists=exist["noncollocated"]),
+            2: C.check_2(main["collocated"], main["noncollocated"], es),
+            3: C.check_3(main["collocated"], es), 5: check5,
+            "mu-existence": C.check_mu_existence((lo_mu, hi_mu), ends[lo_mu], ends[hi_mu], es),
+            "mu-small": C.check_mu_small((MU_LIMIT, PAPER["mu"]), limit, main, es)}
+
+
+def _readings_123(shares, es, settings) -> dict:
+    """Conclusions 1-3 read on the printed box at every reading ``m2`` (certified)."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.reproduce.certified import reading_values
+
+    values = reading_values(settings)
+    per = {1: [], 2: [], 3: []}
+    evidence = []
+    for m2 in values:
+        if m2 == 1.0:
+            sh = {c: _intervals(shares, "main", [(c, e) for e in es]) for c in CASES}
+        else:
+            sh = {c: _intervals(shares, "readings", [(c, e, m2) for e in es]) for c in CASES}
+        chk = {1: C.check_1(sh["collocated"], sh["noncollocated"], es),
+               2: C.check_2(sh["collocated"], sh["noncollocated"], es),
+               3: C.check_3(sh["collocated"], es)}
+        for k, lst in per.items():
+            lst.append(chk[k]["verdict"])
+        evidence.append({"m2": m2, "collocated": sh["collocated"],
+                         "noncollocated": sh["noncollocated"],
+                         "verdicts": {str(k): chk[k]["verdict"] for k in chk}})
+    return {k: R.m2_readings(values, v) for k, v in per.items()}, evidence
+
+
+def _stable_at(ivs, m2) -> bool:
+    return any(i.lo.m2 < m2 < i.hi.m2 for i in ivs)
+
+
+def readings_4(intervals, m2_range, runs) -> list:
+    """Conclusion 4 along ``m2``, from the located interval ends (exact): where, for some
+    ``e``, the orbit at the paper's gains is stable in one case only, a basin faces none
+    (contradicted); where all six are stable only the basins decide, at the conventions
+    of the run."""
+    es = list(intervals["collocated"])
+    lo, hi = m2_range
+    ends = sorted({lo, hi} | {x.m2 for d in intervals.values() for ivs in d.values()
+                              for i in ivs for x in (i.lo, i.hi) if lo < x.m2 < hi})
     out = []
-    for rid, st, v, ev in (
-            ("mu-existence", "The existence region tends to decrease with increasing mu.", va,
-             ev_a),
-            ("mu-small", "As mu tends to zero control becomes easier.", vb, ev_b)):
-        out.append({"id": rid, "statement": st, "verdict": R.resolution(*v), "evidence": ev,
-                    "resolution_check": {"grids": grids, "verdicts": v}})
+    for a, b in itertools.pairwise(ends):
+        m = math.sqrt(a * b)
+        st = {c: [_stable_at(intervals[c][e], m) for e in es] for c in CASES}
+        v = C.check_4_necessary(st["collocated"], st["noncollocated"])
+        if v == R.CONTRADICTED:
+            if out and out[-1].get("exact") and out[-1]["m2"][1] == a:
+                out[-1]["m2"][1] = b
+            else:
+                out.append({"verdict": v, "m2": [a, b], "exact": True,
+                            "computed": [], "change_after": None})
+            continue
+        for r in runs:
+            if a < r.m2 < b or (r.m2 == b == hi):
+                out.append({"verdict": r.verdict_4, "m2": [r.m2, r.m2], "exact": False,
+                            "computed": [r.m2], "change_after": None})
     return out
 
 
-def _conclusion(k, study, runs) -> dict:
-    """One conclusion: the verdict by convention and along ``m2``, on both grids."""
-    by_conv = {f"{r.m2:g}": r.verdicts[k] for r in runs}
-    grid = study.robust_grid if k == 5 else study.grid
-    checked = study.checked[k] if study.checked else study.verdicts[k]
-    vs_resolved = [R.resolution(a, b) for a, b in zip(study.verdicts[k], checked)]
-    v1 = R.combine([r.checks[k]["verdict"] for r in runs] + list(study.verdicts[k]))
-    v2 = R.combine([r.check_grid_checks[k]["verdict"] for r in runs] + list(checked))
-    evidence = {"by_convention": {f"{r.m2:g}": r.checks[k] for r in runs},
-                "by_convention_check_grid": {f"{r.m2:g}": r.check_grid_checks[k]
-                                             for r in runs},
-                "vs_m2": study.evidence[k]}
-    return {"id": k, "statement": C.STATEMENTS[k], "verdict": R.resolution(v1, v2),
-            "by_convention": by_conv,
-            "vs_m2": {"m2": list(grid), "verdict": vs_resolved,
-                      "verdict_run_grid": list(study.verdicts[k]),
-                      "verdict_check_grid": list(checked)},
-            "evidence": evidence,
-            "resolution_check": {"grids": runs[0].check_grids[k], "verdicts": [v1, v2]}}
+def _readings_5(study) -> dict:
+    return {crit: R.m2_readings(list(study.robust_grid),
+                                [r["by_criterion"][crit] for r in study.robust])
+            for crit in C.CRITERIA_5}
+
+
+def _certified_section(shares, settings) -> dict:
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.reproduce.certified import MU_LIMIT, reading_values
+
+    def cfg(c, group):
+        r = next(iter(shares[group].values()), None)
+        grid, levels, width = c
+        return {"base_grid": grid, "levels": levels, "width": width,
+                "grid": None if r is None else [r.finest, r.finest],
+                "seconds": shares["seconds"].get(group), "cpu_seconds":
+                    shares["cpu_seconds"].get(group)}
+    return {"method": ("each class's share of the box is enclosed in [proved, proved + "
+                       "undecided] cells of the finest grid; cells proved by interval "
+                       "arithmetic on the paper's closed forms (hybridpd.pair.proofs), "
+                       "undecided cells cut in four up to the level cap"),
+            "box": {"kp/m2": [0.1, settings.gains[0]], "kv/m2": [0.1, settings.gains[1]]},
+            "main": cfg(settings.certified, "main"), "limit": cfg(settings.certified_ends, "limit"),
+            "mu_ends": cfg(settings.certified_ends, "mu_ends"),
+            "readings": cfg(settings.certified_readings, "readings"),
+            "mu_limit": MU_LIMIT, "mu_ends_values": list(settings.mu_range),
+            "readings_m2": reading_values(settings)}
+
+
+def _shares_json(group, keyfmt) -> dict:
+    out = {}
+    for key, r in group.items():
+        d = out
+        for part in keyfmt(key)[:-1]:
+            d = d.setdefault(part, {})
+        d[keyfmt(key)[-1]] = r.to_dict()
+    return out
+
+
+def build_summary(*, settings, mode, study, studies, runs, shares, check5, timings,
+                  figures=()) -> dict:
+    """The ``summary.json`` dict (see :data:`SCHEMA`)."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.reproduce.table import build_table
+
+    es = [float(e) for e in PAPER["e"]]
+    checks = _checks(shares, es, settings, check5)
+    r123, reading_evidence = _readings_123(shares, es, settings)
+    readings = {**r123, 4: readings_4(study.intervals, settings.m2_range, runs),
+                5: _readings_5(study)}
+    measured = [{"m2": r.m2, "verdict": r.verdict_4, "window": list(r.basin_window),
+                 "grid": list(settings.basin)} for r in runs
+                if all(o.exists and o.stable for o in r.orbits.values())]
+    finest = {g: (next(iter(shares[g].values())).finest,) * 2
+              for g in ("main", "limit", "mu_ends")}
+    table = build_table(checks=checks, readings=readings, basins_measured=measured,
+                        grids=finest)
+    conclusions = []
+    for k in range(1, 6):
+        ev = checks.get(k) if k != 4 else {
+            "by_convention": {f"{r.m2:g}": {"verdict": r.verdict_4, "grids": r.basin_grids,
+                                            "run_grid": r.check_4,
+                                            "check_grid": r.check_4_check_grid}
+                              for r in runs}}
+        conclusions.append({"id": k, "statement": C.STATEMENTS[k],
+                            "verdict": table[k - 1]["verdict"], "evidence": ev,
+                            "m2_readings": readings[k]})
+    remarks = [{"id": rid, "statement": C.REMARKS[rid], "verdict": checks[rid]["verdict"],
+                "evidence": checks[rid]} for rid in ("mu-existence", "mu-small")]
+    ivs = {case: {f"{e:g}": [i.bounds() for i in lst] for e, lst in d.items()}
+           for case, d in study.intervals.items()}
+    ends = {case: {f"{e:g}": [i.to_dict() for i in lst] for e, lst in d.items()}
+            for case, d in study.intervals.items()}
+    out = {
+        "schema_version": 2, "mode": mode,
+        "paper": dict(PAPER, e=list(PAPER["e"])),
+        "conventions": {"m2": [r.m2 for r in runs], "x10": settings.x10,
+                        "gamma": PAPER["gamma"], "L": settings.L,
+                        "chosen_m2": study.chosen_m2, "chosen_m2_rule": RULE,
+                        "feedback_at_chosen_m2": _feedback(study.chosen_m2, settings),
+                        "basin_window": [v * settings.x10 for v in settings.basin_window]},
+        "table": table,
+        "certified": _certified_section(shares, settings),
+        "certified_shares": _shares_json(shares["main"], lambda k: (k[0], f"{k[1]:g}")),
+        "certified_studies": {
+            "limit": _shares_json(shares["limit"], lambda k: (k[0], f"{k[1]:g}")),
+            "mu_ends": _shares_json(shares["mu_ends"], lambda k: (k[0], f"{k[2]:g}",
+                                                                  f"{k[1]:g}")),
+            "readings": _shares_json(shares["readings"], lambda k: (k[0], f"{k[2]:g}",
+                                                                    f"{k[1]:g}"))},
+        "conclusions": conclusions, "remarks": remarks,
+        "m2_stable_intervals": ivs, "m2_interval_ends": ends,
+        "m2_study": {"range": list(settings.m2_range), "bracketing_points": settings.m2_grid,
+                     "readings": reading_evidence,
+                     "robust_grid": list(study.robust_grid), "robust": study.robust},
+        "runs": [_run_dict(r) for r in runs],
+        "studies": {k: v.to_dict() for k, v in studies.items()},
+        "thresholds": {"much_smaller": C.MUCH_SMALLER, "large": C.LARGE,
+                       "similar": list(C.SIMILAR),
+                       "basin_window_growths": settings.basin_extensions,
+                       "check_scale": settings.check_scale,
+                       "basin_check_scale": settings.basin_check_scale},
+        "figures": [str(f) for f in figures],
+        "timings": timings}
+    return _clean(out)
 
 
 def _feedback(m2, settings) -> dict | None:
@@ -289,7 +398,7 @@ def _feedback(m2, settings) -> dict | None:
 
     P = PAPER
     rho = {}
-    for case in ("collocated", "noncollocated"):
+    for case in CASES:
         r = symmetric_orbits(P["kp"], P["kv"], mu=P["mu"], e=np.asarray(P["e"], float),
                              L=settings.L, x10=settings.x10, omega=P["omega"], m2=m2,
                              n=P["n"], case=case)
@@ -298,46 +407,12 @@ def _feedback(m2, settings) -> dict | None:
             "spectral_radius": rho}
 
 
-def build_summary(*, settings, mode, study, studies, runs, timings, figures=()) -> dict:
-    """The ``summary.json`` dict (see :data:`SCHEMA`)."""
-    conclusions = [_conclusion(k, study, runs) for k in range(1, 6)]
-    ivs = {case: {f"{e:g}": [i.bounds() for i in lst] for e, lst in d.items()}
-           for case, d in study.intervals.items()}
-    ends = {case: {f"{e:g}": [i.to_dict() for i in lst] for e, lst in d.items()}
-            for case, d in study.intervals.items()}
-    out = {
-        "schema_version": 1, "mode": mode,
-        "paper": dict(PAPER, e=list(PAPER["e"])),
-        "conventions": {"m2": [r.m2 for r in runs], "x10": settings.x10,
-                        "gamma": PAPER["gamma"], "L": settings.L,
-                        "chosen_m2": study.chosen_m2, "chosen_m2_rule": RULE,
-                        "feedback_at_chosen_m2": _feedback(study.chosen_m2, settings),
-                        "basin_window": [v * settings.x10 for v in settings.basin_window]},
-        "conclusions": conclusions,
-        "m2_stable_intervals": ivs, "m2_interval_ends": ends,
-        "m2_study": {"range": list(settings.m2_range), "grid": list(study.grid),
-                     "bracketing_points": settings.m2_grid,
-                     "gain_box": {"kp": [0.1, settings.gains[0], settings.verdict_grid],
-                                  "kv": [0.1, settings.gains[1], settings.verdict_grid]},
-                     "check_grid": settings.check_num(settings.verdict_grid),
-                     "robust_grid": list(study.robust_grid)},
-        "runs": [_run_dict(r) for r in runs],
-        "studies": {k: v.to_dict() for k, v in studies.items()},
-        "remarks": remarks(studies),
-        "thresholds": {"much_smaller": C.MUCH_SMALLER, "large": C.LARGE,
-                       "similar": list(C.SIMILAR),
-                       "trend_tolerance_cells": R.TREND_TOLERANCE_CELLS,
-                       "basin_window_growths": settings.basin_extensions,
-                       "check_scale": settings.check_scale},
-        "figures": [str(f) for f in figures],
-        "timings": timings}
-    return _clean(out)
+def write_summary(out, data=None, **kw) -> Path:
+    """Write ``summary.json`` and ``summary.md`` into ``out``; return the markdown's path.
 
-
-def write_summary(out, **kw) -> Path:
-    """Write ``summary.json`` and ``summary.md`` into ``out``; return the markdown's path."""
+    ``data`` is a :func:`build_summary` dict; without it one is built from ``kw``."""
     out = Path(out)
-    data = build_summary(**kw)
+    data = build_summary(**kw) if data is None else data
     errs = validate(data)
     if errs:
         raise RuntimeError("summary.json does not match its schema: " + "; ".join(errs[:5]))
