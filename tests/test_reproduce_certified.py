@@ -99,3 +99,18 @@ def test_bad_targets_name_the_parameter(kw, name):
         ShareTarget(**{"case": "collocated", "e": 0.5, **kw})
     with pytest.raises(ValueError, match="grid"):
         certified_shares([ShareTarget("collocated", 0.5)], grid=1)
+
+
+@pytest.mark.slow
+def test_quick_mode_shares_of_the_scaled_box_are_at_most_0_1_wide():
+    # the shares that decide conclusions 1-3 in quick mode, every class, both cases, every e
+    from hybridpd.reproduce import PAPER, Settings
+    from hybridpd.reproduce.certified import CLASSES, PROPERTIES
+
+    grid, levels, width = Settings.quick().certified
+    targets = [ShareTarget(c, e, PAPER["mu"], properties=PROPERTIES)
+               for c in ("collocated", "noncollocated") for e in PAPER["e"]]
+    for r in certified_shares(targets, grid=grid, levels=levels, width=width):
+        for name in CLASSES:
+            lo, hi = r.interval(name)
+            assert hi - lo <= 0.1, (r.target, name, lo, hi)

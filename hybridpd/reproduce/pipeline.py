@@ -491,4 +491,11 @@ def _reproduce(out, mode, settings, bg, *, executor, max_workers, progress, log,
     path = write_summary(out, data=data)
     tick(f"summary written to {path}")
     bar.close()
+    # the last word of a run that reached its end, whatever the bar printed
+    say(f"finished {ticks[0]}/{bar.total} steps in {_duration(time.perf_counter() - t_start)}")
     return path
+
+
+def _duration(seconds: float) -> str:
+    """``"48 s"`` or ``"3.2 min"``."""
+    return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.1f} min"

@@ -208,7 +208,7 @@ def _row_mu_small(c, grid_limit, grid):
         parts.append("harder: " + "; ".join(harder))
     if same:
         parts.append(R.NO_CHANGE + ": " + "; ".join(same))
-    text = ("exists and stable, " + ". ".join(parts) + f" ({_cert(grid_limit)} at mu = "
+    text = ("exists and stable, " + "; ".join(parts) + f" ({_cert(grid_limit)} at mu = "
             f"{c['mu'][0]:g}, {grid[0]} × {grid[1]} at mu = {c['mu'][1]:g})")
     return _row("mu-small", c["verdict"], text, readings_text="read on the scaled box (m2 = 1)")
 
