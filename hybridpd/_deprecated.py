@@ -61,6 +61,7 @@ MOVED_MODULES = {
     "hybridpd.sweeps.basins": "hybridpd.pair.basins",
     "hybridpd.sweeps.attractor_basins": "hybridpd.pair.attractor_basins",
     "hybridpd.sweeps.diagram_sweep": "hybridpd.pair.diagram_sweep",
+    "hybridpd.sweeps.basin_result": "hybridpd.analysis.basins",
 }
 
 
@@ -149,7 +150,8 @@ def moved_names(module: str, moves: dict):
         The old module's ``__name__``.
     moves : dict of str to str
         Each moved name and the dotted path of the module that now holds it (given as a string
-        so that the old module does not import the new one).
+        so that the old module does not import the new one); ``"module:new_name"`` when the
+        name was replaced by another (e.g. two result classes merged into one).
 
     Returns
     -------
@@ -162,10 +164,12 @@ def moved_names(module: str, moves: dict):
         new = moves.get(name)
         if new is None:
             raise AttributeError(f"module {module!r} has no attribute {name!r}")
-        warnings.warn(_message(f"{module}.{name}", f"{new}.{name} (or hybridpd.{name})"
-                               if _is_public(name) else f"{new}.{name}"),
+        new, _, now = new.partition(":")
+        now = now or name
+        warnings.warn(_message(f"{module}.{name}", f"{new}.{now} (or hybridpd.{now})"
+                               if _is_public(now) else f"{new}.{now}"),
                       DeprecationWarning, stacklevel=2)
-        return getattr(importlib.import_module(new), name)
+        return getattr(importlib.import_module(new), now)
 
     return __getattr__
 

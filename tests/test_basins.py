@@ -6,20 +6,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.pair.attractor_basins import attractor_basin, format_percent, load_attractor_basin
-from hybridpd.pair.attractors import (
-    NO_CONVERGENCE,
-    OFF_SECTION_LABEL,
-    CycleCatalog,
-    paper_distance2,
-)
-from hybridpd.pair.basins import (
-    LABELS,
-    ImpactMapper,
-    basin_of_attraction,
-    load_basin,
-    section_grid,
-)
+from hybridpd._format import format_percent
+from hybridpd.analysis.basins import NO_CONVERGENCE, OFF_SECTION_LABEL, load_basin
+from hybridpd.analysis.labels import LABELS
+from hybridpd.pair.attractor_basins import attractor_basin
+from hybridpd.pair.attractors import CycleCatalog, paper_distance2
+from hybridpd.pair.basins import ImpactMapper, basin_of_attraction, section_grid
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
 
@@ -298,15 +290,15 @@ def test_attractor_basin_save_load_and_executors(tmp_path):
                           executor="processes", max_workers=2, chunk_size=40)
     np.testing.assert_array_equal(ab.labels, ab2.labels)
     ab.save(tmp_path / "ab.npz")
-    ab3 = load_attractor_basin(tmp_path / "ab.npz")
+    ab3 = load_basin(tmp_path / "ab.npz")
     np.testing.assert_array_equal(ab3.labels, ab.labels)
     assert [a.name for a in ab3.attractors] == [a.name for a in ab.attractors]
     np.testing.assert_allclose(ab3.attractors[1].points, ab.attractors[1].points)
     assert ab3.to_dict() == ab.to_dict()
-    assert ab3.metadata["gamma"] == 0.75 and ab3.basin.metadata["kp"] == 10.0
-    with pytest.raises(ValueError, match="attractor basin"):
-        ab.basin.save(tmp_path / "b.npz")
-        load_attractor_basin(tmp_path / "b.npz")
+    assert ab3.metadata["gamma"] == 0.75 and ab3.metadata["kp"] == 10.0
+    np.savez(tmp_path / "other.npz", x=np.zeros(2))
+    with pytest.raises(ValueError, match="basin"):
+        load_basin(tmp_path / "other.npz")
 
 
 def test_early_exits_give_identical_attractor_labels():
@@ -316,7 +308,7 @@ def test_early_exits_give_identical_attractor_labels():
                            (-2, 10, 10), extend=False)
     np.testing.assert_array_equal(fast.labels, slow.labels)
     assert [a.name for a in fast.attractors] == [a.name for a in slow.attractors]
-    assert fast.basin.iterations.mean() < 0.5 * slow.basin.iterations.mean()
+    assert fast.iterations.mean() < 0.5 * slow.iterations.mean()
 
 
 def _rendered(fig):
@@ -389,11 +381,13 @@ def test_basin_figures_keep_text_inside_and_legend_matches_drawing():
 
     from hybridpd.plotting import plot_basin
 
-    _o, ab = fig6_e01(num=20)
+    o, ab = fig6_e01(num=20)
+    paper = basin_of_attraction(ImpactMapper.from_orbit(o), (-3, 5, 20), (-2, 10, 20),
+                                progress=False)
     o5 = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     ab5 = attractor_basin(ImpactMapper.from_orbit(o5), (-3, 5, 10), (-2, 10, 10),
                           max_extensions=1)
-    for b in (ab, ab.basin, ab5):
+    for b in (ab, paper, ab5):
         fig = plot_basin(b)
         assert _assert_no_text_clipped(fig) >= 5
         ax = fig.axes[0]
@@ -490,11 +484,12 @@ def test_attractor_basin_round_trips_through_every_format(tmp_path):
     ab = attractor_basin(ImpactMapper.from_orbit(orb, n_iter=300), (-3, 5, 10), (-2, 10, 9),
                          max_points=20, progress=False)
     ds = ab.to_dataset()
-    assert ds.attractor.dims == ("y1", "x1") and ds.attrs["kind"] == "attractor_basin"
+    assert ds.labels.dims == ("y1", "x1") and ds.attrs["kind"] == "basin"
+    assert list(ds.labels.attrs["flag_values"]) == [a.label for a in ab.attractors]
     for suf in (".nc", ".zarr", ".npz"):
-        r = load_attractor_basin(ab.save(tmp_path / f"b{suf}") or tmp_path / f"b{suf}")
+        r = load_basin(ab.save(tmp_path / f"b{suf}") or tmp_path / f"b{suf}")
         np.testing.assert_array_equal(r.labels, ab.labels)
-        np.testing.assert_array_equal(r.basin.labels, ab.basin.labels)
+        np.testing.assert_array_equal(r.criterion_labels, ab.criterion_labels)
         np.testing.assert_array_equal(r.x1, ab.x1)
         assert [a.name for a in r.attractors] == [a.name for a in ab.attractors]
         assert (r.windows, r.edges) == (ab.windows, ab.edges)

@@ -10,23 +10,36 @@ attractors found so far (a new one is refined by Newton on ``P^k``,
 one of the outcomes :data:`OUTCOMES`: no convergence within the iterations, divergence
 (non-finite, or beyond ``escape``), sticking, the map stopped for another reason
 (``unresolved``, its status kept), a start off the map's domain, or (slices of a section with
-an admissible set) an inadmissible start. Labels ``0, 1, ...`` are the attractors in the order found; outcomes are
-negative.
+an admissible set) an inadmissible start. Labels ``0, 1, ...`` are the attractors in the order
+found; outcomes are negative.
+
+:class:`BasinResult` is the one basin result: of any map, of the impact pair's slice
+``(x1, y1)`` and of a model file's section alike, with the grid's coordinate names, the
+attractors (:class:`Attractor`), optionally the labels of a mapper's criterion against one
+orbit (:data:`~hybridpd.analysis.labels.LABELS`, ``criterion_labels``) and the windows tried.
+It is a :class:`hybridpd._results.Result` (``.nc``/``.zarr`` files, ``to_dict``); files of
+earlier versions (``basin``, ``attractor_basin`` and ``model_basin`` datasets, ``.npz``) read
+back as one.
 """
 from __future__ import annotations
 
+import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
+from pathlib import Path
 
 import numpy as np
 
-from hybridpd._results import compact_repr
+from hybridpd._format import format_percent
+from hybridpd._results import Result, check_suffix, compact_repr, decode_attrs, jsonable
+from hybridpd.analysis.labels import LABELS
 from hybridpd.analysis.maps import PoincareMap, check_returns, detect_period
 from hybridpd.analysis.periodic import find_orbit
 from hybridpd.model import check_axis
 
 __all__ = ["DIVERGED", "INADMISSIBLE_LABEL", "NO_CONVERGENCE", "OFF_SECTION_LABEL", "OUTCOMES",
-           "STICKING", "UNRESOLVED", "Attractor", "BasinResult", "basin_of_attraction"]
+           "STICKING", "UNRESOLVED", "Attractor", "BasinMeasure", "BasinResult",
+           "basin_of_attraction", "from_criterion", "load_basin", "outcome"]
 
 NO_CONVERGENCE = -1
 DIVERGED = -2
@@ -43,6 +56,19 @@ OUTCOMES = {
     UNRESOLVED: ("unresolved", "unresolved flight"),
     OFF_SECTION_LABEL: ("off_section", "off the section"),
     INADMISSIBLE_LABEL: ("inadmissible", "inadmissible (a gap beyond its bounds)")}
+_OUTSIDE = (OFF_SECTION_LABEL, INADMISSIBLE_LABEL)
+
+
+def from_criterion(labels) -> np.ndarray:
+    """Attractor codes of a mapper's labels (:data:`~hybridpd.analysis.labels.LABELS`):
+    ``converged`` is ``0`` (the orbit), label ``j > 0`` the outcome ``-j``.
+
+    Examples
+    --------
+    >>> from_criterion([0, 1, 5]).tolist()
+    [0, -1, -5]
+    """
+    return -np.asarray(labels, np.int64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,76 +78,452 @@ class Attractor:
     Attributes
     ----------
     label : int
+        ``0, 1, ...`` periodic attractors (``0`` the orbit a criterion was taken against),
+        negative: an outcome of :data:`OUTCOMES`.
     name : str
+        In words, e.g. ``"period-2 orbit"``.
     period : int
-        ``k`` (0 for an outcome).
-    points : ndarray, shape (k, dim)
-        Its cycle's points (Newton-refined), the one with the smallest first coordinate
-        first.
-    multipliers : ndarray
-        Of ``DP^k``.
+        Applications of the map per period (0 for an outcome).
+    points : ndarray, shape (period, dim)
+        The cycle's points (Newton-refined where it converged).
+    multipliers : ndarray or None
+        Eigenvalues of the cycle's ``DP^period``.
     spectral_radius : float
-    stable : bool
+        ``nan`` when unknown.
+    stable : bool or None
+        ``None`` when unknown.
+    kind : str
+        ``"periodic"``, ``"symmetric"`` (the impact pair's orbit) or an outcome's kind.
+    walls : tuple
+        Contacts hit in each application of the map (the impact pair's walls), if known.
+    residual : float
+        ``|P^period(s) - s|_inf`` at ``points[0]`` (``nan`` when unknown).
+
+    Examples
+    --------
+    >>> a = Attractor(0, "period-1 orbit", 1, np.zeros((1, 2)), stable=True)
+    >>> Attractor.from_dict(a.to_dict()).name, a.periodic, outcome(-2).name
+    ('period-1 orbit', True, 'diverged')
     """
 
     label: int
     name: str
     period: int = 0
     points: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
-    multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    multipliers: np.ndarray | None = field(default=None, repr=False)
     spectral_radius: float = math.nan
-    stable: bool = False
+    stable: bool | None = None
+    kind: str = "periodic"
+    walls: tuple = ()
+    residual: float = math.nan
     __repr__ = compact_repr
 
     @property
     def periodic(self) -> bool:
         """A periodic orbit (not an outcome)."""
-        return self.period > 0
+        return self.label >= 0
+
+    def to_dict(self) -> dict:
+        """JSON-ready description (complex multipliers as ``[re, im]``)."""
+        return {f.name: jsonable(getattr(self, f.name)) for f in fields(self)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Attractor:
+        """Inverse of :meth:`to_dict` (also reads the dictionaries of earlier versions)."""
+        mult = d.get("multipliers")
+        pts = np.asarray(d.get("points") or [], float)
+        stable = d.get("stable")
+        return cls(int(d["label"]), str(d["name"]), int(d.get("period") or 0),
+                   pts.reshape(len(pts), -1) if pts.size else np.zeros((0, 0)),
+                   _multipliers(mult),
+                   _float(d.get("spectral_radius")), None if stable is None else bool(stable),
+                   d.get("kind") or ("periodic" if int(d["label"]) >= 0
+                                     else OUTCOMES[int(d["label"])][0]),
+                   tuple(tuple(w) for w in d.get("walls") or ()), _float(d.get("residual")))
+
+
+def _float(v) -> float:
+    return math.nan if v is None else float(v)
+
+
+def _multipliers(m) -> np.ndarray | None:
+    # JSON: numbers (real multipliers) or [re, im] pairs (complex); None for NaN
+    if m is None or not any(isinstance(z, (list, tuple)) for z in m):
+        return None if m is None else np.array([_float(z) for z in m])
+    return np.array([complex(_float(z[0]), _float(z[1])) for z in m])
+
+
+def outcome(label: int, n_iter: int | None = None) -> Attractor:
+    """The :class:`Attractor` entry of a negative outcome label (with ``n_iter``, the
+    iterations of "no convergence" are named)."""
+    kind, name = OUTCOMES[int(label)]
+    if label == NO_CONVERGENCE and n_iter is not None:
+        name = f"no convergence in {int(n_iter)} iterations"
+    return Attractor(int(label), name, kind=kind)
+
+
+@dataclass(frozen=True)
+class BasinMeasure:
+    """Size of one attractor's basin on the grid.
+
+    Attributes
+    ----------
+    label : int
+    name : str
+    count : int
+        Grid points with this label.
+    fraction : float
+        ``count`` over the on-section, admissible grid points (for the off-section and
+        inadmissible labels: over all points).
+    area : float
+        ``count`` times the grid cell area (units of ``x`` times ``y``).
+    percent : str
+        ``fraction`` formatted by :func:`hybridpd._format.format_percent`.
+    """
+
+    label: int
+    name: str
+    count: int
+    fraction: float
+    area: float
+    percent: str
 
 
 @dataclass(frozen=True, eq=False)
-class BasinResult:
-    """Labels of a 2-D slice (module docstring).
+class BasinResult(Result):
+    """Labels of a 2-D slice by attractor: the one basin result (module docstring).
 
     Attributes
     ----------
     x, y : ndarray
-        Grid axes (values of the coordinates ``axes``).
+        Grid axes, values of the coordinates ``x_name`` and ``y_name``.
     labels : ndarray of int, shape (len(y), len(x))
+        ``0, 1, ...`` the attractors, negative the outcomes of :data:`OUTCOMES`.
     attractors : tuple of Attractor
         The attractors and the outcomes present.
     iterations : ndarray of int, shape (len(y), len(x))
         Iterations run per point.
-    axes : tuple of str
-        Names of the two coordinates of the grid.
+    x_name, y_name : str
+        The coordinates the grid spans (the impact pair's slice: ``"x1"``, ``"y1"``).
     base : ndarray, shape (dim,)
-        The point whose other coordinates the slice holds.
+        The point whose other coordinates the slice holds (a criterion's fixed point).
+    names : tuple of str
+        Names of the map's coordinates (``base``'s entries, :attr:`PoincareMap.names`).
+    criterion_labels : ndarray of int or None
+        A mapper's labels against the orbit of label 0
+        (:data:`~hybridpd.analysis.labels.LABELS`), when one labelled the grid.
+    windows : tuple of (xmin, xmax, ymin, ymax)
+        Every window labelled (the last is the grid's); empty for a single window.
+    edges : tuple of str
+        Sides (``"x1 min"``, ...) of the final window on which the basin of label 0 lies.
     metadata : dict
+        Parameters, iterations, criterion, model.
+    axis_attrs : dict
+        Attributes (``units``, ``long_name``) of the grid's coordinates in a dataset, by
+        coordinate name.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> b = BasinResult(np.arange(3.0), np.arange(2.0), np.array([[0, 0, -2], [0, -1, -2]]),
+    ...                 (Attractor(0, "period-1 orbit", 1), outcome(-1), outcome(-2)))
+    >>> b.fraction(0), b.measure(-2).percent
+    (0.5, '33.33 %')
+    >>> back = BasinResult.load(b.save(tempfile.mkdtemp() + "/b.nc"))
+    >>> back.labels.tolist(), [a.name for a in back.attractors]
+    ([[0, 0, -2], [0, -1, -2]], ['period-1 orbit', 'no convergence', 'diverged'])
     """
 
-    x: np.ndarray
-    y: np.ndarray
-    labels: np.ndarray
-    attractors: tuple
-    iterations: np.ndarray = field(repr=False)
-    axes: tuple = ()
+    kind = "basin"
+    x: np.ndarray = field(metadata={"coord": "@x_name"})
+    y: np.ndarray = field(metadata={"coord": "@y_name"})
+    labels: np.ndarray = field(metadata={"dims": ("@y_name", "@x_name"),
+                                         "long_name": "attractor reached"})
+    attractors: tuple = ()
+    iterations: np.ndarray | None = field(
+        default=None, repr=False, metadata={"dims": ("@y_name", "@x_name"),
+                                            "long_name": "iterations of the map run"})
+    x_name: str = "x"
+    y_name: str = "y"
     base: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    names: tuple = ()
+    criterion_labels: np.ndarray | None = field(
+        default=None, repr=False, metadata={"dims": ("@y_name", "@x_name"),
+                                            "long_name": "label against the orbit"})
+    windows: tuple = ()
+    edges: tuple = ()
     metadata: dict = field(default_factory=dict, repr=False)
+    axis_attrs: dict = field(default_factory=dict, repr=False)
     __repr__ = compact_repr
 
-    def fraction(self, label: int) -> float:
-        """Share of the grid with ``label``."""
-        return float(np.mean(self.labels == label))
+    def __post_init__(self):
+        put = lambda k, v: object.__setattr__(self, k, v)
+        put("x", np.asarray(self.x, float))
+        put("y", np.asarray(self.y, float))
+        put("labels", np.asarray(self.labels, np.int64))
+        if self.iterations is None:
+            put("iterations", np.zeros(self.labels.shape, np.int64))
+        put("iterations", np.asarray(self.iterations, np.int64))
+        if self.criterion_labels is not None:
+            put("criterion_labels", np.asarray(self.criterion_labels, np.int64))
+        put("attractors", tuple(a if isinstance(a, Attractor) else Attractor.from_dict(a)
+                                for a in self.attractors))
+        put("base", np.asarray(self.base, float).ravel())
+        put("names", tuple(str(c) for c in self.names))
+        put("windows", tuple(tuple(float(v) for v in w) for w in self.windows))
+        put("edges", tuple(self.edges))
+        put("metadata", dict(self.metadata or {}))
+        put("axis_attrs", dict(self.axis_attrs or {}))
 
+    def __getattr__(self, name):
+        # a grid axis by its coordinate's name (the pair's slice: b.x1, b.y1)
+        if not name.startswith("_"):
+            d = self.__dict__
+            if d.get("x_name") == name:
+                return d["x"]
+            if d.get("y_name") == name:
+                return d["y"]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+    # ---- the slice --------------------------------------------------------------------
+    @property
+    def axes(self) -> tuple:
+        """``(x_name, y_name)``."""
+        return (self.x_name, self.y_name)
+
+    @property
+    def fixed_point(self) -> np.ndarray:
+        """:attr:`base`: the orbit of label 0's section point, when a criterion was used."""
+        return self.base
+
+    @property
+    def window(self) -> tuple:
+        """``(xmin, xmax, ymin, ymax)`` of the grid."""
+        return (float(self.x[0]), float(self.x[-1]), float(self.y[0]), float(self.y[-1]))
+
+    @property
+    def reaches_edge(self) -> bool:
+        """The basin of label 0 touches the final window's edge (its measure is a lower
+        bound on a larger window)."""
+        return bool(self.edges)
+
+    @property
+    def source(self) -> str:
+        """The model file (``metadata["model"]``; empty for other maps)."""
+        return str(self.metadata.get("model", ""))
+
+    # ---- measures ---------------------------------------------------------------------
     def attractor(self, label: int) -> Attractor:
         """The attractor (or outcome) with ``label``."""
         for a in self.attractors:
             if a.label == label:
                 return a
-        raise ValueError(f"no attractor with label {label}; labels are "
-                         f"{[a.label for a in self.attractors]}")
+        raise ValueError(f"label must be one of {[a.label for a in self.attractors]}, "
+                         f"got {label!r}")
+
+    def _whole(self, label: int) -> int:
+        if label in _OUTSIDE:
+            return int(self.labels.size)
+        return int(np.isin(self.labels, _OUTSIDE, invert=True).sum())
+
+    def fraction(self, label: int) -> float:
+        """Share of the on-section, admissible grid with ``label`` (of the whole grid for
+        the off-section and inadmissible labels)."""
+        whole = self._whole(int(label))
+        return float((self.labels == label).sum() / whole) if whole else 0.0
+
+    @property
+    def converged_fraction(self) -> float:
+        """:meth:`fraction` of label 0."""
+        return self.fraction(0)
+
+    def _cell(self) -> float:
+        dx = (self.x[-1] - self.x[0]) / max(len(self.x) - 1, 1)
+        dy = (self.y[-1] - self.y[0]) / max(len(self.y) - 1, 1)
+        return float(dx * dy)
+
+    def area(self, label=0) -> float:
+        """Area (units of ``x`` times ``y``) of the cells with ``label`` (an attractor code,
+        or a name of :data:`~hybridpd.analysis.labels.LABELS`)."""
+        if isinstance(label, str):
+            label = -LABELS.index(label)
+        return float((self.labels == label).sum() * self._cell())
+
+    def measure(self, label: int) -> BasinMeasure:
+        """Count, fraction, area and formatted percentage of the basin of ``label``."""
+        a = self.attractor(label)
+        n, whole = int((self.labels == label).sum()), self._whole(label)
+        pct = format_percent(n, whole) if whole else "0 %"
+        return BasinMeasure(label, a.name, n, n / whole if whole else 0.0, n * self._cell(), pct)
+
+    def measures(self) -> list:
+        """:meth:`measure` of every entry of :attr:`attractors`."""
+        return [self.measure(a.label) for a in self.attractors]
+
+    def summary(self) -> list:
+        """Lines in words: window, edge flag, then one line per attractor."""
+        x0, x1, y0, y1 = self.window
+        head = f"{Path(self.source).name}: slice" if self.source else "window"
+        tried = f", {len(self.windows)} window(s) tried" if self.windows else ""
+        lines = [(f"{head} {self.x_name} in [{x0:g}, {x1:g}], {self.y_name} in "
+                  f"[{y0:g}, {y1:g}] ({len(self.x)} x {len(self.y)} points{tried})")]
+        if self.reaches_edge:
+            lines.append("the basin of label 0 reaches the window edge ("
+                         + ", ".join(self.edges) + "): its measure is a lower bound")
+        for a, m in zip(self.attractors, self.measures()):
+            extra = ""
+            if a.periodic and np.isfinite(a.spectral_radius):
+                stab = "stable" if a.stable else ("unstable" if a.stable is False else "?")
+                extra = f"; {stab}, spectral radius {a.spectral_radius:.4g}"
+            if a.label == INADMISSIBLE_LABEL:
+                extra = f" ({m.count} points, not iterated)"
+            where = "window" if a.label in _OUTSIDE else "on-section grid"
+            lines.append(f"{m.name}: {m.percent} of the {where}, area {m.area:.4g}{extra}")
+        return lines
+
+    # ---- files ------------------------------------------------------------------------
+    def to_dict(self) -> dict:
+        """JSON-ready description: every field, each attractor with its measure."""
+        d = super().to_dict()
+        d["attractors"] = [dict(a.to_dict(), count=m.count, fraction=m.fraction, area=m.area,
+                                percent=m.percent)
+                           for a, m in zip(self.attractors, self.measures())]
+        d.update(window=list(self.window), reaches_edge=self.reaches_edge,
+                 converged_fraction=self.converged_fraction)
+        return d
+
+    def to_dataset(self):
+        """An :class:`xarray.Dataset` with dimensions ``(y_name, x_name)``; ``labels`` carries
+        CF ``flag_values``/``flag_meanings`` naming the attractors, e.g.
+        ``(b.to_dataset().labels == 0).plot()`` draws the basin of label 0."""
+        ds = super().to_dataset()
+        ds.attrs["attractors"] = "json:" + json.dumps([a.to_dict() for a in self.attractors])
+        ds["labels"].attrs.update(flag_values=[a.label for a in self.attractors],
+                                  flag_meanings=" ".join(a.name.replace(" ", "_")
+                                                         for a in self.attractors))
+        for n in self.axes:
+            ds[n].attrs.update(self.axis_attrs.get(n, {}))
+        if self.criterion_labels is not None:
+            ds["criterion_labels"].attrs.update(flag_values=list(range(len(LABELS))),
+                                                flag_meanings=" ".join(LABELS))
+        return ds
+
+    @classmethod
+    def from_dataset(cls, ds) -> BasinResult:
+        """Inverse of :meth:`to_dataset`; datasets of earlier versions (kinds ``basin``,
+        ``attractor_basin``, ``model_basin``) read too."""
+        a = decode_attrs(ds.attrs)
+        kind = a.get("kind")
+        if kind == "basin" and "attractors" in a:
+            return super().from_dataset(ds)
+        if kind not in ("basin", "attractor_basin", "model_basin"):
+            raise ValueError(f"the dataset does not hold a basin (it holds a {kind!r}: "
+                             "attribute kind)")
+        return _from_old(kind, a, {k: ds[k].values for k in ds.variables})
+
+    def save(self, path) -> Path:
+        """Write to ``.nc`` or ``.zarr`` (:meth:`to_dataset`), or ``.npz``, by suffix."""
+        if check_suffix(path) != ".npz":
+            return super().save(path)
+        return _save_npz(self, Path(path))
+
+    @classmethod
+    def load(cls, path) -> BasinResult:
+        """Read a basin written by :meth:`save` (or by earlier versions)."""
+        if check_suffix(path) != ".npz":
+            return super().load(path)
+        with np.load(Path(path), allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files if k != _META}
+            meta = json.loads(str(z[_META][()])) if _META in z.files else {}
+        kind = meta.pop("kind", None)
+        if kind == "basin" and "attractors" in meta:
+            return cls(**{k: v for k, v in arrays.items()}, **meta)
+        if kind not in ("basin", "attractor_basin"):
+            raise ValueError(f"{path} does not hold a basin (it holds a {kind!r})")
+        return _from_old(kind, meta, arrays)
 
 
+_META = "__metadata__"
+_PAIR_COORDS = ("phi", "z1", "z2", "z4")
+
+
+def _save_npz(b: BasinResult, path: Path) -> Path:
+    arrays = {f.name: getattr(b, f.name) for f in fields(b)
+              if ("dims" in f.metadata or "coord" in f.metadata) and getattr(b, f.name) is not None}
+    meta = {f.name: jsonable(getattr(b, f.name)) for f in fields(b) if f.name not in arrays}
+    meta["attractors"] = [a.to_dict() for a in b.attractors]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp.npz")
+    np.savez(tmp, **arrays, **{_META: np.array(json.dumps(dict(meta, kind=b.kind)))})
+    tmp.replace(path)
+    return path
+
+
+def _from_old(kind: str, a: dict, v: dict) -> BasinResult:
+    """A basin of an earlier version's file: attributes (or ``.npz`` metadata) ``a`` and
+    arrays ``v``."""
+    if kind == "model_basin":
+        xn, yn = a["x_name"], a["y_name"]
+        return BasinResult(v[xn], v[yn], v["attractor"], a["attractors"], v["iterations"],
+                           xn, yn, a["fixed_point"], a["section_coordinates"],
+                           v["criterion_label"], metadata=dict(a.get("metadata") or {},
+                                                               model=a["model"]))
+    x, y = v.get("x1"), v.get("y1")
+    fp = a.get("fixed_point", v.get("fixed_point"))
+    if kind == "basin":
+        crit = np.asarray(v["labels"], np.int64)
+        lab = from_criterion(crit)
+        meta = {k: w for k, w in a.items() if k not in ("fixed_point", "converged_fraction",
+                                                        "fixed_point_coordinates",
+                                                        "label_names")}
+        sym = Attractor(0, "converged to the symmetric orbit", 1,
+                        np.asarray(fp, float).reshape(1, -1), kind="symmetric")
+        atts = (sym,) + tuple(outcome(k, meta.get("n_iter")) for k in sorted(OUTCOMES)[::-1]
+                              if np.any(lab == k))
+        return BasinResult(x, y, lab, atts, v["iterations"], "x1", "y1", fp, _PAIR_COORDS,
+                           crit, metadata=meta)
+    crit = v["criterion_label"] if "criterion_label" in v else v["criterion_labels"]
+    lab = v["attractor"] if "attractor" in v else v["labels"]
+    skip = ("attractors", "windows", "edges", "fixed_point", "converged_fraction",
+            "basin_metadata", "metadata", "kind")
+    meta = dict(a.get("basin_metadata") or {}, **(a.get("metadata") or {}),
+                **{k: w for k, w in a.items() if k not in skip})
+    return BasinResult(x, y, lab, a["attractors"], v["iterations"], "x1", "y1", fp,
+                       _PAIR_COORDS, crit, a.get("windows", ()), a.get("edges", ()), meta)
+
+
+def load_basin(path) -> BasinResult:
+    """Read a :class:`BasinResult` written by :meth:`BasinResult.save`.
+
+    Parameters
+    ----------
+    path : str or path
+        A ``.nc``, ``.zarr`` or ``.npz`` file; files of earlier versions (the pair's basins,
+        attractor basins and model basins) read too.
+
+    Returns
+    -------
+    BasinResult
+
+    Raises
+    ------
+    ValueError
+        If the suffix is unknown or the file holds something else.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> b = BasinResult(np.arange(2.0), np.arange(2.0), np.zeros((2, 2), int),
+    ...                 (Attractor(0, "period-1 orbit", 1),))
+    >>> load_basin(b.save(os.path.join(tempfile.mkdtemp(), "b.npz"))).labels.tolist()
+    [[0, 0], [0, 0]]
+    """
+    return BasinResult.load(path)
+
+
+# ----------------------------------------------------------------------------------------
+# the catalogue of cycles and the generic basin
+# ----------------------------------------------------------------------------------------
 class _Catalogue:
     """The attractors found so far, matched by their cycle points."""
 
@@ -251,9 +653,11 @@ def basin_of_attraction(P: PoincareMap, x, y, *, axes=None, base=None, period: i
             lab[i] = cat.label(tails[i])
     stops = sorted({status[i] for i in range(len(S)) if lab[i] == UNRESOLVED})
     outcomes = tuple(Attractor(c, OUTCOMES[c][1] + (f" ({', '.join(stops)})"
-                                                    if c == UNRESOLVED else ""))
+                                                    if c == UNRESOLVED else ""),
+                               kind=OUTCOMES[c][0])
                      for c in sorted(OUTCOMES, reverse=True) if np.any(lab == c))
     shape = (len(ys), len(xs))
     meta = {"n_iter": n_iter, "period": k, "max_period": max_period, "tol": float(tol)}
     return BasinResult(xs, ys, lab.reshape(shape), tuple(cat.found) + outcomes,
-                       its.reshape(shape), names, base, meta)
+                       its.reshape(shape), names[0], names[1], base, tuple(P.names),
+                       metadata=meta)

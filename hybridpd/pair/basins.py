@@ -47,15 +47,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from hybridpd._deprecated import moved_names
+from hybridpd.analysis import basins as _basins
 from hybridpd.analysis.certify import BasinMapper, certify_ball
-from hybridpd.analysis.labels import LABELS, OFF_SECTION
+from hybridpd.analysis.labels import OFF_SECTION
 from hybridpd.model import check_array, check_axis
 from hybridpd.pair.batch import impact_map, map_labels
 from hybridpd.pair.impactmap import ImpactMap
-from hybridpd.sweeps.basin_result import BasinResult, load_basin
+from hybridpd.sweeps.labelled import axis_attrs
 
-__all__ = ["LABELS", "BasinResult", "ImpactMapper", "basin_of_attraction", "load_basin",
-           "section_grid"]
+__all__ = ["ImpactMapper", "basin_of_attraction", "section_grid"]
+
+#: The coordinates of the pair's section (CONVENTIONS.md).
+COORDINATES = ("phi", "z1", "z2", "z4")
 
 
 class ImpactMapper(BasinMapper):
@@ -170,7 +173,7 @@ def section_grid(fixed_point, L, x1, y1) -> np.ndarray:
 
 
 def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chunk_size=None,
-                        store=None, progress=True, max_workers=None) -> BasinResult:
+                        store=None, progress=True, max_workers=None) -> _basins.BasinResult:
     """Label a grid of the paper's slice ``(x1, y1)``, ``y2 = y2*``, ``phi = phi*``.
 
     Parameters
@@ -186,7 +189,8 @@ def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chun
     Returns
     -------
     BasinResult
-        Labels of shape ``(len(y1), len(x1))``.
+        Attractor labels of shape ``(len(y1), len(x1))`` (``0`` converged, negative
+        outcomes), the criterion's labels (:data:`LABELS`) as ``criterion_labels``.
 
     Raises
     ------
@@ -211,9 +215,9 @@ def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chun
     return _basin_result(mapper, xs, ys, out["label"], out["iterations"])
 
 
-def _basin_result(mapper, xs, ys, lab, its) -> BasinResult:
-    on = lab != OFF_SECTION
-    frac = float((lab[on] == 0).mean()) if np.any(on) else 0.0
+def _basin_result(mapper, xs, ys, crit, its, attractors=None, labels=None, **kw):
+    """The pair's slice as a :class:`~hybridpd.analysis.basins.BasinResult`: the criterion's
+    labels ``crit``, attractor ``labels`` (default: read off ``crit``)."""
     m = mapper.map
     meta = {
         "case": m.case.value, "kp": m.gains.kp, "kv": m.gains.kv, "mu": m.pair.mu,
@@ -221,7 +225,17 @@ def _basin_result(mapper, xs, ys, lab, its) -> BasinResult:
         "xm": m.reference.xm, "n_iter": mapper.n_iter, "criterion": mapper.criterion,
         "certified_radius": mapper.certified_radius}
     meta.update(mapper.conventions)
-    return BasinResult(xs, ys, lab, its, mapper.fixed_point.copy(), frac, meta)
+    lab = _basins.from_criterion(crit) if labels is None else labels
+    if attractors is None:
+        sym = _basins.Attractor(0, "converged to the symmetric orbit", 1,
+                                mapper.fixed_point.reshape(1, 4), kind="symmetric")
+        attractors = (sym,) + tuple(_basins.outcome(k, mapper.n_iter)
+                                    for k in sorted(_basins.OUTCOMES, reverse=True)
+                                    if np.any(lab == k))
+    return _basins.BasinResult(xs, ys, lab, attractors, its, "x1", "y1",
+                               mapper.fixed_point.copy(), COORDINATES, crit,
+                               metadata=dict(meta, **kw.pop("metadata", {})),
+                               axis_attrs={n: axis_attrs(n) for n in ("x1", "y1")}, **kw)
 
 
 def _label_grid(mapper: ImpactMapper, xs, ys, tail: int, *, executor="serial", chunk_size=None,
@@ -314,6 +328,9 @@ def _tails(params, c, final, which, n, mapper: _MapperSpec) -> np.ndarray:
 
 
 __getattr__ = moved_names(__name__, {
-    name: "hybridpd.pair.attractor_basins"
-    for name in ("AttractorBasin", "BasinMeasure", "attractor_basin", "format_percent",
-                 "load_attractor_basin")})
+    "attractor_basin": "hybridpd.pair.attractor_basins",
+    "AttractorBasin": "hybridpd.analysis.basins:BasinResult",
+    "BasinMeasure": "hybridpd.analysis.basins", "format_percent": "hybridpd._format",
+    "load_attractor_basin": "hybridpd.analysis.basins:load_basin",
+    "BasinResult": "hybridpd.analysis.basins", "load_basin": "hybridpd.analysis.basins",
+    "LABELS": "hybridpd.analysis.labels"})

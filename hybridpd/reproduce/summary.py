@@ -158,18 +158,18 @@ def _orbit_row(o) -> dict:
 
 def _run_dict(r) -> dict:
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.basins import LABELS
+    from hybridpd.analysis.labels import LABELS
 
     basins = []
     for (case, e), b in r.basins.items():
         o = r.orbits[(case, e)]
         row = {"case": case, "e": e, "measured": b is not None,
-               "converged_fraction": 0.0 if b is None else b.basin.converged_fraction,
+               "converged_fraction": 0.0 if b is None else b.converged_fraction,
                "window": None if b is None else [float(v) for v in b.window],
                "why_empty": None if b is not None else (
                    o.reason if not o.exists else "orbit unstable")}
         if b is not None:
-            cnt = np.bincount(b.basin.labels.ravel(), minlength=len(LABELS))
+            cnt = np.bincount(b.criterion_labels.ravel(), minlength=len(LABELS))
             row["label_counts"] = {n: int(c) for n, c in zip(LABELS, cnt)}
             row["converged_area"] = b.measure(0).area
             row["reaches_edge"] = b.reaches_edge
