@@ -45,8 +45,9 @@ def one_error_line(capsys):
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     """One small file of every kind hybridpd writes (in every format it writes it in)."""
+    from hybridpd.analysis.basins import basin_of_attraction
     from hybridpd.pair.attractor_basins import attractor_basin
-    from hybridpd.pair.basins import ImpactMapper, basin_of_attraction
+    from hybridpd.pair.basins import ImpactMapper
     from hybridpd.pair.bifdiagram import bifurcation_diagram
     from hybridpd.pair.continuation import continue_symmetric
     from hybridpd.pair.orbits import symmetric_orbit
@@ -61,7 +62,7 @@ def files(tmp_path_factory):
     pair = ImpactPair(0.1, 0.5, 0.75)
     orb = symmetric_orbit(pair, PDGains(10, 20), 5.0, x10=1.0)
     mapper = ImpactMapper.from_orbit(orb, n_iter=100)
-    b = basin_of_attraction(mapper, (-3, 5, 6), (-2, 10, 5), progress=False)
+    b = basin_of_attraction(mapper.map, (-3, 5, 6), (-2, 10, 5), criterion=mapper, max_period=0)
     for suf in (".nc", ".zarr", ".npz"):
         b.save(d / f"basin{suf}")
         out[f"basin{suf}"] = d / f"basin{suf}"

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.basins import load_basin
-from hybridpd.pair.basins import ImpactMapper, basin_of_attraction
+from hybridpd.analysis.basins import basin_of_attraction, load_basin
+from hybridpd.pair.basins import ImpactMapper
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.pair.regions import load_region_map, region_map
@@ -36,7 +36,7 @@ def rm():
 def basin():
     orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     m = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
-    return basin_of_attraction(m, (-3, 5, 6), (-2, 10, 5), progress=False)
+    return basin_of_attraction(m.map, (-3, 5, 6), (-2, 10, 5), criterion=m, max_period=0)
 
 
 def assert_close_or_equal(actual, desired, err_msg):
@@ -116,7 +116,7 @@ def test_basin_round_trips_by_suffix(basin, tmp_path, suffix):
     assert ds.labels.dims == ("y1", "x1") and ds.x1.attrs["units"] == "length"
     assert ds.y1.attrs["units"] == "length/time"
     assert ds.criterion_labels.attrs["flag_meanings"].split()[0] == "converged"
-    assert ds.labels.attrs["flag_meanings"].split()[0] == "converged_to_the_symmetric_orbit"
+    assert ds.labels.attrs["flag_meanings"].split()[0] == "symmetric_orbit_(period_1)"
     meta = decode_attrs(ds.attrs)["metadata"]
     assert meta["kp"] == 10.0 and meta["case"] == "collocated"
     np.testing.assert_array_equal(ds.labels.sel(x1=basin.x1[2]).values, basin.labels[:, 2])
@@ -153,7 +153,7 @@ def test_files_of_earlier_versions_stay_readable():
     assert_same_map(old, new, exact=False)
     orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     m = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
-    new_b = basin_of_attraction(m, (-3, 5, 5), (-2, 10, 4), progress=False)
+    new_b = basin_of_attraction(m.map, (-3, 5, 5), (-2, 10, 4), criterion=m, max_period=0)
     old_b = load_basin(DATA / "basin_v0.npz")
     np.testing.assert_array_equal(old_b.labels, new_b.labels)
     np.testing.assert_array_equal(old_b.criterion_labels, new_b.criterion_labels)
@@ -198,8 +198,8 @@ def test_basin_files_of_earlier_versions_read_as_the_one_basin_result():
             assert a.walls == b.walls and a.stable == b.stable
         assert old.metadata["kp"] == 10.0 and old.metadata["gamma"] == 0.75
     orb5 = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
-    pb = basin_of_attraction(ImpactMapper.from_orbit(orb5, n_iter=100), (-3, 5, 5),
-                             (-2, 10, 4), progress=False)
+    m5 = ImpactMapper.from_orbit(orb5, n_iter=100)
+    pb = basin_of_attraction(m5.map, (-3, 5, 5), (-2, 10, 4), criterion=m5, max_period=0)
     old = load_basin(DATA / "basin_v02.nc")
     np.testing.assert_array_equal(old.labels, pb.labels)
     np.testing.assert_array_equal(old.criterion_labels, pb.criterion_labels)

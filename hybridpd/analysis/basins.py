@@ -524,19 +524,77 @@ def load_basin(path) -> BasinResult:
 # ----------------------------------------------------------------------------------------
 # the catalogue of cycles and the generic basin
 # ----------------------------------------------------------------------------------------
-class _Catalogue:
-    """The attractors found so far, matched by their cycle points."""
+class Catalogue:
+    """The periodic attractors found in the tails of trajectories, with integer labels.
 
-    def __init__(self, P, k, tol, max_period):
-        self.P, self.k, self.tol, self.max_period = P, k, tol, max_period
-        self.found = []
+    The one catalogue interface of basins: :attr:`attractors`, :attr:`tail_length` and
+    :meth:`assign`. A tail (the last iterates of one trajectory) is periodic of period ``p <=
+    max_period`` (:func:`~hybridpd.analysis.maps.detect_period`); its cycle is matched against
+    the attractors found so far (to ``1e3 tol`` relative), else refined by Newton on ``P^p``
+    (:func:`~hybridpd.analysis.periodic.find_orbit`) and added. A map with its own metric
+    (the impact pair's criterion: :class:`hybridpd.pair.attractors.CycleCatalog`) supplies its
+    own catalogue with this interface.
 
-    def label(self, tail) -> int:
+    Parameters
+    ----------
+    P : PoincareMap
+    period : int
+        ``k``: the tails are iterates of ``P^k``.
+    max_period : int
+        Largest period searched (in applications of ``P^k``).
+    tol : float
+        Relative tolerance of the period test.
+    orbit : array_like, shape (dim,), optional
+        A point of a known orbit, label 0 (a criterion's fixed point).
+
+    Examples
+    --------
+    >>> import hybridpd as hp
+    >>> class Logistic(hp.PoincareMap):
+    ...     names = ("x",)
+    ...     def apply(self, s, k=1, jacobian=False):
+    ...         x = np.asarray(s, float)
+    ...         for _ in range(k):
+    ...             x = 3.2 * x * (1 - x)
+    ...         return hp.MapResult(x)
+    >>> P = Logistic()
+    >>> cat = Catalogue(P, max_period=4)
+    >>> cat.assign(P.iterate([0.3], 300)[None, -cat.tail_length:]).tolist()
+    [0]
+    >>> cat.attractors[0].name, cat.attractors[0].period
+    ('period-2 orbit (stable)', 2)
+    """
+
+    def __init__(self, P: PoincareMap, *, period: int = 1, max_period: int = 8,
+                 tol: float = 1e-6, orbit=None):
+        self.P, self.k = P, check_returns(period)
+        self.max_period, self.tol = int(max_period), float(tol)
+        self.attractors: list = []
+        if orbit is not None:
+            s = P.check_point(orbit)
+            self.attractors.append(Attractor(0, f"period-{self.k} orbit", 1, s.reshape(1, -1)))
+
+    @property
+    def tail_length(self) -> int:
+        """Iterates per tail that show ``max_period`` twice: ``2 max_period + 1``."""
+        return 2 * self.max_period + 1
+
+    def assign(self, tails) -> np.ndarray:
+        """Labels of tails of shape ``(M, K, dim)``: an attractor's, or ``NO_CONVERGENCE``
+        (new cycles are added to :attr:`attractors`)."""
+        tails = np.asarray(tails, float)
+        lab = np.full(len(tails), NO_CONVERGENCE, np.int64)
+        for i, tail in enumerate(tails):
+            if np.all(np.isfinite(tail)):
+                lab[i] = self._label(tail)
+        return lab
+
+    def _label(self, tail) -> int:
         p = detect_period(tail, self.P.wrap, self.max_period, self.tol)
         if not p:
-            return -1
+            return NO_CONVERGENCE
         cycle = tail[-p:]
-        for a in self.found:
+        for a in self.attractors:
             if a.period == p and self._on(cycle[-1], a.points):
                 return a.label
         return self._add(cycle, p)
@@ -549,11 +607,11 @@ class _Catalogue:
         po = find_orbit(self.P, cycle[-1], p * self.k, max_iter=30)
         pts = cycle if not po.converged else self.P.iterate(po.s, p - 1, self.k)
         pts = pts[np.argsort(pts[:, 0])]
-        label = len(self.found)
+        label = len(self.attractors)
         stab = "stable" if po.converged and po.stable else "unstable"
         name = f"period-{p} orbit ({stab})" if po.converged else f"period-{p} cycle"
-        self.found.append(Attractor(label, name, p, pts, po.multipliers,
-                                    po.spectral_radius, bool(po.converged and po.stable)))
+        self.attractors.append(Attractor(label, name, p, pts, po.multipliers,
+                                         po.spectral_radius, bool(po.converged and po.stable)))
         return label
 
 
@@ -590,8 +648,24 @@ def _grid(P, x, y, axes, base):
 
 def basin_of_attraction(P: PoincareMap, x, y, *, axes=None, base=None, period: int = 1,
                         n_iter: int = 500, max_period: int = 8, tol: float = 1e-6,
-                        escape: float = 1e6) -> BasinResult:
+                        escape: float = 1e6, criterion=None, catalogue=None,
+                        **options) -> BasinResult:
     """Label a 2-D slice of a map's section by the attractor each point reaches.
+
+    Without ``criterion`` every point is iterated ``n_iter`` times
+    (:meth:`~hybridpd.analysis.maps.PoincareMap.iterate_many`, which a map may compile) and
+    its tail is labelled by the :class:`Catalogue`. With a ``criterion`` (a basin mapper, e.g.
+    :class:`~hybridpd.analysis.periodic.SectionMapper` or the impact pair's
+    :class:`~hybridpd.pair.basins.ImpactMapper`: ``labels(S)``, ``fixed_point``, ``n_iter``)
+    the points are first labelled against its orbit (label 0: the criterion holds after its
+    iterations; the others its outcomes, :func:`from_criterion`), and only the points that did
+    not converge are examined for other attractors (``max_period = 0``: not at all). The
+    criterion's hooks, where it has them, supply the speed and what only its map has:
+    ``slice(x, y, axes)`` (the slice's section points, coordinate names and units, e.g. the
+    pair's ``(x1, y1)``), ``label_tails(S, tail, **options)`` (labels, iterations and the tails
+    of the unconverged points in one compiled sweep; ``options`` are its executor, store and
+    progress), ``catalogue(max_period)`` (the attractor catalogue of its metric) and
+    ``basin_metadata()``.
 
     Parameters
     ----------
@@ -599,19 +673,28 @@ def basin_of_attraction(P: PoincareMap, x, y, *, axes=None, base=None, period: i
     x, y : (min, max, num)
         The grid of the two coordinates ``axes``.
     axes : (str or int, str or int), optional
-        The coordinates the grid spans (default the first two).
+        The coordinates the grid spans (default the first two, or the criterion's slice).
     base : array_like, shape (dim,), optional
-        The other coordinates (required when the map has more than two).
+        The other coordinates (required when the map has more than two; with a criterion,
+        its fixed point).
     period : int
-        ``k``: iterate ``P^k``.
+        ``k``: iterate ``P^k`` (without a criterion).
     n_iter : int
-        Iterations per point.
+        Iterations per point (without a criterion; a criterion has its own).
     max_period : int
-        Largest period of an attractor (in applications of ``P^k``).
+        Largest period of an attractor (in applications of ``P^k``); 0: no search beyond the
+        criterion's orbit.
     tol : float
         Relative tolerance of the period test.
     escape : float
         Bound on the coordinates (the phase excepted): diverged beyond.
+    criterion : basin mapper, optional
+        Labels the points against one orbit first (see above).
+    catalogue : Catalogue, optional
+        The attractors found so far (shared between calls, e.g. over growing windows).
+    **options
+        Passed to the criterion's ``label_tails`` hook (e.g. ``executor``, ``chunk_size``,
+        ``store``, ``progress``, ``max_workers`` of :func:`hybridpd.sweeps.sweep.run_sweep`).
 
     Returns
     -------
@@ -630,17 +713,31 @@ def basin_of_attraction(P: PoincareMap, x, y, *, axes=None, base=None, period: i
     >>> b.labels.tolist(), b.attractors[0].name
     ([[0, 0, 0, 0, 0], [0, 0, 0, 0, 0], [0, 0, 0, 0, 0]], 'period-1 orbit (stable)')
     """
+    if criterion is None and not isinstance(P, PoincareMap) and hasattr(P, "labels"):
+        # the call form of earlier versions: basin_of_attraction(mapper, x1, y1)
+        criterion, P = P, getattr(P, "map", None)
     if not isinstance(P, PoincareMap):
         raise ValueError(f"P must be a PoincareMap, got {type(P).__name__}")
+    max_period = int(max_period)
+    if criterion is not None:
+        if not (callable(getattr(criterion, "labels", None)) and hasattr(criterion, "n_iter")
+                and hasattr(criterion, "fixed_point")):
+            raise ValueError(f"criterion must be a basin mapper (labels(S), fixed_point, "
+                             f"n_iter), got {type(criterion).__name__}")
+        if max_period < 0:
+            raise ValueError(f"max_period must be >= 0, got {max_period}")
+        return _criterion_basin(P, criterion, x, y, axes, max_period, tol, catalogue, options)
+    if options:
+        raise ValueError(f"{', '.join(sorted(options))}: options of a criterion's labeller; "
+                         "give criterion=")
     k = check_returns(period)
-    n_iter, max_period = int(n_iter), int(max_period)
+    n_iter = int(n_iter)
     if n_iter < 4 * max_period or max_period < 1:
         raise ValueError(f"n_iter must be >= 4 max_period (got {n_iter}, {max_period})")
     xs, ys, S, names, base = _grid(P, x, y, axes, base)
-    tail = 2 * max_period + 1
-    tails, status, its = P.iterate_many(S, n_iter, k, tail)
-    cat = _Catalogue(P, k, tol, max_period)
-    lab = np.full(len(S), -1, np.int64)
+    cat = catalogue or Catalogue(P, period=k, max_period=max_period, tol=tol)
+    tails, status, its = P.iterate_many(S, n_iter, k, cat.tail_length)
+    lab = np.full(len(S), NO_CONVERGENCE, np.int64)
     off = 1 if P.period is not None else 0
     for i in range(len(S)):
         st = status[i]
@@ -650,7 +747,7 @@ def basin_of_attraction(P: PoincareMap, x, y, *, axes=None, base=None, period: i
         elif np.any(np.abs(tails[i][:, off:]) > escape):
             lab[i] = DIVERGED
         else:
-            lab[i] = cat.label(tails[i])
+            lab[i] = cat.assign(tails[i][None])[0]
     stops = sorted({status[i] for i in range(len(S)) if lab[i] == UNRESOLVED})
     outcomes = tuple(Attractor(c, OUTCOMES[c][1] + (f" ({', '.join(stops)})"
                                                     if c == UNRESOLVED else ""),
@@ -658,6 +755,59 @@ def basin_of_attraction(P: PoincareMap, x, y, *, axes=None, base=None, period: i
                      for c in sorted(OUTCOMES, reverse=True) if np.any(lab == c))
     shape = (len(ys), len(xs))
     meta = {"n_iter": n_iter, "period": k, "max_period": max_period, "tol": float(tol)}
-    return BasinResult(xs, ys, lab.reshape(shape), tuple(cat.found) + outcomes,
+    return BasinResult(xs, ys, lab.reshape(shape), tuple(cat.attractors) + outcomes,
                        its.reshape(shape), names[0], names[1], base, tuple(P.names),
                        metadata=meta)
+
+
+def _criterion_basin(P, crit, x, y, axes, max_period, tol, catalogue, options):
+    """:func:`basin_of_attraction` with a criterion's labels first (its docstring)."""
+    hook = getattr(crit, "slice", None)
+    if hook is not None:
+        xs, ys, S, names, units = hook(x, y, axes)
+    else:
+        xs, ys, S, names, _ = _grid(P, x, y, axes, crit.fixed_point)
+        units = {}
+    cat = catalogue
+    if cat is None:
+        make = getattr(crit, "catalogue", None)
+        cat = make(max_period) if make is not None else Catalogue(
+            P, period=getattr(crit, "period", 1), max_period=max_period, tol=tol,
+            orbit=crit.fixed_point)
+    tail = cat.tail_length if max_period else 0
+    hook = getattr(crit, "label_tails", None)
+    out = hook(S, tail, **options) if hook is not None else _label_tails(P, crit, S, tail,
+                                                                         options)
+    shape = (len(ys), len(xs))
+    crit_lab = np.asarray(out["label"], np.int64).reshape(shape)
+    lab = from_criterion(crit_lab)
+    if tail:
+        nc = crit_lab == 1
+        lab[nc] = cat.assign(np.asarray(out["tail"]).reshape(shape + (tail + 1, -1))[nc])
+    present = set(np.unique(lab).tolist())
+    entries = [a for a in cat.attractors if a.label == 0 or a.label in present]
+    entries += [outcome(c, crit.n_iter) for c in sorted(OUTCOMES, reverse=True) if c in present]
+    meta = {"n_iter": int(crit.n_iter), "criterion": float(crit.criterion),
+            "max_period": max_period}
+    meta.update(getattr(crit, "basin_metadata", dict)())
+    return BasinResult(xs, ys, lab, tuple(entries), np.asarray(out["iterations"]).reshape(shape),
+                       names[0], names[1], np.asarray(crit.fixed_point, float).copy(),
+                       tuple(P.names), crit_lab, metadata=meta, axis_attrs=units)
+
+
+def _label_tails(P, crit, S, tail, options) -> dict:
+    """Labels and iterations of a criterion without hooks; the tails (iterates ``n_iter ..
+    n_iter + tail``) of the points that did not converge by iterating ``P`` again."""
+    if options:
+        raise ValueError(f"{', '.join(sorted(options))}: this criterion has no label_tails "
+                         "hook to take them")
+    lab, its = crit.labels(S)
+    out = {"label": lab, "iterations": its}
+    if tail:
+        tails = np.full((len(S), tail + 1, P.dim), np.nan)
+        nc = np.flatnonzero(np.asarray(lab) == 1)
+        if nc.size:
+            k = getattr(crit, "period", 1)
+            tails[nc] = P.iterate_many(S[nc], int(crit.n_iter) + tail, k, tail + 1)[0]
+        out["tail"] = tails
+    return out

@@ -16,13 +16,14 @@ still does.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from hybridpd._deprecated import moved_names
 from hybridpd.analysis import basins as _basins
 from hybridpd.model import check_axis
-from hybridpd.pair.attractors import CycleCatalog
-from hybridpd.pair.basins import ImpactMapper, _basin_result, _label_grid
+from hybridpd.pair.basins import ImpactMapper
 
 __all__ = ["attractor_basin"]
 
@@ -59,8 +60,9 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
                     max_workers=None) -> _basins.BasinResult:
     """Label the slice ``(x1, y1)`` by the attractor each point reaches, and measure the basins.
 
-    Each grid point first gets the paper's label (:class:`ImpactMapper`); converged points are
-    the symmetric orbit's basin (label 0). For the others the iterates ``n_iter .. n_iter +
+    One :func:`hybridpd.analysis.basins.basin_of_attraction` with the mapper as its criterion
+    per window: each grid point first gets the paper's label (:class:`ImpactMapper`);
+    converged points are the symmetric orbit's basin (label 0). For the others the iterates ``n_iter .. n_iter +
     max_period + 2`` are examined by a :class:`~hybridpd.pair.attractors.CycleCatalog`:
     a repeating tail is refined by Newton on ``P^k`` into a periodic orbit (label ``>= 1``),
     else the point did not converge. Failed flights keep their outcome (sticking, diverged,
@@ -88,7 +90,7 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
         window's cell size up to that bound (default: every window has the first window's
         number of points on each axis).
     executor, chunk_size, progress, max_workers
-        As in :func:`basin_of_attraction`.
+        As in :meth:`~hybridpd.pair.basins.ImpactMapper.label_tails`.
 
     Returns
     -------
@@ -116,17 +118,17 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
                          f"axis ({max(nx0, ny0)}), got {max_points!r}")
     cap = (nx0, ny0) if max_points is None else (int(max_points), int(max_points))
     cell = (float(xs[-1] - xs[0]) / max(nx0 - 1, 1), float(ys[-1] - ys[0]) / max(ny0 - 1, 1))
-    cat = CycleCatalog(mapper.map, mapper.fixed_point, criterion=mapper.criterion,
-                       max_period=max_period)
+    cat = mapper.catalogue(max_period)
     fp = mapper.fixed_point
     centre = (fp[1] + mapper.map.pair.L, fp[2] + fp[3])
     windows = []
     while True:   # bounded: at most max_extensions + 1 windows
         windows.append((float(xs[0]), float(xs[-1]), float(ys[0]), float(ys[-1])))
-        out = _label_grid(mapper, xs, ys, cat.tail_length, executor=executor,
-                          chunk_size=chunk_size, progress=progress, max_workers=max_workers)
-        lab = out["label"]
-        edges = _edges(lab)
+        b = _basins.basin_of_attraction(
+            mapper.map, (xs[0], xs[-1], len(xs)), (ys[0], ys[-1], len(ys)), criterion=mapper,
+            catalogue=cat, max_period=max_period, executor=executor, chunk_size=chunk_size,
+            progress=progress, max_workers=max_workers)
+        edges = _edges(b.labels)
         if not (extend and edges) or len(windows) > max_extensions:
             break
         w = _grow(windows[-1], centre, edges)
@@ -134,24 +136,9 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
         ny = min(max(ny0, round((w[3] - w[2]) / cell[1]) + 1), cap[1])
         xs = np.linspace(w[0], w[1], nx)
         ys = np.linspace(w[2], w[3], ny)
-    att = _attractor_labels(lab, out["tail"], cat)
-    present = set(np.unique(att).tolist())
-    entries = [a for a in cat.attractors if a.label == 0 or a.label in present]
-    entries += [_basins.outcome(k, mapper.n_iter) for k in sorted(_basins.OUTCOMES, reverse=True)
-                if k in present]
-    meta = {"max_period": int(max_period), "extend": bool(extend),
-            "max_extensions": int(max_extensions),
-            "max_points": None if max_points is None else int(max_points)}
-    return _basin_result(mapper, xs, ys, lab, out["iterations"], tuple(entries), att,
-                         windows=tuple(windows), edges=edges, metadata=meta)
-
-
-def _attractor_labels(lab: np.ndarray, tails: np.ndarray, cat: CycleCatalog) -> np.ndarray:
-    """Attractor labels from the paper's labels; unconverged points by their tails."""
-    att = _basins.from_criterion(lab)
-    nc = lab == 1
-    att[nc] = cat.assign(tails[nc])
-    return att
+    meta = dict(b.metadata, extend=bool(extend), max_extensions=int(max_extensions),
+                max_points=None if max_points is None else int(max_points))
+    return replace(b, x=xs, y=ys, windows=tuple(windows), edges=edges, metadata=meta)
 
 
 __getattr__ = moved_names(__name__, {
