@@ -116,7 +116,7 @@ def test_basin_round_trips_by_suffix(basin, tmp_path, suffix):
     assert ds.labels.dims == ("y1", "x1") and ds.x1.attrs["units"] == "length"
     assert ds.y1.attrs["units"] == "length/time"
     assert ds.criterion_labels.attrs["flag_meanings"].split()[0] == "converged"
-    assert ds.labels.attrs["flag_meanings"].split()[0] == "symmetric_orbit_(period_1)"
+    assert ds.labels.attrs["flag_meanings"].split()[0] == "converged_to_the_symmetric_orbit"
     meta = decode_attrs(ds.attrs)["metadata"]
     assert meta["kp"] == 10.0 and meta["case"] == "collocated"
     np.testing.assert_array_equal(ds.labels.sel(x1=basin.x1[2]).values, basin.labels[:, 2])

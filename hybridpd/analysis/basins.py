@@ -664,8 +664,8 @@ def basin_of_attraction(P: PoincareMap, x, y, *, axes=None, base=None, period: i
     ``slice(x, y, axes)`` (the slice's section points, coordinate names and units, e.g. the
     pair's ``(x1, y1)``), ``label_tails(S, tail, **options)`` (labels, iterations and the tails
     of the unconverged points in one compiled sweep; ``options`` are its executor, store and
-    progress), ``catalogue(max_period)`` (the attractor catalogue of its metric) and
-    ``basin_metadata()``.
+    progress), ``catalogue(max_period)`` (the attractor catalogue of its metric), ``basin_metadata()``
+    and ``orbit_name`` (label 0's name when no attractor is searched).
 
     Parameters
     ----------
@@ -769,7 +769,7 @@ def _criterion_basin(P, crit, x, y, axes, max_period, tol, catalogue, options):
         xs, ys, S, names, _ = _grid(P, x, y, axes, crit.fixed_point)
         units = {}
     cat = catalogue
-    if cat is None:
+    if cat is None and max_period:
         make = getattr(crit, "catalogue", None)
         cat = make(max_period) if make is not None else Catalogue(
             P, period=getattr(crit, "period", 1), max_period=max_period, tol=tol,
@@ -785,7 +785,13 @@ def _criterion_basin(P, crit, x, y, axes, max_period, tol, catalogue, options):
         nc = crit_lab == 1
         lab[nc] = cat.assign(np.asarray(out["tail"]).reshape(shape + (tail + 1, -1))[nc])
     present = set(np.unique(lab).tolist())
-    entries = [a for a in cat.attractors if a.label == 0 or a.label in present]
+    if cat is not None:
+        entries = [a for a in cat.attractors if a.label == 0 or a.label in present]
+    else:   # no search: the criterion's orbit as the criterion names it
+        k = getattr(crit, "period", 1)
+        entries = [Attractor(0, getattr(crit, "orbit_name", f"period-{k} orbit"), k,
+                             np.asarray(crit.fixed_point, float).reshape(1, -1),
+                             kind=getattr(crit, "orbit_kind", "periodic"))]
     entries += [outcome(c, crit.n_iter) for c in sorted(OUTCOMES, reverse=True) if c in present]
     meta = {"n_iter": int(crit.n_iter), "criterion": float(crit.criterion),
             "max_period": max_period}

@@ -56,7 +56,6 @@ from hybridpd._deprecated import moved_names
 from hybridpd.analysis.certify import BasinMapper, certify_ball
 from hybridpd.analysis.labels import OFF_SECTION
 from hybridpd.model import check_array, check_axis
-from hybridpd.pair.attractors import CycleCatalog
 from hybridpd.pair.batch import impact_map, map_labels
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.sweeps.labelled import axis_attrs
@@ -192,8 +191,17 @@ class ImpactMapper(BasinMapper):
                         label=f"basin {self.map.case.value} e={self.map.pair.e:g}")
         return res.outputs
 
-    def catalogue(self, max_period: int) -> CycleCatalog:
-        """The attractor catalogue in the paper's metric, label 0 the symmetric orbit."""
+    #: Label 0's name in a basin without attractor search.
+    orbit_name = "converged to the symmetric orbit"
+    orbit_kind = "symmetric"
+
+    def catalogue(self, max_period: int):
+        """The attractor catalogue in the paper's metric, label 0 the symmetric orbit
+        (:class:`~hybridpd.pair.attractors.CycleCatalog`)."""
+        # deferred import: the catalogue's Newton solver, loaded only when attractors are
+        # searched
+        from hybridpd.pair.attractors import CycleCatalog
+
         return CycleCatalog(self.map, self.fixed_point, criterion=self.criterion,
                             max_period=max(int(max_period), 1))
 
