@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from _reproduce_run import SMALL, small_run
 
-from hybridpd.pair.attractor_basins import load_attractor_basin
+from hybridpd.analysis.basins import load_basin
 from hybridpd.pair.regions import load_region_map
 from hybridpd.reproduce import PAPER, SCHEMA, Settings, validate
 from hybridpd.reproduce import conclusions as C
@@ -47,11 +47,11 @@ def test_reproduce_small(run):
     from hybridpd._format import pct as _pct
 
     assert _pct(rm.fraction("stable")[1]) in text   # the summary quotes the data files
-    ab = load_attractor_basin(out / "m2=1" / "basin_collocated_e0.5.nc")
-    b = ab.basin
-    assert b.labels.shape == ab.labels.shape == (5, 6) and np.isin(b.labels, range(6)).all()
+    ab = load_basin(out / "m2=1" / "basin_collocated_e0.5.nc")
+    crit = ab.criterion_labels
+    assert crit.shape == ab.labels.shape == (5, 6) and np.isin(crit, range(6)).all()
     assert ab.attractors[0].label == 0                 # the symmetric orbit
-    assert _pct(b.converged_fraction) in text
+    assert _pct(ab.converged_fraction) in text
 
 
 def test_summary_json_matches_its_schema(run):
@@ -118,7 +118,7 @@ def test_every_verdict_is_recomputed_from_the_data(run):
                         2: C.check_2(sh["collocated"], sh["noncollocated"], g, PAPER["e"]),
                         3: C.check_3(sh["collocated"], g)}[k]
             elif k == 4:
-                bas = {case: [load_attractor_basin(d / f"basin_{case}_e{e:g}.nc")
+                bas = {case: [load_basin(d / f"basin_{case}_e{e:g}.nc")
                               if (d / f"basin_{case}_e{e:g}.nc").exists() else None
                               for e in PAPER["e"]] for case in ("collocated", "noncollocated")}
                 windows = {tuple(b.window) for v in bas.values() for b in v if b is not None}
