@@ -132,7 +132,7 @@ def main():
     if args.skip_basin:
         return
     el, t_cert, b, orb, full = drivetrain_basin(args.grid, args.iterations, args.workers)
-    counts = {name: int((b.labels == k).sum()) for k, name in enumerate(b.label_names)}
+    counts = {a.name: int((b.labels == a.label).sum()) for a in b.attractors}
     print(f"drivetrain basin {args.grid} x {args.grid}, {args.iterations} iterations of P "
           f"(spectral radius {orb.spectral_radius:.3f}), {args.workers} worker(s): {el:.1f} s "
           f"(target <= 60 s; certification {t_cert:.1f} s); labels {counts}; "

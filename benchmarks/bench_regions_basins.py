@@ -17,7 +17,8 @@ def main(quick=False):
     from hybridpd.pair.impactmap import ImpactMap
     from hybridpd.pair.orbits import symmetric_orbit
     from hybridpd.pair.batch import iterate_map, pack_params
-    from hybridpd.pair.basins import ImpactMapper, basin_of_attraction
+    from hybridpd.analysis.basins import basin_of_attraction
+    from hybridpd.pair.basins import ImpactMapper
     from hybridpd.pair.regions import region_map
 
     num = 60 if quick else 200
@@ -38,7 +39,8 @@ def main(quick=False):
         mapper = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
         for executor in ("processes",):
             t0 = time.perf_counter()
-            b = basin_of_attraction(mapper, (-3, 5, nb), (-2, 10, nb), executor=executor)
+            b = basin_of_attraction(mapper.map, (-3, 5, nb), (-2, 10, nb), criterion=mapper,
+                                    max_period=0, executor=executor, progress=True)
             el = time.perf_counter() - t0
             print(f"basin collocated e = {e}: {nb} x {nb}, 1500 iterations, {executor}: "
                   f"{el:.2f} s (target <= 30 s, aim 10 s); converged "

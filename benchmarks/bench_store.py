@@ -39,7 +39,12 @@ def main(quick=False):
     from hybridpd import ImpactPair, PDGains
     from hybridpd.pair.impactmap import ImpactMap
     from hybridpd.pair.orbits import symmetric_orbit
-    from hybridpd.pair.basins import ImpactMapper, basin_of_attraction
+    from hybridpd.analysis.basins import basin_of_attraction as basin
+    from hybridpd.pair.basins import ImpactMapper
+
+    def basin_of_attraction(m, x1, y1, **options):
+        # the paper's labels alone: the generic basin with the mapper as its criterion
+        return basin(m.map, x1, y1, criterion=m, max_period=0, **options)
     from hybridpd.pair.regions import region_map
 
     print(f"hybridpd from {Path(hybridpd.__file__).parent}")

@@ -96,13 +96,16 @@ _NAMES = {
     "load_region_map": "hybridpd.pair.regions",
     "basin_of_attraction": "hybridpd.analysis.basins",
     "ImpactMapper": "hybridpd.pair.basins",
-    "load_basin": "hybridpd.sweeps.basin_result",
+    "load_basin": "hybridpd.analysis.basins",
     "attractor_basin": "hybridpd.pair.attractor_basins",
-    "load_attractor_basin": "hybridpd.pair.attractor_basins",
     "section_basin": "hybridpd.sweeps.section_basins",
     # design, figures, the paper
     "design": "hybridpd.pair.design",
     "plot_file": "hybridpd.plotting.files"}
+
+# flat names replaced by others (served with a DeprecationWarning)
+_RENAMED = _deprecated.moved_names(__name__, {
+    "load_attractor_basin": "hybridpd.analysis.basins:load_basin"})
 
 # ``reproduce`` is both a subpackage and its main function: the package is callable (it runs
 # :func:`hybridpd.reproduce.reproduce`), so ``hp.reproduce(...)`` works whichever Python binds.
@@ -115,8 +118,7 @@ __all__ = ["Case", "Contact", "ControlledImpactPair", "HybridAutomaton", "Impact
            "Reference", "Section", "SectionMap", "SectionMapper", "Stability", "__version__",
            "attractor_basin", "basin_of_attraction", "bifurcation_diagram", "boundary_curves",
            "certify_orbit",
-           "continue_family", "continue_orbit", "design", "find_orbit", "load_attractor_basin",
-           "load_basin", "load_branch", "load_model", "load_region_map", "plot_file", "region_map",
+           "continue_family", "continue_orbit", "design", "find_orbit", "load_basin", "load_branch", "load_model", "load_region_map", "plot_file", "region_map",
            "reproduce", "run_sweep", "section_basin", "simulate", "stability", "switch_branch",
            "symmetric_orbit", "symmetric_orbits", "virtual_restitution"]
 
@@ -129,6 +131,8 @@ def __getattr__(name):
         return value
     if name in _SUBPACKAGES:
         return _importlib.import_module(f"hybridpd.{name}")
+    if name == "load_attractor_basin":
+        return _RENAMED(name)
     raise AttributeError(f"module 'hybridpd' has no attribute {name!r}")
 
 

@@ -62,6 +62,7 @@ MOVED_MODULES = {
     "hybridpd.sweeps.attractor_basins": "hybridpd.pair.attractor_basins",
     "hybridpd.sweeps.diagram_sweep": "hybridpd.pair.diagram_sweep",
     "hybridpd.analysis.sections": "hybridpd.mechanics.sections",
+    "hybridpd.sweeps.basin_result": "hybridpd.analysis.basins",
 }
 
 

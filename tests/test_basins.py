@@ -6,20 +6,17 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.pair.attractor_basins import attractor_basin, format_percent, load_attractor_basin
-from hybridpd.pair.attractors import (
+from hybridpd._format import format_percent
+from hybridpd.analysis.basins import (
     NO_CONVERGENCE,
     OFF_SECTION_LABEL,
-    CycleCatalog,
-    paper_distance2,
-)
-from hybridpd.pair.basins import (
-    LABELS,
-    ImpactMapper,
     basin_of_attraction,
     load_basin,
-    section_grid,
 )
+from hybridpd.analysis.labels import LABELS
+from hybridpd.pair.attractor_basins import attractor_basin
+from hybridpd.pair.attractors import CycleCatalog, paper_distance2
+from hybridpd.pair.basins import ImpactMapper, section_grid
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
 
@@ -33,12 +30,17 @@ def mapper_for(case, e, kp, kv, **kw):
     return o, ImpactMapper(ImpactMap(o.pair, o.gains, o.reference(), case), o.fixed_point, **kw)
 
 
+def paper_basin(mapper, x1, y1, **options):
+    """The paper's labels alone: the generic basin with the mapper as its criterion."""
+    return basin_of_attraction(mapper.map, x1, y1, criterion=mapper, max_period=0, **options)
+
+
 @pytest.mark.parametrize("case,e,kp,kv", CASES)
 def test_early_exits_give_identical_labels(case, e, kp, kv):
     _o, fast = mapper_for(case, e, kp, kv)
     _, slow = mapper_for(case, e, kp, kv, early_exit=False)
-    b1 = basin_of_attraction(fast, (-3, 5, 13), (-2, 10, 13))
-    b2 = basin_of_attraction(slow, (-3, 5, 13), (-2, 10, 13))
+    b1 = paper_basin(fast, (-3, 5, 13), (-2, 10, 13))
+    b2 = paper_basin(slow, (-3, 5, 13), (-2, 10, 13))
     np.testing.assert_array_equal(b1.labels, b2.labels)
     assert b2.iterations.max() <= 1500
 
@@ -88,8 +90,8 @@ def test_certified_ball_is_invariant_under_iteration():
 
 def test_basin_save_load_and_executors_agree(tmp_path):
     _o, m = mapper_for("collocated", 0.5, 10.0, 20.0)
-    b1 = basin_of_attraction(m, (-3, 5, 9), (-2, 10, 8))
-    b2 = basin_of_attraction(m, (-3, 5, 9), (-2, 10, 8), executor="processes", max_workers=2,
+    b1 = paper_basin(m, (-3, 5, 9), (-2, 10, 8))
+    b2 = paper_basin(m, (-3, 5, 9), (-2, 10, 8), executor="processes", max_workers=2,
                              chunk_size=10)
     np.testing.assert_array_equal(b1.labels, b2.labels)
     b1.save(tmp_path / "b.npz")
@@ -102,7 +104,7 @@ def test_bad_grids_and_mapper_input():
     o, m = mapper_for("collocated", 0.5, 10.0, 20.0)
     for bad in ((1, 0, 5), (0, 1, 0), (0, float("nan"), 3), (0, 1, 2.5)):
         with pytest.raises(ValueError, match="x1"):
-            basin_of_attraction(m, bad, (0, 1, 3))
+            paper_basin(m, bad, (0, 1, 3))
     with pytest.raises(ValueError, match="fixed_point"):
         ImpactMapper(m.map, [0, 1, 2])
     with pytest.raises(ValueError, match="n_iter"):
@@ -298,15 +300,15 @@ def test_attractor_basin_save_load_and_executors(tmp_path):
                           executor="processes", max_workers=2, chunk_size=40)
     np.testing.assert_array_equal(ab.labels, ab2.labels)
     ab.save(tmp_path / "ab.npz")
-    ab3 = load_attractor_basin(tmp_path / "ab.npz")
+    ab3 = load_basin(tmp_path / "ab.npz")
     np.testing.assert_array_equal(ab3.labels, ab.labels)
     assert [a.name for a in ab3.attractors] == [a.name for a in ab.attractors]
     np.testing.assert_allclose(ab3.attractors[1].points, ab.attractors[1].points)
     assert ab3.to_dict() == ab.to_dict()
-    assert ab3.metadata["gamma"] == 0.75 and ab3.basin.metadata["kp"] == 10.0
-    with pytest.raises(ValueError, match="attractor basin"):
-        ab.basin.save(tmp_path / "b.npz")
-        load_attractor_basin(tmp_path / "b.npz")
+    assert ab3.metadata["gamma"] == 0.75 and ab3.metadata["kp"] == 10.0
+    np.savez(tmp_path / "other.npz", x=np.zeros(2))
+    with pytest.raises(ValueError, match="basin"):
+        load_basin(tmp_path / "other.npz")
 
 
 def test_early_exits_give_identical_attractor_labels():
@@ -316,7 +318,7 @@ def test_early_exits_give_identical_attractor_labels():
                            (-2, 10, 10), extend=False)
     np.testing.assert_array_equal(fast.labels, slow.labels)
     assert [a.name for a in fast.attractors] == [a.name for a in slow.attractors]
-    assert fast.basin.iterations.mean() < 0.5 * slow.basin.iterations.mean()
+    assert fast.iterations.mean() < 0.5 * slow.iterations.mean()
 
 
 def _rendered(fig):
@@ -389,11 +391,12 @@ def test_basin_figures_keep_text_inside_and_legend_matches_drawing():
 
     from hybridpd.plotting import plot_basin
 
-    _o, ab = fig6_e01(num=20)
+    o, ab = fig6_e01(num=20)
+    paper = paper_basin(ImpactMapper.from_orbit(o), (-3, 5, 20), (-2, 10, 20))
     o5 = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     ab5 = attractor_basin(ImpactMapper.from_orbit(o5), (-3, 5, 10), (-2, 10, 10),
                           max_extensions=1)
-    for b in (ab, ab.basin, ab5):
+    for b in (ab, paper, ab5):
         fig = plot_basin(b)
         assert _assert_no_text_clipped(fig) >= 5
         ax = fig.axes[0]
@@ -490,12 +493,55 @@ def test_attractor_basin_round_trips_through_every_format(tmp_path):
     ab = attractor_basin(ImpactMapper.from_orbit(orb, n_iter=300), (-3, 5, 10), (-2, 10, 9),
                          max_points=20, progress=False)
     ds = ab.to_dataset()
-    assert ds.attractor.dims == ("y1", "x1") and ds.attrs["kind"] == "attractor_basin"
+    assert ds.labels.dims == ("y1", "x1") and ds.attrs["kind"] == "basin"
+    assert list(ds.labels.attrs["flag_values"]) == [a.label for a in ab.attractors]
     for suf in (".nc", ".zarr", ".npz"):
-        r = load_attractor_basin(ab.save(tmp_path / f"b{suf}") or tmp_path / f"b{suf}")
+        r = load_basin(ab.save(tmp_path / f"b{suf}") or tmp_path / f"b{suf}")
         np.testing.assert_array_equal(r.labels, ab.labels)
-        np.testing.assert_array_equal(r.basin.labels, ab.basin.labels)
+        np.testing.assert_array_equal(r.criterion_labels, ab.criterion_labels)
         np.testing.assert_array_equal(r.x1, ab.x1)
         assert [a.name for a in r.attractors] == [a.name for a in ab.attractors]
         assert (r.windows, r.edges) == (ab.windows, ab.edges)
         assert [m.count for m in r.measures()] == [m.count for m in ab.measures()]
+
+
+def test_a_criterion_without_hooks_labels_any_slice_and_matches_iterating_the_map():
+    """The generic basin with a criterion that has only the mapper protocol (no slice,
+    label_tails or catalogue hooks): labels from its ``labels``, tails by iterating the map,
+    attractors by the generic catalogue; checked point by point by iterating ``P``."""
+    from hybridpd.analysis.hybridmap import SectionMap
+    from hybridpd.analysis.periodic import SectionMapper
+    from hybridpd.analysis.sections import impact_pair_section
+
+    o, m = mapper_for("collocated", 0.1, 10.0, 20.0, n_iter=300)
+    P = SectionMap(impact_pair_section(o.system()))
+    b = basin_of_attraction(P, (-0.5, 0.5, 4), (0.5, 3.0, 3), axes=("z1", "z4"),
+                            criterion=SectionMapper(P, o.fixed_point, n_iter=300), max_period=4)
+    assert b.labels.shape == (3, 4) and b.axes == ("z1", "z4") and b.names == P.names
+    assert b.criterion_labels is not None and set(np.unique(b.labels)) - {0} != set()
+    T = P.period
+    for (r, c), lab in np.ndenumerate(b.labels):
+        s = o.fixed_point.copy()
+        s[1], s[3] = b.x[c], b.y[r]
+        traj = P.iterate(s, 320)
+        d = traj[300] - o.fixed_point
+        d[0] = (d[0] + T / 2) % T - T / 2
+        dist2 = d[1] ** 2 + (d[2] + d[3]) ** 2 + d[2] ** 2 + d[0] ** 2
+        if lab == 0:
+            assert dist2 < 1e-3
+        elif lab > 0:
+            pts = b.attractor(lab).points
+            gap = traj[300:, None, :] - pts[None]
+            gap[..., 0] = (gap[..., 0] + T / 2) % T - T / 2
+            np.testing.assert_allclose(np.abs(gap).max(axis=2).min(axis=1), 0.0, rtol=0,
+                                       atol=1e-5)
+        else:
+            assert lab == NO_CONVERGENCE and dist2 >= 1e-3
+    # the call form of earlier versions (the mapper first) is the pair's slice
+    old = basin_of_attraction(m, (-3, 5, 5), (-2, 10, 4), max_period=0)
+    new = basin_of_attraction(m.map, (-3, 5, 5), (-2, 10, 4), criterion=m, max_period=0)
+    np.testing.assert_array_equal(old.labels, new.labels)
+    with pytest.raises(ValueError, match="criterion"):
+        basin_of_attraction(P, (-3, 5, 5), (-2, 10, 4), criterion="m")
+    with pytest.raises(ValueError, match="executor"):
+        basin_of_attraction(P, (0, 1, 2), (0, 1, 2), base=o.fixed_point, executor="serial")

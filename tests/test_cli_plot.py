@@ -45,8 +45,9 @@ def one_error_line(capsys):
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     """One small file of every kind hybridpd writes (in every format it writes it in)."""
+    from hybridpd.analysis.basins import basin_of_attraction
     from hybridpd.pair.attractor_basins import attractor_basin
-    from hybridpd.pair.basins import ImpactMapper, basin_of_attraction
+    from hybridpd.pair.basins import ImpactMapper
     from hybridpd.pair.bifdiagram import bifurcation_diagram
     from hybridpd.pair.continuation import continue_symmetric
     from hybridpd.pair.orbits import symmetric_orbit
@@ -61,14 +62,14 @@ def files(tmp_path_factory):
     pair = ImpactPair(0.1, 0.5, 0.75)
     orb = symmetric_orbit(pair, PDGains(10, 20), 5.0, x10=1.0)
     mapper = ImpactMapper.from_orbit(orb, n_iter=100)
-    b = basin_of_attraction(mapper, (-3, 5, 6), (-2, 10, 5), progress=False)
+    b = basin_of_attraction(mapper.map, (-3, 5, 6), (-2, 10, 5), criterion=mapper, max_period=0)
     for suf in (".nc", ".zarr", ".npz"):
         b.save(d / f"basin{suf}")
         out[f"basin{suf}"] = d / f"basin{suf}"
     ab = attractor_basin(mapper, (-3, 5, 6), (-2, 10, 5), extend=False)
     for suf in (".nc", ".zarr", ".npz"):
         ab.save(d / f"attractors{suf}")
-        out[f"attractor_basin{suf}"] = d / f"attractors{suf}"
+        out[f"basin.attractors{suf}"] = d / f"attractors{suf}"
     diag = bifurcation_diagram(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv",
                                [20.0, 22.0, 24.0], iterations=60, keep=16)
     diag.save(d / "diagram.npz")
@@ -84,7 +85,7 @@ def files(tmp_path_factory):
 
 
 KINDS = ["region_map.nc", "region_map.zarr", "region_map.npz", "basin.nc", "basin.zarr",
-         "basin.npz", "attractor_basin.nc", "attractor_basin.zarr", "attractor_basin.npz",
+         "basin.npz", "basin.attractors.nc", "basin.attractors.zarr", "basin.attractors.npz",
          "bifurcation_diagram.npz", "branch.npz",
          "trajectory.json", "model_trajectory.json"]
 
@@ -100,6 +101,19 @@ def test_every_kind_round_trips_through_plot(files, name, tmp_path, capsys):
     assert main(["plot", str(files[name]), "--out", str(img)]) == 0
     assert str(img) in capsys.readouterr().out
     assert_image(img)
+
+
+@pytest.mark.parametrize(("name", "kind"), [("attractor_basin_v02.nc", "attractor_basin"),
+                                           ("attractor_basin_v02.npz", "attractor_basin"),
+                                           ("basin_v02.nc", "basin"), ("basin_v0.npz", "basin"),
+                                           ("model_basin_v02.nc", "model_basin")])
+def test_basin_files_of_earlier_versions_plot(name, kind, tmp_path):
+    from hybridpd.plotting.files import file_kind
+
+    path = Path(__file__).parent / "data" / name
+    assert file_kind(path) == kind
+    assert main(["plot", str(path), "--out", str(tmp_path / "old.png")]) == 0
+    assert_image(tmp_path / "old.png")
 
 
 def test_default_output_replaces_the_suffix(files, tmp_path):
@@ -233,7 +247,7 @@ def test_plot_option_draws_right_away(tmp_path, capsys):
     assert_image(tmp_path / "basin.png")
     from hybridpd.plotting.files import file_kind
 
-    assert file_kind(tmp_path / "basin.npz") == "attractor_basin"
+    assert file_kind(tmp_path / "basin.npz") == "basin"
 
 
 def test_branch_save_load_round_trip(files):

@@ -107,10 +107,10 @@ def _entry_points():
         return ImpactMapper(impact_map, fixed_point, n_iter=n_iter, criterion=criterion,
                             escape=escape, early_exit=False)
 
-    def basin(mapper, x1, y1):
-        from hybridpd.pair.basins import basin_of_attraction
+    def basin(P, x, y, criterion):
+        from hybridpd.analysis.basins import basin_of_attraction
 
-        return basin_of_attraction(mapper, x1, y1)
+        return basin_of_attraction(P, x, y, criterion=criterion, max_period=0)
 
     def design_(case, mu, e, omega, L, kp_range, kv_range, grid, n_starts, maxiter):
         from hybridpd.pair.design import design
@@ -173,10 +173,10 @@ def _entry_points():
                                       escape=1e3),
                          dict(impact_map="map_obj", fixed_point="vec4", n_iter="count",
                               criterion=pos, escape=pos)),
-        "basin_of_attraction": (basin, dict(mapper=ImpactMapper(P, fp, n_iter=3,
-                                                                early_exit=False),
-                                            x1=(-0.5, 0.5, 2), y1=(-0.5, 0.5, 2)),
-                                dict(mapper="map_obj", x1="axis", y1="axis")),
+        "basin_of_attraction": (basin, dict(P=P, x=(-0.5, 0.5, 2), y=(-0.5, 0.5, 2),
+                                            criterion=ImpactMapper(P, fp, n_iter=3,
+                                                                   early_exit=False)),
+                                dict(P="map_obj", x="axis", y="axis")),
         "design": (design_, dict(case="collocated", mu=0.1, e=0.5, omega=5.0, L=0.75,
                                  kp_range=(1.0, 50.0), kv_range=(1.0, 50.0), grid=(4, 4),
                                  n_starts=1, maxiter=2),

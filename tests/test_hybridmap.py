@@ -253,7 +253,7 @@ def test_section_mapper_agrees_with_pair_mapper():
     m_slow = SectionMapper(P, orb.fixed_point, n_iter=200, early_exit=False)
     assert np.array_equal(m_slow.labels(pts)[0], lab)
     b = section_basin(m, "z1", "z4", (-1.0, 1.0, 4), (0.5, 3.0, 3))
-    assert b.labels.shape == (3, 4) and b.metadata["axes"] == ["z1", "z4"]
+    assert b.labels.shape == (3, 4) and b.axes == ("z1", "z4")
 
 
 @settings(max_examples=40, deadline=None)

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.pair.basins import ImpactMapper, basin_of_attraction, load_basin
+from hybridpd.analysis.basins import basin_of_attraction, load_basin
+from hybridpd.pair.basins import ImpactMapper
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.pair.regions import load_region_map, region_map
@@ -35,7 +36,7 @@ def rm():
 def basin():
     orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     m = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
-    return basin_of_attraction(m, (-3, 5, 6), (-2, 10, 5), progress=False)
+    return basin_of_attraction(m.map, (-3, 5, 6), (-2, 10, 5), criterion=m, max_period=0)
 
 
 def assert_close_or_equal(actual, desired, err_msg):
@@ -63,7 +64,7 @@ def assert_same_map(a, b, exact=True):
 
 
 def assert_same_basin(a, b):
-    for f in ("x1", "y1", "labels", "iterations", "fixed_point"):
+    for f in ("x1", "y1", "labels", "criterion_labels", "iterations", "fixed_point"):
         np.testing.assert_array_equal(getattr(a, f), getattr(b, f), err_msg=f)
     assert a.converged_fraction == b.converged_fraction and a.metadata == b.metadata
 
@@ -114,8 +115,10 @@ def test_basin_round_trips_by_suffix(basin, tmp_path, suffix):
     ds = basin.to_dataset()
     assert ds.labels.dims == ("y1", "x1") and ds.x1.attrs["units"] == "length"
     assert ds.y1.attrs["units"] == "length/time"
-    assert ds.labels.attrs["flag_meanings"].split()[0] == "converged"
-    assert ds.attrs["kp"] == 10.0 and ds.attrs["case"] == "collocated"
+    assert ds.criterion_labels.attrs["flag_meanings"].split()[0] == "converged"
+    assert ds.labels.attrs["flag_meanings"].split()[0] == "converged_to_the_symmetric_orbit"
+    meta = decode_attrs(ds.attrs)["metadata"]
+    assert meta["kp"] == 10.0 and meta["case"] == "collocated"
     np.testing.assert_array_equal(ds.labels.sel(x1=basin.x1[2]).values, basin.labels[:, 2])
     p = tmp_path / f"b{suffix}"
     basin.save(p)
@@ -150,9 +153,10 @@ def test_files_of_earlier_versions_stay_readable():
     assert_same_map(old, new, exact=False)
     orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     m = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
-    new_b = basin_of_attraction(m, (-3, 5, 5), (-2, 10, 4), progress=False)
+    new_b = basin_of_attraction(m.map, (-3, 5, 5), (-2, 10, 4), criterion=m, max_period=0)
     old_b = load_basin(DATA / "basin_v0.npz")
     np.testing.assert_array_equal(old_b.labels, new_b.labels)
+    np.testing.assert_array_equal(old_b.criterion_labels, new_b.criterion_labels)
     np.testing.assert_array_equal(old_b.iterations, new_b.iterations)
     assert old_b.metadata["kp"] == 10.0
     np.testing.assert_allclose(old_b.converged_fraction, new_b.converged_fraction,
@@ -167,6 +171,46 @@ def test_files_of_earlier_versions_stay_readable():
     assert s.metadata == {"kind": "region_sweep"} and s.n_chunks == 2
     for k, v in fresh.outputs.items():
         assert_close_or_equal(s.outputs[k], v, err_msg=k)
+
+
+def test_basin_files_of_earlier_versions_read_as_the_one_basin_result():
+    """The pair's basins, attractor basins and model basins written by the previous version
+    (tests/data) read back as one :class:`BasinResult` equal to a fresh computation."""
+    from _pair_model import PAIR
+
+    from hybridpd.pair.attractor_basins import attractor_basin
+    from hybridpd.sweeps.model_basins import model_basin
+
+    orb = symmetric_orbit(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0)
+    fresh = attractor_basin(ImpactMapper.from_orbit(orb, n_iter=300), (-3, 5, 6), (-2, 10, 5),
+                            extend=False)
+    for name in ("attractor_basin_v02.nc", "attractor_basin_v02.npz"):
+        old = load_basin(DATA / name)
+        assert old.axes == ("x1", "y1") and old.names == ("phi", "z1", "z2", "z4")
+        for f in ("labels", "criterion_labels", "iterations"):
+            np.testing.assert_array_equal(getattr(old, f), getattr(fresh, f), err_msg=f)
+        for f in ("x1", "y1", "fixed_point"):
+            np.testing.assert_allclose(getattr(old, f), getattr(fresh, f), rtol=STORED_RTOL,
+                                       atol=STORED_ATOL, err_msg=f)
+        assert [a.name for a in old.attractors] == [a.name for a in fresh.attractors]
+        for a, b in zip(old.attractors, fresh.attractors):
+            np.testing.assert_allclose(a.points, b.points, rtol=1e-7, atol=1e-9)
+            assert a.walls == b.walls and a.stable == b.stable
+        assert old.metadata["kp"] == 10.0 and old.metadata["gamma"] == 0.75
+    orb5 = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
+    m5 = ImpactMapper.from_orbit(orb5, n_iter=100)
+    pb = basin_of_attraction(m5.map, (-3, 5, 5), (-2, 10, 4), criterion=m5, max_period=0)
+    old = load_basin(DATA / "basin_v02.nc")
+    np.testing.assert_array_equal(old.labels, pb.labels)
+    np.testing.assert_array_equal(old.criterion_labels, pb.criterion_labels)
+    assert [a.label for a in old.attractors] == [a.label for a in pb.attractors]
+    mb = model_basin(PAIR, ("x2", -1.0, 1.0, 4), ("x1_dot", -1.0, 3.0, 3), n_iter=100)
+    old = load_basin(DATA / "model_basin_v02.nc")
+    assert old.axes == mb.axes and old.names == mb.names and old.source == mb.source
+    np.testing.assert_array_equal(old.labels, mb.labels)
+    np.testing.assert_array_equal(old.criterion_labels, mb.criterion_labels)
+    np.testing.assert_allclose(old.base, mb.base, rtol=1e-7, atol=1e-9)
+    assert old.summary() == mb.summary()
 
 
 def test_sweep_store_and_result_as_datasets(tmp_path):

@@ -5,16 +5,17 @@ import json
 import numpy as np
 from _pair_model import PAIR, PAIR_TOML
 
+from hybridpd.analysis.basins import load_basin
 from hybridpd.analysis.model_orbits import SectionSpec
 from hybridpd.cli import main
 from hybridpd.mechanics.params import ModelTemplate
-from hybridpd.sweeps.model_basins import load_model_basin, model_basin
+from hybridpd.sweeps.model_basins import model_basin
 
 
 def test_pair_file_basin_labels_confirmed_by_iterating_the_map(tmp_path, capsys):
     b = model_basin(PAIR, ("x2", -1.0, 1.0, 5), ("x1_dot", -1.0, 3.0, 5), n_iter=150)
-    assert b.labels.shape == (5, 5) and b.attractors[0]["label"] == 0
-    assert b.attractors[0]["stable"]
+    assert b.labels.shape == (5, 5) and b.attractors[0].label == 0
+    assert b.attractors[0].stable and b.axes == ("x2", "x1_dot")
     assert (b.labels == 0).sum() >= 1
     # independently: iterate the simulated map from every point labelled 0
     P = SectionSpec().section_map(ModelTemplate(PAIR).model())
@@ -34,7 +35,7 @@ def test_pair_file_basin_labels_confirmed_by_iterating_the_map(tmp_path, capsys)
     assert main(["basin", "--model", "-", "--x", "x2", "-1", "1", "3"]) == 2   # no --y
     capsys.readouterr()
     path = b.save(out)
-    back = load_model_basin(path)
+    back = load_basin(path)
     np.testing.assert_allclose(back.labels, b.labels, rtol=0, atol=0)
     assert back.summary() == b.summary()
     assert main(["plot", str(out), "--out", str(tmp_path / "b.png")]) == 0

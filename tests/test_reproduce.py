@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from _reproduce_run import SMALL, small_run
 
-from hybridpd.pair.attractor_basins import load_attractor_basin
+from hybridpd.analysis.basins import load_basin
 from hybridpd.pair.regions import load_region_map
 from hybridpd.reproduce import SCHEMA, Settings, validate
 from hybridpd.reproduce import rules as R
@@ -50,9 +50,9 @@ def test_reproduce_small(run):
         assert repr_leak not in text, repr_leak
     rm = load_region_map(out / "m2=1" / "regions_collocated.nc")
     assert rm.exists.shape == (3, 9, 9)
-    ab = load_attractor_basin(out / "m2=100" / "basin_collocated_e0.5.nc")
-    b = ab.basin
-    assert b.labels.shape == ab.labels.shape == (5, 6) and np.isin(b.labels, range(-3, 6)).all()
+    ab = load_basin(out / "m2=100" / "basin_collocated_e0.5.nc")
+    crit = ab.criterion_labels
+    assert crit.shape == ab.labels.shape == (5, 6) and np.isin(crit, range(-3, 6)).all()
     assert ab.attractors[0].label == 0                 # the symmetric orbit
 
 
@@ -168,7 +168,7 @@ def test_basins_are_recomputed_from_their_files(run):
     out = path.parent
     for r in data["runs"]:
         d = out / f"m2={r['m2']:g}"
-        bas = {case: [load_attractor_basin(d / f"basin_{case}_e{e}.nc")
+        bas = {case: [load_basin(d / f"basin_{case}_e{e}.nc")
                       if (d / f"basin_{case}_e{e}.nc").exists() else None for e in ES]
                for case in CASES}
         windows = {tuple(b.window) for v in bas.values() for b in v if b is not None}

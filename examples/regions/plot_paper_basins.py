@@ -16,7 +16,8 @@ from hybridpd import ImpactPair, PDGains
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.plotting import plot_basin
-from hybridpd.pair.basins import ImpactMapper, basin_of_attraction
+from hybridpd.analysis.basins import basin_of_attraction
+from hybridpd.pair.basins import ImpactMapper
 
 # sphinx_gallery_start_ignore
 sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py
@@ -38,8 +39,8 @@ for row, case in enumerate(("collocated", "noncollocated")):
             continue
         mapper = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference(), case),
                               orb.fixed_point, n_iter=N_ITER)
-        b = basin_of_attraction(mapper, (-3, 5, NUM), (-2, 10, NUM),
-                                executor="serial" if ARGS.quick else "processes")
+        b = basin_of_attraction(mapper.map, (-3, 5, NUM), (-2, 10, NUM), criterion=mapper,
+                                max_period=0, executor="serial" if ARGS.quick else "processes")
         print(f"{case} e={e}: spectral radius {orb.spectral_radius:.4g}, converged "
               f"{100 * b.converged_fraction:.1f}%")
         plot_basin(b, ax=ax)

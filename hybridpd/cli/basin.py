@@ -64,9 +64,10 @@ def register(sub):
 
 def run(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.analysis.labels import LABELS
     from hybridpd.model import ImpactPair, PDGains
     from hybridpd.pair.attractor_basins import attractor_basin
-    from hybridpd.pair.basins import LABELS, ImpactMapper
+    from hybridpd.pair.basins import ImpactMapper
     from hybridpd.pair.orbits import symmetric_orbit
 
     if args.model is not None:
@@ -104,7 +105,6 @@ def run(args) -> int:
                          extend=args.max_extensions > 0, max_extensions=args.max_extensions,
                          executor=executor_of(args), max_workers=args.workers,
                          progress=progress_wanted(args))
-    b = ab.basin
     if args.out:
         ab.save(args.out)
     if args.plot:
@@ -112,17 +112,18 @@ def run(args) -> int:
         from hybridpd.plotting.basins import plot_basin
 
         write_figure(plot_basin(ab), args.plot)
-    fp = b.fixed_point
+    fp = ab.fixed_point
     if args.json:
         print_json({
-            "x1": b.x1.tolist(), "y1": b.y1.tolist(), "labels": b.labels.tolist(),
+            **ab.to_dict(),
+            "x1": ab.x.tolist(), "y1": ab.y.tolist(), "labels": ab.criterion_labels.tolist(),
             "label_names": list(LABELS),
             "fixed_point": {"phi": float(fp[0]), "z1": float(fp[1]), "z2": float(fp[2]),
                             "z4": float(fp[3]), "x1": float(fp[1] + L),
                             "y1": float(fp[2] + fp[3]), "y2": float(fp[2])},
-            "converged_fraction": b.converged_fraction, "spectral_radius": orb.spectral_radius,
+            "converged_fraction": ab.converged_fraction, "spectral_radius": orb.spectral_radius,
             "stable": orb.stable, "certified_radius": mapper.certified_radius,
-            "attractor_labels": ab.labels.tolist(), **ab.to_dict()})
+            "attractor_labels": ab.labels.tolist()})
         return 0
     print(f"{args.case} basin, e = {args.e:g}, kp = {args.kp:g}, kv = {args.kv:g} "
           f"(slice phi = phi* = {fp[0]:.6g}, y2 = y2* = {fp[2]:.6g})")
@@ -158,9 +159,9 @@ def _run_model(args) -> int:
         mb.save(args.out)
     if args.plot:
         # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.plotting.model_basins import plot_model_basin
+        from hybridpd.plotting.basins import plot_basin
 
-        write_figure(plot_model_basin(mb), args.plot)
+        write_figure(plot_basin(mb), args.plot)
     if args.json:
         print_json(mb.to_dict())
         return 0

@@ -22,26 +22,18 @@ at the point of smallest phase.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
-from hybridpd._results import compact_repr
-from hybridpd.analysis.basins import (
-    DIVERGED,
-    INADMISSIBLE_LABEL,
-    NO_CONVERGENCE,
-    OFF_SECTION_LABEL,
-    OUTCOMES,
-    STICKING,
-    UNRESOLVED,
-)
+from hybridpd._deprecated import moved_names
+from hybridpd.analysis import basins as _basins
 from hybridpd.pair.continuation import find_periodic_orbit
 from hybridpd.pair.impactmap import ImpactMap
 
-__all__ = ["DIVERGED", "INADMISSIBLE_LABEL", "NO_CONVERGENCE", "OFF_SECTION_LABEL", "OUTCOMES",
-           "STICKING", "UNRESOLVED",
-           "Attractor", "CycleCatalog", "outcome", "paper_distance2"]
+__all__ = ["CycleCatalog", "paper_distance2", "slice_points"]
+
+_NC = _basins.NO_CONVERGENCE
 
 # (dx1, dy1, dy2, dphi) = C (dphi, dz1, dz2, dz4): the paper's criterion coordinates
 _C = np.array([[0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 1, 0], [1, 0, 0, 0]], float)
@@ -62,98 +54,6 @@ def paper_distance2(a, b, T: float) -> np.ndarray:
     d[..., 0] = _wrap(d[..., 0], T)
     cd = d @ _C.T
     return np.einsum("...i,...i->...", cd, cd)
-
-
-@dataclass(frozen=True)
-class Attractor:
-    """One attractor (or outcome class) of a basin computation.
-
-    Attributes
-    ----------
-    label : int
-        ``0`` the symmetric orbit, ``1, 2, ...`` other periodic orbits, negative: an outcome
-        that is not a periodic orbit (:data:`OUTCOMES`).
-    kind : str
-        ``"symmetric"``, ``"periodic"`` or an outcome kind (``"no_convergence"``,
-        ``"diverged"``, ``"sticking"``, ``"unresolved"``, ``"off_section"``).
-    name : str
-        Label in words, e.g. ``"symmetric orbit (period 1)"``, ``"period-2 orbit"``.
-    period : int
-        Applications of ``P`` per period (0 for outcomes).
-    points : ndarray, shape (period, 4)
-        Section points ``(phi, z1, z2, z4)`` of the cycle, ``phi`` in ``[0, T)``, starting at
-        the smallest phase (empty for outcomes).
-    multipliers : ndarray, shape (4,), complex, or None
-        Eigenvalues of ``D(P^period)`` at ``points[0]``, by decreasing modulus.
-    spectral_radius : float
-        ``nan`` when unknown.
-    stable : bool or None
-    walls : tuple
-        Walls hit in each of the ``period`` applications of ``P`` (e.g. ``((-1, -1, 1), (1,))``
-        for the double-impact period-2 motion).
-    residual : float
-        ``||P^period(s) - s||_inf`` at ``points[0]`` (``nan`` for outcomes).
-    """
-
-    label: int
-    kind: str
-    name: str
-    period: int = 0
-    points: np.ndarray = None
-    multipliers: np.ndarray | None = None
-    spectral_radius: float = float("nan")
-    stable: bool | None = None
-    walls: tuple = ()
-    residual: float = float("nan")
-    __repr__ = compact_repr
-
-    @property
-    def periodic(self) -> bool:
-        return self.label >= 0
-
-    def slice_points(self, L: float) -> np.ndarray:
-        """The cycle's points in the basin slice's coordinates ``(x1, y1) = (z1 + L, z2 + z4)``.
-
-        Shape ``(period, 2)``. The slice fixes ``phi`` and ``y2``; the cycle's points have their
-        own, so these are projections.
-        """
-        p = np.zeros((0, 4)) if self.points is None else np.asarray(self.points)
-        return np.stack([p[:, 1] + L, p[:, 2] + p[:, 3]], axis=-1)
-
-    def to_dict(self) -> dict:
-        """JSON-ready description."""
-        mult = None if self.multipliers is None else [[float(z.real), float(z.imag)]
-                                                      for z in self.multipliers]
-        rho = self.spectral_radius
-        res = self.residual
-        return {"label": self.label, "kind": self.kind, "name": self.name,
-                "period": self.period,
-                "points": [] if self.points is None else np.asarray(self.points).tolist(),
-                "multipliers": mult,
-                "spectral_radius": float(rho) if np.isfinite(rho) else None,
-                "stable": self.stable, "walls": [list(w) for w in self.walls],
-                "residual": float(res) if np.isfinite(res) else None}
-
-    @classmethod
-    def from_dict(cls, d: dict) -> Attractor:
-        """Inverse of :meth:`to_dict`."""
-        mult = d.get("multipliers")
-        rho = d.get("spectral_radius")
-        res = d.get("residual")
-        return cls(int(d["label"]), d["kind"], d["name"], int(d["period"]),
-                   np.asarray(d["points"], float).reshape(-1, 4),
-                   None if mult is None else np.array([complex(a, b) for a, b in mult]),
-                   float("nan") if rho is None else float(rho), d.get("stable"),
-                   tuple(tuple(w) for w in d.get("walls", ())),
-                   float("nan") if res is None else float(res))
-
-
-def outcome(label: int, n_iter: int | None = None) -> Attractor:
-    """The :class:`Attractor` entry of a negative outcome label."""
-    kind, name = OUTCOMES[int(label)]
-    if label == NO_CONVERGENCE and n_iter is not None:
-        name = f"no convergence in {int(n_iter)} iterations"
-    return Attractor(int(label), kind, name)
 
 
 def _canonical(orbit: np.ndarray, T: float) -> np.ndarray:
@@ -209,7 +109,7 @@ class CycleCatalog:
         self.max_period = int(max_period)
         self.detect_tol = float(detect_tol)
         self.max_newton = int(max_newton)
-        self.attractors: list[Attractor] = [self._refine(np.asarray(fixed_point, float), 1, 0)
+        self.attractors: list = [self._refine(np.asarray(fixed_point, float), 1, 0)
                                             or self._bare_symmetric(fixed_point)]
 
     @property
@@ -217,9 +117,9 @@ class CycleCatalog:
         """Iterates per tail needed to see ``max_period`` repeat twice: ``max_period + 2``."""
         return self.max_period + 2
 
-    def _bare_symmetric(self, fp) -> Attractor:
-        return Attractor(0, "symmetric", "symmetric orbit (period 1)", 1,
-                         np.asarray(fp, float).reshape(1, 4))
+    def _bare_symmetric(self, fp) -> _basins.Attractor:
+        return _basins.Attractor(0, "symmetric orbit (period 1)", 1,
+                         np.asarray(fp, float).reshape(1, 4), kind="symmetric")
 
     def _name(self, k: int, label: int) -> str:
         if label == 0:
@@ -227,7 +127,7 @@ class CycleCatalog:
         same = [a for a in self.attractors if a.period == k and a.label > 0]
         return f"period-{k} orbit" + (f" {chr(ord('A') + len(same))}" if same else "")
 
-    def _refine(self, s0: np.ndarray, k: int, label: int) -> Attractor | None:
+    def _refine(self, s0: np.ndarray, k: int, label: int) -> _basins.Attractor | None:
         try:
             orb = find_periodic_orbit(self.map, s0, period=k)
         except (ValueError, RuntimeError, np.linalg.LinAlgError):
@@ -243,18 +143,18 @@ class CycleCatalog:
         walls = orb.walls
         shift = int(np.argmin(np.asarray(orb.orbit)[:, 0] % self.T))
         walls = tuple(walls[shift:]) + tuple(walls[:shift])
-        return Attractor(label, "symmetric" if label == 0 else "periodic",
-                         self._name(k, label), k, pts, orb.multipliers,
-                         float(orb.spectral_radius), orb.stable, walls, float(orb.residual))
+        return _basins.Attractor(label, self._name(k, label), k, pts, orb.multipliers,
+                         float(orb.spectral_radius), orb.stable,
+                         "symmetric" if label == 0 else "periodic", walls, float(orb.residual))
 
-    def _add(self, att: Attractor) -> None:
+    def _add(self, att: _basins.Attractor) -> None:
         same = [i for i, a in enumerate(self.attractors) if a.label > 0 and a.period == att.period]
         if len(same) == 1:   # a second cycle of this period: the first becomes "A"
             first = self.attractors[same[0]]
             self.attractors[same[0]] = replace(first, name=f"{first.name} A")
         self.attractors.append(att)
 
-    def _known(self, att: Attractor) -> Attractor | None:
+    def _known(self, att: _basins.Attractor) -> _basins.Attractor | None:
         """An attractor already catalogued with the same cycle (up to a cyclic shift)."""
         for a in self.attractors:
             if a.period != att.period:
@@ -264,7 +164,7 @@ class CycleCatalog:
                 return a
         return None
 
-    def _match(self, tails: np.ndarray, att: Attractor) -> np.ndarray:
+    def _match(self, tails: np.ndarray, att: _basins.Attractor) -> np.ndarray:
         # the first iterate rules most tails out; the whole tail only for the rest
         d0 = paper_distance2(tails[:, 0, None, :], att.points[None, :, :], self.T)
         ok = d0.min(axis=1) < self.criterion
@@ -306,12 +206,12 @@ class CycleCatalog:
         tails = np.asarray(tails, float)
         if tails.ndim != 3 or tails.shape[2] != 4:
             raise ValueError(f"tails must have shape (M, K + 1, 4), got {tails.shape}")
-        lab = np.full(tails.shape[0], NO_CONVERGENCE, dtype=np.int64)
+        lab = np.full(tails.shape[0], _NC, dtype=np.int64)
         finite = np.all(np.isfinite(tails), axis=(1, 2))
         for a in self.attractors:
-            free = finite & (lab == NO_CONVERGENCE)
-            lab[free] = np.where(self._match(tails[free], a), a.label, NO_CONVERGENCE)
-        free = np.flatnonzero(finite & (lab == NO_CONVERGENCE))
+            free = finite & (lab == _NC)
+            lab[free] = np.where(self._match(tails[free], a), a.label, _NC)
+        free = np.flatnonzero(finite & (lab == _NC))
         if free.size == 0:
             return lab
         per, err = self._period(tails[free])
@@ -321,7 +221,7 @@ class CycleCatalog:
             i = free[j]
             if per[j] == 0 or tried >= self.max_newton:
                 break
-            if lab[i] != NO_CONVERGENCE:
+            if lab[i] != _NC:
                 continue
             tried += 1
             att = self._refine(tails[i, -1], int(per[j]), len(self.attractors))
@@ -330,6 +230,29 @@ class CycleCatalog:
                     or not self._match(tails[i:i + 1], att)[0]):
                 continue
             self._add(att)
-            rest = free[lab[free] == NO_CONVERGENCE]
-            lab[rest] = np.where(self._match(tails[rest], att), att.label, NO_CONVERGENCE)
+            rest = free[lab[free] == _NC]
+            lab[rest] = np.where(self._match(tails[rest], att), att.label, _NC)
         return lab
+
+
+def slice_points(attractor: _basins.Attractor, L: float) -> np.ndarray:
+    """An attractor's cycle points in the basin slice's coordinates ``(x1, y1) = (z1 + L,
+    z2 + z4)``, shape ``(period, 2)``.
+
+    The slice fixes ``phi`` and ``y2``; the cycle's points have their own, so these are
+    projections.
+
+    Examples
+    --------
+    >>> from hybridpd.analysis.basins import Attractor
+    >>> slice_points(Attractor(0, "orbit", 1, np.array([[0.1, 0.2, 1.0, 2.0]])), 0.75)
+    array([[0.95, 3.  ]])
+    """
+    p = np.asarray(attractor.points, float).reshape(-1, 4)
+    return np.stack([p[:, 1] + L, p[:, 2] + p[:, 3]], axis=-1)
+
+
+__getattr__ = moved_names(__name__, {
+    name: "hybridpd.analysis.basins"
+    for name in ("Attractor", "outcome", "DIVERGED", "INADMISSIBLE_LABEL", "NO_CONVERGENCE",
+                 "OFF_SECTION_LABEL", "OUTCOMES", "STICKING", "UNRESOLVED")})

@@ -1,7 +1,13 @@
-"""Basins of attraction of the impact map (paper Figs 6-7), labelled by attractor and measured.
+"""The impact pair's basin mapper (paper Figs 6-7): the paper's criterion and its slice.
 
-Two layers, after Attractors.jl: a **mapper** that takes one initial condition on the section
-to a label, and **basins** as a thin layer that applies a mapper over a 2-D grid.
+After Attractors.jl: a **mapper** takes one initial condition on the section to a label, and
+basins are the one thin layer, :func:`hybridpd.analysis.basins.basin_of_attraction`, that
+applies it over a 2-D grid. :class:`ImpactMapper` is the pair's mapper with the hooks that
+layer uses: the paper's slice ``(x1, y1)`` (``slice``), its compiled labelling with early exits
+over any executor (``label_tails``), the attractor catalogue in the paper's metric
+(``catalogue``) and the parameters for the result's metadata (``basin_metadata``)::
+
+    basin_of_attraction(mapper.map, x1, y1, criterion=mapper, max_period=0)
 
 Labels (:data:`LABELS`): ``converged`` (the paper's criterion holds after ``n_iter``
 iterations of ``P``), ``not_converged``, ``diverged`` (left the bounded region, non-finite,
@@ -48,14 +54,13 @@ import numpy as np
 
 from hybridpd._deprecated import moved_names
 from hybridpd.analysis.certify import BasinMapper, certify_ball
-from hybridpd.analysis.labels import LABELS, OFF_SECTION
+from hybridpd.analysis.labels import OFF_SECTION
 from hybridpd.model import check_array, check_axis
 from hybridpd.pair.batch import impact_map, map_labels
 from hybridpd.pair.impactmap import ImpactMap
-from hybridpd.sweeps.basin_result import BasinResult, load_basin
+from hybridpd.sweeps.labelled import axis_attrs
 
-__all__ = ["LABELS", "BasinResult", "ImpactMapper", "basin_of_attraction", "load_basin",
-           "section_grid"]
+__all__ = ["ImpactMapper", "section_grid"]
 
 
 class ImpactMapper(BasinMapper):
@@ -157,6 +162,59 @@ class ImpactMapper(BasinMapper):
         return lab, its
 
 
+    # ---- hooks of hybridpd.analysis.basins.basin_of_attraction ------------------------
+    def slice(self, x1, y1, axes=None) -> tuple:
+        """The paper's slice ``(x1, y1)`` (``phi = phi*``, ``y2 = y2*``): ``(xs, ys, S, names,
+        units)`` with the section points ``S`` of the grid (:func:`section_grid`)."""
+        if axes not in (None, ("x1", "y1"), ["x1", "y1"]):
+            raise ValueError(f"axes: the pair's basin slice is ('x1', 'y1'), got {axes!r}")
+        xs, ys = check_axis("x1", x1), check_axis("y1", y1)
+        S = section_grid(self.fixed_point, self.map.pair.L, xs, ys).reshape(-1, 4)
+        return xs, ys, S, ("x1", "y1"), {n: axis_attrs(n) for n in ("x1", "y1")}
+
+    def label_tails(self, S, tail: int = 0, *, executor="serial", chunk_size=None,
+                    store=None, progress=False, max_workers=None) -> dict:
+        """Labels, iterations and (``tail > 0``) the iterates ``n_iter .. n_iter + tail`` of
+        the points that did not converge, in one compiled sweep over ``S`` (shape ``(N, 4)``)
+        by :func:`hybridpd.sweeps.sweep.run_sweep` (``executor``, ``store``: a ``.zarr``
+        directory written as it goes and resumed; the labels do not depend on them)."""
+        S = np.asarray(S, float).reshape(-1, 4)
+        # deferred import: loaded only when this runs, for start-up time
+        from hybridpd.sweeps.sweep import run_sweep
+
+        res = run_sweep(_label_chunk, {"phi": S[:, 0], "z1": S[:, 1], "z2": S[:, 2],
+                                       "z4": S[:, 3]},
+                        chunk_size=chunk_size, executor=executor, max_workers=max_workers,
+                        store=store, progress=progress,
+                        func_kwargs={"mapper": _MapperSpec.of(self), "tail": int(tail)},
+                        metadata={"kind": "basin"},
+                        label=f"basin {self.map.case.value} e={self.map.pair.e:g}")
+        return res.outputs
+
+    #: Label 0's name in a basin without attractor search.
+    orbit_name = "converged to the symmetric orbit"
+    orbit_kind = "symmetric"
+
+    def catalogue(self, max_period: int):
+        """The attractor catalogue in the paper's metric, label 0 the symmetric orbit
+        (:class:`~hybridpd.pair.attractors.CycleCatalog`)."""
+        # deferred import: the catalogue's Newton solver, loaded only when attractors are
+        # searched
+        from hybridpd.pair.attractors import CycleCatalog
+
+        return CycleCatalog(self.map, self.fixed_point, criterion=self.criterion,
+                            max_period=max(int(max_period), 1))
+
+    def basin_metadata(self) -> dict:
+        """Parameters, conventions and the certified radius, for a basin's metadata."""
+        m = self.map
+        meta = {"case": m.case.value, "kp": m.gains.kp, "kv": m.gains.kv, "mu": m.pair.mu,
+                "e": m.pair.e, "L": m.pair.L, "m2": m.pair.m2, "omega": m.reference.omega,
+                "xm": m.reference.xm, "certified_radius": self.certified_radius}
+        meta.update(self.conventions)
+        return meta
+
+
 def section_grid(fixed_point, L, x1, y1) -> np.ndarray:
     """Section points of the paper's basin slice: ``(x1, y1)`` with ``y2 = y2*``, ``phi = phi*``.
 
@@ -167,81 +225,6 @@ def section_grid(fixed_point, L, x1, y1) -> np.ndarray:
     X1, Y1 = np.meshgrid(np.asarray(x1, float), np.asarray(y1, float))
     return np.stack([np.full_like(X1, fp[0]), X1 - L, np.full_like(X1, fp[2]), Y1 - fp[2]],
                     axis=-1)
-
-
-def basin_of_attraction(mapper: ImpactMapper, x1, y1, *, executor="serial", chunk_size=None,
-                        store=None, progress=True, max_workers=None) -> BasinResult:
-    """Label a grid of the paper's slice ``(x1, y1)``, ``y2 = y2*``, ``phi = phi*``.
-
-    Parameters
-    ----------
-    mapper : ImpactMapper
-    x1, y1 : (min, max, num)
-        Grid axes.
-    executor, chunk_size, store, progress, max_workers
-        Passed to :func:`hybridpd.sweeps.sweep.run_sweep` (a ``store``, a ``.zarr`` directory,
-        makes the sweep write as it goes and resume); the labels do not depend on them.
-        Progress is labelled e.g. ``basin noncollocated e=0.1``.
-
-    Returns
-    -------
-    BasinResult
-        Labels of shape ``(len(y1), len(x1))``.
-
-    Raises
-    ------
-    ValueError
-        If ``mapper`` is not an :class:`ImpactMapper` or a grid axis is malformed.
-
-    Examples
-    --------
-    >>> import hybridpd as hp
-    >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
-    >>> mapper = hp.ImpactMapper.from_orbit(orb, n_iter=200)
-    >>> b = basin_of_attraction(mapper, (-1, 3, 5), (-1, 5, 4), progress=False)
-    >>> b.labels.shape, b.converged_fraction
-    ((4, 5), 1.0)
-    """
-    if not isinstance(mapper, ImpactMapper):
-        raise ValueError(f"mapper must be an ImpactMapper, got {type(mapper).__name__}")
-    xs = check_axis("x1", x1)
-    ys = check_axis("y1", y1)
-    out = _label_grid(mapper, xs, ys, 0, executor=executor, chunk_size=chunk_size, store=store,
-                      progress=progress, max_workers=max_workers)
-    return _basin_result(mapper, xs, ys, out["label"], out["iterations"])
-
-
-def _basin_result(mapper, xs, ys, lab, its) -> BasinResult:
-    on = lab != OFF_SECTION
-    frac = float((lab[on] == 0).mean()) if np.any(on) else 0.0
-    m = mapper.map
-    meta = {
-        "case": m.case.value, "kp": m.gains.kp, "kv": m.gains.kv, "mu": m.pair.mu,
-        "e": m.pair.e, "L": m.pair.L, "m2": m.pair.m2, "omega": m.reference.omega,
-        "xm": m.reference.xm, "n_iter": mapper.n_iter, "criterion": mapper.criterion,
-        "certified_radius": mapper.certified_radius}
-    meta.update(mapper.conventions)
-    return BasinResult(xs, ys, lab, its, mapper.fixed_point.copy(), frac, meta)
-
-
-def _label_grid(mapper: ImpactMapper, xs, ys, tail: int, *, executor="serial", chunk_size=None,
-                store=None, progress=False, max_workers=None) -> dict:
-    """Labels, iterations (and tails) of the slice grid, each reshaped to ``(ny, nx, ...)``."""
-    grid = section_grid(mapper.fixed_point, mapper.map.pair.L, xs, ys)
-    pts = grid.reshape(-1, 4)
-    spec = _MapperSpec.of(mapper)
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.sweep import run_sweep
-
-    res = run_sweep(_label_chunk, {"phi": pts[:, 0], "z1": pts[:, 1], "z2": pts[:, 2],
-                                   "z4": pts[:, 3]},
-                    chunk_size=chunk_size, executor=executor, max_workers=max_workers,
-                    store=store, progress=progress,
-                    func_kwargs={"mapper": spec, "tail": tail}, metadata={"kind": "basin"},
-                    label=f"basin {mapper.map.case.value} e={mapper.map.pair.e:g}")
-    out = res.outputs
-    shape = (len(ys), len(xs))
-    return {k: np.asarray(v).reshape(shape + np.shape(v)[1:]) for k, v in out.items()}
 
 
 @dataclass(frozen=True)
@@ -314,6 +297,10 @@ def _tails(params, c, final, which, n, mapper: _MapperSpec) -> np.ndarray:
 
 
 __getattr__ = moved_names(__name__, {
-    name: "hybridpd.pair.attractor_basins"
-    for name in ("AttractorBasin", "BasinMeasure", "attractor_basin", "format_percent",
-                 "load_attractor_basin")})
+    "attractor_basin": "hybridpd.pair.attractor_basins",
+    "AttractorBasin": "hybridpd.analysis.basins:BasinResult",
+    "BasinMeasure": "hybridpd.analysis.basins", "format_percent": "hybridpd._format",
+    "load_attractor_basin": "hybridpd.analysis.basins:load_basin",
+    "BasinResult": "hybridpd.analysis.basins", "load_basin": "hybridpd.analysis.basins",
+    "basin_of_attraction": "hybridpd.analysis.basins",
+    "LABELS": "hybridpd.analysis.labels"})

@@ -9,21 +9,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from hybridpd.pair.attractor_basins import AttractorBasin, format_percent
-from hybridpd.pair.attractors import (
+from hybridpd._format import format_percent
+from hybridpd.analysis.basins import (
     DIVERGED,
     INADMISSIBLE_LABEL,
     NO_CONVERGENCE,
     OFF_SECTION_LABEL,
     STICKING,
     UNRESOLVED,
-    outcome,
+    BasinResult,
 )
-from hybridpd.pair.basins import BasinResult
-from hybridpd.plotting._common import figure, patch_proxy, register, set_all
+from hybridpd.plotting._common import figure, model_title, patch_proxy, register, set_all
 from hybridpd.plotting.style import axis_label, house_figure, styled
 
-__all__ = ["basin_colors", "basin_hatches", "basin_title", "plot_basin"]
+__all__ = ["basin_colors", "basin_hatches", "basin_title", "plot_basin", "plot_model_basin"]
 
 _SYMMETRIC = "#0072B2"
 _PERIODIC = ("#E69F00", "#009E73", "#CC79A7", "#F0E442")
@@ -31,9 +30,6 @@ _OUTCOME_COLORS = {NO_CONVERGENCE: "#999999", DIVERGED: "#D55E00", STICKING: "#5
                    UNRESOLVED: "#000000", OFF_SECTION_LABEL: "#FFFFFF",
                    INADMISSIBLE_LABEL: "#FFFFFF"}
 _MARKERS = ("D", "o", "s", "^", "v", "P")
-# the paper's labels as attractor codes (a BasinResult has no attractor identification)
-_FROM_PAPER = {0: 0, 1: NO_CONVERGENCE, 2: DIVERGED, 3: STICKING, 4: UNRESOLVED,
-               5: OFF_SECTION_LABEL, 6: INADMISSIBLE_LABEL}
 
 
 _PERIODIC_HATCHES = ("////", "\\\\\\\\", "||||", "----", "oo")
@@ -84,24 +80,9 @@ def basin_title(meta: dict) -> str:
     return f"{str(meta.get('case', '')).capitalize()} PD: {first}\n{second}"
 
 
-def _as_attractor_basin(b):
-    """Labels and entries of either result type."""
-    if isinstance(b, AttractorBasin):
-        return b.labels, list(b.attractors), b.basin, b.edges
-    if isinstance(b, BasinResult):
-        lab = np.vectorize(_FROM_PAPER.get, otypes=[np.int64])(b.labels)
-        entries = []
-        for k in sorted(set(np.unique(lab).tolist()) | {0}, reverse=True):
-            if k == 0:
-                # deferred import: loaded only when this runs, for start-up time
-                from hybridpd.pair.attractors import Attractor
-
-                entries.insert(0, Attractor(0, "symmetric", "converged to the symmetric orbit",
-                                            1, b.fixed_point.reshape(1, 4)))
-            else:
-                entries.append(outcome(k, b.metadata.get("n_iter")))
-        return lab, entries, b, ()
-    raise ValueError(f"basin must be an AttractorBasin or a BasinResult, got {type(b).__name__}")
+def _pair_slice(b) -> bool:
+    """The impact pair's slice ``(x1, y1)`` of its section ``(phi, z1, z2, z4)``."""
+    return b.axes == ("x1", "y1") and b.names == ("phi", "z1", "z2", "z4")
 
 
 @styled
@@ -110,9 +91,11 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
 
     Parameters
     ----------
-    basin : AttractorBasin or BasinResult
-        An attractor-labelled basin (:func:`hybridpd.pair.attractor_basins.attractor_basin`), or the
-        paper's labels only (:func:`hybridpd.pair.basins.basin_of_attraction`).
+    basin : BasinResult
+        The impact pair's slice ``(x1, y1)`` (:func:`hybridpd.pair.attractor_basins.
+        attractor_basin`, :func:`hybridpd.pair.basins.basin_of_attraction`); a basin of any
+        other map or model file is drawn by
+        :func:`plot_model_basin`.
     ax : matplotlib Axes, optional
         Draw there (legend below the axes); else a new figure 7.2 in wide in the house style
         (legend beside the axes).
@@ -128,7 +111,7 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     Notes
     -----
     The legend lists every label present on the grid with its share of the on-section grid
-    (:func:`hybridpd.pair.attractor_basins.format_percent`), then the markers: the symmetric orbit's
+    (:func:`hybridpd._format.format_percent`), then the markers: the symmetric orbit's
     fixed point and the section points of the other periodic orbits, projected on the slice
     (they have their own ``phi`` and ``y2``). The slice's fixed coordinates ``phi*`` and
     ``y2*`` are stated under the axes.
@@ -136,7 +119,14 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     from matplotlib.colors import BoundaryNorm, ListedColormap
     from matplotlib.patches import Rectangle
 
-    lab, entries, pb, edges = _as_attractor_basin(basin)
+    if not isinstance(basin, BasinResult):
+        raise ValueError(f"basin must be a BasinResult, got {type(basin).__name__}")
+    if not _pair_slice(basin):
+        return plot_model_basin(basin, ax=ax, title=title)
+    # deferred import: only the pair's slice needs the pair
+    from hybridpd.pair.attractors import slice_points
+
+    lab, entries, pb, edges = basin.labels, list(basin.attractors), basin, basin.edges
     if ax is None:
         fig = house_figure("double", 4.2)
         ax = fig.add_subplot(1, 1, 1)
@@ -190,7 +180,7 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     for a in entries:
         if a.label < 0:
             continue
-        xy = a.slice_points(L)
+        xy = slice_points(a, L)
         inside = ((xy[:, 0] >= extent[0]) & (xy[:, 0] <= extent[1]) & (xy[:, 1] >= extent[2])
                   & (xy[:, 1] <= extent[3]))
         if not inside.any():
@@ -253,3 +243,86 @@ def _note(fp, nx: int, ny: int, outside, edges) -> str:
                  + ", ".join(e.replace("x1", "$x_1$").replace("y1", "$y_1$") for e in edges)
                  + "):\nit may extend beyond the window")
     return note
+
+
+def plot_model_basin(basin, ax=None, title=None):
+    """A model file's (or any map's) basin: the slice coloured by attractor, section points
+    of the periodic attractors marked (the pair's colours and markers, outcomes in the pair's
+    outcome colours, the off-section part hatched).
+
+    Parameters
+    ----------
+    basin : BasinResult
+        Of a model file (:func:`hybridpd.sweeps.model_basins.model_basin`) or any map.
+    ax : matplotlib Axes, optional
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.patches import Patch
+
+    fig, ax = figure(ax, figsize=(3.5, 4.6), layout="constrained")
+    lab = basin.labels
+    x, y = basin.x, basin.y
+    dx, dy = x[1] - x[0], y[1] - y[0]
+    codes = sorted(a.label for a in basin.attractors)
+    colors = basin_colors(codes)
+    idx = np.searchsorted(codes, lab)
+    img = np.ma.masked_where(lab == -5, idx)
+    extent = (x[0] - dx / 2, x[-1] + dx / 2, y[0] - dy / 2, y[-1] + dy / 2)
+    ax.imshow(img, origin="lower", extent=extent, aspect="auto", interpolation="nearest",
+              cmap=ListedColormap([colors[k] for k in codes]),
+              norm=BoundaryNorm(np.arange(len(codes) + 1) - 0.5, len(codes)))
+    # every basin but the orbit's own gets a hatch too, so that none differs by colour alone
+    hatches = basin_hatches([k for k in codes if k != -5])
+    for k in codes:
+        if k != -5 and hatches[k] and np.any(lab == k):
+            ax.contourf(x, y, (lab == k).astype(float), levels=[0.5, 1.5], colors="none",
+                        hatches=[hatches[k]])
+    if np.any(lab == -5):
+        ax.contourf(x, y, (lab == -5).astype(float), levels=[0.5, 1.5], colors="none",
+                    hatches=["///"])
+    handles = []
+    coords = basin.names or basin.axes
+    ix, iy = coords.index(basin.x_name), coords.index(basin.y_name)
+    for a in basin.attractors:
+        share = format_percent(basin.fraction(a.label))
+        if a.label == -5:
+            handles.append(Patch(facecolor="white", edgecolor="0.3", hatch="///",
+                                 label=f"{a.name}: {share} of the window"))
+            continue
+        handles.append(Patch(facecolor=colors[a.label], edgecolor="0.3",
+                             hatch=hatches.get(a.label, ""), label=f"{a.name}: {share}"))
+        if a.periodic and a.points.size:
+            pts = np.asarray(a.points)
+            star = a.label == 0
+            (ln,) = ax.plot(pts[:, ix], pts[:, iy], ls="none",
+                            marker="*" if star else _MARKERS[(a.label - 1) % len(_MARKERS)],
+                            ms=12 if star else 7, mfc="white" if star else colors[a.label],
+                            mec="black", mew=1.0, zorder=3,
+                            label=f"its section point ({'stable' if a.stable else 'unstable'}"
+                                  f", spectral radius {a.spectral_radius:.3g})")
+            handles.append(ln)
+    ax.set_xlim(extent[0], extent[1])
+    ax.set_ylim(extent[2], extent[3])
+    ax.set_xlabel(f"{basin.x_name} at the section (model units)", fontsize=8)
+    ax.set_ylabel(f"{basin.y_name} at the section (model units)", fontsize=8)
+    ax.tick_params(labelsize=7)
+    spec = basin.metadata.get("spec", {})
+    vals = ", ".join(f"{k} = {v:g}" for k, v in basin.metadata.get("values", {}).items())
+    head = (f"{model_title(basin.source, basin.metadata)}:\ncontact {spec.get('contact', 0)} "
+            f"({spec.get('event', 'impact')})" + (f", {vals}" if vals else ""))
+    ax.set_title(title if title is not None else head, fontsize=8)
+    others = ", ".join(f"{n} = {v:.3g}" for n, v in zip(coords, basin.base)
+                       if n not in (basin.x_name, basin.y_name))
+    others = "\n".join(", ".join(parts) for parts in _rows(others.split(", "), 3))
+    fig.legend(handles=handles, loc="outside lower center", fontsize=7, frameon=False,
+               title=f"slice through the orbit:\n{others}", title_fontsize=7)
+    return fig
+
+
+def _rows(items, n):
+    return [items[i:i + n] for i in range(0, len(items), n)]

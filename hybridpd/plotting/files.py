@@ -144,19 +144,13 @@ def _region_map(path, title=None):
 
 
 def _basin(path, title=None):
+    """Every basin file (the kinds ``attractor_basin`` and ``model_basin`` of earlier
+    versions too): the one basin result, drawn by the one basin figure."""
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.basins import load_basin
+    from hybridpd.analysis.basins import load_basin
     from hybridpd.plotting.basins import plot_basin
 
     return plot_basin(load_basin(path), title=title)
-
-
-def _attractor_basin(path, title=None):
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.attractor_basins import load_attractor_basin
-    from hybridpd.plotting.basins import plot_basin
-
-    return plot_basin(load_attractor_basin(path), title=title)
 
 
 def _diagram(path, title=None, coordinate="z1"):
@@ -214,14 +208,6 @@ def _trajectory(path, title=None):
         raise _unreadable(path, f"trajectory without {exc}") from None
 
 
-def _model_basin(path, title=None):
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.plotting.model_basins import plot_model_basin
-    from hybridpd.sweeps.model_basins import load_model_basin
-
-    return plot_model_basin(load_model_basin(path), title=title)
-
-
 def _model_diagram(path, title=None):
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.plotting.model_diagrams import plot_model_diagram
@@ -230,6 +216,6 @@ def _model_diagram(path, title=None):
     return plot_model_diagram(load_model_diagram(path), title=title)
 
 
-_DRAW = {"region_map": _region_map, "basin": _basin, "attractor_basin": _attractor_basin,
+_DRAW = {"region_map": _region_map, "basin": _basin, "attractor_basin": _basin,
          "bifurcation_diagram": _diagram, "branch": _branch, "trajectory": _trajectory,
-         "model_basin": _model_basin, "model_diagram": _model_diagram}
+         "model_basin": _basin, "model_diagram": _model_diagram}

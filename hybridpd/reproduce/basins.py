@@ -30,7 +30,7 @@ class SharedWindowBasins:
     Attributes
     ----------
     basins : dict
-        ``{key: AttractorBasin or None}`` (None: the orbit does not exist or is unstable).
+        ``{key: BasinResult or None}`` (None: the orbit does not exist or is unstable).
     window : (x1_min, x1_max, y1_min, y1_max)
         The final window (physical units).
     windows : list of tuple
@@ -139,7 +139,7 @@ def boundary_distance(basin, *, x10, omega) -> dict:
 
     Parameters
     ----------
-    basin : AttractorBasin
+    basin : BasinResult
     x10 : float
         Amplitude of the primary mass (length unit).
     omega : float
@@ -165,7 +165,7 @@ def boundary_distance(basin, *, x10, omega) -> dict:
     True
     """
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.attractors import OFF_SECTION_LABEL
+    from hybridpd.analysis.basins import OFF_SECTION_LABEL
 
     from_x = lambda v: np.asarray(v, float) / x10
     from_y = lambda v: np.asarray(v, float) / (omega * x10)

@@ -301,7 +301,7 @@ def render(d: dict) -> str:
     w("## Files\n")
     w("Per convention `m2=<value>/`: `regions_*.nc` (region maps, "
       "`hybridpd.pair.regions.load_region_map`), `basin_*.nc` (attractor basins, "
-      "`hybridpd.pair.attractor_basins.load_attractor_basin`); `robustness.json` (the "
+      "`hybridpd.analysis.basins.load_basin`); `robustness.json` (the "
       "comparison of conclusion 5); `hybridpd plot FILE` draws each `.nc` file.\n")
     w("## Timings (s)\n")
     for k, v in d["timings"].items():

@@ -166,6 +166,7 @@ def _run_dict(r) -> dict:
     for (case, e), b in r.basins.items():
         o = r.orbits[(case, e)]
         row = {"case": case, "e": e, "measured": b is not None,
+               "converged_fraction": 0.0 if b is None else b.converged_fraction,
                "window": None if b is None else [float(v) for v in b.window],
                "why_empty": None if b is not None else (
                    o.reason if not o.exists else "orbit unstable")}

@@ -14,158 +14,16 @@ runs it on an existing Dask cluster). The result converts to a labelled xarray D
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from pathlib import Path
-
 import numpy as np
 
-from hybridpd._format import format_percent
-from hybridpd._results import compact_repr
-from hybridpd.analysis.basins import OUTCOMES
-from hybridpd.analysis.labels import LABELS
+from hybridpd._deprecated import moved_names
+from hybridpd.analysis.basins import OUTCOMES, Attractor, BasinResult, from_criterion, outcome
 from hybridpd.analysis.model_orbits import SectionSpec, solve_at
 from hybridpd.analysis.periodic import SectionMapper, find_orbit
-from hybridpd.sweeps.labelled import decode_attrs, encode_attrs, load_result, save_result
 from hybridpd.sweeps.model_regions import _grid_spec, template_of
 from hybridpd.sweeps.section_basins import off_section_axis
 
-__all__ = ["ModelBasin", "load_model_basin", "model_basin"]
-
-# paper label -> outcome code (converged handled apart)
-_OUTCOME_OF = {1: -1, 2: -2, 3: -3, 4: -4, 5: -5, 6: -6}
-
-
-@dataclass(frozen=True, eq=False)
-class ModelBasin:
-    """An attractor-labelled slice of a model file's section.
-
-    Attributes
-    ----------
-    source : str
-        The model file.
-    x_name, y_name : str
-        Section coordinates spanned by the grid.
-    x, y : ndarray
-        Grid axes.
-    labels : ndarray of int, shape (len(y), len(x))
-        ``0`` the orbit, ``>= 1`` other periodic attractors, negative outcomes.
-    attractors : tuple of dict
-        ``label, name, period, n_periods, points (k x dim), stable, spectral_radius`` of each
-        periodic attractor, and ``label, name`` of each outcome present.
-    criterion_labels : ndarray of int
-        The mapper's labels (:data:`hybridpd.analysis.labels.LABELS`) against the orbit.
-    iterations : ndarray of int
-    fixed_point : ndarray, shape (dim,)
-        The orbit's section point (the slice's other coordinates).
-    coords : tuple of str
-        Names of the section coordinates.
-    metadata : dict
-        Model, section, parameter values, iterations and criterion.
-    """
-
-    source: str
-    x_name: str
-    y_name: str
-    x: np.ndarray
-    y: np.ndarray
-    labels: np.ndarray
-    attractors: tuple
-    criterion_labels: np.ndarray = field(repr=False)
-    iterations: np.ndarray = field(repr=False)
-    fixed_point: np.ndarray = field(repr=False)
-    coords: tuple = ()
-    metadata: dict = field(default_factory=dict)
-    __repr__ = compact_repr
-
-    def fraction(self, label: int) -> float:
-        """Share of the on-section, admissible grid with ``label`` (of the whole grid for
-        the off-section and inadmissible labels, ``-5`` and ``-6``)."""
-        on = (self.labels != -5) & (self.labels != -6)
-        whole = self.labels.size if label in (-5, -6) else int(on.sum())
-        return float((self.labels == label).sum() / whole) if whole else 0.0
-
-    def area(self, label: int) -> float:
-        """Area of the basin of ``label`` (units of ``x`` times ``y``)."""
-        cell = (self.x[1] - self.x[0]) * (self.y[1] - self.y[0])
-        return float((self.labels == label).sum() * cell)
-
-    def summary(self) -> list:
-        """Lines in words, like the pair's: window, then one line per attractor."""
-        lines = [(f"{Path(self.source).name}: slice {self.x_name} in [{self.x[0]:g}, "
-                 f"{self.x[-1]:g}], {self.y_name} in [{self.y[0]:g}, {self.y[-1]:g}] "
-                 f"({len(self.x)} x {len(self.y)} points)")]
-        on = int(((self.labels != -5) & (self.labels != -6)).sum())
-        for a in self.attractors:
-            n = int((self.labels == a["label"]).sum())
-            whole = self.labels.size if a["label"] in (-5, -6) else on
-            pct = format_percent(n, whole) if whole else "0 %"
-            extra = ""
-            if a.get("period"):
-                stab = "stable" if a["stable"] else "unstable"
-                extra = f"; {stab}, spectral radius {a['spectral_radius']:.4g}"
-            where = "window" if a["label"] in (-5, -6) else "on-section, admissible grid"
-            if a["label"] == -6:
-                extra = f" ({n} points, not iterated)"
-            lines.append(f"{a['name']}: {pct} of the {where}, area "
-                         f"{self.area(a['label']):.4g}{extra}")
-        return lines
-
-    def to_dict(self) -> dict:
-        """JSON-ready description (with the labels)."""
-        return {"model": self.source, "x_name": self.x_name, "y_name": self.y_name,
-                "x": self.x.tolist(), "y": self.y.tolist(), "labels": self.labels.tolist(),
-                "attractors": [dict(a, fraction=self.fraction(a["label"]),
-                                    area=self.area(a["label"])) for a in self.attractors],
-                "fixed_point": self.fixed_point.tolist(), "coordinates": list(self.coords),
-                "metadata": self.metadata}
-
-    def to_dataset(self):
-        """Dimensions ``(y_name, x_name)``; ``attractor`` (CF flags name the attractors),
-        ``criterion_label``, ``iterations``; attractors and settings as attributes."""
-        # deferred import: loaded only when this runs, for start-up time
-        import xarray as xr
-
-        dims = (self.y_name, self.x_name)
-        flags = [a["label"] for a in self.attractors]
-        data = {
-            "attractor": (dims, self.labels, {
-                "long_name": "attractor reached", "flag_values": flags,
-                "flag_meanings": " ".join(a["name"].replace(" ", "_")
-                                          for a in self.attractors)}),
-            "criterion_label": (dims, self.criterion_labels, {
-                "long_name": "label against the orbit", "flag_values": list(range(len(LABELS))),
-                "flag_meanings": " ".join(LABELS)}),
-            "iterations": (dims, self.iterations, {"long_name": "iterations of the map run"})}
-        coords = {self.y_name: (self.y_name, self.y), self.x_name: (self.x_name, self.x)}
-        attrs = {"kind": "model_basin", "model": self.source, "x_name": self.x_name,
-                 "y_name": self.y_name, **encode_attrs({
-                     "attractors": list(self.attractors),
-                     "section_coordinates": list(self.coords),
-                     "fixed_point": [float(v) for v in self.fixed_point],
-                     "metadata": dict(self.metadata)})}
-        return xr.Dataset(data, coords=coords, attrs=attrs)
-
-    @classmethod
-    def from_dataset(cls, ds) -> ModelBasin:
-        """Inverse of :meth:`to_dataset`."""
-        a = decode_attrs(ds.attrs)
-        if a.get("kind") != "model_basin":
-            raise ValueError("the dataset does not hold a model basin (attribute kind)")
-        ds = ds.transpose(a["y_name"], a["x_name"])
-        return cls(a["model"], a["x_name"], a["y_name"], ds[a["x_name"]].values,
-                   ds[a["y_name"]].values, ds["attractor"].values.astype(np.int64),
-                   tuple(a["attractors"]), ds["criterion_label"].values.astype(np.int64),
-                   ds["iterations"].values.astype(np.int64), np.asarray(a["fixed_point"]),
-                   tuple(a["section_coordinates"]), dict(a.get("metadata") or {}))
-
-    def save(self, path) -> Path:
-        """Write to ``.nc`` or ``.zarr`` (by suffix)."""
-        return save_result(self, path)
-
-
-def load_model_basin(path) -> ModelBasin:
-    """Read a :class:`ModelBasin` written by :meth:`ModelBasin.save`."""
-    return load_result(ModelBasin, path)
+__all__ = ["model_basin"]
 
 
 def _grid(name, spec, sec):
@@ -182,10 +40,9 @@ def _orbit_name(label, period, n_periods):
 
 
 def _orbit_entry(label, po):
-    return {"label": int(label), "name": _orbit_name(label, po.period, po.n_periods),
-            "period": int(po.period), "n_periods": int(po.n_periods),
-            "points": [[float(v) for v in po.s]], "stable": bool(po.stable),
-            "spectral_radius": float(po.spectral_radius)}
+    return Attractor(int(label), _orbit_name(label, po.period, po.n_periods), int(po.period),
+                     np.asarray(po.s, float).reshape(1, -1), po.multipliers,
+                     float(po.spectral_radius), bool(po.stable))
 
 
 def _find_attractor(P, s, max_period, known, n_transient=200):
@@ -210,7 +67,7 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
                 periods: int | None = None, mode: str | None = None, n_iter: int = 300,
                 criterion: float = 1e-3,
                 max_period: int = 4, max_attractors: int = 4, executor="serial",
-                max_workers=None, progress: bool = False) -> ModelBasin:
+                max_workers=None, progress: bool = False) -> BasinResult:
     """Basin of a model file's periodic orbit on a 2-D slice of its section, by attractor.
 
     Parameters
@@ -235,7 +92,10 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
 
     Returns
     -------
-    ModelBasin
+    BasinResult
+        On the coordinates ``x_name``, ``y_name`` of the section (``names``); the
+        mapper's labels against the orbit as ``criterion_labels``; the model file as
+        ``metadata["model"]`` (:attr:`~hybridpd.analysis.basins.BasinResult.source`).
 
     Raises
     ------
@@ -263,12 +123,10 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
     mapper = SectionMapper(P, po.s, period=po.period, n_iter=n_iter, criterion=criterion)
     b = section_basin(mapper, xn, yn, xg, yg, executor=executor, max_workers=max_workers,
                       progress=progress)
-    crit = b.labels
-    lab = np.where(crit == 0, 0, -1)
-    for code, out in _OUTCOME_OF.items():
-        lab[crit == code] = out
+    crit = b.criterion_labels
+    lab = from_criterion(crit)
     atts = [_orbit_entry(0, po)]
-    X, Y = np.meshgrid(b.x1, b.y1)
+    X, Y = np.meshgrid(b.x, b.y)
     ix, iy = names.index(xn), names.index(yn)
     known = [po.s]
     for k in range(1, int(max_attractors) + 1):
@@ -288,12 +146,15 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
         got, _ = om.labels(pts)
         lab[tuple(rest[got == 0].T)] = k
         atts.append(_orbit_entry(k, other))
-    for code in sorted(set(np.unique(lab).tolist()) - {a["label"] for a in atts}, reverse=True):
-        atts.append({"label": int(code), "name": OUTCOMES[code][1]})
+    atts += [outcome(code) for code in sorted(OUTCOMES, reverse=True) if np.any(lab == code)]
     meta = {"values": dict(values or {}), "spec": {f: getattr(spec, f) for f in
                                                     ("contact", "wall", "event", "period",
                                                      "periods")},
             "n_iter": int(n_iter), "criterion": float(criterion), "section_mode": po.mode,
             "inadmissible": int(b.metadata.get("inadmissible", 0))}
-    return ModelBasin(template.source, xn, yn, b.x1, b.y1, lab, tuple(atts), crit,
-                      b.iterations, po.s.copy(), tuple(names), meta)
+    return BasinResult(b.x, b.y, lab, tuple(atts), b.iterations, xn, yn, po.s.copy(),
+                       tuple(names), crit, metadata=dict(meta, model=str(template.source)))
+
+
+__getattr__ = moved_names(__name__, {"ModelBasin": "hybridpd.analysis.basins:BasinResult",
+                                     "load_model_basin": "hybridpd.analysis.basins:load_basin"})

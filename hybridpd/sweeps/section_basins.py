@@ -11,10 +11,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridpd.analysis.labels import INADMISSIBLE, OFF_SECTION
+from hybridpd.analysis.basins import OUTCOMES, Attractor, BasinResult, from_criterion, outcome
+from hybridpd.analysis.labels import INADMISSIBLE
 from hybridpd.analysis.periodic import SectionMapper
 from hybridpd.model import check_axis
-from hybridpd.sweeps.basin_result import BasinResult
 from hybridpd.sweeps.sweep import run_sweep
 
 __all__ = ["off_section_axis", "section_basin"]
@@ -52,10 +52,11 @@ def section_basin(mapper: SectionMapper, axis_x, axis_y, x, y, *, executor="seri
     Returns
     -------
     BasinResult
-        ``x1``/``y1`` hold the ``x``/``y`` axes, ``labels`` has shape ``(ny, nx)``;
-        ``metadata["axes"]`` names the coordinates. Points whose state lies outside the
-        section's admissible set (:meth:`~hybridpd.hybrid.section.Section.violations`:
-        a contact's gap beyond its bounds) are labelled ``inadmissible`` and never iterated
+        ``x``/``y`` on the coordinates ``x_name``/``y_name``, ``labels`` of shape
+        ``(ny, nx)`` (``0``: the mapper's criterion holds, negative outcomes), the mapper's
+        labels as ``criterion_labels``. Points whose state lies outside the section's
+        admissible set (:meth:`~hybridpd.hybrid.section.Section.violations`: a contact's
+        gap beyond its bounds) are labelled ``inadmissible`` and never iterated
         (``metadata["inadmissible"]`` counts them); ``fraction`` is of the others.
 
     Raises
@@ -66,7 +67,7 @@ def section_basin(mapper: SectionMapper, axis_x, axis_y, x, y, *, executor="seri
     Examples
     --------
     >>> import hybridpd as hp
-    >>> from hybridpd.pair.section import impact_pair_section
+    >>> from hybridpd.analysis.sections import impact_pair_section
     >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
     >>> P = hp.SectionMap(impact_pair_section(orb.system()))
     >>> b = hp.section_basin(hp.SectionMapper(P, orb.fixed_point, n_iter=50), "z1", "z4",
@@ -99,14 +100,17 @@ def section_basin(mapper: SectionMapper, axis_x, axis_y, x, y, *, executor="seri
                         progress=progress, func_kwargs={"mapper": _PickledMapper.of(mapper)},
                         metadata={"kind": "section_basin"})
         lab[~bad], its[~bad] = res.outputs["label"], res.outputs["iterations"]
-    lab = lab.reshape(Y.shape)
-    on = (lab != OFF_SECTION) & (lab != INADMISSIBLE)
-    frac = float((lab[on] == 0).mean()) if np.any(on) else 0.0
-    meta = {"axes": [names[ix], names[iy]], "coordinates": list(names),
-            "n_iter": mapper.n_iter, "criterion": mapper.criterion,
+    crit = lab.reshape(Y.shape)
+    att = from_criterion(crit)
+    orbit = Attractor(0, f"period-{mapper.period} orbit", mapper.period,
+                      mapper.fixed_point.reshape(1, -1))
+    entries = (orbit,) + tuple(outcome(k, mapper.n_iter) for k in sorted(OUTCOMES, reverse=True)
+                               if np.any(att == k))
+    meta = {"n_iter": mapper.n_iter, "criterion": mapper.criterion,
             "certified_radius": mapper.certified_radius, "period": mapper.period,
             "inadmissible": int(bad.sum())}
-    return BasinResult(xs, ys, lab, its.reshape(Y.shape), mapper.fixed_point.copy(), frac, meta)
+    return BasinResult(xs, ys, att, entries, its.reshape(Y.shape), names[ix], names[iy],
+                       mapper.fixed_point.copy(), tuple(names), crit, metadata=meta)
 
 
 def _axis_index(a, sec) -> int:
