@@ -36,8 +36,8 @@ OLD_MODULES = {
         STATUS_UNRESOLVED impact_map iterate_map map_labels next_impact pack_params
     """),
     "hybridpd.continuation": ("hybridpd.pair.continuation", """
-        BifurcationEvent Branch EVENT_KINDS ImpactStep MapTrace PARAMETERS PeriodicOrbit
-        SYMMETRIC_PARAMETERS continue_orbit continue_symmetric find_periodic_orbit
+        BifurcationEvent Branch EVENT_KINDS ImpactStep MapTrace PARAMETERS
+        SYMMETRIC_PARAMETERS continue_orbit continue_symmetric
         map_power_jacobian plot_branch trace_map
     """),
     "hybridpd.design": ("hybridpd.pair.design", """
@@ -96,6 +96,7 @@ MOVED_NAMES = [
     ("hybridpd.analysis.periodic", "orbit_from_model", "hybridpd.analysis.model_orbits"),
     ("hybridpd.analysis.hybridmap", "impact_pair_section", "hybridpd.analysis.sections"),
     ("hybridpd.analysis.hybridmap", "mechanical_section", "hybridpd.analysis.sections"),
+    ("hybridpd.pair.continuation", "PeriodicOrbit", "hybridpd.analysis.periodic"),
 ]
 
 

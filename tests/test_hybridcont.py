@@ -8,9 +8,10 @@ import pytest
 from hybridpd import ImpactPair, PDGains, Reference
 from hybridpd.analysis.hybridcont import FAMILY_EVENTS, continue_family
 from hybridpd.analysis.hybridmap import SectionMap
+from hybridpd.analysis.periodic import find_orbit
 from hybridpd.analysis.sections import impact_pair_section
 from hybridpd.hybrid.samples import impact_oscillator, oscillator_initial_state
-from hybridpd.pair.continuation import continue_orbit, find_periodic_orbit
+from hybridpd.pair.continuation import continue_orbit
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.impactpair import ControlledImpactPair
 from hybridpd.pair.orbits import symmetric_orbit
@@ -37,7 +38,7 @@ def test_fold_of_the_period2_cycle_matches_the_pair_engine():
     pair = ImpactPair(0.1, 0.1, 0.75)
     xm = symmetric_orbit(pair, PDGains(10, 20), W).xm
     P = ImpactMap(pair, PDGains(10, 20), Reference(xm, W))
-    orb = find_periodic_orbit(P, P.iterate(np.array([0.3, -2.1, -2.3, 0.5]), 200)[-1],
+    orb = find_orbit(P, P.iterate(np.array([0.3, -2.1, -2.3, 0.5]), 200)[-1],
                               period=2)
     ref = continue_orbit(P, orb, "kv", 5.0, period=2).events_of("fold")[0].parameter
     br = continue_family(_kv_builder(pair, xm), orb.s, 18.5, 5.0, period=2, step=0.3,

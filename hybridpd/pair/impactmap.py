@@ -140,6 +140,11 @@ class ImpactMap(PoincareMap):
             raise ValueError("s[..., 3] = z4 must be > 0 (approaching the +L wall)")
         return np.ascontiguousarray(s.reshape(-1, 4))
 
+    def check_point(self, s) -> np.ndarray:
+        """``s`` as a section point ``(phi, z1, z2, z4)`` with ``z4 > 0``; ``ValueError``
+        naming ``s`` otherwise."""
+        return self._points(check_array("s", s, shape=(4,)))[0].copy()
+
     def _fd_steps(self, s, H):
         H = H.copy()
         H[3] = min(H[3], 0.5 * s[3])          # stay on the section side z4 > 0
@@ -191,9 +196,19 @@ class ImpactMap(PoincareMap):
         return MapResult(cur.copy(), True, "returned", float(jumps[0][0]), t_abs, z, "free",
                          tuple(jumps), bool(grazing), DP)
 
-    def state(self, s, t) -> np.ndarray:
+    def point_quantities(self, s, k: int, result: MapResult, *, graze_tol: float = 1e-6,
+                         margin_samples: int = 256, **options) -> dict:
+        """The pair's walls, flight margins and contact pattern along ``s, ..., P^{k-1}(s)``
+        (:func:`hybridpd.pair.continuation.trace.orbit_quantities`)."""
+        from hybridpd.pair.continuation.trace import orbit_quantities
+
+        return orbit_quantities(self, s, k, graze_tol=graze_tol,
+                                margin_samples=margin_samples)
+
+    def state(self, s, t: float | None = None) -> np.ndarray:
         """Full state ``[x1, y1, x2, y2, pc, ps]`` of the pre-impact section point ``s`` at time
-        ``t``."""
+        ``t`` (default: its phase ``s[0]``)."""
+        t = s[0] if t is None else t
         return np.array([s[1] + self.pair.L, s[2] + s[3], s[1], s[2],
                          *self.reference.exo_state(t)])
 
@@ -270,12 +285,6 @@ class ImpactMap(PoincareMap):
                 f"the symbolic DP needs the impact pattern (+L, -L, +L); got walls "
                 f"{[w for w, _ in seq]} (use jacobian_fd)")
         return self._symbolic(s, seq[0][1], seq[1][1])
-
-    def jacobian_fd(self, s, h: float | None = None, *, k: int = 1, scale=None,
-                    richardson: bool = False, one_sided: bool = False) -> np.ndarray:
-        """Central finite differences of the simulated map (:meth:`PoincareMap.jacobian_fd`)."""
-        return super().jacobian_fd(self._points(s)[0], k, h=h, scale=scale,
-                                   richardson=richardson, one_sided=one_sided)
 
     def stability(self, s) -> Stability:
         """Stability of the fixed point ``s`` from the symbolic ``DP``."""

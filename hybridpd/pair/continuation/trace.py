@@ -9,7 +9,12 @@ import numpy as np
 from hybridpd._results import compact_repr
 from hybridpd.model import check_int
 from hybridpd.pair.batch import STATUS_IMPACT, trace_once, turning_margins
-from hybridpd.pair.continuation._common import _impact_map, _min, _section_point
+from hybridpd.pair.continuation._common import (
+    _fixed_parameters,
+    _impact_map,
+    _min,
+    _section_point,
+)
 from hybridpd.pair.impactmap import ImpactMap
 
 
@@ -140,3 +145,52 @@ def trace_map(impact_map_: ImpactMap, s, *, margin: bool = True,
     ok = st == STATUS_IMPACT
     return MapTrace(out if ok else np.full(4, np.nan), bool(ok), int(st), steps, marg,
                     _min(speeds))
+
+
+def trace_orbit(P: ImpactMap, s, k: int, margin_samples: int = 256) -> list:
+    """:func:`trace_map` (with margins) of ``s, P(s), ..., P^{k-1}(s)``, up to the first
+    application that does not return."""
+    traces, cur = [], np.asarray(s, float)
+    for _ in range(k):
+        tr = trace_map(P, cur, margin=True, margin_samples=margin_samples)
+        traces.append(tr)
+        if not tr.ok:
+            break
+        cur = tr.s
+    return traces
+
+
+def orbit_quantities(P: ImpactMap, s, k: int, *, graze_tol: float = 1e-6,
+                     margin_samples: int = 256) -> dict:
+    """The pair's quantities of the segment ``s, P(s), ..., P^{k-1}(s)`` (the hook
+    :meth:`ImpactMap.point_quantities`).
+
+    Returns a dict with ``orbit`` (shape ``(k, 4)``, the iterates as far as ``P`` is defined),
+    ``pattern`` (the :class:`ImpactStep` of each application), ``walls``, ``n_impacts``,
+    ``margin`` (smallest flight margin over ``L``, see :class:`MapTrace`),
+    ``min_impact_speed`` (length/time), ``sticking``, ``grazing`` (a grazing touch, a
+    margin below ``graze_tol`` or an approach speed below ``graze_tol`` times the largest),
+    ``minimal_period`` (smallest ``d`` dividing ``k`` with ``P^d(s) = s`` to ``1e-7``) and
+    ``symbolic_dp`` (every application has the simple pattern: the map's ``DP`` is the chain
+    of its named blocks, :meth:`ImpactMap.blocks`; finite differences otherwise) and
+    ``parameters`` (the map's ``kp, kv, e, mu, L, m2, xm, omega, case``).
+    """
+    from hybridpd.analysis.maps import minimal_period
+
+    traces = trace_orbit(P, s, k, margin_samples)
+    steps = [st for tr in traces for st in tr.steps]
+    margin = _min([tr.margin for tr in traces])
+    speeds = [st.speed for st in steps if st.kind != "stick"]
+    vmax, vmin = max(speeds, default=0.0), _min(speeds)
+    grazing = (any(st.kind == "graze" for st in steps)
+               or (np.isfinite(margin) and margin < graze_tol)
+               or (vmax > 0 and vmin < graze_tol * vmax))
+    pattern = tuple(tr.steps for tr in traces)
+    ok = all(tr.ok for tr in traces)
+    return {"orbit": np.array([s] + [tr.s for tr in traces[:-1]]), "pattern": pattern,
+            "walls": tuple(tuple(st.wall for st in p) for p in pattern),
+            "n_impacts": len(steps), "margin": margin, "min_impact_speed": vmin,
+            "sticking": any(st.kind == "stick" for st in steps), "grazing": bool(grazing),
+            "minimal_period": minimal_period(P, s, k) if ok else k,
+            "symbolic_dp": ok and all(tr.simple for tr in traces),
+            "parameters": _fixed_parameters(P)}
