@@ -468,3 +468,30 @@ def test_symmetric_events_against_a_fine_grid(case, e):
         assert kv[i] <= p <= kv[i + 1]
     for p, i in zip(sorted(gr), ex):
         assert kv[i] <= p <= kv[i + 1]
+
+
+def _central_differences(P, s, h=1e-7):
+    """Hand-written central differences of P at s (phase differences wrapped)."""
+    J = np.empty((4, 4))
+    for j in range(4):
+        d = np.zeros(4)
+        d[j] = h * max(1.0, abs(s[j]))
+        J[:, j] = _phase_diff(P(s + d), P(s - d), P.period) / (2 * d[j])
+    return J
+
+
+def test_impact_map_jacobian_is_an_array_with_named_blocks(period2):
+    o = sym(e=0.5)
+    P = ImpactMap(o.pair, o.gains, o.reference())
+    J = P.jacobian(o.fixed_point)
+    assert isinstance(J, np.ndarray) and J.shape == (4, 4)
+    B = P.blocks(o.fixed_point)
+    np.testing.assert_allclose(J, B.DP43 @ B.DP32 @ B.DP21 @ B.DP10, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(J, _central_differences(P, o.fixed_point), rtol=1e-5, atol=1e-6)
+    # a return with a double impact: no named blocks, the map's DP is still an array
+    Q, orb = period2
+    s = next(x for x, w in zip(orb.orbit, orb.walls) if w != (-1, 1))
+    with pytest.raises(ValueError, match="pattern"):
+        Q.blocks(s)
+    np.testing.assert_allclose(Q.jacobian(s), _central_differences(Q, s), rtol=1e-4,
+                               atol=1e-5)

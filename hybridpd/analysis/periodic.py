@@ -255,7 +255,7 @@ def find_orbit(P: PoincareMap, s0, period: int = 1, *, tol: float = 1e-11, max_i
         raise ValueError(f"jacobian must be 'exact' or 'fd', got {jacobian!r}")
     try:
         k = check_returns(period)
-    except (ValueError, TypeError):
+    except (ValueError, TypeError, OverflowError):
         raise ValueError(f"period must be an int >= 1 (returns per period), got {period!r}") \
             from None
     if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not tol > 0:

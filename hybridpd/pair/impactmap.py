@@ -7,9 +7,11 @@ right wall, whatever happens in between (on a simple orbit: one impact on the le
 is computed by the simulator (the compiled closed-form engine of :mod:`hybridpd.pair.batch`), so
 it is usable from any state, not only near an orbit.
 
-``DP`` comes from the symbolic blocks ``DP43 DP32 DP21 DP10`` (:mod:`hybridpd.pair.symbolic`)
-whenever the return has the simple pattern (+L, -L, +L); :meth:`ImpactMap.jacobian_fd` gives
-central finite differences of the simulated map as an independent check.
+``DP`` (:meth:`ImpactMap.jacobian`, an array like every map's) is the product of the symbolic
+blocks ``DP43 DP32 DP21 DP10`` (:mod:`hybridpd.pair.symbolic`, by name from
+:meth:`ImpactMap.blocks`) whenever the return has the simple pattern (+L, -L, +L);
+:meth:`ImpactMap.jacobian_fd` gives central finite differences of the simulated map as an
+independent check.
 """
 from __future__ import annotations
 
@@ -104,6 +106,9 @@ class ImpactMap(PoincareMap):
     True
     >>> P.apply(orb.fixed_point).signature
     (('wall+', 'crossing'), ('wall-', 'crossing'))
+    >>> B = P.blocks(orb.fixed_point)
+    >>> bool(np.allclose(P.jacobian(orb.fixed_point), B.DP43 @ B.DP32 @ B.DP21 @ B.DP10))
+    True
     """
 
     def __init__(self, pair: ImpactPair, gains, reference: Reference, case="collocated", *,
@@ -277,15 +282,19 @@ class ImpactMap(PoincareMap):
             raise RuntimeError(f"no return to the section without sticking: status {st}")
         return [(int(r[0]), float(r[1])) for r in rec]
 
-    def jacobian(self, s) -> symbolic.JacobianResult:
-        """``DP`` at ``s`` from the symbolic blocks (the return must be +L, -L, +L)."""
+    def blocks(self, s) -> symbolic.JacobianResult:
+        """The named blocks of ``DP`` at ``s`` (paper (24)-(25)): ``DP10`` (impact at ``+L``),
+        ``DP21`` (flight to ``-L``), ``DP32`` (impact at ``-L``), ``DP43`` (flight back), their
+        product ``DP`` and the section points between them. The return from ``s`` must have
+        the simple pattern ``(+L, -L, +L)`` (``ValueError`` otherwise: :meth:`jacobian` then
+        gives finite differences)."""
         seq = self.flight_times(s)
         if [w for w, _ in seq] != [-1, 1]:
             raise ValueError(
-                f"the symbolic DP needs the impact pattern (+L, -L, +L); got walls "
-                f"{[w for w, _ in seq]} (use jacobian_fd)")
+                f"s: the named blocks need the impact pattern (+L, -L, +L); got walls "
+                f"{[w for w, _ in seq]} (use jacobian)")
         return self._symbolic(s, seq[0][1], seq[1][1])
 
     def stability(self, s) -> Stability:
-        """Stability of the fixed point ``s`` from the symbolic ``DP``."""
-        return stability(np.asarray(self.jacobian(s).DP).reshape(4, 4))
+        """Stability of the fixed point ``s`` from ``DP`` (:meth:`jacobian`)."""
+        return stability(self.jacobian(s))
