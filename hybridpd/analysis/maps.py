@@ -112,7 +112,10 @@ class PoincareMap(abc.ABC):
     quantities of its own at a fixed point (the impact pair's walls, flight margins and
     contact pattern) returns them from :meth:`point_quantities`: orbit searches keep them in
     :attr:`~hybridpd.analysis.periodic.PeriodicOrbit.quantities` (a quantity named
-    ``grazing`` also raises the orbit's grazing flag). No analysis asks which class it has.
+    ``grazing`` also raises the orbit's grazing flag). A map with named parameters gives
+    :meth:`family`, a builder of the map at other values of one of them, for the one
+    continuation engine (:func:`hybridpd.analysis.continuation.continue_orbit`). No analysis
+    asks which class it has.
 
     Examples
     --------
@@ -181,6 +184,14 @@ class PoincareMap(abc.ABC):
         checks); a hook ignores the ones it does not know."""
         del s, k, result, options
         return {}
+
+    def family(self, parameter: str, **options):
+        """A builder ``p -> PoincareMap``: this map with its parameter named `parameter` set to
+        ``p`` (the others kept), for :func:`~hybridpd.analysis.continuation.continue_orbit`.
+        The default map has no named parameters (``ValueError``)."""
+        del options
+        raise ValueError(f"parameter: this map ({type(self).__name__}) names no parameters, "
+                         f"got {parameter!r}; give continue_orbit a builder p -> map")
 
     def canonical(self, s) -> np.ndarray:
         """The representative of a section point (the phase reduced to ``[0, T)``)."""

@@ -258,8 +258,9 @@ def find_orbit(P: PoincareMap, s0, period: int = 1, *, tol: float = 1e-11, max_i
     except (ValueError, TypeError, OverflowError):
         raise ValueError(f"period must be an int >= 1 (returns per period), got {period!r}") \
             from None
-    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not tol > 0:
-        raise ValueError(f"tol must be > 0, got {tol!r}")
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) \
+            or not (math.isfinite(tol) and tol > 0):
+        raise ValueError(f"tol must be a finite number > 0, got {tol!r}")
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) \
             or max_iter < 1:
         raise ValueError(f"max_iter must be an int >= 1, got {max_iter!r}")

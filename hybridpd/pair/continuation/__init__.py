@@ -51,6 +51,11 @@ point, the motion reached past a grazing point) and :mod:`.plot` (:func:`plot_br
 """
 from __future__ import annotations
 
+import warnings
+
+from hybridpd._deprecated import _message
+from hybridpd.analysis.periodic import PeriodicOrbit as _PeriodicOrbit
+from hybridpd.analysis.periodic import find_orbit as _find_orbit
 from hybridpd.pair.continuation._common import (
     DESIGN_PARAMETERS,
     EVENT_KINDS,
@@ -76,12 +81,10 @@ def _find_periodic_orbit(impact_map_, s0, period: int = 1, *, tol: float = 1e-12
                          graze_tol: float = 1e-6, margin_samples: int = 256):
     """The orbit search of earlier versions: :func:`hybridpd.analysis.periodic.find_orbit`
     (``jacobian`` ``"auto"`` or ``"symbolic"`` is its ``"exact"``; ``fd_step`` is unused)."""
-    from hybridpd.analysis.periodic import find_orbit
-
     del fd_step
     if jacobian not in ("auto", "symbolic", "fd"):
         raise ValueError(f"jacobian must be 'auto', 'symbolic' or 'fd', got {jacobian!r}")
-    return find_orbit(impact_map_, s0, period, tol=tol, max_iter=max_iter,
+    return _find_orbit(impact_map_, s0, period, tol=tol, max_iter=max_iter,
                       jacobian="fd" if jacobian == "fd" else "exact", graze_tol=graze_tol,
                       margin_samples=margin_samples)
 
@@ -91,12 +94,8 @@ def __getattr__(name):
     if name == "find_periodic_orbit":
         obj, new = _find_periodic_orbit, "hybridpd.analysis.periodic.find_orbit"
     elif name == "PeriodicOrbit":
-        from hybridpd.analysis.periodic import PeriodicOrbit as obj
-        new = "hybridpd.analysis.periodic.PeriodicOrbit"
+        obj, new = _PeriodicOrbit, "hybridpd.analysis.periodic.PeriodicOrbit"
     else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import warnings
-
-    from hybridpd._deprecated import _message
     warnings.warn(_message(f"{__name__}.{name}", new), DeprecationWarning, stacklevel=2)
     return obj
