@@ -57,7 +57,9 @@ MOVED_MODULES = {
     # continuation engine (that module serves the pair's names): its submodules
     "hybridpd.analysis.continuation.branchio": "hybridpd.pair.continuation.events",
     **{f"hybridpd.analysis.continuation.{m}": f"hybridpd.pair.continuation.{m}"
-       for m in ("branch", "events", "newton", "plot", "switching", "symmetric", "trace")},
+       for m in ("branch", "events", "newton", "switching", "symmetric", "trace")},
+    "hybridpd.analysis.continuation.plot": "hybridpd.plotting.branches",
+    "hybridpd.pair.continuation.plot": "hybridpd.plotting.branches",
     "hybridpd.analysis.hybridcont": "hybridpd.analysis.continuation",
     "hybridpd.analysis.bifdiagram": "hybridpd.pair.bifdiagram",
     "hybridpd.analysis.attractors": "hybridpd.pair.attractors",

@@ -41,7 +41,7 @@ OLD_MODULES = {
     "hybridpd.continuation": ("hybridpd.pair.continuation", """
         BifurcationEvent Branch EVENT_KINDS ImpactStep MapTrace PARAMETERS
         SYMMETRIC_PARAMETERS continue_orbit continue_symmetric
-        map_power_jacobian plot_branch trace_map
+        map_power_jacobian trace_map
     """),
     "hybridpd.design": ("hybridpd.pair.design", """
         ComparisonRow DesignMap DesignResult InfeasibleDesignError OptimizerRun
@@ -102,6 +102,7 @@ MOVED_NAMES = [
     ("hybridpd.pair.continuation", "PeriodicOrbit", "hybridpd.analysis.periodic"),
     ("hybridpd.analysis.continuation", "continue_symmetric", "hybridpd.pair.continuation"),
     ("hybridpd.analysis.continuation", "switch_branch", "hybridpd.pair.continuation"),
+    ("hybridpd.pair.continuation", "plot_branch", "hybridpd.plotting.branches"),
 ]
 
 

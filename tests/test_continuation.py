@@ -17,11 +17,11 @@ from hybridpd.pair.continuation import (
     continue_orbit,
     continue_symmetric,
     map_power_jacobian,
-    plot_branch,
     trace_map,
 )
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit, symmetric_orbits
+from hybridpd.plotting.branches import plot_branch
 
 PAPER = dict(mu=0.1, L=0.75)
 W = 5.0

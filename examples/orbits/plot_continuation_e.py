@@ -29,10 +29,10 @@ from hybridpd.analysis.periodic import find_orbit
 from hybridpd.pair.continuation import (
     continue_orbit,
     continue_symmetric,
-    plot_branch,
 )
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
+from hybridpd.plotting.branches import plot_branch
 
 # sphinx_gallery_start_ignore
 sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py

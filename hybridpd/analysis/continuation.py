@@ -518,7 +518,7 @@ _OLD = {"continue_family": ("_continue_family", "continue_orbit (p0, p_end befor
 #: The impact pair's names once at this path (the 0.2.0 package).
 _PAIR = ("PARAMETERS", "DESIGN_PARAMETERS", "SYMMETRIC_PARAMETERS", "ImpactStep", "MapTrace",
          "BranchSwitch", "branch_map", "continue_symmetric", "design_xm", "load_branch",
-         "map_power_jacobian", "plot_branch", "switch_branch", "trace_map")
+         "map_power_jacobian", "switch_branch", "trace_map")
 #: Submodules of that package: the import hook serves ``hybridpd.analysis.continuation.<x>``.
 __path__ = []
 
@@ -527,6 +527,9 @@ def __getattr__(name):
     if name in _OLD:
         here, new = _OLD[name]
         obj, where = globals()[here], f"{__name__}.{new}"
+    elif name == "plot_branch":
+        obj = importlib.import_module("hybridpd.plotting.branches").plot_branch
+        where = "hybridpd.plotting.branches.plot_branch"
     elif name in _PAIR:
         obj, where = getattr(importlib.import_module("hybridpd.pair.continuation"), name), \
             f"hybridpd.pair.continuation.{name}"

@@ -47,10 +47,12 @@ Modules: :mod:`.trace` (one application of ``P`` with its impact pattern), :mod:
 (``P^k`` and its Jacobian), :mod:`.events` (:class:`Branch`, :class:`BifurcationEvent`, event location), :mod:`.branch`
 (:func:`continue_orbit`), :mod:`.symmetric` (:func:`continue_symmetric`), :mod:`.switching`
 (:func:`switch_branch`: the period-doubled branch at a flip, the crossing branch at a branch
-point, the motion reached past a grazing point) and :mod:`.plot` (:func:`plot_branch`).
+point, the motion reached past a grazing point); branches are drawn by
+:func:`hybridpd.plotting.branches.plot_branch`.
 """
 from __future__ import annotations
 
+import importlib
 import warnings
 
 from hybridpd._deprecated import _message
@@ -66,14 +68,13 @@ from hybridpd.pair.continuation._common import (
 from hybridpd.pair.continuation.branch import continue_orbit
 from hybridpd.pair.continuation.events import BifurcationEvent, Branch, load_branch
 from hybridpd.pair.continuation.newton import map_power_jacobian
-from hybridpd.pair.continuation.plot import plot_branch
 from hybridpd.pair.continuation.switching import BranchSwitch, branch_map, switch_branch
 from hybridpd.pair.continuation.symmetric import continue_symmetric
 from hybridpd.pair.continuation.trace import ImpactStep, MapTrace, trace_map
 
 __all__ = ["DESIGN_PARAMETERS", "EVENT_KINDS", "PARAMETERS", "SYMMETRIC_PARAMETERS",
            "BifurcationEvent", "Branch", "BranchSwitch", "ImpactStep", "MapTrace",
-           "branch_map", "continue_orbit", "continue_symmetric", "design_xm", "load_branch", "map_power_jacobian", "plot_branch", "switch_branch", "trace_map"]
+           "branch_map", "continue_orbit", "continue_symmetric", "design_xm", "load_branch", "map_power_jacobian", "switch_branch", "trace_map"]
 
 
 def _find_periodic_orbit(impact_map_, s0, period: int = 1, *, tol: float = 1e-12,
@@ -95,6 +96,9 @@ def __getattr__(name):
         obj, new = _find_periodic_orbit, "hybridpd.analysis.periodic.find_orbit"
     elif name == "PeriodicOrbit":
         obj, new = _PeriodicOrbit, "hybridpd.analysis.periodic.PeriodicOrbit"
+    elif name == "plot_branch":     # by name: the plotting layer sits above the pair
+        new = "hybridpd.plotting.branches.plot_branch"
+        obj = importlib.import_module("hybridpd.plotting.branches").plot_branch
     else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     warnings.warn(_message(f"{__name__}.{name}", new), DeprecationWarning, stacklevel=2)
