@@ -10,7 +10,8 @@ import numpy as np
 from _common import best_of
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.pair.continuation import continue_orbit, continue_symmetric, find_periodic_orbit
+from hybridpd.analysis.periodic import find_orbit
+from hybridpd.pair.continuation import continue_orbit, continue_symmetric
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
 
@@ -20,12 +21,12 @@ def main():
     orb = symmetric_orbit(pair, PDGains(10, 20), 5.0)
     P = ImpactMap(pair, orb.gains, orb.reference())
     start = orb.fixed_point + np.array([0.01, 0.02, -0.05, 0.05])
-    find_periodic_orbit(P, start)                                  # warm-up (numba, SymPy)
-    t, r = best_of(lambda: find_periodic_orbit(P, start))
+    find_orbit(P, start)                                  # warm-up (numba, SymPy)
+    t, r = best_of(lambda: find_orbit(P, start))
     print(f"Newton, symmetric fixed point (symbolic DP): {t * 1e3:.1f} ms, "
           f"{r.iterations} iterations, residual {r.residual:.1e}")
     s2 = P.iterate(np.array([0.3, -2.1, -2.3, 0.5]), 200)[-1] + 0.01
-    t, c = best_of(lambda: find_periodic_orbit(P, s2, period=2))
+    t, c = best_of(lambda: find_orbit(P, s2, period=2))
     print(f"Newton, period-2 cycle (finite-difference DP): {t * 1e3:.1f} ms, "
           f"{c.iterations} iterations")
 
@@ -43,7 +44,7 @@ def main():
     pa = ImpactPair(0.1, 0.5, 0.75)
     o = symmetric_orbit(pa, PDGains(60, 0.5), 5.0)
     Q = ImpactMap(pa, o.gains, o.reference())
-    a = find_periodic_orbit(Q, Q.iterate(o.fixed_point + 1e-3, 3000)[-1])
+    a = find_orbit(Q, Q.iterate(o.fixed_point + 1e-3, 3000)[-1])
     t, br = best_of(lambda: continue_orbit(Q, a, "kp", 99.3), repeat=2)
     print(f"non-symmetric orbit in kp 60 -> 99.3: {t:.2f} s, {len(br)} points "
           f"({t / len(br) * 1e3:.1f} ms/point incl. location), events "

@@ -16,7 +16,7 @@ any hybrid automaton  :class:`HybridAutomaton`, :class:`Section`, :class:`Sectio
                       :func:`find_orbit`, :class:`PeriodicOrbit`, :func:`stability`
 mechanical systems    :class:`MechanicalSystem`, :class:`Contact`, :func:`load_model`,
                       :func:`simulate`
-continuation          :func:`continue_orbit`, :func:`switch_branch`, :func:`continue_family`,
+continuation          :func:`continue_orbit`, :func:`switch_branch`,
                       :func:`boundary_curves`, :func:`bifurcation_diagram`
 sweeps                :func:`region_map`, :func:`basin_of_attraction`,
                       :func:`attractor_basin`, :func:`section_basin`, :func:`run_sweep`
@@ -84,10 +84,9 @@ _NAMES = {
     "load_model": "hybridpd.mechanics.modelfile",
     "simulate": "hybridpd.mechanics.simulate",
     # continuation, boundaries, diagrams
-    "continue_orbit": "hybridpd.analysis.hybridcont",
+    "continue_orbit": "hybridpd.analysis.continuation",
     "switch_branch": "hybridpd.pair.continuation",
     "load_branch": "hybridpd.pair.continuation",
-    "continue_family": "hybridpd.analysis.hybridcont",
     "boundary_curves": "hybridpd.pair.boundaries",
     "bifurcation_diagram": "hybridpd.analysis.diagrams",
     # sweeps and result files
@@ -104,8 +103,9 @@ _NAMES = {
     "plot_file": "hybridpd.plotting.files"}
 
 # flat names replaced by others (served with a DeprecationWarning)
-_RENAMED = _deprecated.moved_names(__name__, {
-    "load_attractor_basin": "hybridpd.analysis.basins:load_basin"})
+_RENAMED_NAMES = {"load_attractor_basin": "hybridpd.analysis.basins:load_basin",
+                  "continue_family": "hybridpd.analysis.continuation:continue_orbit"}
+_RENAMED = _deprecated.moved_names(__name__, _RENAMED_NAMES)
 
 # ``reproduce`` is both a subpackage and its main function: the package is callable (it runs
 # :func:`hybridpd.reproduce.reproduce`), so ``hp.reproduce(...)`` works whichever Python binds.
@@ -117,9 +117,8 @@ __all__ = ["Case", "Contact", "ControlledImpactPair", "HybridAutomaton", "Impact
            "PeriodicOrbit", "PoincareMap",
            "Reference", "Section", "SectionMap", "SectionMapper", "Stability", "__version__",
            "attractor_basin", "basin_of_attraction", "bifurcation_diagram", "boundary_curves",
-           "certify_orbit",
-           "continue_family", "continue_orbit", "design", "find_orbit", "load_basin", "load_branch", "load_model", "load_region_map", "plot_file", "region_map",
-           "reproduce", "run_sweep", "section_basin", "simulate", "stability", "switch_branch",
+           "certify_orbit", "continue_orbit", "design", "find_orbit", "load_basin", "load_branch",
+           "load_model", "load_region_map", "plot_file", "region_map", "reproduce", "run_sweep", "section_basin", "simulate", "stability", "switch_branch",
            "symmetric_orbit", "symmetric_orbits", "virtual_restitution"]
 
 
@@ -131,7 +130,7 @@ def __getattr__(name):
         return value
     if name in _SUBPACKAGES:
         return _importlib.import_module(f"hybridpd.{name}")
-    if name == "load_attractor_basin":
+    if name in _RENAMED_NAMES:
         return _RENAMED(name)
     raise AttributeError(f"module 'hybridpd' has no attribute {name!r}")
 

@@ -53,8 +53,14 @@ MOVED_MODULES = {
     "hybridpd.analysis.tracing": "hybridpd.pair.tracing",
     "hybridpd.analysis.testfunctions": "hybridpd.pair.testfunctions",
     "hybridpd.analysis.design": "hybridpd.pair.design",
-    "hybridpd.analysis.continuation": "hybridpd.pair.continuation",
+    # the pair's package once at hybridpd.analysis.continuation, whose name is now the one
+    # continuation engine (that module serves the pair's names): its submodules
     "hybridpd.analysis.continuation.branchio": "hybridpd.pair.continuation.events",
+    **{f"hybridpd.analysis.continuation.{m}": f"hybridpd.pair.continuation.{m}"
+       for m in ("branch", "events", "newton", "switching", "symmetric", "trace")},
+    "hybridpd.analysis.continuation.plot": "hybridpd.plotting.branches",
+    "hybridpd.pair.continuation.plot": "hybridpd.plotting.branches",
+    "hybridpd.analysis.hybridcont": "hybridpd.analysis.continuation",
     "hybridpd.analysis.bifdiagram": "hybridpd.pair.bifdiagram",
     "hybridpd.analysis.attractors": "hybridpd.pair.attractors",
     "hybridpd.sweeps.regions": "hybridpd.pair.regions",

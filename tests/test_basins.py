@@ -511,7 +511,7 @@ def test_a_criterion_without_hooks_labels_any_slice_and_matches_iterating_the_ma
     attractors by the generic catalogue; checked point by point by iterating ``P``."""
     from hybridpd.analysis.hybridmap import SectionMap
     from hybridpd.analysis.periodic import SectionMapper
-    from hybridpd.analysis.sections import impact_pair_section
+    from hybridpd.pair.section import impact_pair_section
 
     o, m = mapper_for("collocated", 0.1, 10.0, 20.0, n_iter=300)
     P = SectionMap(impact_pair_section(o.system()))

@@ -119,10 +119,10 @@ def _entry_points():
                       kv_range=kv_range, grid=grid, n_starts=n_starts, maxiter=maxiter,
                       validation_grid=(2, 2), uncertainty_grid=(2, 2))
 
-    def periodic(impact_map_, s0, period, tol, max_iter):
-        from hybridpd.pair.continuation import find_periodic_orbit
+    def periodic(P, s0, period, tol, max_iter):
+        from hybridpd.analysis.periodic import find_orbit
 
-        return find_periodic_orbit(impact_map_, s0, period, tol=tol, max_iter=max_iter)
+        return find_orbit(P, s0, period, tol=tol, max_iter=max_iter)
 
     def lti_orbit(pair, controller, omega, x10, n, case, margin_samples):
         from hybridpd.pair.lti import lti_symmetric_orbit
@@ -204,10 +204,9 @@ def _entry_points():
                                     e=0.5, omega=5.0, L=0.75, uncertainty_grid=(2, 2)),
                        dict(case="case", kp=pos, kv=pos, xm=pos, mu=pos, e="unit", omega=pos,
                             L=pos, uncertainty_grid="grid")),
-        "find_periodic_orbit": (periodic, dict(impact_map_=P, s0=fp, period=1, tol=1e-12,
-                                               max_iter=20),
-                                dict(impact_map_="map_obj", s0="vec4", period="count",
-                                     tol=pos, max_iter="count")),
+        "find_orbit": (periodic, dict(P=P, s0=fp, period=1, tol=1e-12, max_iter=20),
+                       dict(P="map_obj", s0="vec4", period="count", tol=pos,
+                            max_iter="count")),
         "ImpactPair": (ImpactPair, dict(mu=0.1, e=0.5, L=0.75, m2=1.0),
                        dict(mu=pos, e="unit", L=pos, m2=pos)),
         "PDGains": (PDGains, dict(kp=10, kv=20), dict(kp=pos, kv=pos)),

@@ -22,7 +22,7 @@ def orbit(kp=10.0, kv=20.0, e=0.5, case="collocated", n=1, mu=0.1, L=0.75, omega
 
 def richardson_fd(P, s, h):
     """Central differences at h and h/2 combined (error O(h^4)), phase unwrapped."""
-    return (4 * P.jacobian_fd(s, h / 2) - P.jacobian_fd(s, h)) / 3
+    return (4 * P.jacobian_fd(s, h=h / 2) - P.jacobian_fd(s, h=h)) / 3
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -6,7 +6,7 @@ import json
 import numpy as np
 
 from hybridpd import ImpactPair, PDGains, Reference
-from hybridpd.analysis.hybridcont import continue_family
+from hybridpd.analysis.continuation import continue_orbit
 from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.pathfollow import corrector, follow_path
 from hybridpd.pair.section import impact_pair_section
@@ -38,7 +38,7 @@ def test_a_min_step_stop_names_the_maps_failure_and_the_parameter():
     # kv = 21.79; natural continuation cannot pass and stops at the smallest step
     pair = ImpactPair(0.1, 0.1, 0.75)
     orb = symmetric_orbit(pair, PDGains(10, 20), W)
-    br = continue_family(_kv_builder(pair, orb.xm), orb.fixed_point, 20.0, 23.0,
+    br = continue_orbit(_kv_builder(pair, orb.xm), 20.0, 23.0, orb.fixed_point,
                          method="natural", step=0.5, max_step=0.5, min_step=1e-3)
     assert br.termination == "min_step"
     last = br.points[-1].p
@@ -55,15 +55,15 @@ def test_the_other_stops_carry_their_reason():
     pair = ImpactPair(0.1, 0.5, 0.75)
     orb = symmetric_orbit(pair, PDGains(10, 20), W)
     build = _kv_builder(pair, orb.xm)
-    br = continue_family(build, orb.fixed_point, 20.0, 22.0, method="natural", step=1.0)
+    br = continue_orbit(build, 20.0, 22.0, orb.fixed_point, method="natural", step=1.0)
     assert br.termination == "reached" and br.reason == "reached the end value p = 22"
-    br = continue_family(build, orb.fixed_point, 20.0, 30.0, method="natural", step=0.5,
+    br = continue_orbit(build, 20.0, 30.0, orb.fixed_point, method="natural", step=0.5,
                          max_step=0.5, max_steps=3)
     assert br.termination == "max_steps"
     assert len(br.points) == 3
     assert br.reason == f"max_steps = 3 accepted points reached at p = {br.points[-1].p:.10g}"
     np.testing.assert_allclose(br.points[-1].p, 21.0, rtol=0, atol=1e-12)
-    bad = continue_family(build, [0.0, 5.0, 5.0, -1.0], 20.0, 22.0)
+    bad = continue_orbit(build, 20.0, 22.0, [0.0, 5.0, 5.0, -1.0])
     assert bad.termination.startswith("start failed") and "p = 20" in bad.reason
 
 

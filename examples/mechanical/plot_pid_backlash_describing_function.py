@@ -20,7 +20,7 @@ the load with a small inertia ``m_L`` and viscous friction ``c_L``), its impact 
 backlash's ``hi`` contact (:func:`hybridpd.mechanics.sections.mechanical_section`), the
 periodic orbit by Newton on the map with ``DP`` from exact flows and saltation matrices
 (:func:`hybridpd.analysis.periodic.find_orbit`), its Floquet multipliers, and its continuation
-in ``ki`` (:func:`hybridpd.analysis.hybridcont.continue_family`).
+in ``ki`` (:func:`hybridpd.analysis.continuation.continue_orbit`).
 
 The figure compares (a) the Nyquist plane, (b) one period of the exact cycle and the
 describing function's sinusoid, (c) frequency and amplitude against ``ki``, (d) the exact
@@ -147,7 +147,7 @@ def _amplitude(ma, orb, P):
 
 def ki_family(kis):
     """Exact cycles along ``ki`` (natural continuation): ``(ki, w, A, rho)`` per point."""
-    from hybridpd.analysis.hybridcont import continue_family
+    from hybridpd.analysis.continuation import continue_orbit
     from hybridpd.analysis.hybridmap import SectionMap
     from hybridpd.analysis.periodic import find_orbit
     from hybridpd.mechanics.sections import mechanical_section
@@ -159,7 +159,7 @@ def ki_family(kis):
     orb0, _, _ = exact_cycle(model(ki=kis[0]))
     if orb0 is None or not orb0.converged:
         return []
-    br = continue_family(build, orb0.s, kis[0], kis[-1], method="natural",
+    br = continue_orbit(build, kis[0], kis[-1], orb0.s, method="natural",
                          step=(kis[-1] - kis[0]) / (len(kis) - 1))
     rows = []
     for pt in br.points:

@@ -25,14 +25,14 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains, Reference
+from hybridpd.analysis.periodic import find_orbit
 from hybridpd.pair.continuation import (
     continue_orbit,
     continue_symmetric,
-    find_periodic_orbit,
-    plot_branch,
 )
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
+from hybridpd.plotting.branches import plot_branch
 
 # sphinx_gallery_start_ignore
 sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py
@@ -74,7 +74,7 @@ for j, (case, e) in enumerate(RUNS):
 pair = ImpactPair(MU, 0.1, L)
 xm = symmetric_orbit(pair, PDGains(KP, 20.0), OMEGA).xm
 P = ImpactMap(pair, PDGains(KP, 20.0), Reference(xm, OMEGA))
-cyc = find_periodic_orbit(P, P.iterate(np.array([0.3, -2.1, -2.3, 0.5]), 200)[-1], period=2)
+cyc = find_orbit(P, P.iterate(np.array([0.3, -2.1, -2.3, 0.5]), 200)[-1], period=2)
 print(f"\nperiod-2 cycle at kv = 20 (xm = {xm:.6f}): converged {cyc.converged}, walls "
       f"{cyc.walls}, multipliers {np.round(np.abs(cyc.multipliers), 6)}")
 for s in cyc.orbit:

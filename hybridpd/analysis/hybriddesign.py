@@ -2,7 +2,7 @@
 
 :func:`design_gains` searches gains ``g`` (any parameters of a model builder
 ``builder(g) -> SectionMap | Section | automaton``, as in
-:mod:`hybridpd.analysis.hybridcont`) that
+:mod:`hybridpd.analysis.continuation`) that
 
 * keep a periodic orbit of the impact map (found by Newton on ``P^k``, continued from the
   previous evaluation's fixed point),
@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridpd._results import compact_repr
-from hybridpd.analysis.hybridcont import _map_factory
+from hybridpd.analysis.continuation import _map_factory
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
 
 __all__ = ["GainDesign", "design_gains", "orbit_amplitude"]
@@ -91,7 +91,7 @@ def design_gains(builder, gains0, s0, *, state, amplitude: float, bounds, period
     ----------
     builder : callable
         ``gains (ndarray) -> SectionMap | Section | automaton`` (see
-        :mod:`hybridpd.analysis.hybridcont`; ``section`` for automata).
+        :mod:`hybridpd.analysis.continuation`; ``section`` for automata).
     gains0 : array_like
         Starting gains (inside ``bounds``).
     s0 : array_like

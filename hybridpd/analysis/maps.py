@@ -108,7 +108,14 @@ class PoincareMap(abc.ABC):
     :meth:`apply_many` or :meth:`iterate`). Maps that know more about their orbits answer
     the hooks :meth:`refuse` and :meth:`validate` (a hybrid section map checks that a
     fixed point returns after whole reference periods and that an independent simulation
-    returns to it), :attr:`structural_zeros`, :meth:`state` and :attr:`mode`.
+    returns to it), :attr:`structural_zeros`, :meth:`state` and :attr:`mode`. A map with
+    quantities of its own at a fixed point (the impact pair's walls, flight margins and
+    contact pattern) returns them from :meth:`point_quantities`: orbit searches keep them in
+    :attr:`~hybridpd.analysis.periodic.PeriodicOrbit.quantities` (a quantity named
+    ``grazing`` also raises the orbit's grazing flag). A map with named parameters gives
+    :meth:`family`, a builder of the map at other values of one of them, for the one
+    continuation engine (:func:`hybridpd.analysis.continuation.continue_orbit`). No analysis
+    asks which class it has.
 
     Examples
     --------
@@ -169,6 +176,22 @@ class PoincareMap(abc.ABC):
         """Whether a zero of ``P^k(s) - s`` is an orbit: ``(reason, n_periods, detail,
         return_error)`` with reason ``"converged"`` when it is (the default)."""
         return "converged", 1, "", math.nan
+
+    def point_quantities(self, s, k: int, result: MapResult, **options) -> dict:
+        """Quantities of the map's own at the point ``s`` of ``P^k`` whose application gave
+        `result`: a dict by name (empty by default; the impact pair gives its walls and
+        flight margins). `options` are those of the analysis (e.g. :func:`~hybridpd.analysis.periodic.find_orbit`'s
+        checks); a hook ignores the ones it does not know."""
+        del s, k, result, options
+        return {}
+
+    def family(self, parameter: str, **options):
+        """A builder ``p -> PoincareMap``: this map with its parameter named `parameter` set to
+        ``p`` (the others kept), for :func:`~hybridpd.analysis.continuation.continue_orbit`.
+        The default map has no named parameters (``ValueError``)."""
+        del options
+        raise ValueError(f"parameter: this map ({type(self).__name__}) names no parameters, "
+                         f"got {parameter!r}; give continue_orbit a builder p -> map")
 
     def canonical(self, s) -> np.ndarray:
         """The representative of a section point (the phase reduced to ``[0, T)``)."""

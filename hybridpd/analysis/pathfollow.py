@@ -2,7 +2,7 @@
 
 Unknowns ``u = (s, p)``: a section point and the parameter; :func:`follow_path` continues a
 solution of ``F(u) = P^k(s; p) - s = 0`` by natural or pseudo-arclength steps (passing
-folds). Its callers (:func:`hybridpd.analysis.hybridcont.continue_family` for any automaton,
+folds). Its callers (:func:`hybridpd.analysis.continuation.continue_orbit` for any map,
 :func:`hybridpd.pair.continuation.continue_orbit` for the impact pair) give the map
 through ``F``, ``Fs``, ``Fp`` and ``make_point`` and their events through ``detect``.
 :func:`newton` (damped; with Broyden updates for
@@ -472,17 +472,58 @@ def illinois(evaluate, ftest, fa, fb, pa, pb, *, size, tol, max_iter, ftol=0.0,
             best = (pt, fc)
         if fc == 0.0 or abs(fc) < ftol:
             return pt, fc, True
-        if (fc > 0) == (fb > 0):
-            b, fb = theta, fc
-            if side == 1:
-                fa *= 0.5
-            side = 1
-        else:
-            a, fa = theta, fc
-            if side == -1:
-                fb *= 0.5
-            side = -1
+        a, b, fa, fb, side = (float(v) for v in _illinois_update(a, b, fa, fb, side, theta, fc))
     return best[0], best[1], (b - a) * size <= tol
+
+
+def _illinois_update(a, b, fa, fb, side, theta, fc):
+    """The Illinois bracket update at ``theta`` with test value ``fc`` (scalars or arrays): the
+    new point replaces the end of its sign, and the value kept at the other end is halved when
+    that end was kept twice running (``side``: +1 the last point replaced ``b``, -1 ``a``)."""
+    right = (fc > 0) == (fb > 0)
+    fa = np.where(right & (side == 1), 0.5 * fa, fa)
+    fb = np.where(~right & (side == -1), 0.5 * fb, fb)
+    return (np.where(right, a, theta), np.where(right, theta, b), np.where(right, fa, fc),
+            np.where(right, fc, fb), np.where(right, 1, -1))
+
+
+def illinois_many(ftest, fa, fb, *, tol, max_iter):
+    """:func:`illinois` on many brackets at once (the same update, no bisection steps).
+
+    ``ftest(theta, active)`` gives the test values at ``theta[active]`` (one vectorised
+    evaluation per iteration); ``fa``, ``fb`` (shape ``(K,)``) at ``theta = 0`` and 1. A bracket
+    stops below width ``tol`` or where a value is not finite. Returns ``(theta, bad)``: the
+    midpoints of the final brackets and where a value was not finite.
+
+    Examples
+    --------
+    >>> c = np.array([0.25, 0.5])
+    >>> th, bad = illinois_many(lambda th, act: th[act] ** 2 - c[act], -c, 1 - c, tol=1e-12,
+    ...                         max_iter=60)
+    >>> np.round(th, 10).tolist(), bad.tolist()
+    ([0.5, 0.7071067812], [False, False])
+    """
+    fa, fb = np.array(fa, float), np.array(fb, float)
+    K = len(fa)
+    a, b = np.zeros(K), np.ones(K)
+    side = np.zeros(K, int)
+    bad = np.zeros(K, bool)
+    for _ in range(max_iter):
+        act = ~bad & (b - a > tol)
+        if not act.any():
+            break
+        with np.errstate(all="ignore"):
+            th = b - fb * (b - a) / (fb - fa)
+        th = np.where((th > a) & (th < b), th, 0.5 * (a + b))
+        fm = np.full(K, np.nan)
+        fm[act] = ftest(th, act)
+        bad |= act & ~np.isfinite(fm)
+        act &= np.isfinite(fm)
+        na, nb, nfa, nfb, nside = _illinois_update(a, b, fa, fb, side, th, fm)
+        a, b = np.where(act, na, a), np.where(act, nb, b)
+        fa, fb = np.where(act, nfa, fa), np.where(act, nfb, fb)
+        side = np.where(act, nside, side)
+    return 0.5 * (a + b), bad
 
 
 def bisect_predicate(evaluate, same_as_a, pa, pb, *, size, tol, max_iter):

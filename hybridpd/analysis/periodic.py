@@ -100,6 +100,10 @@ class PeriodicOrbit:
     mode : str
         The section's mode (e.g. ``"stick0+1+"``: the contacts held where the section's guard
         fires).
+    quantities : dict
+        The map's own quantities at the orbit
+        (:meth:`~hybridpd.analysis.maps.PoincareMap.point_quantities`; empty for most maps),
+        also readable as attributes: ``orb.walls`` is ``orb.quantities["walls"]``.
 
     Examples
     --------
@@ -135,7 +139,18 @@ class PeriodicOrbit:
     detail: str = ""
     return_error: float = math.nan
     mode: str = ""
+    quantities: dict = field(default_factory=dict, repr=False)
     __repr__ = compact_repr
+
+    def __getattr__(self, name):
+        # only reached for names that are no field: the map's quantities
+        if name.startswith("__") or name == "quantities":
+            raise AttributeError(name)
+        try:
+            return self.quantities[name]
+        except KeyError:
+            raise AttributeError(f"{type(self).__name__!r} has no attribute {name!r} (the "
+                                 f"map's quantities: {sorted(self.quantities)})") from None
 
     def to_dict(self) -> dict:
         """JSON-ready summary (fields of ``hybridpd orbit --json`` where they apply)."""
@@ -238,14 +253,25 @@ def find_orbit(P: PoincareMap, s0, period: int = 1, *, tol: float = 1e-11, max_i
         raise ValueError(f"P must be a PoincareMap, got {type(P).__name__}")
     if jacobian not in ("exact", "fd"):
         raise ValueError(f"jacobian must be 'exact' or 'fd', got {jacobian!r}")
-    k = check_returns(period)
-    if not (tol > 0):
-        raise ValueError(f"tol must be > 0, got {tol!r}")
+    try:
+        k = check_returns(period)
+    except (ValueError, TypeError, OverflowError):
+        raise ValueError(f"period must be an int >= 1 (returns per period), got {period!r}") \
+            from None
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) \
+            or not (math.isfinite(tol) and tol > 0):
+        raise ValueError(f"tol must be a finite number > 0, got {tol!r}")
+    if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) \
+            or max_iter < 1:
+        raise ValueError(f"max_iter must be an int >= 1, got {max_iter!r}")
     periods = checks.get("periods")
     if periods is not None and (isinstance(periods, bool) or int(periods) != periods
                                 or periods < 1):
         raise ValueError(f"periods must be None or an int >= 1, got {periods!r}")
-    s = P.check_point(s0).copy()
+    try:
+        s = P.check_point(s0).copy()
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"s0 is no point of the map's section: {exc}") from None
     refused = P.refuse(s, k, **checks)
     if refused is not None:
         return _no_orbit(P, s, k, refused[0], 0, None, refused[1])
@@ -373,9 +399,11 @@ def _make_orbit(P, s, k, reason, it, F, jacobian, checks) -> PeriodicOrbit:
     if ok:
         reason, m, detail, err = P.validate(s, k, rr, **checks)
         ok = reason == "converged"
+    q = P.point_quantities(s, k, rr, **checks)
     return PeriodicOrbit(s, k, ok, reason, it, res, t_per, rr.signature, DP, mult, rho,
-                         bool(stab and ok), bool(hyp), rr.grazing, P.state(s), P.names,
-                         n_periods=m, detail=detail, return_error=err, mode=P.mode)
+                         bool(stab and ok), bool(hyp), bool(rr.grazing or q.get("grazing")),
+                         P.state(s), P.names, n_periods=m, detail=detail, return_error=err,
+                         mode=P.mode, quantities=q)
 
 
 def measured_contraction(P: SectionMap, s, period: int = 1, *, n_iter: int = 40,

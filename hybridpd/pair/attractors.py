@@ -4,7 +4,7 @@ A trajectory of ``P`` that has settled on a stable periodic orbit of period ``k`
 every ``k`` iterations. :class:`CycleCatalog` takes the last iterates of many trajectories
 ("tails": iterate ``n``, ``n + 1``, ..., ``n + K`` of each), finds the smallest ``k <=
 max_period`` for which a tail repeats to ``detect_tol``, refines that cycle with Newton's method
-on ``P^k`` (:func:`hybridpd.pair.continuation.find_periodic_orbit`), removes duplicates (the
+on ``P^k`` (:func:`hybridpd.analysis.periodic.find_orbit`), removes duplicates (the
 same cycle entered at another of its points, i.e. up to a cyclic shift), and gives every
 distinct cycle an integer label ``>= 0``. A tail belongs to a cycle when each of its iterates
 lies within the paper's criterion ball of a point of the cycle: squared distance in ``(x1, y1,
@@ -28,7 +28,7 @@ import numpy as np
 
 from hybridpd._deprecated import moved_names
 from hybridpd.analysis import basins as _basins
-from hybridpd.pair.continuation import find_periodic_orbit
+from hybridpd.analysis.periodic import find_orbit
 from hybridpd.pair.impactmap import ImpactMap
 
 __all__ = ["CycleCatalog", "paper_distance2", "slice_points"]
@@ -129,7 +129,7 @@ class CycleCatalog:
 
     def _refine(self, s0: np.ndarray, k: int, label: int) -> _basins.Attractor | None:
         try:
-            orb = find_periodic_orbit(self.map, s0, period=k)
+            orb = find_orbit(self.map, s0, period=k, tol=1e-12)
         except (ValueError, RuntimeError, np.linalg.LinAlgError):
             return None
         if not orb.converged:

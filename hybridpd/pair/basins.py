@@ -129,7 +129,7 @@ class ImpactMapper(BasinMapper):
         """Largest sampled-invariant Q-ball inside the criterion ball (r^2 = 0: none)."""
         P = self.map
         try:
-            DP = np.asarray(P.jacobian(self.fixed_point).DP, float).reshape(4, 4)
+            DP = np.asarray(P.blocks(self.fixed_point).DP, float).reshape(4, 4)
         except (ValueError, RuntimeError):
             return np.eye(4), 0.0
 

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridpd._results import compact_repr
+from hybridpd.analysis.pathfollow import illinois_many
 from hybridpd.model import check_positive
 from hybridpd.pair.testfunctions import KINDS, PARAMETERS, Plane, TestValues, make_plane
 from hybridpd.pair.tracing import Codim2Point, Tracer
@@ -225,36 +226,14 @@ def _dist_to_polyline(p, U):
 
 
 def _edge_roots(tr: Tracer, kind, UA, UB, FA, FB, iters=60):
-    """Zeros of the sign test of ``kind`` on coarse edges ``UA[k]``-``UB[k]`` (vectorised
-    Illinois method); NaN rows where the sign test is not finite along the way."""
-    K = len(UA)
-    a, b = np.zeros(K), np.ones(K)
-    fa, fb = np.array(FA, float), np.array(FB, float)
-    side = np.zeros(K, int)
-    bad = np.zeros(K, bool)
-    for _ in range(iters):
-        act = ~bad & (b - a > 1e-9)
-        if not act.any():
-            break
-        with np.errstate(all="ignore"):
-            th = b - fb * (b - a) / (fb - fa)
-        mid = 0.5 * (a + b)
-        th = np.where((th > a) & (th < b), th, mid)
-        P = UA[act] + th[act, None] * (UB[act] - UA[act])
-        fm = np.full(K, np.nan)
-        fm[act] = tr.values(P).sign_test(kind)
-        bad |= act & ~np.isfinite(fm)
-        act &= np.isfinite(fm)
-        right = act & ((fm > 0) == (fb > 0))
-        left = act & ~right
-        fa = np.where(right & (side == 1), 0.5 * fa, fa)
-        fb = np.where(left & (side == -1), 0.5 * fb, fb)
-        b = np.where(right, th, b)
-        fb = np.where(right, fm, fb)
-        a = np.where(left, th, a)
-        fa = np.where(left, fm, fa)
-        side = np.where(right, 1, np.where(left, -1, side))
-    R = UA + (0.5 * (a + b))[:, None] * (UB - UA)
+    """Zeros of the sign test of ``kind`` on coarse edges ``UA[k]``-``UB[k]`` (the Illinois
+    method on all edges at once, :func:`~hybridpd.analysis.pathfollow.illinois_many`); NaN
+    rows where the sign test is not finite along the way."""
+    def test(th, act):
+        return tr.values(UA[act] + th[act, None] * (UB[act] - UA[act])).sign_test(kind)
+
+    th, bad = illinois_many(test, FA, FB, tol=1e-9, max_iter=iters)
+    R = UA + th[:, None] * (UB - UA)
     R[bad] = np.nan
     return R
 

@@ -7,9 +7,11 @@ right wall, whatever happens in between (on a simple orbit: one impact on the le
 is computed by the simulator (the compiled closed-form engine of :mod:`hybridpd.pair.batch`), so
 it is usable from any state, not only near an orbit.
 
-``DP`` comes from the symbolic blocks ``DP43 DP32 DP21 DP10`` (:mod:`hybridpd.pair.symbolic`)
-whenever the return has the simple pattern (+L, -L, +L); :meth:`ImpactMap.jacobian_fd` gives
-central finite differences of the simulated map as an independent check.
+``DP`` (:meth:`ImpactMap.jacobian`, an array like every map's) is the product of the symbolic
+blocks ``DP43 DP32 DP21 DP10`` (:mod:`hybridpd.pair.symbolic`, by name from
+:meth:`ImpactMap.blocks`) whenever the return has the simple pattern (+L, -L, +L);
+:meth:`ImpactMap.jacobian_fd` gives central finite differences of the simulated map as an
+independent check.
 """
 from __future__ import annotations
 
@@ -20,10 +22,11 @@ import numpy as np
 
 from hybridpd._results import compact_repr
 from hybridpd.analysis.floquet import Stability, stability
-from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
+from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns, minimal_period
 from hybridpd.model import (
     Case,
     ImpactPair,
+    PDGains,
     Reference,
     as_gains,
     check_array,
@@ -32,7 +35,14 @@ from hybridpd.model import (
 )
 from hybridpd.pair import batch as B
 from hybridpd.pair import symbolic
-from hybridpd.pair.batch import impact_map, iterate_map, trace_once
+from hybridpd.pair.batch import (
+    STATUS_IMPACT,
+    impact_map,
+    iterate_map,
+    trace_once,
+    turning_margins,
+)
+from hybridpd.pair.orbits import symmetric_orbits
 from hybridpd.pair.params import PairParams
 
 __all__ = ["BatchMapResult", "ImpactMap", "MapResult", "Stability", "stability"]
@@ -106,6 +116,9 @@ class ImpactMap(PoincareMap):
     True
     >>> P.apply(orb.fixed_point).signature
     (('wall+', 'crossing'), ('wall-', 'crossing'))
+    >>> B = P.blocks(orb.fixed_point)
+    >>> bool(np.allclose(P.jacobian(orb.fixed_point), B.DP43 @ B.DP32 @ B.DP21 @ B.DP10))
+    True
     """
 
     def __init__(self, pair: ImpactPair, gains, reference: Reference, case="collocated", *,
@@ -140,6 +153,11 @@ class ImpactMap(PoincareMap):
         if np.any(s[..., 3] <= 0):
             raise ValueError("s[..., 3] = z4 must be > 0 (approaching the +L wall)")
         return np.ascontiguousarray(s.reshape(-1, 4))
+
+    def check_point(self, s) -> np.ndarray:
+        """``s`` as a section point ``(phi, z1, z2, z4)`` with ``z4 > 0``; ``ValueError``
+        naming ``s`` otherwise."""
+        return self._points(check_array("s", s, shape=(4,)))[0].copy()
 
     def _fd_steps(self, s, H):
         H = H.copy()
@@ -194,9 +212,57 @@ class ImpactMap(PoincareMap):
         return MapResult(cur.copy(), True, "returned", float(jumps[0][0]), t_abs, z, "free",
                          tuple(jumps), bool(grazing), DP)
 
-    def state(self, s, t) -> np.ndarray:
+    def point_quantities(self, s, k: int, result: MapResult, *, graze_tol: float = 1e-6,
+                         margin_samples: int = 256, **options) -> dict:
+        """The pair's walls, flight margins and contact pattern along ``s, ..., P^{k-1}(s)``
+        (:func:`hybridpd.pair.continuation.trace.orbit_quantities`)."""
+        return orbit_quantities(self, s, k, graze_tol=graze_tol,
+                                margin_samples=margin_samples)
+
+    def family(self, parameter: str, *, x10: float | None = None, n: int = 1):
+        """A builder ``p -> ImpactMap``: this map with one parameter set to ``p``.
+
+        Parameters
+        ----------
+        parameter : str
+            One of ``kp, kv, e, mu, xm, omega, L, m2``; with ``x10`` (the design path: ``xm``
+            follows the amplitude of the order-``n`` symmetric orbit realising ``x10``) one of
+            ``kp, kv, e, mu, omega, L, m2, gamma, x10``.
+        x10 : float, optional
+            The design amplitude (length).
+        n : int
+            The order of the designed symmetric orbit.
+
+        Returns
+        -------
+        callable
+            ``p -> ImpactMap``; it raises ``ValueError`` where ``p`` is out of the parameter's
+            range or the design has no amplitude.
+
+        Examples
+        --------
+        >>> from hybridpd import ImpactPair, PDGains
+        >>> from hybridpd.pair.orbits import symmetric_orbit
+        >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
+        >>> P = ImpactMap(orb.pair, orb.gains, orb.reference())
+        >>> P.family("kv")(22.0).gains.kv
+        22.0
+        """
+        design = None if x10 is None else _Design(check_positive("x10", x10),
+                                                  check_int("n", n, 1))
+        name = _check_parameter(parameter, PARAMETERS if design is None else DESIGN_PARAMETERS)
+
+        def build(p):
+            Q = _map_with(self, name, float(p), design)
+            if Q is None:
+                raise ValueError(f"{name} = {p:g}: the design path has no amplitude xm here")
+            return Q
+        return build
+
+    def state(self, s, t: float | None = None) -> np.ndarray:
         """Full state ``[x1, y1, x2, y2, pc, ps]`` of the pre-impact section point ``s`` at time
-        ``t``."""
+        ``t`` (default: its phase ``s[0]``)."""
+        t = s[0] if t is None else t
         return np.array([s[1] + self.pair.L, s[2] + s[3], s[1], s[2],
                          *self.reference.exo_state(t)])
 
@@ -265,21 +331,280 @@ class ImpactMap(PoincareMap):
             raise RuntimeError(f"no return to the section without sticking: status {st}")
         return [(int(r[B.REC_WALL]), float(r[B.REC_TAU])) for r in rec]
 
-    def jacobian(self, s) -> symbolic.JacobianResult:
-        """``DP`` at ``s`` from the symbolic blocks (the return must be +L, -L, +L)."""
+    def blocks(self, s) -> symbolic.JacobianResult:
+        """The named blocks of ``DP`` at ``s`` (paper (24)-(25)): ``DP10`` (impact at ``+L``),
+        ``DP21`` (flight to ``-L``), ``DP32`` (impact at ``-L``), ``DP43`` (flight back), their
+        product ``DP`` and the section points between them. The return from ``s`` must have
+        the simple pattern ``(+L, -L, +L)`` (``ValueError`` otherwise: :meth:`jacobian` then
+        gives finite differences)."""
         seq = self.flight_times(s)
         if [w for w, _ in seq] != [-1, 1]:
             raise ValueError(
-                f"the symbolic DP needs the impact pattern (+L, -L, +L); got walls "
-                f"{[w for w, _ in seq]} (use jacobian_fd)")
+                f"s: the named blocks need the impact pattern (+L, -L, +L); got walls "
+                f"{[w for w, _ in seq]} (use jacobian)")
         return self._symbolic(s, seq[0][1], seq[1][1])
 
-    def jacobian_fd(self, s, h: float | None = None, *, k: int = 1, scale=None,
-                    richardson: bool = False, one_sided: bool = False) -> np.ndarray:
-        """Central finite differences of the simulated map (:meth:`PoincareMap.jacobian_fd`)."""
-        return super().jacobian_fd(self._points(s)[0], k, h=h, scale=scale,
-                                   richardson=richardson, one_sided=one_sided)
-
     def stability(self, s) -> Stability:
-        """Stability of the fixed point ``s`` from the symbolic ``DP``."""
-        return stability(np.asarray(self.jacobian(s).DP).reshape(4, 4))
+        """Stability of the fixed point ``s`` from ``DP`` (:meth:`jacobian`)."""
+        return stability(self.jacobian(s))
+
+
+#: Parameters :func:`continue_orbit` can follow (all others fixed).
+PARAMETERS = ("kp", "kv", "e", "mu", "xm", "omega", "L", "m2")
+#: Parameters :func:`continue_orbit` can follow along the design path (``x10`` given: the
+#: reference amplitude ``xm`` follows the symmetric-orbit design, as in
+#: :func:`continue_symmetric`).
+DESIGN_PARAMETERS = ("kp", "kv", "e", "mu", "omega", "L", "m2", "gamma", "x10")
+
+
+def _min(values):
+    return float(min(values)) if values else np.nan
+
+
+def _section_point(s, name, closure=False) -> np.ndarray:
+    a = check_array(name, s, shape=(4,))  # (phi, z1, z2, z4)
+    if a[3] < 0 or (a[3] == 0 and not closure):
+        raise ValueError(f"{name}[3] = z4 must be > 0 (approaching the +L wall), got {a[3]!r}")
+    return a
+
+
+def _check_parameter(name, allowed):
+    if not isinstance(name, str) or name not in allowed:
+        raise ValueError(f"parameter must be one of {allowed}, got {name!r}")
+    return name
+
+
+@dataclass(frozen=True)
+class _Design:
+    """The design path: ``xm`` is the amplitude that puts the primary mass on the order-``n``
+    triangle wave of amplitude ``x10`` (paper (20)), recomputed at every parameter value."""
+
+    x10: float
+    n: int = 1
+
+
+def design_xm(pair: ImpactPair, gains: PDGains, omega: float, x10: float, n: int = 1,
+              case="collocated") -> float:
+    """Reference amplitude ``xm`` of the order-``n`` symmetric orbit realising ``x10``.
+
+    The closed-form solution of (13)-(14) and (20) (the *formal* orbit: its viability is not
+    required); NaN where the conditions are singular or give ``xm <= 0``.
+    """
+    r = symmetric_orbits(gains.kp, gains.kv, mu=pair.mu, e=pair.e, L=pair.L, omega=omega,
+                         m2=pair.m2, x10=x10, n=n, case=case, margin=False, jacobian=False)
+    xm = float(np.asarray(r.xm).reshape(-1)[0])
+    return xm if np.isfinite(xm) and xm > 0 else np.nan
+
+
+def _map_with(P: ImpactMap, name: str, value: float, design: _Design | None = None):
+    """A copy of ``P`` with one parameter changed (the others and the tolerances kept).
+
+    With a ``design``, ``xm`` follows the design at the new value (``gamma`` moves
+    ``L = gamma * x10``; ``x10`` moves the design itself); None where the design has no
+    amplitude.
+    """
+    pair, g, ref = P.pair, P.gains, P.reference
+    if name in ("kp", "kv"):
+        g = PDGains(**{"kp": g.kp, "kv": g.kv, name: value})
+    elif name in ("e", "mu", "L", "m2", "gamma"):
+        if name == "gamma":
+            name, value = "L", value * design.x10
+        pair = ImpactPair(**{"mu": pair.mu, "e": pair.e, "L": pair.L, "m2": pair.m2,
+                             name: value})
+    elif name in ("xm", "omega"):
+        ref = Reference(**{"xm": ref.xm, "omega": ref.omega, name: value})
+    if design is not None:
+        if name == "x10":
+            design = _Design(value, design.n)
+        xm = design_xm(pair, g, ref.omega, design.x10, design.n, P.case)
+        if not np.isfinite(xm):
+            return None
+        ref = Reference(xm, ref.omega)
+    return type(P)(pair, g, ref, P.case, tol=P.tol, max_impacts=P.max_impacts)
+
+
+def _fixed_parameters(P: ImpactMap) -> dict:
+    return {"kp": P.gains.kp, "kv": P.gains.kv, "e": P.pair.e, "mu": P.pair.mu,
+            "L": P.pair.L, "m2": P.pair.m2, "xm": P.reference.xm,
+            "omega": P.reference.omega, "case": P.case.value}
+
+
+@dataclass(frozen=True)
+class ImpactStep:
+    """One wall contact met by an application of ``P``.
+
+    Attributes
+    ----------
+    wall : int
+        +1 (``z3 = +L``) or -1 (``z3 = -L``).
+    tau : float
+        Flight time (time units) from the previous contact (or release) to this one.
+    speed : float
+        Approach speed ``wall * z4`` just before the contact (length/time, >= 0).
+    kind : str
+        ``"impact"`` (Newton's law applied), ``"graze"`` (tangential touch: the approach speed
+        is below the engine's velocity tolerance, no velocity jump) or ``"stick"`` (impacts
+        accumulated; the masses then moved together for ``stick_time``).
+    stick_time : float
+        Duration of the sticking phase (time units), 0 unless ``kind == "stick"``.
+    """
+
+    wall: int
+    tau: float
+    speed: float
+    kind: str
+    stick_time: float = 0.0
+    __repr__ = compact_repr
+
+
+@dataclass(frozen=True)
+class MapTrace:
+    """One application of ``P`` with its impact pattern and flight diagnostics.
+
+    Attributes
+    ----------
+    s : ndarray, shape (4,)
+        ``P(s0)`` (``phi`` in ``[0, T)``); NaN unless ``ok``.
+    ok : bool
+        The trajectory returned to the section.
+    status : int
+        0 when ``ok``, else ``10 + batch.STATUS_*`` (as :class:`~hybridpd.pair.impactmap.MapResult`).
+    steps : tuple of ImpactStep
+        Contacts after the initial ``+L`` impact; the last one is the return to ``+L``.
+    margin : float
+        Smallest interior distance of a flight to the wall it turns towards, divided by ``L``
+        (dimensionless): at every interior turning point of ``z3`` a maximum is measured to
+        ``+L`` and a minimum to ``-L``; 1 if ``z3`` has no interior turning point. It tends to
+        0 at grazing (paper (19)). NaN if not computed.
+    min_speed : float
+        Smallest approach speed over the impacts and grazing touches (length/time).
+    """
+
+    s: np.ndarray
+    ok: bool
+    status: int
+    steps: tuple
+    margin: float
+    min_speed: float
+    __repr__ = compact_repr
+
+    @property
+    def walls(self) -> tuple:
+        """Walls of the contacts, e.g. ``(-1, 1)`` for the simple pattern."""
+        return tuple(st.wall for st in self.steps)
+
+    @property
+    def signature(self) -> tuple:
+        """``((wall, kind), ...)``: what a pattern change (grazing) is detected on."""
+        return tuple((st.wall, st.kind) for st in self.steps)
+
+    @property
+    def simple(self) -> bool:
+        """The pattern ``(+L, -L, +L)`` with two genuine impacts (symbolic ``DP`` applies)."""
+        return self.signature == ((-1, "impact"), (1, "impact"))
+
+
+def trace_map(impact_map_: ImpactMap, s, *, margin: bool = True,
+              margin_samples: int = 256) -> MapTrace:
+    """Apply ``P`` once from ``s`` and record every contact (the impact pattern).
+
+    This is the compiled engine's own run with its record
+    (:func:`hybridpd.pair.batch.trace_once`), so ``trace_map(P, s).s`` equals ``P(s)``; it
+    additionally gives walls, flight times, approach speeds, grazing touches and sticking phases, and measures how close every
+    flight comes to a wall in its interior.
+
+    Parameters
+    ----------
+    impact_map_ : ImpactMap
+    s : array_like, shape (4,)
+        Section point ``(phi, z1, z2, z4)`` with ``z4 >= 0`` (``z4 = 0``: a grazing arrival,
+        as returned by ``P`` after a tangential touch).
+    margin : bool
+        Compute :attr:`MapTrace.margin` (``margin_samples`` flow evaluations per flight).
+    margin_samples : int
+        Grid size of the turning-point search in each flight.
+
+    Returns
+    -------
+    MapTrace
+
+    Examples
+    --------
+    >>> from hybridpd import ImpactPair, PDGains
+    >>> from hybridpd.pair.orbits import symmetric_orbit
+    >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
+    >>> P = ImpactMap(orb.pair, orb.gains, orb.reference())
+    >>> tr = trace_map(P, orb.fixed_point)
+    >>> tr.walls, tr.simple
+    ((-1, 1), True)
+    """
+    # z4 = 0 (the closure of the section) is accepted: P itself returns it after a
+    # tangential touch of the right wall
+    if not isinstance(impact_map_, ImpactMap):
+        raise ValueError(f"impact_map_ must be an ImpactMap, got {type(impact_map_).__name__}")
+    P = impact_map_
+    s = _section_point(s, "s", closure=True)
+    nsamp = check_int("margin_samples", margin_samples, 2)
+    out, st, _n, rec = trace_once(P.params, P._c, s, P.tol, P.max_impacts)
+    kinds = {B.KIND_IMPACT: "impact", B.KIND_GRAZING: "graze", B.KIND_STICKING: "stick"}
+    steps = tuple(ImpactStep(int(r[B.REC_WALL]), float(r[B.REC_TAU]), float(r[B.REC_SPEED]),
+                             kinds[int(r[B.REC_KIND])], float(r[B.REC_STICK_TIME]))
+                  for r in rec)
+    marg = np.nan
+    if margin:
+        # smallest distance / L to the wall approached at interior turning points of z3
+        start = slice(B.REC_T, B.REC_Y2 + 1)      # t, x1, y1, x2, y2 where the flight starts
+        marg = min([1.0] + [turning_margins(P.params, P._c, *r[start], r[B.REC_TAU], nsamp,
+                                            True)[0]
+                            for r in rec if r[B.REC_TAU] > 0.0])
+    speeds = [float(r[B.REC_SPEED]) for r in rec if r[B.REC_KIND] != B.KIND_STICKING]
+    ok = st == STATUS_IMPACT
+    return MapTrace(out if ok else np.full(4, np.nan), bool(ok), int(st), steps, marg,
+                    _min(speeds))
+
+
+def trace_orbit(P: ImpactMap, s, k: int, margin_samples: int = 256) -> list:
+    """:func:`trace_map` (with margins) of ``s, P(s), ..., P^{k-1}(s)``, up to the first
+    application that does not return."""
+    traces, cur = [], np.asarray(s, float)
+    for _ in range(k):
+        tr = trace_map(P, cur, margin=True, margin_samples=margin_samples)
+        traces.append(tr)
+        if not tr.ok:
+            break
+        cur = tr.s
+    return traces
+
+
+def orbit_quantities(P: ImpactMap, s, k: int, *, graze_tol: float = 1e-6,
+                     margin_samples: int = 256) -> dict:
+    """The pair's quantities of the segment ``s, P(s), ..., P^{k-1}(s)`` (the hook
+    :meth:`ImpactMap.point_quantities`).
+
+    Returns a dict with ``orbit`` (shape ``(k, 4)``, the iterates as far as ``P`` is defined),
+    ``pattern`` (the :class:`ImpactStep` of each application), ``walls``, ``n_impacts``,
+    ``margin`` (smallest flight margin over ``L``, see :class:`MapTrace`),
+    ``min_impact_speed`` (length/time), ``sticking``, ``grazing`` (a grazing touch, a
+    margin below ``graze_tol`` or an approach speed below ``graze_tol`` times the largest),
+    ``minimal_period`` (smallest ``d`` dividing ``k`` with ``P^d(s) = s`` to ``1e-7``) and
+    ``symbolic_dp`` (every application has the simple pattern: the map's ``DP`` is the chain
+    of its named blocks, :meth:`ImpactMap.blocks`; finite differences otherwise) and
+    ``parameters`` (the map's ``kp, kv, e, mu, L, m2, xm, omega, case``).
+    """
+    traces = trace_orbit(P, s, k, margin_samples)
+    steps = [st for tr in traces for st in tr.steps]
+    margin = _min([tr.margin for tr in traces])
+    speeds = [st.speed for st in steps if st.kind != "stick"]
+    vmax, vmin = max(speeds, default=0.0), _min(speeds)
+    grazing = (any(st.kind == "graze" for st in steps)
+               or (np.isfinite(margin) and margin < graze_tol)
+               or (vmax > 0 and vmin < graze_tol * vmax))
+    pattern = tuple(tr.steps for tr in traces)
+    ok = all(tr.ok for tr in traces)
+    return {"orbit": np.array([s] + [tr.s for tr in traces[:-1]]), "pattern": pattern,
+            "walls": tuple(tuple(st.wall for st in p) for p in pattern),
+            "n_impacts": len(steps), "margin": margin, "min_impact_speed": vmin,
+            "sticking": any(st.kind == "stick" for st in steps), "grazing": bool(grazing),
+            "minimal_period": minimal_period(P, s, k) if ok else k,
+            "symbolic_dp": ok and all(tr.simple for tr in traces),
+            "parameters": _fixed_parameters(P)}

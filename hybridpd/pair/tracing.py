@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridpd._results import compact_repr
-from hybridpd.analysis.pathfollow import illinois
+from hybridpd.analysis.pathfollow import illinois, newton
 from hybridpd.pair.testfunctions import Plane, TestValues
 
 __all__ = ["Codim2Point", "Tracer"]
@@ -145,29 +145,40 @@ class Tracer:
         return out, _take(tv, 0)
 
     # -- corrector --------------------------------------------------------------------
+    def _system(self, extra=None):
+        """``(run, resid, jac)`` of ``G(u) = [F(u); extra(u)]`` for :func:`newton`: one
+        finite-difference stencil gives both at a point, so the latest is kept."""
+        memo = {}
+
+        def run(u):
+            key = u.tobytes()
+            if key not in memo:
+                memo.clear()
+                memo[key] = self.fgrad(u, extra)
+            return memo[key]
+
+        def resid(u):
+            vals, _tv = run(u)
+            G = np.array([v for v, _ in vals])
+            return G if np.all(np.isfinite(G)) and all(np.all(np.isfinite(d))
+                                                        for _, d in vals) else None
+
+        return run, resid, lambda u: np.array([d for _, d in run(u)[0]])
+
     def correct(self, u_pred, t, max_dist):
-        """Newton on ``[F; t . (u - u_pred)]``: (ok, u, F, grad, tv, iterations)."""
-        u = np.array(u_pred, float)
-        for it in range(_MAX_NEWTON):
-            ((F, g),), tv = self.fgrad(u)
-            if not (np.isfinite(F) and np.all(np.isfinite(g))):
-                return False, u, F, g, tv, it
-            if abs(F) <= self.tol and it > 0:
-                return True, u, F, g, tv, it
-            J = np.array([g, t])
-            r = np.array([F, float(t @ (u - u_pred))])
-            try:
-                d = np.linalg.solve(J, -r)
-            except np.linalg.LinAlgError:
-                return False, u, F, g, tv, it
-            u = u + d
-            if np.linalg.norm(u - u_pred) > max_dist:
-                return False, u, F, g, tv, it
-            if abs(F) <= self.tol and np.linalg.norm(d) < 1e-13:
-                break
-        ((F, g),), tv = self.fgrad(u)
-        ok = bool(np.isfinite(F) and abs(F) <= self.tol)
-        return ok, u, F, g, tv, _MAX_NEWTON
+        """Newton (:func:`~hybridpd.analysis.pathfollow.newton`) on ``[F; t . (u - u_pred)]``
+        within ``max_dist`` of ``u_pred``: (ok, u, F, grad, tv, iterations)."""
+        u_pred = np.array(u_pred, float)
+        run, resid_f, jac_f = self._system()
+
+        def resid(u):
+            G = None if np.linalg.norm(u - u_pred) > max_dist else resid_f(u)
+            return None if G is None else np.append(G, float(t @ (u - u_pred)))
+
+        res = newton(resid, lambda u: np.vstack([jac_f(u), t]), u_pred, tol=self.tol,
+                     max_iter=_MAX_NEWTON, step_test=False)
+        ((F, g),), tv = run(res.x)
+        return bool(res.converged), res.x, F, g, tv, res.iterations
 
     def correct_on_line(self, u_pred, normal, max_dist=0.5):
         """Correct onto ``F = 0`` keeping ``normal . (u - u_pred) = 0`` (returns ok, u, g, tv)."""
@@ -316,22 +327,13 @@ class Tracer:
         return self._done(pts, codim, "stalled")
 
     def newton2(self, u, extra, max_iter=20):
-        """Newton on ``[F; extra] = 0`` from ``u``: ``(u, tv)`` or ``(None, None)``."""
-        u = np.array(u, float)
-        for _ in range(max_iter):
-            ((F, g), (E, ge)), tv = self.fgrad(u, extra)
-            if not np.isfinite(F + E):
-                return None, None
-            if abs(F) <= self.tol and abs(E) <= self.tol:
-                return u, tv
-            try:
-                d = np.linalg.solve(np.array([g, ge]), -np.array([F, E]))
-            except np.linalg.LinAlgError:
-                return None, None
-            if not np.all(np.isfinite(d)) or np.linalg.norm(d) > 0.05:
-                return None, None
-            u = u + d
-        return None, None
+        """Newton (:func:`~hybridpd.analysis.pathfollow.newton`) on ``[F; extra] = 0`` within
+        0.05 of ``u``: ``(u, tv)`` or ``(None, None)``."""
+        u0 = np.array(u, float)
+        run, resid_g, jac = self._system(extra)
+        res = newton(lambda x: None if np.linalg.norm(x - u0) > 0.05 else resid_g(x), jac, u0,
+                     tol=self.tol, max_iter=max_iter, step_test=False)
+        return (res.x, run(res.x)[1]) if res.converged else (None, None)
 
     @staticmethod
     def _done(pts, codim, end):

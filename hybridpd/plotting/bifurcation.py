@@ -4,8 +4,8 @@ from __future__ import annotations
 import numpy as np
 
 from hybridpd.pair.bifdiagram import COORDINATES, section_coordinate
-from hybridpd.pair.continuation.plot import _grow
 from hybridpd.plotting._common import _COLORS, figure
+from hybridpd.plotting.branches import _grow
 from hybridpd.plotting.style import DOUBLE, styled
 
 __all__ = ["PARAMETER_LABELS", "bifurcation_legend", "plot_bifurcation"]

@@ -105,7 +105,7 @@ def plot_file(path: str | os.PathLike, **options):
     **options
         ``title`` (any kind); ``coordinate`` (bifurcation diagrams: ``phi, z1, z2, z4, x1,
         y1, x2, y2``); ``quantity`` (branches: see
-        :func:`hybridpd.pair.continuation.plot_branch`). ``None`` means the default.
+        :func:`hybridpd.plotting.branches.plot_branch`). ``None`` means the default.
 
     Returns
     -------
@@ -168,7 +168,8 @@ _BRANCH_UNITS = {"spectral_radius": "(1)", "multipliers": "(1)", "margin": "(len
 
 def _branch(path, title=None, quantity="spectral_radius"):
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.continuation import load_branch, plot_branch
+    from hybridpd.pair.continuation import load_branch
+    from hybridpd.plotting.branches import plot_branch
     from hybridpd.plotting.style import DOUBLE, axis_label, house_figure, house_style
 
     br = load_branch(path)

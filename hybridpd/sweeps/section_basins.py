@@ -67,7 +67,7 @@ def section_basin(mapper: SectionMapper, axis_x, axis_y, x, y, *, executor="seri
     Examples
     --------
     >>> import hybridpd as hp
-    >>> from hybridpd.analysis.sections import impact_pair_section
+    >>> from hybridpd.pair.section import impact_pair_section
     >>> orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), hp.PDGains(10, 20), 5.0)
     >>> P = hp.SectionMap(impact_pair_section(orb.system()))
     >>> b = hp.section_basin(hp.SectionMapper(P, orb.fixed_point, n_iter=50), "z1", "z4",

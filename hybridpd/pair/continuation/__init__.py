@@ -2,13 +2,12 @@
 
 Two complementary tools:
 
-* :func:`find_periodic_orbit` solves ``P^k(s) = s`` for a fixed point of the ``k``-th iterate
-  of the impact map ``P`` (:class:`~hybridpd.pair.impactmap.ImpactMap`), from any start: symmetric
-  or not, simple impact pattern or not (double impacts, grazing contacts, sticking phases).
-  The phase residual is unwrapped modulo ``T``. The Jacobian of ``P^k`` is the product of the
-  symbolic ``DP`` blocks of :mod:`hybridpd.pair.symbolic` when every iterate has the simple pattern
-  ``(+L, -L, +L)``, otherwise central finite differences of the simulated map. Damped Newton
-  with a backtracking line search.
+* the fixed points of ``P^k`` of the impact map ``P``
+  (:class:`~hybridpd.pair.impactmap.ImpactMap`) are found by the package's one orbit search,
+  :func:`hybridpd.analysis.periodic.find_orbit`, from any start (double impacts, grazing
+  contacts, sticking phases included); the map's hook
+  :meth:`~hybridpd.pair.impactmap.ImpactMap.point_quantities` adds the pair's walls, flight
+  margins and contact pattern to the orbit (:func:`.trace.orbit_quantities`).
 * :func:`continue_orbit` follows a fixed point of ``P^k`` in one parameter among
   :data:`PARAMETERS` (natural-parameter continuation with a secant predictor, or
   pseudo-arclength continuation which passes folds); :func:`continue_symmetric` follows the
@@ -45,14 +44,20 @@ Coordinates: a section point is ``s = (phi, z1, z2, z4)`` (pre-impact at ``z3 = 
 units, velocities in length/time.
 
 Modules: :mod:`.trace` (one application of ``P`` with its impact pattern), :mod:`.newton`
-(``P^k``, its Jacobian, damped Newton), :mod:`.periodic` (:func:`find_periodic_orbit`),
-:mod:`.events` (:class:`Branch`, :class:`BifurcationEvent`, event location), :mod:`.branch`
+(``P^k`` and its Jacobian), :mod:`.events` (:class:`Branch`, :class:`BifurcationEvent`, event location), :mod:`.branch`
 (:func:`continue_orbit`), :mod:`.symmetric` (:func:`continue_symmetric`), :mod:`.switching`
 (:func:`switch_branch`: the period-doubled branch at a flip, the crossing branch at a branch
-point, the motion reached past a grazing point) and :mod:`.plot` (:func:`plot_branch`).
+point, the motion reached past a grazing point); branches are drawn by
+:func:`hybridpd.plotting.branches.plot_branch`.
 """
 from __future__ import annotations
 
+import importlib
+import warnings
+
+from hybridpd._deprecated import _message
+from hybridpd.analysis.periodic import PeriodicOrbit as _PeriodicOrbit
+from hybridpd.analysis.periodic import find_orbit as _find_orbit
 from hybridpd.pair.continuation._common import (
     DESIGN_PARAMETERS,
     EVENT_KINDS,
@@ -63,13 +68,38 @@ from hybridpd.pair.continuation._common import (
 from hybridpd.pair.continuation.branch import continue_orbit
 from hybridpd.pair.continuation.events import BifurcationEvent, Branch, load_branch
 from hybridpd.pair.continuation.newton import map_power_jacobian
-from hybridpd.pair.continuation.periodic import PeriodicOrbit, find_periodic_orbit
-from hybridpd.pair.continuation.plot import plot_branch
 from hybridpd.pair.continuation.switching import BranchSwitch, branch_map, switch_branch
 from hybridpd.pair.continuation.symmetric import continue_symmetric
 from hybridpd.pair.continuation.trace import ImpactStep, MapTrace, trace_map
 
 __all__ = ["DESIGN_PARAMETERS", "EVENT_KINDS", "PARAMETERS", "SYMMETRIC_PARAMETERS",
-           "BifurcationEvent", "Branch", "BranchSwitch", "ImpactStep", "MapTrace", "PeriodicOrbit",
-           "branch_map", "continue_orbit", "continue_symmetric", "design_xm", "find_periodic_orbit",
-           "load_branch", "map_power_jacobian", "plot_branch", "switch_branch", "trace_map"]
+           "BifurcationEvent", "Branch", "BranchSwitch", "ImpactStep", "MapTrace",
+           "branch_map", "continue_orbit", "continue_symmetric", "design_xm", "load_branch", "map_power_jacobian", "switch_branch", "trace_map"]
+
+
+def _find_periodic_orbit(impact_map_, s0, period: int = 1, *, tol: float = 1e-12,
+                         max_iter: int = 50, jacobian: str = "auto", fd_step: float = 1e-6,
+                         graze_tol: float = 1e-6, margin_samples: int = 256):
+    """The orbit search of earlier versions: :func:`hybridpd.analysis.periodic.find_orbit`
+    (``jacobian`` ``"auto"`` or ``"symbolic"`` is its ``"exact"``; ``fd_step`` is unused)."""
+    del fd_step
+    if jacobian not in ("auto", "symbolic", "fd"):
+        raise ValueError(f"jacobian must be 'auto', 'symbolic' or 'fd', got {jacobian!r}")
+    return _find_orbit(impact_map_, s0, period, tol=tol, max_iter=max_iter,
+                      jacobian="fd" if jacobian == "fd" else "exact", graze_tol=graze_tol,
+                      margin_samples=margin_samples)
+
+
+def __getattr__(name):
+    # names of earlier versions: the one orbit type and search of hybridpd.analysis.periodic
+    if name == "find_periodic_orbit":
+        obj, new = _find_periodic_orbit, "hybridpd.analysis.periodic.find_orbit"
+    elif name == "PeriodicOrbit":
+        obj, new = _PeriodicOrbit, "hybridpd.analysis.periodic.PeriodicOrbit"
+    elif name == "plot_branch":     # by name: the plotting layer sits above the pair
+        new = "hybridpd.plotting.branches.plot_branch"
+        obj = importlib.import_module("hybridpd.plotting.branches").plot_branch
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    warnings.warn(_message(f"{__name__}.{name}", new), DeprecationWarning, stacklevel=2)
+    return obj

@@ -9,6 +9,7 @@ import numpy as np
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.maps import minimal_period
 from hybridpd.analysis.pathfollow import bisect_predicate, corrector, follow_path
+from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
 from hybridpd.model import check_finite
 from hybridpd.pair.continuation._common import (
     _END_GRAZE,
@@ -21,6 +22,7 @@ from hybridpd.pair.continuation._common import (
     _in_domain,
     _map_value,
     _map_with,
+    _min,
     _path_steps,
     _positive_float,
     _positive_int,
@@ -40,11 +42,7 @@ from hybridpd.pair.continuation.events import (
     _Tracker,
 )
 from hybridpd.pair.continuation.newton import _param_derivative, _residual, map_power_jacobian
-from hybridpd.pair.continuation.periodic import (
-    PeriodicOrbit,
-    _orbit_diagnostics,
-    find_periodic_orbit,
-)
+from hybridpd.pair.continuation.trace import trace_orbit
 from hybridpd.pair.impactmap import ImpactMap
 
 
@@ -93,7 +91,7 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
     event_tol : float
         Location tolerance (length of the bracket in ``(s, p)``).
     graze_tol : float
-        Grazing thresholds (see :func:`find_periodic_orbit`).
+        Grazing thresholds (see :func:`~hybridpd.pair.continuation.trace.orbit_quantities`).
     margin_samples : int
         Grid of the turning-point search per flight.
     events : tuple of str
@@ -203,10 +201,17 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
         if P is None:
             return None
         s = u[:4].copy()
-        traces, DP, _, margin, vmin, _, _ = _orbit_diagnostics(
-            P, s, k, jacobian, fd_step, margin_samples, graze_tol)
-        if DP is None or not np.all(np.isfinite(DP)):
+        traces = trace_orbit(P, s, k, margin_samples)
+        if not all(tr.ok for tr in traces):
             return None
+        try:
+            DP = map_power_jacobian(P, s, k, method=jacobian, fd_step=fd_step)[0]
+        except (RuntimeError, ValueError):
+            return None
+        if not np.all(np.isfinite(DP)):
+            return None
+        margin = _min([tr.margin for tr in traces])
+        vmin = _min([st.speed for tr in traces for st in tr.steps if st.kind != "stick"])
         st = stability(DP)
         sig = tuple(tr.signature for tr in traces)
         try:
@@ -265,8 +270,8 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
         return [to_event("grazing", pt, index, detail, g, ok)]
 
     # ---- initial point
-    start = find_periodic_orbit(P0, s0, k, tol=tol, max_iter=max(max_newton, 30),
-                                jacobian=jacobian, fd_step=fd_step)
+    start = find_orbit(P0, s0, k, tol=tol, max_iter=max(max_newton, 30),
+                       jacobian="fd" if jacobian == "fd" else "exact")
     if not start.converged:
         return _empty_branch(name, P0, k, method,
                              f"initial Newton failed: {start.reason}")

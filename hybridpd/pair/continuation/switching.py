@@ -41,6 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hybridpd._results import compact_repr
+from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
 from hybridpd.model import Case, ImpactPair, PDGains, Reference
 from hybridpd.pair.continuation._common import (
     _Design,
@@ -59,7 +60,6 @@ from hybridpd.pair.continuation.newton import (
     _residual,
     map_power_jacobian,
 )
-from hybridpd.pair.continuation.periodic import PeriodicOrbit, find_periodic_orbit
 from hybridpd.pair.impactmap import ImpactMap
 
 __all__ = ["BranchSwitch", "branch_map", "switch_branch"]
@@ -259,12 +259,12 @@ def _smooth_switch(branch, event, kind, amplitudes, tol, max_iter, fd_step):
                 notes.append(f"a = {sign * a:+.2g}: landed on the parent (period {k})")
                 continue
             if kind == "fold":
-                parent = find_periodic_orbit(P, sc, k, tol=tol)
+                parent = find_orbit(P, sc, k, tol=tol)
                 if parent.converged and np.max(np.abs(_dphase(parent.s - s, P.period))) \
                         < 0.1 * a:
                     notes.append(f"a = {sign * a:+.2g}: landed on the parent branch")
                     continue
-            orb = find_periodic_orbit(P, s, K, tol=tol)
+            orb = find_orbit(P, s, K, tol=tol)
             if not orb.converged or orb.minimal_period != K:
                 notes.append(f"a = {sign * a:+.2g}: polishing failed or minimal period "
                              f"{orb.minimal_period} != {K}")
@@ -320,7 +320,7 @@ def _grazing_switch(branch, event, offset, settle, max_period, tol):
             # of a continuation cannot slide back onto the parent
             far = max(tr[-K:], key=lambda x: np.max(np.abs(_dphase(x - event.point,
                                                                     P.period))))
-            orb = find_periodic_orbit(P, far, K, tol=tol)
+            orb = find_orbit(P, far, K, tol=tol)
             if orb.converged and orb.minimal_period == K:
                 return p, orb, f"settled on a period-{K} orbit after {settle} iterations"
     return p, None, (f"the motion from the grazing orbit did not settle on a cycle of period "
@@ -354,7 +354,7 @@ def switch_branch(branch: Branch, event: BifurcationEvent, stop: float | None = 
     max_period : int
         Largest period looked for after a grazing.
     tol, max_iter : float, int
-        Newton tolerance (see :func:`find_periodic_orbit`) and iteration bound.
+        Newton tolerance (see :func:`~hybridpd.analysis.periodic.find_orbit`) and iteration bound.
     fd_step : float
         Relative finite-difference step.
     **continue_kwargs

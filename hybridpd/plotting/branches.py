@@ -1,4 +1,5 @@
-"""Plot a continued branch (:func:`plot_branch`)."""
+"""Plot a continued branch of the impact pair (:func:`plot_branch`): a quantity against the
+parameter, with the events marked."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""One-parameter continuation of periodic orbits of the impact map of any hybrid automaton.
+"""The one continuation engine: one-parameter families of periodic orbits of any map.
 
 A *model builder* ``builder(p)`` returns, for a parameter value ``p``, the model: a
 :class:`~hybridpd.analysis.hybridmap.SectionMap`, a
@@ -9,7 +9,7 @@ attribute, e.g. a mechanical automaton) together with ``section=dict(mode=..., g
 followed: a gain, a clearance, a restitution coefficient, a sampling period, a forcing
 amplitude. The section dimension must not change along the family.
 
-:func:`continue_family` follows a fixed point of ``P^k`` from ``(s0, p0)`` on the package's
+:func:`continue_orbit` follows a fixed point of ``P^k`` from ``(s0, p0)`` on the package's
 path-following engine (:func:`hybridpd.analysis.pathfollow.follow_path`): ``method="natural"``
 (``p`` steps, secant predictor on ``s``) or ``"arclength"`` (pseudo-arclength in ``(s, p)``,
 ``dF/dp`` by central differences of the map in ``p``; passes folds). Step sizes halve on a
@@ -28,14 +28,27 @@ chord, corrected like arclength steps); ``locate=False`` keeps a linear interpol
 ``stability_change``   the spectral radius crosses 1
 ``sequence_change``    the impact sequence of one period changes (grazing, sticking, ...)
 =====================  =====================================================================
+
+A map knows its named parameters through its hook ``family``: e.g. the impact pair's
+``ImpactMap.family("kv")`` is a builder of the map at other damping gains, so
+``continue_orbit(P.family("kv"), 20.0, 23.0, s0)`` follows the pair's orbits on this engine.
+
+The result is one :class:`Branch` of :class:`BranchPoint` with :class:`BifurcationEvent`
+(``kind``, ``index``, ``parameter``, ``detail``). The names of earlier versions
+(``continue_family``, ``FamilyBranch``, ``FamilyEvent``, ``FAMILY_EVENTS``, the module path
+``hybridpd.analysis.hybridcont``, and the impact pair's names once at this path, now in
+:mod:`hybridpd.pair.continuation`) still resolve with a ``DeprecationWarning``.
 """
 from __future__ import annotations
 
+import importlib
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from hybridpd._deprecated import _message
 from hybridpd._results import compact_repr
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import Section, SectionMap
@@ -43,11 +56,10 @@ from hybridpd.analysis.maps import PoincareMap, minimal_period
 from hybridpd.analysis.pathfollow import corrector, follow_path, illinois
 from hybridpd.analysis.periodic import find_orbit
 
-__all__ = ["FAMILY_EVENTS", "FamilyBranch", "FamilyEvent", "FamilyPoint", "continue_family",
-           "continue_orbit"]
+__all__ = ["EVENT_KINDS", "BifurcationEvent", "Branch", "BranchPoint", "continue_orbit"]
 
-#: Kinds of :class:`FamilyEvent`.
-FAMILY_EVENTS = ("fold", "period_doubling", "neimark_sacker", "stability_change",
+#: Kinds of :class:`BifurcationEvent`.
+EVENT_KINDS = ("fold", "period_doubling", "neimark_sacker", "stability_change",
                  "sequence_change")
 _NONREAL = 1e-9
 #: What a :data:`~hybridpd.analysis.hybridmap.MAP_STATUS` means where the map is undefined.
@@ -62,7 +74,7 @@ _UNDEFINED = {
 
 
 @dataclass(frozen=True, eq=False)
-class FamilyPoint:
+class BranchPoint:
     """One accepted point of a family: parameter ``p``, fixed point ``s`` and its stability."""
 
     p: float
@@ -77,36 +89,37 @@ class FamilyPoint:
 
 
 @dataclass(frozen=True)
-class FamilyEvent:
-    """An event between points ``index`` and ``index + 1``, located at ``p`` (estimate).
+class BifurcationEvent:
+    """An event between points ``index`` and ``index + 1``, located at ``parameter``.
 
-    ``kind`` is one of :data:`FAMILY_EVENTS`; ``parameter`` is ``p``.
+    ``kind`` is one of :data:`EVENT_KINDS`; ``detail`` says what changed (and how it was
+    located).
     """
 
     kind: str
     index: int
-    p: float
+    parameter: float
     detail: str = ""
     __repr__ = compact_repr
 
     @property
-    def parameter(self) -> float:
-        """The parameter value of the event (``p``)."""
-        return self.p
+    def p(self) -> float:
+        """The parameter value of the event (the name of earlier versions)."""
+        return self.parameter
 
     def to_dict(self) -> dict:
-        return {"kind": self.kind, "index": self.index, "p": float(self.p),
+        return {"kind": self.kind, "index": self.index, "p": float(self.parameter),
                 "detail": self.detail}
 
 
 @dataclass(frozen=True, eq=False)
-class FamilyBranch:
-    """Result of :func:`continue_family`.
+class Branch:
+    """Result of :func:`continue_orbit`.
 
     Attributes
     ----------
-    points : list of FamilyPoint
-    events : list of FamilyEvent
+    points : list of BranchPoint
+    events : list of BifurcationEvent
     termination : str
         ``"reached"`` (the end value), ``"max_steps"``, ``"min_step"`` (the corrector failed at
         the smallest step), ``"turned back: left the parameter range"`` (after a fold), or
@@ -179,20 +192,20 @@ def _map_factory(builder, section, map_options):
     return make
 
 
-def _point(r, DP, s, p, zeros=0) -> FamilyPoint:
+def _point(r, DP, s, p, zeros=0) -> BranchPoint:
     """The family point of an application ``r`` of ``P^k`` with Jacobian ``DP`` at ``(s, p)``."""
     st = stability(DP, structural_zeros=zeros)
-    return FamilyPoint(float(p), s, DP, st.multipliers, st.spectral_radius,
+    return BranchPoint(float(p), s, DP, st.multipliers, st.spectral_radius,
                        bool(st.stable), r.signature, r.t_hit - r.t_start)
 
 
-def _ns_count(pt: FamilyPoint) -> int:
+def _ns_count(pt: BranchPoint) -> int:
     """Non-real multipliers outside the unit circle."""
     m = pt.multipliers
     return int(np.sum((np.abs(m.imag) > _NONREAL * np.maximum(1, np.abs(m))) & (np.abs(m) > 1)))
 
 
-def _ns_test(pt: FamilyPoint) -> float:
+def _ns_test(pt: BranchPoint) -> float:
     """``|lambda| - 1`` of the non-real multiplier nearest the circle (NaN if none)."""
     m = pt.multipliers[np.abs(pt.multipliers.imag) > _NONREAL]
     return float(np.min(np.abs(m)) - 1.0) if m.size else math.nan
@@ -205,7 +218,7 @@ _TESTS = {"fold": lambda pt: float(np.linalg.det(pt.DP - np.eye(pt.DP.shape[0]))
           "neimark_sacker": _ns_test}
 
 
-def _events(a: FamilyPoint, b: FamilyPoint, index: int) -> list:
+def _events(a: BranchPoint, b: BranchPoint, index: int) -> list:
     """Sign changes of the test functions between two points, linearly interpolated."""
     out = []
 
@@ -216,15 +229,15 @@ def _events(a: FamilyPoint, b: FamilyPoint, index: int) -> list:
     for kind in ("fold", "period_doubling", "stability_change"):
         fa, fb = _TESTS[kind](a), _TESTS[kind](b)
         if np.isfinite(fa) and np.isfinite(fb) and fa * fb < 0:
-            out.append(FamilyEvent(kind, index, lin(fa, fb)))
+            out.append(BifurcationEvent(kind, index, lin(fa, fb)))
     na, nb = _ns_count(a), _ns_count(b)
     if na != nb:
         fa, fb = _ns_test(a), _ns_test(b)
         pe = lin(fa, fb) if np.isfinite(fa) and np.isfinite(fb) else 0.5 * (a.p + b.p)
-        out.append(FamilyEvent("neimark_sacker", index, pe,
+        out.append(BifurcationEvent("neimark_sacker", index, pe,
                                f"complex multipliers outside: {na} -> {nb}"))
     if a.signature != b.signature:
-        out.append(FamilyEvent("sequence_change", index, 0.5 * (a.p + b.p),
+        out.append(BifurcationEvent("sequence_change", index, 0.5 * (a.p + b.p),
                                f"{len(a.signature)} -> {len(b.signature)} jumps per period"))
     return out
 
@@ -233,7 +246,8 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
                    section=None, method: str = "arclength", step: float | None = None,
                    max_step: float | None = None, min_step: float | None = None,
                    max_steps: int = 200, tol: float = 1e-10, fd_step: float = 1e-6,
-                   locate: bool = True, map_options: dict | None = None) -> FamilyBranch:
+                   locate: bool = True, map_options: dict | None = None,
+                   **options) -> Branch:
     """Follow a periodic orbit (a fixed point of ``P^k``) in a parameter, on any map.
 
     Parameters
@@ -268,10 +282,14 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
         iterations on their test function along the branch (otherwise: linear interpolation).
     map_options : dict, optional
         Keyword arguments of :class:`SectionMap` (``t_max``, ``max_jumps``, ...).
+    **options
+        Only for the impact pair's call of earlier versions ``continue_orbit(P, s0,
+        parameter, stop, ...)`` (deprecated: it runs
+        :func:`hybridpd.pair.continuation.continue_orbit`).
 
     Returns
     -------
-    FamilyBranch
+    Branch
 
     Raises
     ------
@@ -296,6 +314,20 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
     >>> br.reason
     'reached the end value p = 0.82'
     """
+    if isinstance(p_end, str):
+        # the impact pair's form of earlier versions: continue_orbit(P, s0, "kv", stop)
+        warnings.warn(_message(f"{__name__}.continue_orbit(P, s0, parameter, stop)",
+                               "hybridpd.pair.continuation.continue_orbit, or "
+                               "continue_orbit(P.family(parameter), p0, stop, s0)"),
+                      DeprecationWarning, stacklevel=2)
+        named = dict(period=period, section=section, method=method, step=step,
+                     max_step=max_step, min_step=min_step, max_steps=max_steps, tol=tol,
+                     fd_step=fd_step, locate=locate, map_options=map_options)
+        given = {k: v for k, v in named.items() if v is not continue_orbit.__kwdefaults__[k]}
+        pair = importlib.import_module("hybridpd.pair.continuation")
+        return pair.continue_orbit(builder, p0, p_end, s0, **given, **options)
+    if options:
+        raise TypeError(f"continue_orbit() got unexpected keyword arguments {sorted(options)}")
     if not callable(builder):
         raise ValueError(f"builder must be a callable p -> PoincareMap (e.g. a map class), got "
                          f"{type(builder).__name__}")
@@ -321,7 +353,7 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
     first = find_orbit(P, s0, k, tol=tol)
     if not first.converged:
         detail = f" ({first.detail})" if first.detail else ""
-        return FamilyBranch([], [], f"start failed: {first.reason}", method, k,
+        return Branch([], [], f"start failed: {first.reason}", method, k,
                             f"no fixed point of P^{k} at p = {p0:.10g} to start from: "
                             f"{first.reason}{detail}")
     path = _Path(make, k, fd_step * max(1.0, abs(p0)), P.dim)
@@ -346,7 +378,7 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
     for key, short in (("reached", "reached"), ("max_steps", "max_steps"),
                        ("step below", "min_step")):
         termination = short if termination.startswith(key) else termination
-    return FamilyBranch([q.fam for q in pts], events, termination, method, k, reason)
+    return Branch([q.fam for q in pts], events, termination, method, k, reason)
 
 
 def _reason(termination: str, p_last: float, p_end: float, lo: float, hi: float,
@@ -369,7 +401,7 @@ class _PathPoint:
     u: np.ndarray
     DP: np.ndarray
     Fp: np.ndarray | None
-    fam: FamilyPoint
+    fam: BranchPoint
 
 
 class _Path:
@@ -448,7 +480,7 @@ class _Path:
             new.u[0] = cur.u[0] + P.wrap(new.u[:-1] - cur.u[:-1])[0]
 
 
-def _locate(path, correct, a, b, ev, max_iter=40) -> FamilyEvent:
+def _locate(path, correct, a, b, ev, max_iter=40) -> BifurcationEvent:
     """Illinois on the test function along the branch between ``a`` and ``b``.
 
     A point at chord fraction ``theta`` is the branch point on the hyperplane through
@@ -468,24 +500,40 @@ def _locate(path, correct, a, b, ev, max_iter=40) -> FamilyEvent:
                              max_iter=max_iter)
     if best is a or best is b:
         return ev
-    return FamilyEvent(ev.kind, ev.index, best.fam.p, (ev.detail + "; " if ev.detail else "")
+    return BifurcationEvent(ev.kind, ev.index, best.fam.p, (ev.detail + "; " if ev.detail else "")
                        + f"located: test {fv:.3g}")
 
 
-def continue_family(builder, s0, p0: float, p_end: float, **options) -> FamilyBranch:
-    """:func:`continue_orbit` with the guess first (the argument order of earlier versions).
-
-    Examples
-    --------
-    >>> import hybridpd as hp
-    >>> class Scale(hp.PoincareMap):
-    ...     names = ("x",)
-    ...     def __init__(self, a):
-    ...         self.a = a
-    ...     def apply(self, s, k=1, jacobian=False):
-    ...         return hp.MapResult(np.array([self.a ** k * s[0] + 1.0]))
-    >>> br = continue_family(Scale, [2.0], 0.5, 0.6)
-    >>> round(float(br.s[-1][0]), 10)       # the fixed point 1 / (1 - a) at a = 0.6
-    2.5
-    """
+def _continue_family(builder, s0, p0: float, p_end: float, **options) -> Branch:
+    # the argument order of earlier versions: the guess first
     return continue_orbit(builder, p0, p_end, s0, **options)
+
+
+#: Names of earlier versions: here (renamed) or in the impact pair's continuation package.
+_OLD = {"continue_family": ("_continue_family", "continue_orbit (p0, p_end before s0)"),
+        "FamilyBranch": ("Branch", "Branch"), "FamilyEvent": ("BifurcationEvent",
+                                                              "BifurcationEvent"),
+        "FamilyPoint": ("BranchPoint", "BranchPoint"),
+        "FAMILY_EVENTS": ("EVENT_KINDS", "EVENT_KINDS")}
+#: The impact pair's names once at this path (the 0.2.0 package).
+_PAIR = ("PARAMETERS", "DESIGN_PARAMETERS", "SYMMETRIC_PARAMETERS", "ImpactStep", "MapTrace",
+         "BranchSwitch", "branch_map", "continue_symmetric", "design_xm", "load_branch",
+         "map_power_jacobian", "switch_branch", "trace_map")
+#: Submodules of that package: the import hook serves ``hybridpd.analysis.continuation.<x>``.
+__path__ = []
+
+
+def __getattr__(name):
+    if name in _OLD:
+        here, new = _OLD[name]
+        obj, where = globals()[here], f"{__name__}.{new}"
+    elif name == "plot_branch":
+        obj = importlib.import_module("hybridpd.plotting.branches").plot_branch
+        where = "hybridpd.plotting.branches.plot_branch"
+    elif name in _PAIR:
+        obj, where = getattr(importlib.import_module("hybridpd.pair.continuation"), name), \
+            f"hybridpd.pair.continuation.{name}"
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    warnings.warn(_message(f"{__name__}.{name}", where), DeprecationWarning, stacklevel=2)
+    return obj
