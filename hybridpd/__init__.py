@@ -59,6 +59,7 @@ _NAMES = {
     "Case": "hybridpd.model",
     "ImpactPair": "hybridpd.model",
     "PDGains": "hybridpd.model",
+    "PairParams": "hybridpd.pair.params",
     "Reference": "hybridpd.model",
     "virtual_restitution": "hybridpd.model",
     "ControlledImpactPair": "hybridpd.pair.impactpair",
@@ -113,7 +114,7 @@ _SUBPACKAGES = ("analysis", "hybrid", "mechanics", "pair", "plotting", "reproduc
 
 # the flat namespace: every name of _NAMES, the version and ``reproduce``
 __all__ = ["Case", "Contact", "ControlledImpactPair", "HybridAutomaton", "ImpactMap",
-           "ImpactMapper", "ImpactPair", "MapResult", "MechanicalSystem", "PDGains",
+           "ImpactMapper", "ImpactPair", "MapResult", "MechanicalSystem", "PDGains", "PairParams",
            "PeriodicOrbit", "PoincareMap",
            "Reference", "Section", "SectionMap", "SectionMapper", "Stability", "__version__",
            "attractor_basin", "basin_of_attraction", "bifurcation_diagram", "boundary_curves",
