@@ -104,9 +104,8 @@ _NAMES = {
     "plot_file": "hybridpd.plotting.files"}
 
 # flat names replaced by others (served with a DeprecationWarning)
-_RENAMED_NAMES = {"load_attractor_basin": "hybridpd.analysis.basins:load_basin",
-                  "continue_family": "hybridpd.analysis.continuation:continue_orbit"}
-_RENAMED = _deprecated.moved_names(__name__, _RENAMED_NAMES)
+_RENAMED = _deprecated.moved_names(__name__, {
+    "load_attractor_basin": "hybridpd.analysis.basins:load_basin"})
 
 # ``reproduce`` is both a subpackage and its main function: the package is callable (it runs
 # :func:`hybridpd.reproduce.reproduce`), so ``hp.reproduce(...)`` works whichever Python binds.
@@ -131,8 +130,10 @@ def __getattr__(name):
         return value
     if name in _SUBPACKAGES:
         return _importlib.import_module(f"hybridpd.{name}")
-    if name in _RENAMED_NAMES:
+    if name == "load_attractor_basin":
         return _RENAMED(name)
+    if name == "continue_family":   # its argument order differs: the alias there warns
+        return getattr(_importlib.import_module("hybridpd.analysis.continuation"), name)
     raise AttributeError(f"module 'hybridpd' has no attribute {name!r}")
 
 

@@ -270,3 +270,20 @@ def test_every_documented_command_line_parses():
                 pytest.fail(f"{label}: hybridpd {' '.join(argv)} (exit {exc.code})")
             seen += 1
     assert seen >= 10
+
+
+@pytest.mark.slow
+def test_readme_three_joint_arm_commands_run(tmp_path):
+    """The README's commands on the three-joint arm run as printed (a few minutes)."""
+    import shlex
+
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    argvs = [a for a in hybridpd_commands(text) if any("arm3.toml" in w for w in a)]
+    assert len(argvs) >= 2          # its orbit and its region map
+    path = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
+    env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=path)
+    for argv in argvs:
+        argv = [str(ROOT / w) if w.startswith("examples/") else w for w in argv]
+        r = subprocess.run([sys.executable, "-m", "hybridpd", *argv], cwd=tmp_path, env=env,
+                           capture_output=True, text=True, timeout=1800, check=False)
+        assert r.returncode == 0, f"hybridpd {shlex.join(argv)}:\n{r.stderr[-2000:]}"
