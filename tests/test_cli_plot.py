@@ -45,9 +45,10 @@ def one_error_line(capsys):
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     """One small file of every kind hybridpd writes (in every format it writes it in)."""
+    from hybridpd.analysis.diagrams import CLASSES, bifurcation_diagram
     from hybridpd.pair.attractor_basins import attractor_basin
     from hybridpd.pair.basins import ImpactMapper, basin_of_attraction
-    from hybridpd.pair.bifdiagram import bifurcation_diagram
+    from hybridpd.pair.bifdiagram import PAIR_SETTINGS, ImpactMapFamily
     from hybridpd.pair.continuation import continue_symmetric
     from hybridpd.pair.orbits import symmetric_orbit
     from hybridpd.pair.regions import region_map
@@ -69,9 +70,19 @@ def files(tmp_path_factory):
     for suf in (".nc", ".zarr", ".npz"):
         ab.save(d / f"attractors{suf}")
         out[f"attractor_basin{suf}"] = d / f"attractors{suf}"
-    diag = bifurcation_diagram(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv",
-                               [20.0, 22.0, 24.0], iterations=60, keep=16)
-    diag.save(d / "diagram.npz")
+    fam = ImpactMapFamily(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv")
+    diag = bifurcation_diagram(fam, [20.0, 22.0, 24.0], **dict(PAIR_SETTINGS, iterations=60,
+                                                                keep=16))
+    out["bifurcation_diagram.nc"] = diag.save(d / "diagram.nc")
+    # the layout hybridpd 0.2.0 wrote (arrays and a JSON "meta"), built here by hand
+    meta = {"parameter_name": "kv", "iterations": 60, "keep": 16, "follow": False,
+            "case": "collocated", "fixed": diag.fixed, "design": True, "settings": {},
+            "classes": list(CLASSES)}
+    np.savez_compressed(d / "diagram.npz", values=diag.values, points=diag.points,
+                        code=diag.code, period=diag.periods, lyapunov=diag.lyapunov,
+                        lyapunov_spectrum=diag.spectrum, xm=diag.xm, L=diag.L,
+                        final=diag.final, status=np.zeros(3, np.int64),
+                        initial=np.asarray(diag.initial), meta=np.array(json.dumps(meta)))
     out["bifurcation_diagram.npz"] = d / "diagram.npz"
     br = continue_symmetric(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv", 23.0)
     out["branch.npz"] = br.save(d / "branch.npz")
@@ -85,7 +96,7 @@ def files(tmp_path_factory):
 
 KINDS = ["region_map.nc", "region_map.zarr", "region_map.npz", "basin.nc", "basin.zarr",
          "basin.npz", "attractor_basin.nc", "attractor_basin.zarr", "attractor_basin.npz",
-         "bifurcation_diagram.npz", "branch.npz",
+         "bifurcation_diagram.npz", "bifurcation_diagram.nc", "branch.npz",
          "trajectory.json", "model_trajectory.json"]
 
 
