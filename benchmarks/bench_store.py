@@ -16,6 +16,25 @@ from pathlib import Path
 from _common import best_of
 
 
+def _pair_region_map():
+    """The pair's region map as ``f(case, x=..., y=..., e=..., mu=..., ...)``, on this version
+    (the one region map over the pair's family) and on earlier ones (for comparison)."""
+    try:
+        from hybridpd.pair.regions import SymmetricFamily
+        from hybridpd.sweeps.regions import region_map
+    except ImportError:
+        from hybridpd.pair.regions import region_map
+
+        return region_map
+    names = set(SymmetricFamily.__dataclass_fields__)
+
+    def pair_region_map(case, *, x, y, **kw):
+        fam = SymmetricFamily(case, **{k: kw.pop(k) for k in list(kw) if k in names})
+        return region_map(fam, x, y, **kw)
+
+    return pair_region_map
+
+
 def _timed(label, fn, base=None, repeat=3):
     el, out = best_of(fn, repeat=repeat)
     extra = "" if base is None else f"  overhead {el - base:+.3f} s ({100 * (el - base) / base:+.1f}%)"
@@ -40,7 +59,7 @@ def main(quick=False):
     from hybridpd.pair.impactmap import ImpactMap
     from hybridpd.pair.orbits import symmetric_orbit
     from hybridpd.pair.basins import ImpactMapper, basin_of_attraction
-    from hybridpd.pair.regions import region_map
+    region_map = _pair_region_map()
 
     print(f"hybridpd from {Path(hybridpd.__file__).parent}")
     num, nb = (60, 40) if quick else (200, 100)

@@ -57,7 +57,6 @@ MOVED_MODULES = {
     "hybridpd.analysis.continuation.branchio": "hybridpd.pair.continuation.events",
     "hybridpd.analysis.bifdiagram": "hybridpd.pair.bifdiagram",
     "hybridpd.analysis.attractors": "hybridpd.pair.attractors",
-    "hybridpd.sweeps.regions": "hybridpd.pair.regions",
     "hybridpd.sweeps.basins": "hybridpd.pair.basins",
     "hybridpd.sweeps.attractor_basins": "hybridpd.pair.attractor_basins",
     "hybridpd.sweeps.diagram_sweep": "hybridpd.pair.bifdiagram",

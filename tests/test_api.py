@@ -67,7 +67,7 @@ OLD_MODULES = {
         OrbitArrays REASONS SymmetricOrbitResult symmetric_orbit symmetric_orbits
     """),
     "hybridpd.regions": ("hybridpd.pair.regions", """
-        AXES RegionMap load_region_map region_map
+        AXES SymmetricFamily
     """),
     "hybridpd.samples": ("hybridpd.hybrid.samples", """
         ball_initial_state bouncing_ball impact_oscillator oscillator_initial_state
@@ -96,6 +96,11 @@ MOVED_NAMES = [
     ("hybridpd.analysis.periodic", "orbit_from_model", "hybridpd.analysis.model_orbits"),
     ("hybridpd.analysis.hybridmap", "impact_pair_section", "hybridpd.analysis.sections"),
     ("hybridpd.analysis.hybridmap", "mechanical_section", "hybridpd.analysis.sections"),
+    ("hybridpd.pair.regions", "RegionMap", "hybridpd.sweeps.regions"),
+    ("hybridpd.pair.regions", "load_region_map", "hybridpd.sweeps.regions"),
+    ("hybridpd.pair.bifdiagram", "BifurcationDiagram", "hybridpd.analysis.diagrams"),
+    ("hybridpd.pair.bifdiagram", "load_diagram", "hybridpd.analysis.diagrams"),
+    ("hybridpd.pair.bifdiagram", "CLASSES", "hybridpd.analysis.diagrams"),
 ]
 
 

@@ -51,12 +51,13 @@ def files(tmp_path_factory):
     from hybridpd.pair.bifdiagram import PAIR_SETTINGS, ImpactMapFamily
     from hybridpd.pair.continuation import continue_symmetric
     from hybridpd.pair.orbits import symmetric_orbit
-    from hybridpd.pair.regions import region_map
+    from hybridpd.pair.regions import SymmetricFamily
+    from hybridpd.sweeps.regions import region_map
 
     d = tmp_path_factory.mktemp("results")
     out = {}
-    rm = region_map("collocated", x=("kp", 1, 50, 5), y=("kv", 1, 50, 4), e=(0.1, 0.5),
-                    mu=0.1, omega=5.0, gamma=0.75, progress=False)
+    fam = SymmetricFamily("collocated", e=(0.1, 0.5), mu=0.1, omega=5.0, gamma=0.75)
+    rm = region_map(fam, x=("kp", 1, 50, 5), y=("kv", 1, 50, 4), progress=False)
     for suf in (".nc", ".zarr", ".npz"):
         out[f"region_map{suf}"] = rm.save(d / f"regions{suf}")
     pair = ImpactPair(0.1, 0.5, 0.75)
@@ -191,10 +192,10 @@ def test_unwritable_suffixes_are_refused_before_computing(argv, allowed, files, 
                                                           monkeypatch, capsys):
     import hybridpd.pair.impactpair
     import hybridpd.pair.orbits
-    import hybridpd.pair.regions
     import hybridpd.plotting.files
+    import hybridpd.sweeps.regions
 
-    monkeypatch.setattr(hybridpd.pair.regions, "region_map", _no_compute)
+    monkeypatch.setattr(hybridpd.sweeps.regions, "region_map", _no_compute)
     monkeypatch.setattr(hybridpd.pair.orbits, "symmetric_orbit", _no_compute)
     monkeypatch.setattr(hybridpd.pair.impactpair, "ControlledImpactPair", _no_compute)
     monkeypatch.setattr(hybridpd.plotting.files, "plot_file", _no_compute)

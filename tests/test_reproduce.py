@@ -9,11 +9,11 @@ import pytest
 from _reproduce_run import SMALL, small_run
 
 from hybridpd.pair.attractor_basins import load_attractor_basin
-from hybridpd.pair.regions import load_region_map
 from hybridpd.reproduce import PAPER, SCHEMA, Settings, validate
 from hybridpd.reproduce import conclusions as C
 from hybridpd.reproduce import rules as R
 from hybridpd.reproduce.study import box_fractions
+from hybridpd.sweeps.regions import load_region_map
 
 
 @pytest.fixture(scope="module")

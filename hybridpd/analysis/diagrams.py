@@ -426,7 +426,8 @@ def bifurcation_diagram(builder, values, *, s0=None, period: int = 1, iterations
         Iterations per value and how many of the last ones are recorded
         (``8 <= keep <= iterations``).
     follow : bool
-        Start each value from the final point of the previous one (when it is finite).
+        Start each value from the final point of the previous one (where that run stopped,
+        or the map refuses its final point, from the last start the maps accepted).
     max_period : int
         Largest period detected (at most ``keep // 2`` is).
     period_tol : float
@@ -481,7 +482,7 @@ def bifurcation_diagram(builder, values, *, s0=None, period: int = 1, iterations
     if s0 is None and hasattr(builder, "initial"):
         s0 = builder.initial(v)
     arrays, status, names = None, [], ()
-    last = None
+    last = good = None
     for i, value in enumerate(v):
         try:
             P, start = _build(builder, value, s0)
@@ -490,8 +491,6 @@ def bifurcation_diagram(builder, values, *, s0=None, period: int = 1, iterations
             continue
         if not isinstance(P, PoincareMap):
             raise ValueError(f"builder must return a PoincareMap, got {type(P).__name__}")
-        if follow and last is not None:
-            start = last
         if arrays is None:
             names, dim = tuple(P.names), P.dim
             arrays = {"pts": np.full((v.size, st["keep"], dim), np.nan),
@@ -499,7 +498,17 @@ def bifurcation_diagram(builder, values, *, s0=None, period: int = 1, iterations
                       "per": np.zeros(v.size, np.int64),
                       "ex": np.full((v.size, dim), np.nan),
                       "final": np.full((v.size, dim), np.nan)}
-        last = _one_value(P, start, k, st, lyapunov, arrays, i, status)
+        if follow:                     # the last start the maps accepted if the run stopped
+            start = last if last is not None else good if good is not None else start
+        try:
+            last = _one_value(P, start, k, st, lyapunov, arrays, i, status)
+            good = start
+        except ValueError:
+            if good is None:
+                raise                  # a bad start: the caller's s0
+            # the previous value's final point is off the map's domain (e.g. a grazing
+            # z4 = 0 of the pair): from the last start the maps accepted instead
+            last = _one_value(P, good, k, st, lyapunov, arrays, i, status)
         if hasattr(builder, "project"):
             arrays["pts"][i] = builder.project(P, arrays["pts"][i])
     if arrays is None:

@@ -84,8 +84,8 @@ def register(sub):
     p.add_argument("--max-period", type=int, default=32,
                    help="largest period detected (default 32)")
     p.add_argument("--out", default=None, metavar="FILE",
-                   help="write the diagram (required): .nc or .zarr (by suffix); draw it "
-                   "later with 'hybridpd plot FILE'")
+                   help="write the diagram (required): the impact pair's or --model .nc or .zarr "
+                   "(by suffix); draw it later with 'hybridpd plot FILE'")
     p.add_argument("--plot", default=None, metavar="IMAGE",
                    help="also draw the diagram (.png, .pdf or .svg)")
     p.add_argument("--coordinate", default="z1",

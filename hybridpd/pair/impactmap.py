@@ -293,7 +293,8 @@ class ImpactMap(PoincareMap):
             d = np.where(only_p[:, None], plus[:, j] - Y, d)
             d = np.where(only_m[:, None], Y - minus[:, j], d)
             step = np.where((only_p | only_m)[:, None], hj, step)
-            J[:, :, j] = self.wrap(d) / step
+            with np.errstate(invalid="ignore"):
+                J[:, :, j] = self.wrap(d) / step     # NaN where neither side returns
         return J
 
     def flight_times(self, s):

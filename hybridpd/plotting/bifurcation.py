@@ -61,11 +61,13 @@ def _branch_cycles(branch):
 
 
 def _title(diagram):
-    run = (f"last {diagram.keep} of {diagram.iterations} iterates"
-           + (", following" if diagram.follow else ", one initial condition"))
-    if "fixed" not in diagram.metadata:        # not the impact pair's family
-        src = diagram.metadata.get("source")
-        return (f"{model_title(src, diagram.metadata)}: " if src else "") + run
+    md = diagram.metadata
+    src = md.get("source")
+    start = (", following" if md.get("follow") else
+             ", each value started from a simulation" if src else ", one initial condition")
+    run = f"last {diagram.points.shape[1]} of {md.get('iterations', '?')} iterates{start}"
+    if "fixed" not in md:        # not the impact pair's family
+        return (f"{model_title(src, md)}: " if src else "") + run
     f = diagram.fixed
     parts = [f"{diagram.case}"]
     for key in ("e", "mu", "kp", "kv", "omega", "m2", "xm", "x10"):

@@ -137,8 +137,8 @@ def plot_file(path: str | os.PathLike, **options):
 
 def _region_map(path, title=None):
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.regions import load_region_map
     from hybridpd.plotting.regions import plot_region_panels
+    from hybridpd.sweeps.regions import load_region_map
 
     return plot_region_panels(load_region_map(path), title=title)
 

@@ -376,7 +376,7 @@ def render(d: dict) -> str:
     _figures(d, w)
     w("## Files\n")
     w("Per convention `m2=<value>/`: `regions_*.nc` (region maps, "
-      "`hybridpd.pair.regions.load_region_map`), `basin_*.nc` (attractor basins, "
+      "`hybridpd.load_region_map`), `basin_*.nc` (attractor basins, "
       "`hybridpd.pair.attractor_basins.load_attractor_basin`), `robustness.json`; "
       "`hybridpd plot FILE` draws each `.nc` file.\n")
     w("## Timings (s)\n")

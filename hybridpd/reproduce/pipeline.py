@@ -213,15 +213,16 @@ def _regions(run, settings, common, *, progress, tick):
     """Region maps of Figs 4-5 on the scaled box (saved as .nc) and their shares on the
     run's grid and on the resolution-check grid."""
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.regions import region_map
+    from hybridpd.pair.regions import SymmetricFamily
+    from hybridpd.sweeps.regions import region_map
 
     s, d, m2 = run.scale, run.directory, run.m2
     kpm, kvm, num = settings.gains
     num2 = settings.check_num(num)
     for case in CASES:
         t0 = time.perf_counter()
-        rm = region_map(case, x=("kp", 0.1 * s, kpm * s, num), y=("kv", 0.1 * s, kvm * s, num),
-                        progress=progress, **common)
+        rm = region_map(SymmetricFamily(case, **common), x=("kp", 0.1 * s, kpm * s, num),
+                        y=("kv", 0.1 * s, kvm * s, num), progress=progress)
         rm.save(d / f"regions_{case}.nc")
         run.maps[case] = rm
         run.shares[case] = box_fractions(case, rm.x, rm.y, **common)
@@ -231,8 +232,9 @@ def _regions(run, settings, common, *, progress, tick):
         run.timings[f"regions {case}"] = time.perf_counter() - t0
         tick(f"m2 = {m2:g}: regions {case}")
     zk, zv, zn = settings.zoom
-    run.maps["zoom"] = region_map("noncollocated", x=("kp", 0.1 * s, zk * s, zn),
-                                  y=("kv", 0.1 * s, zv * s, zn), progress=progress, **common)
+    run.maps["zoom"] = region_map(SymmetricFamily("noncollocated", **common),
+                                  x=("kp", 0.1 * s, zk * s, zn), y=("kv", 0.1 * s, zv * s, zn),
+                                  progress=progress)
     run.maps["zoom"].save(d / "regions_noncollocated_zoom.nc")
 
 
