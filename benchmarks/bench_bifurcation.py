@@ -11,8 +11,17 @@ import numpy as np
 from _common import best_of, naive_per_impact
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.pair.bifdiagram import bifurcation_diagram
 from hybridpd.pair.impactmap import ImpactMap
+
+try:                   # this version: the pair's family through the one diagram
+    from hybridpd.analysis.diagrams import bifurcation_diagram as _any_diagram
+    from hybridpd.pair.bifdiagram import PAIR_SETTINGS, ImpactMapFamily
+
+    def bifurcation_diagram(pair, gains, omega, parameter, values, **kw):
+        fam = ImpactMapFamily(pair, gains, omega, parameter)
+        return _any_diagram(fam, values, **dict(PAIR_SETTINGS, **kw))
+except ImportError:    # earlier versions (the same run on main, for comparison)
+    from hybridpd.pair.bifdiagram import bifurcation_diagram
 
 
 def main():

@@ -29,6 +29,25 @@ from pathlib import Path
 
 import numpy as np
 
+
+def _model_region_map():
+    """A model file's region map as ``f(model, x, y, event=..., ...)``, on this version (the
+    one region map over a model's search) and on earlier ones (for comparison)."""
+    try:
+        from hybridpd.sweeps.model_regions import ModelSearch
+        from hybridpd.sweeps.regions import region_map
+    except ImportError:
+        from hybridpd.sweeps.model_regions import model_region_map
+
+        return model_region_map
+    names = set(ModelSearch.__dataclass_fields__)
+
+    def model_region_map(model, x, y, **kw):
+        fam = ModelSearch(model, **{k: kw.pop(k) for k in list(kw) if k in names})
+        return region_map(fam, x, y, **kw)
+
+    return model_region_map
+
 ROOT = Path(__file__).resolve().parents[1]
 DRIVETRAIN = ROOT / "examples" / "models" / "drivetrain.toml"
 PAIR = {
@@ -40,7 +59,7 @@ PAIR = {
 
 
 def _map(n, executor, workers=None):
-    from hybridpd.sweeps.model_regions import model_region_map
+    model_region_map = _model_region_map()
 
     t0 = time.perf_counter()
     rm = model_region_map(DRIVETRAIN, ("controller.kp", 5.0, 80.0, n),
@@ -123,7 +142,7 @@ def _naive_point(kp, kv, s0, T):
 
 
 def naive_comparison(n_side=10, n_naive=6):
-    from hybridpd.sweeps.model_regions import model_region_map
+    model_region_map = _model_region_map()
 
     t0 = time.perf_counter()
     rm = model_region_map(PAIR, ("controller.kp", 6.0, 14.0, n_side),
@@ -131,12 +150,15 @@ def naive_comparison(n_side=10, n_naive=6):
     ours = (time.perf_counter() - t0) / rm.status.size
     T = 2 * np.pi / 5.0
     rng = np.random.default_rng(0)
-    cells = [tuple(c) for c in np.argwhere(rm.exists)]
+    # one layer (this version's region maps are indexed [layer, iy, ix]; earlier ones [iy, ix])
+    exists = rm.exists[0] if rm.exists.ndim == 3 else rm.exists
+    points = rm.section_point[0] if rm.section_point.ndim == 4 else rm.section_point
+    cells = [tuple(c) for c in np.argwhere(exists)]
     pick = [cells[i] for i in rng.choice(len(cells), size=min(n_naive, len(cells)),
                                           replace=False)]
     times, err = [], 0.0
     for iy, ix in pick:
-        s = rm.section_point[iy, ix]
+        s = points[iy, ix]
         guess = s + np.array([0.01, 0.02, -0.01, 0.02])     # a neighbour's distance
         dt, sol = _naive_point(rm.x[ix], rm.y[iy], guess, T)
         times.append(dt)

@@ -92,8 +92,8 @@ _NAMES = {
     "bifurcation_diagram": "hybridpd.analysis.diagrams",
     # sweeps and result files
     "run_sweep": "hybridpd.sweeps.sweep",
-    "region_map": "hybridpd.pair.regions",
-    "load_region_map": "hybridpd.pair.regions",
+    "region_map": "hybridpd.sweeps.regions",
+    "load_region_map": "hybridpd.sweeps.regions",
     "basin_of_attraction": "hybridpd.analysis.basins",
     "ImpactMapper": "hybridpd.pair.basins",
     "load_basin": "hybridpd.analysis.basins",

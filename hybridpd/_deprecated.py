@@ -63,10 +63,12 @@ MOVED_MODULES = {
     "hybridpd.analysis.hybridcont": "hybridpd.analysis.continuation",
     "hybridpd.analysis.bifdiagram": "hybridpd.pair.bifdiagram",
     "hybridpd.analysis.attractors": "hybridpd.pair.attractors",
-    "hybridpd.sweeps.regions": "hybridpd.pair.regions",
     "hybridpd.sweeps.basins": "hybridpd.pair.basins",
     "hybridpd.sweeps.attractor_basins": "hybridpd.pair.attractor_basins",
-    "hybridpd.sweeps.diagram_sweep": "hybridpd.pair.diagram_sweep",
+    "hybridpd.sweeps.diagram_sweep": "hybridpd.pair.bifdiagram",
+    # the executor sweep of diagrams is generic (hybridpd.sweeps.diagrams); the pair's
+    # pair_diagram is served, with its old signature, by hybridpd.pair.bifdiagram
+    "hybridpd.pair.diagram_sweep": "hybridpd.pair.bifdiagram",
     "hybridpd.analysis.sections": "hybridpd.mechanics.sections",
     "hybridpd.sweeps.basin_result": "hybridpd.analysis.basins",
 }

@@ -71,7 +71,7 @@ OLD_MODULES = {
         OrbitArrays REASONS SymmetricOrbitResult symmetric_orbit symmetric_orbits
     """),
     "hybridpd.regions": ("hybridpd.pair.regions", """
-        AXES RegionMap load_region_map region_map
+        AXES SymmetricFamily
     """),
     "hybridpd.samples": ("hybridpd.hybrid.samples", """
         ball_initial_state bouncing_ball impact_oscillator oscillator_initial_state
@@ -109,6 +109,11 @@ MOVED_NAMES = [
     ("hybridpd.analysis.continuation", "continue_symmetric", "hybridpd.pair.continuation"),
     ("hybridpd.analysis.continuation", "switch_branch", "hybridpd.pair.continuation"),
     ("hybridpd.pair.continuation", "plot_branch", "hybridpd.plotting.branches"),
+    ("hybridpd.pair.regions", "RegionMap", "hybridpd.sweeps.regions"),
+    ("hybridpd.pair.regions", "load_region_map", "hybridpd.sweeps.regions"),
+    ("hybridpd.pair.bifdiagram", "BifurcationDiagram", "hybridpd.analysis.diagrams"),
+    ("hybridpd.pair.bifdiagram", "load_diagram", "hybridpd.analysis.diagrams"),
+    ("hybridpd.pair.bifdiagram", "CLASSES", "hybridpd.analysis.diagrams"),
 ]
 
 

@@ -13,17 +13,22 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.pair.bifdiagram import (
-    CLASSES,
-    bifurcation_diagram,
-    load_diagram,
-    section_coordinate,
-)
+from hybridpd.analysis.diagrams import CLASSES, load_diagram
+from hybridpd.analysis.diagrams import bifurcation_diagram as any_diagram
+from hybridpd.analysis.maps import detect_period
+from hybridpd.pair.bifdiagram import PAIR_SETTINGS, ImpactMapFamily, section_coordinate
 from hybridpd.pair.continuation import branch_map, continue_symmetric, switch_branch
 
 W = 5.0
 PAIR01 = ImpactPair(0.1, 0.1, 0.75)
 BASIN_POINT = [0.3, -2.1, -2.3, 0.5]      # a grid point of the kv = 20 basin slice
+
+
+def bifurcation_diagram(pair, gains, omega, parameter, values, *, case="collocated",
+                        x10=1.0, n=1, xm=None, initial=None, **kw):
+    """The impact pair's family through the one diagram, with the pair's settings."""
+    fam = ImpactMapFamily(pair, gains, omega, parameter, case, x10, n, xm)
+    return any_diagram(fam, values, s0=initial, **dict(PAIR_SETTINGS, **kw))
 
 
 def _d(a, b, T):
@@ -116,15 +121,17 @@ def test_no_impact_class_and_fixed_xm():
 def test_save_load_roundtrip_and_dict(tmp_path):
     d = bifurcation_diagram(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), W, "e",
                             [0.4, 0.5], iterations=100, keep=16)
-    path = tmp_path / "d.npz"
-    d.save(path)
-    r = load_diagram(path)
-    for f in ("values", "points", "code", "period", "lyapunov", "xm", "L", "final"):
-        np.testing.assert_array_equal(getattr(r, f), getattr(d, f))
-    assert r.fixed == d.fixed and r.parameter_name == "e" and r.case == d.case
+    for path in (tmp_path / "d.nc", tmp_path / "d.zarr"):
+        d.save(path)
+        r = load_diagram(path)
+        for f in ("values", "points", "code", "periods", "lyapunov", "xm", "L", "final"):
+            np.testing.assert_array_equal(getattr(r, f), getattr(d, f))
+        assert r.fixed == d.fixed and r.parameter_name == "e" and r.case == d.case
+        assert r.status == d.status and r.names == d.names
     out = json.loads(json.dumps(d.to_dict()))
     assert out["counts"]["periodic"] == 2 and set(out["counts"]) == set(CLASSES)
-    assert np.allclose(d.coordinate("x1"), d.points[..., 1] + 0.75)
+    assert np.allclose(section_coordinate(d.points, "x1", d.L[:, None]),
+                       d.points[..., 1] + 0.75)
     assert np.allclose(section_coordinate(d.points, "y1", 0.75),
                        d.points[..., 2] + d.points[..., 3])
 
@@ -139,9 +146,9 @@ def test_gamma_sweep_moves_the_clearance():
     (dict(parameter="L"), "parameter must be one of"),
     (dict(values=[1.0]), "at least 2"),
     (dict(values=[-1.0, 2.0]), "must be > 0"),
-    (dict(keep=50, iterations=10), "must not exceed"),
-    (dict(keep=4), "keep must be >= 8"),
-    (dict(initial=[0, 0, 0, -1]), "initial"),
+    (dict(keep=50, iterations=10), "keep must be in"),
+    (dict(keep=4), "keep must be in"),
+    (dict(initial=[0, 0, 0, -1]), "z4 must be > 0"),
     (dict(parameter="xm"), "fixed-xm"),
     (dict(n=2), "odd"),
 ])
@@ -184,8 +191,6 @@ def test_plot_overlays_branches_with_a_legend_of_the_drawn_artists(period2_branc
        shift=st.floats(0, 1))
 def test_period_detection_finds_the_minimal_period(k, n, seed, shift):
     """Synthetic cycles (phases wrapped across T, noise far below the tolerance)."""
-    from hybridpd.pair.bifdiagram import _period
-
     T = 1.2566
     rng = np.random.default_rng(seed)
     cyc = rng.uniform(-3, 3, (k, 4))
@@ -193,4 +198,32 @@ def test_period_detection_finds_the_minimal_period(k, n, seed, shift):
     X = cyc[np.arange(n) % k] + rng.normal(0, 1e-12, (n, 4))
     X[:, 0] %= T
     want = k if n >= 2 * k else 0
-    assert _period(X, T, 16, 1e-8) == want
+    def wrap(d):
+        d = np.array(d, float)
+        d[:, 0] = (d[:, 0] + T / 2) % T - T / 2
+        return d
+
+    assert detect_period(X, wrap, 16, 1e-8) == want
+
+
+def test_old_names_warn_and_give_the_same_diagram(tmp_path):
+    """The 0.2.0 call and file of the pair's diagram: a DeprecationWarning, the same result."""
+    with pytest.warns(DeprecationWarning, match="ImpactMapFamily"):
+        from hybridpd.pair.bifdiagram import bifurcation_diagram as old
+    new = bifurcation_diagram(PAIR01, PDGains(10, 20), W, "kv", [20.0, 23.0], iterations=100,
+                              keep=16)
+    d = old(PAIR01, PDGains(10, 20), W, "kv", [20.0, 23.0], iterations=100, keep=16)
+    np.testing.assert_allclose(d.points, new.points, rtol=0, atol=0)
+    assert d.classification == new.classification
+    # the 0.2.0 .npz layout, written here by hand from the arrays of that version
+    meta = {"parameter_name": "kv", "iterations": 100, "keep": 16, "follow": False,
+            "case": "collocated", "fixed": d.fixed, "design": True, "settings": {},
+            "classes": list(CLASSES)}
+    np.savez_compressed(tmp_path / "d.npz", values=d.values, points=d.points, code=d.code,
+                        period=d.periods, lyapunov=d.lyapunov, lyapunov_spectrum=d.spectrum,
+                        xm=d.xm, L=d.L, final=d.final, status=np.array([0, 12]),
+                        initial=np.asarray(d.initial), meta=np.array(json.dumps(meta)))
+    r = load_diagram(tmp_path / "d.npz")
+    np.testing.assert_allclose(r.points, d.points, rtol=0, atol=0)
+    np.testing.assert_allclose(r.xm, d.xm, rtol=0, atol=0)
+    assert r.status == ("", "sticking") and r.fixed == d.fixed and r.names == d.names

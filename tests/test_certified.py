@@ -13,6 +13,7 @@ import math
 import numpy as np
 import pytest
 import scipy.linalg
+from _regions import pair_region_map
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
@@ -459,7 +460,7 @@ def test_certified_map_agrees_with_the_point_map():
     grid = dict(x=("kp", 10, 13, 4), y=("kv", 19.5, 23.5, 4), e=[0.5], mu=0.1, gamma=0.75,
                 omega=5.0)
     cm = certified_map("noncollocated", depth=1, **grid)
-    rm = hp.region_map("noncollocated", progress=False, **grid)
+    rm = pair_region_map("noncollocated", progress=False, **grid)
     point = np.where(~rm.exists, 3, np.where(rm.stable, 1, 2))
     proved = cm.flags != 0
     assert set(cm.flags[proved].tolist()) == {2, 3}
@@ -469,7 +470,7 @@ def test_certified_map_agrees_with_the_point_map():
 
 
 def test_region_map_certified_round_trip(tmp_path):
-    rm = hp.region_map("collocated", x=("kp", 9, 11, 3), y=("kv", 19, 21, 2), e=[0.5, 0.9],
+    rm = pair_region_map("collocated", x=("kp", 9, 11, 3), y=("kv", 19, 21, 2), e=[0.5, 0.9],
                        mu=0.1, gamma=0.75, omega=5.0, certify=True, certify_depth=1,
                        progress=False, store=tmp_path / "run.zarr")
     assert (tmp_path / "run.certified.zarr").is_dir()   # the certification's own store
@@ -481,8 +482,8 @@ def test_region_map_certified_round_trip(tmp_path):
     for suffix in (".nc", ".npz"):
         back = hp.load_region_map(rm.save(tmp_path / f"r{suffix}"))
         np.testing.assert_array_equal(back.certified, rm.certified)
-    assert rm.to_dict()["certified_shares"][0]["proved_stable"]["cells"] == 6
-    plain = hp.region_map("collocated", x=("kp", 9, 11, 3), y=("kv", 19, 21, 2), e=[0.5],
+    assert class_shares(rm.certified[0])["proved_stable"]["cells"] == 6
+    plain = pair_region_map("collocated", x=("kp", 9, 11, 3), y=("kv", 19, 21, 2), e=[0.5],
                           mu=0.1, gamma=0.75, omega=5.0, progress=False)
     assert plain.certified is None and "certified" not in plain.to_dataset()
     back = hp.load_region_map(plain.save(tmp_path / "p.nc"))
@@ -497,7 +498,7 @@ def test_certified_figure(tmp_path):
 
     grid = dict(x=("kp", 10, 13, 3), y=("kv", 19.5, 23.5, 3), e=[0.5], mu=0.1, gamma=0.75,
                 omega=5.0, progress=False)
-    rm = hp.region_map("noncollocated", certify=True, certify_depth=1, **grid)
+    rm = pair_region_map("noncollocated", certify=True, certify_depth=1, **grid)
     assert {0, 2, 3} <= set(rm.certified.ravel().tolist())
     fig = plot_region_panels(rm)
     labels = [t.get_text() for leg in fig.legends for t in leg.get_texts()]
@@ -505,7 +506,7 @@ def test_certified_figure(tmp_path):
     assert len(fig.axes) == 2
     fig.savefig(tmp_path / "c.png")
     assert len(plot_certified_panels(rm).axes) == 1
-    plain = hp.region_map("noncollocated", **grid)
+    plain = pair_region_map("noncollocated", **grid)
     with pytest.raises(ValueError, match="certify"):
         plot_certified_panels(plain)
 
@@ -542,7 +543,7 @@ def test_bad_map_and_orbit_input():
 def test_certified_map_full_paper_box_is_consistent(case):
     cm = certified_map(case, x=("kp", 0.1, 50, 41), y=("kv", 0.1, 50, 41), e=[0.1, 0.5, 0.9],
                        mu=0.1, gamma=0.75, omega=5.0)
-    rm = hp.region_map(case, x=("kp", 0.1, 50, 41), y=("kv", 0.1, 50, 41), e=[0.1, 0.5, 0.9],
+    rm = pair_region_map(case, x=("kp", 0.1, 50, 41), y=("kv", 0.1, 50, 41), e=[0.1, 0.5, 0.9],
                        mu=0.1, gamma=0.75, omega=5.0, progress=False)
     point = np.where(~rm.exists, 3, np.where(rm.stable, 1, 2))
     proved = cm.flags != 0

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains
+from hybridpd.analysis.diagrams import load_diagram
 from hybridpd.cli import main
-from hybridpd.pair.bifdiagram import load_diagram
 from hybridpd.pair.orbits import symmetric_orbit
 
 BASE = ["bifurcation", "--case", "collocated", "--mu", "0.1", "--e", "0.1", "--gamma", "0.75",
@@ -16,7 +16,7 @@ BASE = ["bifurcation", "--case", "collocated", "--mu", "0.1", "--e", "0.1", "--g
 
 
 def test_cli_bifurcation_json_files_and_orbits(tmp_path):
-    out, png = tmp_path / "kv.npz", tmp_path / "kv.png"
+    out, png = tmp_path / "kv.nc", tmp_path / "kv.png"
     r = subprocess.run([sys.executable, "-m", "hybridpd", *BASE, "--param", "kv", "18", "24",
                         "4", "--iterations", "400", "--keep", "40", "--follow", "--out",
                         str(out), "--plot", str(png), "--json"],
@@ -52,13 +52,13 @@ def test_cli_bifurcation_json_files_and_orbits(tmp_path):
     (["--param", "kv", "10", "30", "5", "--keep", "50", "--iterations", "20"],
      "must not exceed --iterations"),
     (["--param", "kv", "10", "30", "5", "--n", "2"], "odd"),
-    (["--param", "kv", "10", "30", "5", "--out", "x.csv"], ".npz"),
+    (["--param", "kv", "10", "30", "5", "--out", "x.csv"], ".nc"),
     (["--param", "kp", "1", "30", "5"], "kp is swept"),
 ])
 def test_cli_bifurcation_bad_input_one_line_exit_2(extra, match, capsys, tmp_path):
     argv = [*BASE, *extra]
     if "--out" not in extra:
-        argv += ["--out", str(tmp_path / "d.npz")]
+        argv += ["--out", str(tmp_path / "d.nc")]
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and match in err and "Traceback" not in err
@@ -68,7 +68,7 @@ def test_cli_bifurcation_requires_the_unswept_parameters(capsys, tmp_path):
     i = BASE.index("--omega")
     argv = BASE[:i] + BASE[i + 2:]
     assert main([*argv, "--param", "kv", "10", "20", "3", "--out",
-                 str(tmp_path / "d.npz")]) == 2
+                 str(tmp_path / "d.nc")]) == 2
     err = capsys.readouterr().err
     assert "missing --omega" in err and err.count("\n") == 1
 

@@ -101,8 +101,8 @@ def test_model_figures_name_the_pid_not_pd(pid_results, kind):
 
 
 def test_region_title_reads_the_model_file_when_the_result_does_not_say(tmp_path):
-    from hybridpd.pair.regions import RegionMap
     from hybridpd.plotting.regions import plot_region_panels, plot_regions
+    from hybridpd.sweeps.regions import RegionMap
 
     model = tmp_path / "joint.toml"
     shutil.copy(MODELS / "robot_joint.toml", model)
@@ -110,7 +110,7 @@ def test_region_title_reads_the_model_file_when_the_result_does_not_say(tmp_path
     rm = RegionMap("joint.toml", "controller.kp", "controller.kd", np.array([1.0, 2.0]),
                    np.array([1.0, 2.0]), np.array([0.3]),
                    {"model": str(model), "section_contact": 0, "section_event": "release"},
-                   z.astype(bool), z.astype(bool), z, z, z.astype(np.int64), {})
+                   z.astype(bool), z.astype(bool), z, z.astype(np.int64))
     for fig in (plot_region_panels(rm), plot_regions(rm, ax=_axes())):
         text = _all_text(fig)
         assert "sampled PID on motor (dt = 0.001)" in text

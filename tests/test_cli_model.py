@@ -151,7 +151,7 @@ def test_every_command_json_is_strict(tmp_path, capsys):
           "--seed-grid", "5", "--json"], 0),
         (["bifurcation", *PAIR[:4], "--e", "0.1", "--gamma", "0.75", "--omega", "5", "--kp",
           "10", "--param", "kv", "20", "24", "3", "--iterations", "40", "--keep", "10",
-          "--out", str(tmp_path / "d.npz"), "--json"], 0),
+          "--out", str(tmp_path / "d.nc"), "--json"], 0),
     ]
     for argv, status in runs:
         rc, out, _ = _run(argv, capsys)

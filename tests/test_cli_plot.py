@@ -46,17 +46,19 @@ def one_error_line(capsys):
 def files(tmp_path_factory):
     """One small file of every kind hybridpd writes (in every format it writes it in)."""
     from hybridpd.analysis.basins import basin_of_attraction
+    from hybridpd.analysis.diagrams import CLASSES, bifurcation_diagram
     from hybridpd.pair.attractor_basins import attractor_basin
     from hybridpd.pair.basins import ImpactMapper
-    from hybridpd.pair.bifdiagram import bifurcation_diagram
+    from hybridpd.pair.bifdiagram import PAIR_SETTINGS, ImpactMapFamily
     from hybridpd.pair.continuation import continue_symmetric
     from hybridpd.pair.orbits import symmetric_orbit
-    from hybridpd.pair.regions import region_map
+    from hybridpd.pair.regions import SymmetricFamily
+    from hybridpd.sweeps.regions import region_map
 
     d = tmp_path_factory.mktemp("results")
     out = {}
-    rm = region_map("collocated", x=("kp", 1, 50, 5), y=("kv", 1, 50, 4), e=(0.1, 0.5),
-                    mu=0.1, omega=5.0, gamma=0.75, progress=False)
+    fam = SymmetricFamily("collocated", e=(0.1, 0.5), mu=0.1, omega=5.0, gamma=0.75)
+    rm = region_map(fam, x=("kp", 1, 50, 5), y=("kv", 1, 50, 4), progress=False)
     for suf in (".nc", ".zarr", ".npz"):
         out[f"region_map{suf}"] = rm.save(d / f"regions{suf}")
     pair = ImpactPair(0.1, 0.5, 0.75)
@@ -70,9 +72,19 @@ def files(tmp_path_factory):
     for suf in (".nc", ".zarr", ".npz"):
         ab.save(d / f"attractors{suf}")
         out[f"basin.attractors{suf}"] = d / f"attractors{suf}"
-    diag = bifurcation_diagram(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv",
-                               [20.0, 22.0, 24.0], iterations=60, keep=16)
-    diag.save(d / "diagram.npz")
+    fam = ImpactMapFamily(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv")
+    diag = bifurcation_diagram(fam, [20.0, 22.0, 24.0], **dict(PAIR_SETTINGS, iterations=60,
+                                                                keep=16))
+    out["bifurcation_diagram.nc"] = diag.save(d / "diagram.nc")
+    # the layout hybridpd 0.2.0 wrote (arrays and a JSON "meta"), built here by hand
+    meta = {"parameter_name": "kv", "iterations": 60, "keep": 16, "follow": False,
+            "case": "collocated", "fixed": diag.fixed, "design": True, "settings": {},
+            "classes": list(CLASSES)}
+    np.savez_compressed(d / "diagram.npz", values=diag.values, points=diag.points,
+                        code=diag.code, period=diag.periods, lyapunov=diag.lyapunov,
+                        lyapunov_spectrum=diag.spectrum, xm=diag.xm, L=diag.L,
+                        final=diag.final, status=np.zeros(3, np.int64),
+                        initial=np.asarray(diag.initial), meta=np.array(json.dumps(meta)))
     out["bifurcation_diagram.npz"] = d / "diagram.npz"
     br = continue_symmetric(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv", 23.0)
     out["branch.npz"] = br.save(d / "branch.npz")
@@ -86,7 +98,7 @@ def files(tmp_path_factory):
 
 KINDS = ["region_map.nc", "region_map.zarr", "region_map.npz", "basin.nc", "basin.zarr",
          "basin.npz", "basin.attractors.nc", "basin.attractors.zarr", "basin.attractors.npz",
-         "bifurcation_diagram.npz", "branch.npz",
+         "bifurcation_diagram.npz", "bifurcation_diagram.nc", "branch.npz",
          "trajectory.json", "model_trajectory.json"]
 
 
@@ -194,10 +206,10 @@ def test_unwritable_suffixes_are_refused_before_computing(argv, allowed, files, 
                                                           monkeypatch, capsys):
     import hybridpd.pair.impactpair
     import hybridpd.pair.orbits
-    import hybridpd.pair.regions
     import hybridpd.plotting.files
+    import hybridpd.sweeps.regions
 
-    monkeypatch.setattr(hybridpd.pair.regions, "region_map", _no_compute)
+    monkeypatch.setattr(hybridpd.sweeps.regions, "region_map", _no_compute)
     monkeypatch.setattr(hybridpd.pair.orbits, "symmetric_orbit", _no_compute)
     monkeypatch.setattr(hybridpd.pair.impactpair, "ControlledImpactPair", _no_compute)
     monkeypatch.setattr(hybridpd.plotting.files, "plot_file", _no_compute)

@@ -158,7 +158,7 @@ def test_cli_regions_on_the_cluster_match_serial(cluster, tmp_path, capsys, monk
     capsys.readouterr()
     bif = ["bifurcation", "--case", "collocated", "--mu", "0.1", "--e", "0.1", "--gamma",
            "0.75", "--omega", "5", "--kp", "10", "--param", "kv", "10", "35", "7",
-           "--iterations", "120", "--keep", "24", "--out", str(tmp_path / "d.npz"), "--json"]
+           "--iterations", "120", "--keep", "24", "--out", str(tmp_path / "d.nc"), "--json"]
     assert main(bif) == 0
     ser = json.loads(capsys.readouterr().out)
     assert main([*bif, "--scheduler", cluster["address"]]) == 0
@@ -167,7 +167,7 @@ def test_cli_regions_on_the_cluster_match_serial(cluster, tmp_path, capsys, monk
 
 @pytest.mark.slow      # the workers load the model code and compile: ~20 s on 2 cores
 def test_model_region_map_on_the_cluster_is_the_serial_one(cluster, tmp_path):
-    from hybridpd.sweeps.model_regions import model_region_map
+    from _regions import model_region_map
 
     pair = {
         "system": {"dofs": ["x1", "x2"], "masses": [0.1, 1.0], "input": [0.0, 1.0]},

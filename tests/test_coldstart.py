@@ -340,7 +340,8 @@ import numpy as np
 from hybridpd import ImpactPair, PDGains, Reference
 from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.pair.impactpair import ControlledImpactPair
-from hybridpd.pair.regions import region_map
+from hybridpd.sweeps.regions import region_map
+from hybridpd.pair.regions import SymmetricFamily
 out = {}
 heavy = ("control", "scipy.signal", "matplotlib", "numba", "sympy")
 loaded = lambda: sorted(h for h in heavy if h in sys.modules)
@@ -349,8 +350,8 @@ out["orbit"] = loaded()
 tr = ControlledImpactPair(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), Reference(1, 5)
                           ).simulate([0, 0, 0, 0], (0, 100), max_impacts=30)
 out["simulate"] = loaded()
-region_map("collocated", x=("kp", 1, 20, 3), y=("kv", 1, 20, 3), e=(0.5,), mu=0.1,
-           omega=5, L=0.75)
+region_map(SymmetricFamily("collocated", e=(0.5,), mu=0.1, omega=5, L=0.75),
+           x=("kp", 1, 20, 3), y=("kv", 1, 20, 3))
 out["regions"] = loaded()
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.analysis.basins import basin_of_attraction

@@ -97,9 +97,11 @@ def _entry_points():
         return closed_loop(pair, controller, reference, case)
 
     def regions(case, x, y, e, mu, omega, L, m2, n):
-        from hybridpd.pair.regions import region_map
+        from hybridpd.pair.regions import SymmetricFamily
+        from hybridpd.sweeps.regions import region_map
 
-        return region_map(case, x=x, y=y, e=e, mu=mu, omega=omega, L=L, m2=m2, n=n)
+        return region_map(SymmetricFamily(case, e=e, mu=mu, omega=omega, L=L, m2=m2, n=n),
+                          x=x, y=y)
 
     def mapper(impact_map, fixed_point, n_iter, criterion, escape):
         from hybridpd.pair.basins import ImpactMapper

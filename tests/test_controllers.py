@@ -476,17 +476,19 @@ def test_cli_set_with_a_pattern_and_a_region_axis_named_by_its_key(tmp_path, cap
     assert d["exists"]
     np.testing.assert_allclose(d["spectral_radius"], orb.spectral_radius, rtol=1e-8, atol=0)
 
-    from hybridpd.sweeps.model_regions import load_model_region_map, model_region_map
+    from _regions import model_region_map
+
+    from hybridpd.sweeps.regions import load_region_map
 
     rm = model_region_map(f, ("controller.*.kp", 5.0, 6.0, 2),
                           ("controller.0.kv,controller.1.kv", 10.0, 11.0, 2), progress=False)
     assert (rm.x_name, rm.y_name) == ("controller.*.kp", "controller.0.kv,controller.1.kv")
-    assert rm.exists[0, 0]
-    np.testing.assert_allclose(rm.spectral_radius[0, 0], orb.spectral_radius, rtol=1e-8,
+    assert rm.exists[0, 0, 0]
+    np.testing.assert_allclose(rm.spectral_radius[0, 0, 0], orb.spectral_radius, rtol=1e-8,
                                atol=0)
     out = tmp_path / "map.nc"
     rm.save(out)
-    ds = load_model_region_map(out).to_dataset()
+    ds = load_region_map(out).to_dataset()
     assert "controller.*.kp" in ds.coords and "controller.0.kv,controller.1.kv" in ds.coords
     with pytest.raises(ValueError, match="must set different entries"):
         model_region_map(f, ("controller.*.kp", 5.0, 6.0, 2),

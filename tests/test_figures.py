@@ -5,13 +5,13 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from _regions import pair_region_map
 from _reproduce_run import small_run
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from hybridpd.pair.regions import region_map
 from hybridpd.plotting.regions import plot_region_panels, plot_regions
 from hybridpd.plotting.style import DOUBLE, MAX_HEIGHT, MIN_FONT, SINGLE
 
@@ -202,14 +202,14 @@ def _cli_figures(tmp_path, monkeypatch):
          "--plot", str(t / "basin.png")],
         ["bifurcation", "--case", "collocated", *plant, "--e", "0.5", "--kp", "10",
          "--param", "kv", "15", "25", "6", "--iterations", "60", "--keep", "8",
-         "--follow", "--out", str(t / "d.npz"), "--plot", str(t / "diagram.png")],
+         "--follow", "--out", str(t / "d.nc"), "--plot", str(t / "diagram.png")],
         ["simulate", "--case", "collocated", *plant[:2], "--e", "0.5", "--L", "0.75",
          "--omega", "5", "--kp", "10", "--kv", "20", "--xm", "1", "--x0", "0.3", "0.5", "0",
          "0", "--t-end", "3", "--out", str(t / "run.json"), "--plot", str(t / "run.png")],
     ]
     for argv in cmds:
         assert main(argv) == 0, argv
-    for f in ("r.nc", "b.nc", "d.npz", "run.json"):
+    for f in ("r.nc", "b.nc", "d.nc", "run.json"):
         assert main(["plot", str(t / f), "--out", str(t / f"plot_{f}.png")]) == 0, f
     return seen
 
@@ -224,7 +224,7 @@ def test_cli_figures_are_print_ready(tmp_path, monkeypatch, capsys):
 
 
 def test_region_plots_accept_traced_curves(tmp_path):
-    rm = region_map("noncollocated", x=("kp", 0.1, 20, 9), y=("kv", 0.1, 6, 9), e=[0.1, 0.5],
+    rm = pair_region_map("noncollocated", x=("kp", 0.1, 20, 9), y=("kv", 0.1, 6, 9), e=[0.1, 0.5],
                     mu=0.1, omega=5.0, gamma=0.75)
     t = np.linspace(0, 1, 20)
     curves = [SimpleNamespace(kind="stability", x=2 + 10 * t, y=1 + 4 * t),
@@ -257,7 +257,7 @@ def test_region_plots_accept_traced_curves(tmp_path):
 
 
 def test_exists_but_unstable_is_not_white():
-    rm = region_map("noncollocated", x=("kp", 0.1, 50, 21), y=("kv", 0.1, 50, 21), e=[0.5],
+    rm = pair_region_map("noncollocated", x=("kp", 0.1, 50, 21), y=("kv", 0.1, 50, 21), e=[0.5],
                     mu=0.1, omega=5.0, gamma=0.75)
     assert (rm.exists & ~rm.stable).any() and (~rm.exists).any()
     fig = plot_region_panels(rm)
@@ -269,7 +269,7 @@ def test_the_house_style_is_never_global():
     import matplotlib
 
     before = dict(matplotlib.rcParams)
-    rm = region_map("collocated", x=("kp", 0.1, 20, 5), y=("kv", 0.1, 6, 5), e=[0.5],
+    rm = pair_region_map("collocated", x=("kp", 0.1, 20, 5), y=("kv", 0.1, 6, 5), e=[0.5],
                     mu=0.1, omega=5.0, gamma=0.75)
     plot_region_panels(rm)
     after = dict(matplotlib.rcParams)

@@ -4,33 +4,34 @@ import json
 import numpy as np
 from _pair_model import PAIR, PAIR_TOML
 
+from hybridpd.analysis.diagrams import load_diagram
 from hybridpd.analysis.model_orbits import SectionSpec
 from hybridpd.cli import main
 from hybridpd.mechanics.params import ModelTemplate
-from hybridpd.sweeps.model_diagrams import load_model_diagram, model_diagram
+from hybridpd.sweeps.model_diagrams import model_diagram
 
 
 def test_pair_file_diagram_periods_confirmed(tmp_path, capsys):
     d = model_diagram(PAIR, ("controller.kv", 2.0, 30.0, 5), iterations=150, keep=30,
                       progress=False)
-    assert d.points.shape == (5, 30, 4) and d.coords == ("phi", "x1_dot", "x2", "x2_dot")
+    assert d.points.shape == (5, 30, 4) and d.names == ("phi", "x1_dot", "x2", "x2_dot")
     tpl = ModelTemplate(PAIR)
     for i, v in enumerate(d.values):
-        if d.period[i] == 0:
+        if d.periods[i] == 0:
             continue
         P = SectionSpec().section_map(tpl.model({"controller.kv": v}))
         s = d.points[i, -1]
-        img = P.iterate(s, int(d.period[i]))[-1]
+        img = P.iterate(s, int(d.periods[i]))[-1]
         np.testing.assert_allclose(P.section.wrap(img - s), 0.0, atol=1e-5,
                                    err_msg=f"kv = {v}: not periodic with period "
-                                           f"{d.period[i]}")
+                                           f"{d.periods[i]}")
     assert d.counts()["periodic"] >= 1
     out = tmp_path / "d.nc"
     assert main(["bifurcation", "--model", "-", "--param", "controller.kv", "2", "30",
                  "5", "--out", str(out), "--case", "collocated"]) == 2
     assert "--case" in capsys.readouterr().err
     d.save(out)
-    back = load_model_diagram(out)
+    back = load_diagram(out)
     np.testing.assert_allclose(back.points, d.points, rtol=0, atol=0)
     assert main(["plot", str(out), "--out", str(tmp_path / "d.png")]) == 0
 

@@ -6,18 +6,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 from _pair_model import PAIR
+from _regions import model_region_map
 
 from hybridpd.analysis.model_orbits import OrbitSearch, SectionSpec
 from hybridpd.cli import main
 from hybridpd.mechanics.naive import naive_mechanical
 from hybridpd.mechanics.params import ModelTemplate, check_path, numeric_paths, set_values
 from hybridpd.mechanics.simulate import simulate_state
-from hybridpd.sweeps.model_regions import (
-    _Cells,
-    _Context,
-    load_model_region_map,
-    model_region_map,
-)
+from hybridpd.sweeps.model_regions import _Cells, _Context
+from hybridpd.sweeps.regions import load_region_map
 
 MODELS = Path(__file__).resolve().parents[1] / "examples" / "models"
 
@@ -29,7 +26,7 @@ def _cell_orbits(rm, tpl):
         for ix, kp in enumerate(rm.x):
             model = tpl.model({"controller.kp": kp, "controller.kv": kv})
             sec = spec.section_map(model).section
-            z, t0 = sec.to_state(rm.section_point[iy, ix])
+            z, t0 = sec.to_state(rm.section_point[0, iy, ix])
             yield kp, kv, model, sec, z, t0
 
 
@@ -98,7 +95,7 @@ def _naive_return(model, kp, kv, z, t0, T, wall):
 def test_pair_file_region_map_orbits_confirmed_by_solve_ivp(tmp_path):
     rm = model_region_map(PAIR, ("controller.kp", 6.0, 14.0, 3), ("controller.kv", 15.0, 25.0, 3),
                           progress=False, tile=2)
-    assert rm.status.shape == (3, 3) and rm.exists.all(), rm.summary()
+    assert rm.status.shape == (1, 3, 3) and rm.exists.all(), rm.summary()
     assert set(np.unique(rm.status)) <= {0, 1}
     for kp, kv, model, sec, z, t0 in _cell_orbits(rm, ModelTemplate(PAIR)):
         t1, pre = _naive_return(model, kp, kv, z, t0, sec.period, 1)
@@ -108,12 +105,10 @@ def test_pair_file_region_map_orbits_confirmed_by_solve_ivp(tmp_path):
                                    err_msg=f"solve_ivp does not return at kp={kp}, kv={kv}")
     # the pair's file format: the pair's reader and the plot command take it
     path = rm.save(tmp_path / "pair.nc")
-    back = load_model_region_map(path)
+    back = load_region_map(path)
     np.testing.assert_allclose(back.section_point, rm.section_point, rtol=0, atol=0)
     assert back.signature_of(1, 1) == rm.signature_of(1, 1) == (("contact0+", "crossing"),
                                                                 ("contact0-", "crossing"))
-    from hybridpd.pair.regions import load_region_map
-
     pr = load_region_map(path)
     assert pr.exists.shape == (1, 3, 3) and pr.x_name == "controller.kp"
     np.testing.assert_allclose(pr.e, [0.5], rtol=0)
@@ -129,7 +124,7 @@ def test_robot_joint_release_map_every_orbit_returns_after_one_period(tmp_path, 
                  "--out", str(out), "--json", "--quiet"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert d["counts"]["stable"] + d["counts"]["unstable"] == 6, d["counts"]
-    rm = load_model_region_map(out)
+    rm = load_region_map(out)
     for kp, kv, model, sec, z, t0 in _cell_orbits(rm, ModelTemplate.load(f)):
         T = sec.period
         tr = simulate_state(model.automaton, z, (t0, t0 + T * (1 + 1e-6)), mode=sec.mode)
@@ -198,9 +193,9 @@ def test_two_orbits_of_the_undamped_drivetrain_both_reported_and_both_periodic()
     assert "two or more orbits" in rm.summary()
     tpl = ModelTemplate.load(f)
     spec = SectionSpec(**rm.spec)
-    for iy, ix in np.argwhere(rm.n_orbits >= 2):
+    for iy, ix in np.argwhere(rm.n_orbits[0] >= 2):
         model = tpl.model({"controller.kp": rm.x[ix], "controller.kv": rm.y[iy]})
-        a, b = rm.section_point[iy, ix], rm.section_point2[iy, ix]
+        a, b = rm.section_point[0, iy, ix], rm.section_point2[0, iy, ix]
         assert np.max(np.abs(a - b)) > 1e-3, "the two orbits are one"
         for s in (a, b):
             assert _returns(model, spec, s) < 1e-7

@@ -5,17 +5,18 @@ import sys
 
 import numpy as np
 import pytest
+from _regions import pair_region_map
 
 from hybridpd import ImpactPair, PDGains
 from hybridpd.pair.orbits import symmetric_orbit
-from hybridpd.pair.regions import load_region_map, region_map
+from hybridpd.sweeps.regions import load_region_map
 
 PAPER = dict(mu=0.1, omega=5.0, gamma=0.75, x10=1.0, n=1)
 
 
 @pytest.mark.parametrize("case", ["collocated", "noncollocated"])
 def test_coarse_map_agrees_pointwise_with_symmetric_orbit(case):
-    rm = region_map(case, x=("kp", 0.5, 40, 7), y=("kv", 0.2, 30, 6), e=(0.1, 0.9), **PAPER)
+    rm = pair_region_map(case, x=("kp", 0.5, 40, 7), y=("kv", 0.2, 30, 6), e=(0.1, 0.9), **PAPER)
     for k, e in enumerate(rm.e):
         for i, kv in enumerate(rm.y):
             for j, kp in enumerate(rm.x):
@@ -28,7 +29,7 @@ def test_coarse_map_agrees_pointwise_with_symmetric_orbit(case):
 
 
 def test_other_axes_and_save_load(tmp_path):
-    rm = region_map("collocated", x=("mu", 0.05, 0.5, 5), y=("omega", 2, 8, 4), e=(0.5,),
+    rm = pair_region_map("collocated", x=("mu", 0.05, 0.5, 5), y=("omega", 2, 8, 4), e=(0.5,),
                     kp=10, kv=20, gamma=0.75)
     assert rm.exists.shape == (1, 4, 5) and rm.x_name == "mu"
     o = symmetric_orbit(ImpactPair(rm.x[2], 0.5, 0.75), PDGains(10, 20), rm.y[1])
@@ -50,10 +51,10 @@ def _compare(a, b):
 def test_same_results_serial_processes_dask():
     pytest.importorskip("distributed")
     kw = dict(x=("kp", 0.5, 30, 9), y=("kv", 0.2, 20, 8), e=(0.1, 0.5), **PAPER)
-    serial = region_map("noncollocated", **kw)
-    procs = region_map("noncollocated", executor="processes", max_workers=2, chunk_size=17, **kw)
+    serial = pair_region_map("noncollocated", **kw)
+    procs = pair_region_map("noncollocated", executor="processes", max_workers=2, chunk_size=17, **kw)
     _compare(serial, procs)
-    dask = region_map("noncollocated", executor="dask", max_workers=2, chunk_size=17, **kw)
+    dask = pair_region_map("noncollocated", executor="dask", max_workers=2, chunk_size=17, **kw)
     _compare(serial, dask)
 
 
@@ -61,7 +62,7 @@ def test_interrupted_sweep_resumes_to_the_same_file(tmp_path, monkeypatch):
     from hybridpd.pair import regions
 
     kw = dict(x=("kp", 0.5, 30, 9), y=("kv", 0.2, 20, 8), e=(0.5,), chunk_size=10, **PAPER)
-    full = region_map("collocated", store=tmp_path / "full.zarr", executor="serial", **kw)
+    full = pair_region_map("collocated", store=tmp_path / "full.zarr", executor="serial", **kw)
     calls = {"n": 0}
     original = regions.symmetric_orbits
 
@@ -74,10 +75,10 @@ def test_interrupted_sweep_resumes_to_the_same_file(tmp_path, monkeypatch):
     # interrupt inside the evaluation: the sweep's identity (its chunk function) is unchanged
     monkeypatch.setattr(regions, "symmetric_orbits", flaky)
     with pytest.raises(KeyboardInterrupt):
-        region_map("collocated", store=tmp_path / "part.zarr", executor="serial", **kw)
+        pair_region_map("collocated", store=tmp_path / "part.zarr", executor="serial", **kw)
     done_before = calls["n"] - 1
     calls["n"] = -100  # counts again, never fails
-    resumed = region_map("collocated", store=tmp_path / "part.zarr", executor="serial", **kw)
+    resumed = pair_region_map("collocated", store=tmp_path / "part.zarr", executor="serial", **kw)
     _compare(full, resumed)
     assert done_before == 3
     assert calls["n"] + 100 == 8 - 3  # 72 points, chunks of 10: only the 5 unfinished ran
@@ -102,7 +103,7 @@ def test_bad_grids_raise(kwargs, match):
     kw = dict(x=("kp", 1, 5, 4), y=("kv", 1, 5, 4), e=(0.5,), **PAPER)
     kw.update(kwargs)
     with pytest.raises(ValueError, match=match):
-        region_map("collocated", **kw)
+        pair_region_map("collocated", **kw)
 
 
 def cli(*args):
@@ -170,3 +171,40 @@ def test_cli_design_exit_codes():
     assert r.returncode == 3 and r.stderr.count("\n") == 1
     r = cli("design", "--case", "collocated", "--e", "0.5", *PLANT, "--kp-range", "5", "1")
     assert r.returncode == 2 and r.stderr.count("\n") == 1
+
+
+def test_region_figure_labels_cells_with_k_returns_per_period():
+    """Cells whose orbit returns twice per period carry their own hatch and legend entry, and
+    the hatch covers exactly the grid points of those cells (tested on the drawn paths)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.path import Path as MPath
+
+    from hybridpd.plotting.regions import plot_region_panels
+    from hybridpd.sweeps.regions import RegionMap
+
+    x, y = np.linspace(0.0, 4.0, 5), np.linspace(0.0, 3.0, 4)
+    exists = np.ones((1, 4, 5), bool)
+    exists[0, 0, 0] = False
+    k = np.ones((1, 4, 5), np.int64)
+    k[0, 2:, 3:] = 2                       # a 2 x 2 block of period-2 orbits
+    stable = exists & (k == 1)
+    rm = RegionMap("model.toml", "kp", "kv", x, y, np.array([0.5]), {}, exists, stable,
+                   np.where(exists, 0.5, np.nan), np.where(exists, 0, 2), {"period": k})
+    fig = plot_region_panels(rm, title="k test")
+    labels = {t.get_text() for leg in fig.legends for t in leg.get_texts()}
+    assert "k = 2 returns per period" in labels
+    ax = fig.axes[0]
+    hatched = [a for a in ax.collections if a.get_gid() == "k = 2 returns per period"]
+    assert len(hatched) == 1
+    paths = hatched[0].get_paths()
+    inside = lambda px, py: any(MPath(p.vertices).contains_point((px, py), radius=1e-9)
+                                or np.min(np.hypot(p.vertices[:, 0] - px,
+                                                   p.vertices[:, 1] - py)) < 1e-9
+                                for p in paths)
+    for iy in range(4):
+        for ix in range(5):
+            assert inside(x[ix], y[iy]) == bool(k[0, iy, ix] == 2), (iy, ix)
+    # an orbit everywhere but one cell: no white where an orbit exists
+    assert rm.returns()[0, 0, 0] == 0 and rm.returns()[0, 3, 4] == 2

@@ -10,9 +10,9 @@ import pytest
 from _reproduce_run import SMALL, small_run
 
 from hybridpd.analysis.basins import load_basin
-from hybridpd.pair.regions import load_region_map
 from hybridpd.reproduce import SCHEMA, Settings, validate
 from hybridpd.reproduce import rules as R
+from hybridpd.sweeps.regions import load_region_map
 
 ES = ("0.1", "0.5", "0.9")
 CASES = ("collocated", "noncollocated")

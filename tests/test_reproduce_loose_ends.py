@@ -36,7 +36,7 @@ def test_bifurcation_plot_draws_the_continued_branch_and_explains_the_period(
     argv = ["bifurcation", "--case", "collocated", "--mu", "0.1", "--e", "0.1", "--gamma",
             "0.75", "--omega", "5", "--kp", "10", "--param", "kv", "18", "26", "9",
             "--iterations", "200", "--keep", "20", "--follow", "--out",
-            str(tmp_path / "d.npz"), "--plot", str(tmp_path / "d.png")]
+            str(tmp_path / "d.nc"), "--plot", str(tmp_path / "d.png")]
     assert main(argv) == 0
     out = capsys.readouterr().out
     periods = next(ln for ln in out.splitlines() if "periods:" in ln)

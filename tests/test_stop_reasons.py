@@ -105,7 +105,7 @@ def test_the_path_follower_names_why_the_map_was_undefined():
 def test_the_command_line_reports_the_branch_termination(tmp_path, capsys):
     argv = ["bifurcation", "--case", "collocated", "--mu", "0.1", "--e", "0.1", "--gamma",
             "0.75", "--omega", "5", "--kp", "10", "--param", "kv", "20", "23", "3",
-            "--iterations", "40", "--keep", "10", "--out", str(tmp_path / "d.npz"),
+            "--iterations", "40", "--keep", "10", "--out", str(tmp_path / "d.nc"),
             "--plot", str(tmp_path / "d.png")]
     assert main([*argv, "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)

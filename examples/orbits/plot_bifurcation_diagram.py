@@ -30,8 +30,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from hybridpd import ImpactPair, PDGains
-from hybridpd.pair.bifdiagram import bifurcation_diagram
+from hybridpd import ImpactPair, PDGains, bifurcation_diagram
+from hybridpd.pair.bifdiagram import PAIR_SETTINGS, ImpactMapFamily
 from hybridpd.pair.continuation import (
     branch_map,
     continue_orbit,
@@ -117,14 +117,14 @@ def main():
     brs = branches(pair, kv_lo, kv_hi)
     t1 = time.perf_counter()
     kv = np.linspace(kv_lo, kv_hi, args.num)
-    common = dict(x10=X10, iterations=args.iterations, keep=args.keep, follow=True)
-    d_up = bifurcation_diagram(pair, PDGains(KP, kv_lo), OMEGA, "kv", kv, **common)
-    d_down = bifurcation_diagram(pair, PDGains(KP, kv_lo), OMEGA, "kv", kv[::-1],
-                                 initial=[0.3, -2.1, -2.3, 0.5], **common)
+    fam = ImpactMapFamily(pair, PDGains(KP, kv_lo), OMEGA, "kv", x10=X10)
+    common = dict(PAIR_SETTINGS, iterations=args.iterations, keep=args.keep, follow=True)
+    d_up = bifurcation_diagram(fam, kv, **common)
+    d_down = bifurcation_diagram(fam, kv[::-1], s0=[0.3, -2.1, -2.3, 0.5], **common)
     t2 = time.perf_counter()
     for name, d in (("upwards", d_up), ("downwards", d_down)):
         counts = {c: n for c, n in d.counts().items() if n}
-        per = {int(k): int(np.sum(d.period == k)) for k in np.unique(d.period) if k}
+        per = {int(k): int(np.sum(d.periods == k)) for k in np.unique(d.periods) if k}
         print(f"diagram {name}: {counts}; periods {per}")
     print(f"continuation {t1 - t0:.1f} s, diagrams {t2 - t1:.1f} s "
           f"({2 * args.num * args.iterations} iterates)")

@@ -30,12 +30,14 @@ PANELS = [("collocated", (0.1, 50.0), (0.1, 50.0), "Fig. 4: collocated"),
 
 
 def panel(ax, case, xr, yr, title):
+    from hybridpd import region_map
     from hybridpd.pair.boundaries import boundary_curves
+    from hybridpd.pair.regions import SymmetricFamily
     from hybridpd.plotting.boundaries import draw_boundaries
-    from hybridpd.pair.regions import region_map
 
-    rm = region_map(case, x=("kp", *xr, 120), y=("kv", *yr, 120), e=ES, mu=PAPER["mu"],
-                    omega=PAPER["omega"], gamma=PAPER["gamma"], n=PAPER["n"])
+    fam = SymmetricFamily(case, e=ES, mu=PAPER["mu"], omega=PAPER["omega"],
+                          gamma=PAPER["gamma"], n=PAPER["n"])
+    rm = region_map(fam, x=("kp", *xr, 120), y=("kv", *yr, 120))
     for k, e in enumerate(ES):
         if rm.stable[k].any():
             ax.contourf(rm.x, rm.y, rm.stable[k].astype(float), levels=[0.5, 1.5],

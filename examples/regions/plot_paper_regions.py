@@ -12,8 +12,9 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
+from hybridpd import region_map
+from hybridpd.pair.regions import SymmetricFamily
 from hybridpd.plotting import plot_regions
-from hybridpd.pair.regions import region_map
 
 # sphinx_gallery_start_ignore
 sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py
@@ -23,9 +24,11 @@ from _out import example_args
 ARGS = example_args(__doc__)
 NUM = 30 if ARGS.quick else 150
 common = dict(e=(0.1, 0.5, 0.9), mu=0.1, omega=5.0, gamma=0.75, x10=1.0, n=1)
-col = region_map("collocated", x=("kp", 0.1, 50, 150), y=("kv", 0.1, 50, NUM), **common)
-non = region_map("noncollocated", x=("kp", 0.1, 50, NUM), y=("kv", 0.1, 50, NUM), **common)
-zoom = region_map("noncollocated", x=("kp", 0.1, 20, NUM), y=("kv", 0.1, 6, NUM), **common)
+col_fam = SymmetricFamily("collocated", **common)
+non_fam = SymmetricFamily("noncollocated", **common)
+col = region_map(col_fam, x=("kp", 0.1, 50, 150), y=("kv", 0.1, 50, NUM))
+non = region_map(non_fam, x=("kp", 0.1, 50, NUM), y=("kv", 0.1, 50, NUM))
+zoom = region_map(non_fam, x=("kp", 0.1, 20, NUM), y=("kv", 0.1, 6, NUM))
 
 for name, rm in (("collocated", col), ("non-collocated", non), ("non-collocated zoom", zoom)):
     print(name, "exists & stable:",

@@ -1,4 +1,4 @@
-"""Brute-force bifurcation diagrams of any map in one parameter.
+"""Brute-force bifurcation diagrams of any family of maps in one parameter.
 
 For every value of a parameter the map ``P`` built for it is iterated from one initial point
 (or, *following*, from the final point reached at the previous value) and the last ``keep``
@@ -14,38 +14,62 @@ value is classified (:data:`CLASSES`):
     not periodic and not chaotic (quasi-periodic, a period above ``max_period``, or a
     transient slower than the window; without exponents every non-periodic value);
 ``diverged``
-    a coordinate left ``|s_i| <= escape`` or became non-finite;
+    a coordinate left ``|s_i| <= escape`` (the phase excepted) or became non-finite;
+``sticking``, ``no_impact``, ``unresolved``
+    the map stopped with a status its ``status_classes`` hook (a dict ``{status: class}``)
+    maps to these classes (the impact pair's engine: stuck on a wall for good, no further
+    contact, an iteration bound inside one flight);
 ``undefined``
-    the map stopped (its status is kept in ``status``: e.g. a hybrid map's ``end_time``, the
-    pair's ``sticking``), or no map could be built at this value.
+    the map stopped for another reason (its status is kept in ``status``), or no map could
+    be built at this value.
 
 The largest Lyapunov exponent (per application of ``P^k``) is the mean of ``log |R_ii|``
 along the kept iterates, ``Q_{i+1} R_{i+1} = DP(s_i) Q_i`` (QR re-orthonormalisation; the
-first quarter of the window only aligns ``Q``). ``DP`` is the map's own where it gives one,
-else central differences; a map may compute all of them at once
-(:meth:`~hybridpd.analysis.maps.PoincareMap.jacobians`). On a period-``k`` orbit the
-exponent tends to ``log rho(DP^k) / k``.
+first quarter of the window only aligns ``Q``); ``DP`` at all kept iterates comes from one
+call of the map's :meth:`~hybridpd.analysis.maps.PoincareMap.jacobians` (a map may batch
+them). On a period-``k`` orbit the exponent tends to ``log rho(DP^k) / k``.
+
+A *family* is any callable ``value -> PoincareMap`` (or ``-> (PoincareMap, start point)``,
+e.g. a start from a simulation of a model). It may offer hooks, each optional:
+``parameter`` (its name), ``prepare(values) -> family`` (precompute over all values at once),
+``variables(values) -> {name: (M,) array}`` (recorded per value; may raise ``ValueError`` for
+values outside the family), ``initial(values) -> point`` (the start when ``s0`` is not given),
+``metadata`` (a dict recorded with the diagram) and ``project(P, points) -> points`` (the
+recorded coordinates of a map's points, when maps of different values use different charts).
 """
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from hybridpd._jit import njit
-from hybridpd._results import compact_repr
+from hybridpd._results import (
+    Result,
+    check_suffix,
+    compact_repr,
+    decode_attrs,
+    encode_attrs,
+    read_dataset,
+)
 from hybridpd.analysis.maps import PoincareMap, check_returns, detect_period
 
-__all__ = ["CLASSES", "BifurcationDiagram", "bifurcation_diagram", "lyapunov_exponents"]
+__all__ = ["CLASSES", "BifurcationDiagram", "bifurcation_diagram", "load_diagram",
+           "lyapunov_exponents"]
 
 #: Classes of a parameter value (index = the integer code in ``BifurcationDiagram.code``).
-CLASSES = ("periodic", "quasiperiodic", "chaotic", "diverged", "undefined")
+CLASSES = ("periodic", "quasiperiodic", "chaotic", "diverged", "sticking", "no_impact",
+           "unresolved", "undefined")
+#: Classes of the model diagrams written by hybridpd 0.2.0, and their codes now.
+_MODEL_020 = {"periodic": 0, "not_periodic": 1, "undefined": 7}
 
 
 @dataclass(frozen=True, eq=False)
-class BifurcationDiagram:
-    """A brute-force bifurcation diagram (module docstring).
+class BifurcationDiagram(Result):
+    """A brute-force bifurcation diagram of any family of maps (module docstring).
 
     Attributes
     ----------
@@ -61,12 +85,19 @@ class BifurcationDiagram:
         The detected period (applications of ``P^k``), 0 unless periodic.
     status : tuple of str
         Why the map stopped at each value (``""`` where it did not).
-    lyapunov : ndarray, shape (M,)
-        Largest Lyapunov exponent per application of ``P^k`` (NaN where not estimated).
+    spectrum : ndarray, shape (M, dim)
+        Lyapunov exponents per application of ``P^k``, decreasing (NaN where not estimated).
+    final : ndarray, shape (M, dim)
+        Last defined point of each value (the start of the next one when following).
     names : tuple of str
         Coordinate names.
+    variables : dict of str to ndarray (M,)
+        Per-value quantities of the family (the impact pair's reference amplitude ``xm`` and
+        half clearance ``L``); also readable as attributes (``d.xm``).
     metadata : dict
-        Settings (``iterations``, ``keep``, ``period``, ``follow``, ...).
+        Settings (``iterations``, ``keep``, ``period``, ``follow``, ``initial``, ...) and the
+        family's own (the pair's ``case``, ``fixed``, ``design``; a model's ``source``); also
+        readable as attributes (``d.case``).
 
     Examples
     --------
@@ -87,19 +118,44 @@ class BifurcationDiagram:
     ([1, 2, 4], ['periodic', 'periodic', 'periodic'])
     """
 
+    kind = "bifurcation_diagram"
     parameter_name: str
     values: np.ndarray
     points: np.ndarray = field(repr=False)
     code: np.ndarray
     periods: np.ndarray
     status: tuple = field(repr=False, default=())
-    lyapunov: np.ndarray | None = field(repr=False, default=None)
+    spectrum: np.ndarray | None = field(repr=False, default=None)
+    final: np.ndarray | None = field(repr=False, default=None)
     names: tuple = ()
+    variables: dict = field(default_factory=dict, repr=False)
     metadata: dict = field(default_factory=dict, repr=False)
     __repr__ = compact_repr
 
+    def __getattr__(self, name):
+        # per-value variables and settings read as attributes (``d.xm``, ``d.keep``); the
+        # guard keeps copy/pickle, which probe before the fields exist, from recursing
+        if not name.startswith("_"):
+            for where in ("variables", "metadata"):
+                table = self.__dict__.get(where) or {}
+                if name in table:
+                    return table[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
     def __len__(self) -> int:
         return len(self.values)
+
+    @property
+    def lyapunov(self) -> np.ndarray:
+        """Largest Lyapunov exponent of every value, shape (M,) (NaN where not estimated)."""
+        if self.spectrum is None:
+            return np.full(len(self.values), np.nan)
+        return self.spectrum[:, 0]
+
+    @property
+    def period(self) -> np.ndarray:
+        """:attr:`periods` (the name of earlier versions)."""
+        return self.periods
 
     @property
     def classification(self) -> list:
@@ -111,11 +167,120 @@ class BifurcationDiagram:
         return {c: int(np.sum(self.code == i)) for i, c in enumerate(CLASSES)}
 
     def cycle(self, i: int) -> np.ndarray:
-        """The ``k`` points of the cycle of periodic value ``i`` (shape ``(k, dim)``)."""
+        """The ``k`` points of the cycle at value ``i`` (shape ``(k, dim)``, sorted by the
+        first coordinate); empty unless periodic."""
         k = int(self.periods[i])
         if k < 1:
-            raise ValueError(f"value {i} is not periodic ({self.classification[i]})")
-        return self.points[i, -k:]
+            return np.zeros((0, self.points.shape[-1]))
+        c = self.points[i, -k:]
+        return c[np.argsort(c[:, 0], kind="stable")]
+
+    def coordinate(self, name: str) -> np.ndarray:
+        """The kept points' coordinate ``name`` (one of :attr:`names`), shape (M, keep)."""
+        if name not in self.names:
+            raise ValueError(f"coordinate must be one of {self.names}, got {name!r}")
+        return self.points[..., list(self.names).index(name)]
+
+    def summary(self) -> str:
+        """A few lines in words."""
+        c = ", ".join(f"{n} {k}" for k, n in self.counts().items() if n)
+        per = {int(p): int(np.sum(self.periods == p)) for p in np.unique(self.periods) if p}
+        src = self.metadata.get("source")
+        out = (f"{Path(src).name + ': ' if src else ''}diagram in {self.parameter_name} "
+               f"[{self.values[0]:g}, {self.values[-1]:g}] ({len(self.values)} values): {c}")
+        if per:
+            out += "\n  periods: " + ", ".join(f"{p}: {n} values" for p, n in per.items())
+        return out
+
+    def to_dict(self) -> dict:
+        """JSON-ready form (classes by name, ``counts``)."""
+        d = super().to_dict()
+        d.update(classification=self.classification, counts=self.counts(),
+                 parameter=self.parameter_name)
+        return d
+
+    def to_dataset(self):
+        """Dimensions ``(value, iterate, coordinate)``; ``code`` a CF flag variable, each of
+        :attr:`variables` a variable along ``value``."""
+        # deferred import: loaded only when this runs, for start-up time
+        import xarray as xr
+
+        M, _keep, dim = self.points.shape
+        nan = np.full((M, dim), np.nan)
+        data = {"points": (("value", "iterate", "coordinate"), self.points),
+                "code": ("value", np.asarray(self.code, np.int64), {
+                    "flag_values": list(range(len(CLASSES))),
+                    "flag_meanings": " ".join(CLASSES)}),
+                "periods": ("value", np.asarray(self.periods, np.int64)),
+                "spectrum": (("value", "coordinate"),
+                             nan if self.spectrum is None else self.spectrum),
+                "final": (("value", "coordinate"), nan if self.final is None else self.final)}
+        for k, a in self.variables.items():
+            data["var_" + k] = ("value", np.asarray(a, float))
+        coords = {"value": ("value", np.asarray(self.values, float),
+                            {"long_name": self.parameter_name}),
+                  "coordinate": ("coordinate", [str(n) for n in self.names]
+                                 if len(self.names) == dim else list(range(dim)))}
+        attrs = {"kind": self.kind, "parameter_name": self.parameter_name,
+                 **encode_attrs({"status": list(self.status), "metadata": self.metadata,
+                                 "names": list(self.names)})}
+        return xr.Dataset(data, coords=coords, attrs=attrs)
+
+    @classmethod
+    def from_dataset(cls, ds) -> BifurcationDiagram:
+        """Inverse of :meth:`to_dataset`; also reads the model diagrams of hybridpd 0.2.0."""
+        a = decode_attrs(ds.attrs)
+        if a.get("kind") == "model_diagram":
+            return _from_model_020(cls, ds, a)
+        if a.get("kind") != cls.kind:
+            raise ValueError(f"the dataset holds a {a.get('kind')!r}, not a {cls.kind!r}")
+        meanings = str(ds["code"].attrs.get("flag_meanings", " ".join(CLASSES))).split()
+        code = np.array([CLASSES.index(meanings[int(c)]) for c in ds["code"].values], np.int64)
+        var = {k[4:]: ds[k].values for k in ds.data_vars if k.startswith("var_")}
+        return cls(a["parameter_name"], ds["value"].values,
+                   ds["points"].transpose("value", "iterate", "coordinate").values, code,
+                   ds["periods"].values.astype(np.int64), tuple(a.get("status") or ()),
+                   ds["spectrum"].transpose("value", "coordinate").values,
+                   ds["final"].transpose("value", "coordinate").values,
+                   tuple(a.get("names") or ()), var, dict(a.get("metadata") or {}))
+
+
+def _from_model_020(cls, ds, a):
+    """A model diagram written by hybridpd 0.2.0 (classes periodic/not_periodic/undefined)."""
+    meanings = str(ds["code"].attrs.get("flag_meanings")).split()
+    code = np.array([_MODEL_020[meanings[int(c)]] for c in ds["code"].values], np.int64)
+    pts = ds["points"].transpose("value", "iterate", "coordinate").values
+    meta = dict(a.get("metadata") or {}, source=a.get("model", ""))
+    return cls(a["parameter_name"], ds["value"].values, pts, code,
+               ds["period"].values.astype(np.int64), ("",) * len(code), None, pts[:, -1],
+               tuple(str(c) for c in ds["coordinate"].values), {}, meta)
+
+
+def _from_npz_020(path) -> BifurcationDiagram:
+    """An impact-pair diagram written by hybridpd 0.2.0 (``.npz``, engine status codes)."""
+    with np.load(path, allow_pickle=False) as z:
+        meta = json.loads(str(z["meta"]))
+        old = tuple(meta.get("classes", ()))
+        if not set(old) <= set(CLASSES):
+            raise ValueError(f"{path}: unknown class table {old}")
+        code = np.array([CLASSES.index(old[int(c)]) for c in z["code"]], np.int64)
+        names = {0: "", 11: "end_time", 12: "sticking", 13: "unresolved", 14: "nonfinite"}
+        status = tuple(names.get(int(s), str(int(s))) for s in z["status"])
+        md = {k: meta[k] for k in ("iterations", "keep", "follow", "case", "fixed", "design",
+                                   "settings")}
+        md.update(initial=z["initial"].tolist(), period=1)
+        return BifurcationDiagram(meta["parameter_name"], z["values"], z["points"], code,
+                                  z["period"].astype(np.int64), status,
+                                  z["lyapunov_spectrum"], z["final"],
+                                  ("phi", "z1", "z2", "z4"), {"xm": z["xm"], "L": z["L"]}, md)
+
+
+def load_diagram(path) -> BifurcationDiagram:
+    """Read a diagram written by :meth:`BifurcationDiagram.save` (``.nc``, ``.zarr``), or by
+    hybridpd 0.2.0 (the impact pair's ``.npz``, a model's ``.nc``/``.zarr``)."""
+    if check_suffix(path) == ".npz":
+        return _from_npz_020(path)
+    return BifurcationDiagram.from_dataset(read_dataset(path))
 
 
 def lyapunov_exponents(J) -> np.ndarray:
@@ -178,53 +343,93 @@ def _qr_exponents(J, warm):
     return acc / max(N - warm, 1)
 
 
-def _start(s0, P, value):
-    """The initial point at ``value``: ``s0(P, value)`` if callable, else ``s0``."""
-    return np.asarray(s0(P, value) if callable(s0) else s0, float)
+def _status_class(P, why: str) -> int:
+    """The class of a map that stopped with status ``why`` (module docstring)."""
+    named = getattr(P, "status_classes", {}).get(why)
+    if named is None:
+        named = "diverged" if why in ("nonfinite", "diverged") else "undefined"
+    return CLASSES.index(named)
 
 
-def _classify(P, tail, period, max_period, period_tol, chaos_tol, escape, lyapunov):
-    """``(code, period, exponent)`` of a finite window of iterates."""
-    if np.any(np.abs(tail[:, 1:] if P.period is not None else tail) > escape):
-        return CLASSES.index("diverged"), 0, math.nan
-    k = detect_period(tail, P.wrap, max_period, period_tol)
+def _classify(P, tail, period, settings, lyapunov):
+    """``(code, period, spectrum)`` of a finite window of iterates."""
+    nan = np.full(tail.shape[1], np.nan)
+    if np.any(np.abs(tail[:, 1:] if P.period is not None else tail) > settings["escape"]):
+        return CLASSES.index("diverged"), 0, nan
+    k = detect_period(tail, P.wrap, settings["max_period"], settings["period_tol"])
+    ex = nan
+    if lyapunov:
+        try:
+            ex = lyapunov_exponents(P.jacobians(tail[:-1], period))
+        except RuntimeError:           # DP undefined somewhere along the window
+            pass
     if k:
-        return CLASSES.index("periodic"), k, math.nan
-    if not lyapunov:
-        return CLASSES.index("quasiperiodic"), 0, math.nan
-    try:
-        lam = float(lyapunov_exponents(P.jacobians(tail[:-1], period))[0])
-    except RuntimeError:
-        lam = math.nan
-    chaotic = np.isfinite(lam) and lam > chaos_tol
-    return CLASSES.index("chaotic" if chaotic else "quasiperiodic"), 0, lam
+        return CLASSES.index("periodic"), k, ex
+    chaotic = np.isfinite(ex[0]) and ex[0] > settings["chaos_tol"]
+    return CLASSES.index("chaotic" if chaotic else "quasiperiodic"), 0, ex
 
 
-def bifurcation_diagram(builder, values, *, s0, period: int = 1, iterations: int = 1000,
+def _settings(iterations, keep, max_period, period_tol, chaos_tol, escape):
+    iterations, keep, max_period = int(iterations), int(keep), int(max_period)
+    if iterations < 1:
+        raise ValueError(f"iterations must be >= 1, got {iterations}")
+    if not 8 <= keep <= iterations:
+        raise ValueError(f"keep must be in [8, iterations = {iterations}], got {keep}")
+    if max_period < 1:
+        raise ValueError(f"max_period must be >= 1, got {max_period}")
+    max_period = min(max_period, keep // 2)     # a longer period cannot repeat in the window
+    for name, val in (("period_tol", period_tol), ("escape", escape)):
+        if not (math.isfinite(val) and val > 0):
+            raise ValueError(f"{name} must be > 0, got {val!r}")
+    if not math.isfinite(chaos_tol):
+        raise ValueError(f"chaos_tol must be finite, got {chaos_tol!r}")
+    return {"iterations": iterations, "keep": keep, "max_period": max_period,
+            "period_tol": float(period_tol), "chaos_tol": float(chaos_tol),
+            "escape": float(escape)}
+
+
+def _build(builder, value, s0):
+    """``(P, start)`` at ``value``: the family's map and its start (``s0`` unless the family
+    gives one; ``s0(P, value)`` if callable)."""
+    out = builder(float(value))
+    P, start = out if isinstance(out, tuple) else (out, None)
+    if not isinstance(P, PoincareMap):
+        return P, None
+    if start is None:
+        if s0 is None:
+            raise ValueError("give s0 (the family has no start of its own)")
+        start = s0(P, value) if callable(s0) else s0
+    return P, np.asarray(start, float)
+
+
+def bifurcation_diagram(builder, values, *, s0=None, period: int = 1, iterations: int = 1000,
                         keep: int = 64, follow: bool = True, max_period: int = 16,
                         period_tol: float = 1e-6, chaos_tol: float = 1e-3,
                         escape: float = 1e6, lyapunov: bool = False,
-                        parameter: str = "p") -> BifurcationDiagram:
+                        parameter: str | None = None) -> BifurcationDiagram:
     """Brute-force bifurcation diagram of a family of maps (module docstring).
 
     Parameters
     ----------
     builder : callable
-        ``value -> PoincareMap`` (a map class whose constructor takes the parameter first is
-        one).
+        The family: ``value -> PoincareMap`` or ``value -> (PoincareMap, start)`` (a map
+        class whose constructor takes the parameter first is one), with the optional hooks
+        of the module docstring (the impact pair's
+        :class:`~hybridpd.pair.bifdiagram.ImpactMapFamily`).
     values : array_like, shape (M,)
         Parameter values in sweep order (at least 2).
-    s0 : array_like, shape (dim,), or callable
-        Initial point, or ``s0(P, value) -> point`` (e.g. from a simulation of a model).
+    s0 : array_like, shape (dim,), or callable, optional
+        Initial point, or ``s0(P, value) -> point``; default: the family's ``initial`` hook.
     period : int
         ``k``: the diagram iterates ``P^k``.
     iterations, keep : int
         Iterations per value and how many of the last ones are recorded
         (``8 <= keep <= iterations``).
     follow : bool
-        Start each value from the final point of the previous one (when it is finite).
+        Start each value from the final point of the previous one (where that run stopped,
+        or the map refuses its final point, from the last start the maps accepted).
     max_period : int
-        Largest period detected (``<= keep // 2``).
+        Largest period detected (at most ``keep // 2`` is).
     period_tol : float
         Relative tolerance of the period test.
     chaos_tol : float
@@ -232,9 +437,9 @@ def bifurcation_diagram(builder, values, *, s0, period: int = 1, iterations: int
     escape : float
         Bound on the coordinates (the phase excepted); diverged beyond.
     lyapunov : bool
-        Estimate the largest Lyapunov exponent of the non-periodic values.
-    parameter : str
-        Name of the parameter (for the result).
+        Estimate the Lyapunov exponents of every value that ran to the end.
+    parameter : str, optional
+        Name of the parameter (default: the family's ``parameter``, else ``"p"``).
 
     Returns
     -------
@@ -243,7 +448,7 @@ def bifurcation_diagram(builder, values, *, s0, period: int = 1, iterations: int
     Raises
     ------
     ValueError
-        Bad values or settings, or a builder that does not return a map.
+        Bad values or settings, values outside the family, or no map at any value.
 
     Examples
     --------
@@ -270,46 +475,65 @@ def bifurcation_diagram(builder, values, *, s0, period: int = 1, iterations: int
         raise ValueError(f"builder must be a callable value -> PoincareMap, got "
                          f"{type(builder).__name__}")
     k = check_returns(period)
-    iterations, keep, max_period = int(iterations), int(keep), int(max_period)
-    if not 8 <= keep <= iterations:
-        raise ValueError(f"keep must be in [8, iterations = {iterations}], got {keep}")
-    if not 1 <= max_period <= keep // 2:
-        raise ValueError(f"max_period must be in [1, keep // 2 = {keep // 2}], got "
-                         f"{max_period}")
-    pts = code = per = lam = None
-    status, last, names = [], None, ()
+    st = _settings(iterations, keep, max_period, period_tol, chaos_tol, escape)
+    if hasattr(builder, "prepare"):
+        builder = builder.prepare(v)
+    variables = builder.variables(v) if hasattr(builder, "variables") else {}
+    if s0 is None and hasattr(builder, "initial"):
+        s0 = builder.initial(v)
+    arrays, status, names = None, [], ()
+    last = good = None
     for i, value in enumerate(v):
         try:
-            P = builder(float(value))
+            P, start = _build(builder, value, s0)
         except ValueError as exc:            # no map at this value
             status.append(f"no map: {exc}")
             continue
         if not isinstance(P, PoincareMap):
             raise ValueError(f"builder must return a PoincareMap, got {type(P).__name__}")
-        if pts is None:
-            names = P.names
-            pts = np.full((v.size, keep, P.dim), np.nan)
-            code = np.full(v.size, CLASSES.index("undefined"), np.int64)
-            per, lam = np.zeros(v.size, np.int64), np.full(v.size, np.nan)
-            code[:i] = CLASSES.index("undefined")
-        start = last if follow and last is not None else _start(s0, P, value)
-        it, why = P.iterate_status(start, iterations, k)
-        pts[i] = it[-keep:]
-        status.append(why)
-        tail = it[-keep:]
-        if why:
-            code[i] = CLASSES.index("diverged" if why in ("nonfinite", "diverged")
-                                    else "undefined")
-            last = None
-            continue
-        last = tail[-1].copy()
-        code[i], per[i], lam[i] = _classify(P, tail, k, max_period, period_tol, chaos_tol,
-                                            escape, lyapunov)
-        if code[i] == CLASSES.index("diverged"):
-            last = None
-    if pts is None:
+        if arrays is None:
+            names, dim = tuple(P.names), P.dim
+            arrays = {"pts": np.full((v.size, st["keep"], dim), np.nan),
+                      "code": np.full(v.size, CLASSES.index("undefined"), np.int64),
+                      "per": np.zeros(v.size, np.int64),
+                      "ex": np.full((v.size, dim), np.nan),
+                      "final": np.full((v.size, dim), np.nan)}
+        if follow:                     # the last start the maps accepted if the run stopped
+            start = last if last is not None else good if good is not None else start
+        try:
+            last = _one_value(P, start, k, st, lyapunov, arrays, i, status)
+            good = start
+        except ValueError:
+            if good is None:
+                raise                  # a bad start: the caller's s0
+            # the previous value's final point is off the map's domain (e.g. a grazing
+            # z4 = 0 of the pair): from the last start the maps accepted instead
+            last = _one_value(P, good, k, st, lyapunov, arrays, i, status)
+        if hasattr(builder, "project"):
+            arrays["pts"][i] = builder.project(P, arrays["pts"][i])
+    if arrays is None:
         raise ValueError("the builder built no map at any value: " + "; ".join(status))
-    meta = {"iterations": iterations, "keep": keep, "period": k, "follow": bool(follow),
-            "max_period": max_period, "period_tol": float(period_tol)}
-    return BifurcationDiagram(str(parameter), v, pts, code, per, tuple(status), lam, names,
-                              meta)
+    meta = dict(getattr(builder, "metadata", {}) or {})
+    meta.update(st, period=k, follow=bool(follow),
+                initial=None if s0 is None or callable(s0) else np.asarray(s0, float).tolist())
+    name = parameter or getattr(builder, "parameter", None) or "p"
+    return BifurcationDiagram(str(name), v, arrays["pts"], arrays["code"], arrays["per"],
+                              tuple(status), arrays["ex"], arrays["final"], names,
+                              {k_: np.asarray(a, float) for k_, a in variables.items()}, meta)
+
+
+def _one_value(P, start, k, st, lyapunov, arrays, i, status):
+    """Iterate, record and classify value ``i``; the point to follow from (or None)."""
+    it, why = P.iterate_status(start, st["iterations"], k)
+    done = np.flatnonzero(np.all(np.isfinite(it), axis=1))
+    tail = it[-st["keep"]:]
+    arrays["pts"][i] = tail
+    arrays["final"][i] = it[done[-1]] if done.size else np.nan
+    status.append(why)
+    if why:
+        arrays["code"][i] = _status_class(P, why)
+        return None
+    arrays["code"][i], arrays["per"][i], arrays["ex"][i] = _classify(P, tail, k, st, lyapunov)
+    if arrays["code"][i] == CLASSES.index("diverged"):
+        return None
+    return tail[-1].copy()

@@ -35,7 +35,7 @@ product of the Jacobians DP along the iterates.
 The reference amplitude xm follows the design at every value: the one that puts the
 primary mass on the order-N symmetric orbit of amplitude x10 (gamma = L / x10, see the
 conventions (CONVENTIONS.md)). Every parameter other than the swept one must be given (m2 and x10
-default to 1); the swept one must not be. The diagram is written to --out as .npz.
+default to 1); the swept one must not be. The diagram is written to --out (.nc or .zarr).
 
 With --model FILE.toml the map is the model's section map (--contact, --wall, --event,
 --period) and --param sweeps any numeric entry of the file, named by its dotted TOML path
@@ -47,7 +47,7 @@ _EPILOG = """\
 example (the paper's parameters, kv swept, following):
   hybridpd bifurcation --case collocated --mu 0.1 --e 0.1 --gamma 0.75 --omega 5 --n 1 \\
       --kp 10 --param kv 10 35 200 --iterations 1000 --keep 100 --follow \\
-      --out kv.npz --plot kv.png
+      --out kv.nc --plot kv.png
   hybridpd bifurcation --model examples/models/robot_joint_pd.toml --event release \\
       --param controller.kv 0.5 12 60 --out kv.nc --plot kv.png
 """
@@ -74,8 +74,7 @@ def register(sub):
                    "displaced by 1e-3 in z1)")
     p.add_argument("--max-period", type=int, default=32,
                    help="largest period detected (default 32)")
-    add_output(p, out=(".npz",), model_out=(".nc", ".zarr"), what="the diagram (required)",
-               plot="the diagram")
+    add_output(p, out=(".nc", ".zarr"), what="the diagram (required)", plot="the diagram")
     p.add_argument("--coordinate", default="z1",
                    choices=["phi", "z1", "z2", "z4", "x1", "y1", "x2", "y2"],
                    help="section coordinate on the plot's y axis (default z1)")
@@ -117,8 +116,9 @@ def run(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
     import numpy as np
 
+    from hybridpd.analysis.diagrams import bifurcation_diagram
     from hybridpd.model import ImpactPair, PDGains
-    from hybridpd.pair.bifdiagram import bifurcation_diagram
+    from hybridpd.pair.bifdiagram import PAIR_SETTINGS, ImpactMapFamily
 
     name, lo, hi, num = _sweep(args)
     if args.iterations < 1:
@@ -126,8 +126,7 @@ def run(args) -> int:
     if args.keep > args.iterations:
         raise ValueError(f"--keep ({args.keep}) must not exceed --iterations "
                          f"({args.iterations})")
-    if not str(args.out).endswith(".npz"):
-        raise ValueError(f"--out must be a .npz file, got {args.out!r}")
+    check_out(args.out, allowed=(".nc", ".zarr"))
     check_image(args.plot)
     values = np.linspace(lo, hi, num)
     v0 = {k: getattr(args, k) for k in ("e", "mu", "gamma", "omega", "kp", "kv", "m2")}
@@ -136,21 +135,22 @@ def run(args) -> int:
     if not (v0["gamma"] > 0 and args.x10 > 0):
         raise ValueError(f"gamma and x10 must be > 0, got {v0['gamma']!r}, {args.x10!r}")
     pair = ImpactPair(v0["mu"], v0["e"], v0["gamma"] * args.x10, v0["m2"])
-    opts = dict(case=args.case, x10=args.x10, n=args.n, iterations=args.iterations,
-                keep=args.keep, initial=args.initial, max_period=args.max_period)
+    fam = ImpactMapFamily(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name, args.case,
+                          args.x10, args.n)
+    opts = dict(PAIR_SETTINGS, s0=args.initial, iterations=args.iterations, keep=args.keep,
+                max_period=args.max_period)
     executor = executor_of(args)
     if executor == "serial":
-        d = bifurcation_diagram(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name, values,
-                                follow=args.follow, **opts)
+        d = bifurcation_diagram(fam, values, **dict(opts, follow=args.follow))
     elif args.follow:
         raise UsageError("--follow runs the values one after another: it cannot be spread "
                          "over --executor/--scheduler workers")
     else:
         # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.pair.diagram_sweep import pair_diagram
+        from hybridpd.sweeps.diagrams import diagram_sweep
 
-        d = pair_diagram(pair, PDGains(v0["kp"], v0["kv"]), v0["omega"], name, values,
-                         executor=executor, max_workers=args.workers, **opts)
+        opts.pop("follow")
+        d = diagram_sweep(fam, values, executor=executor, max_workers=args.workers, **opts)
     d.save(args.out)
     branch = None
     if args.plot:
@@ -222,15 +222,15 @@ def _run_model(args) -> int:
     d = model_diagram(args.model, tuple(args.param), contact=args.contact, wall=args.wall,
                       event=args.event, period=args.period, iterations=args.iterations,
                       mode=args.mode, keep=args.keep,
-                      max_period=min(args.max_period, args.keep - 1),
+                      max_period=min(args.max_period, args.keep // 2),
                       executor=executor_of(args), max_workers=args.workers, progress=False)
     d = stamp_controllers(d, args)
     d.save(args.out)
     if args.plot:
         # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.plotting.model_diagrams import plot_model_diagram
+        from hybridpd.plotting.bifurcation import plot_bifurcation
 
-        write_figure(plot_model_diagram(d), args.plot)
+        write_figure(plot_bifurcation(d), args.plot)
     if args.json:
         print_json(dict(d.to_dict(), out=str(args.out), plot=args.plot))
         return 0

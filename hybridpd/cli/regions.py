@@ -53,14 +53,16 @@ def run(args) -> int:
         raise cli.UsageError("--x and --y need --model FILE.toml (the pair's axes are --kp, --kv)")
     L, x10 = cli.check_pair_command(args, _PAIR)
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.regions import region_map
+    from hybridpd.pair.regions import SymmetricFamily
+    from hybridpd.sweeps.regions import region_map
 
     for nm in ("kp", "kv"):
         num = getattr(args, nm)[2]
         if num != int(num):
             raise ValueError(f"--{nm} NUM must be an integer, got {num:g}")
-    rm = region_map(args.case, x=("kp", *args.kp), y=("kv", *args.kv), e=args.e, mu=args.mu,
-                    omega=args.omega, L=L, x10=x10, m2=args.m2, n=args.n,
+    fam = SymmetricFamily(args.case, e=args.e, mu=args.mu, omega=args.omega, L=L, x10=x10,
+                          m2=args.m2, n=args.n)
+    rm = region_map(fam, x=("kp", *args.kp), y=("kv", *args.kv),
                     executor=cli.executor_of(args), max_workers=args.workers,
                     store=args.store, progress=cli.progress_wanted(args),
                     certify=args.certify, certify_depth=args.certify_depth)
@@ -71,14 +73,15 @@ def run(args) -> int:
         from hybridpd.plotting.regions import plot_region_panels
 
         cli.write_figure(plot_region_panels(rm), args.plot)
+    shares = _certified_shares(rm)
     if args.json:
-        cli.print_json(rm.to_dict())
+        cli.print_json(dict(rm.to_dict(), **({"certified_shares": shares} if shares else {})))
         return 0
     print(f"{args.case} regions on kp x kv = {len(rm.x)} x {len(rm.y)}:")
     for k, e in enumerate(rm.e):
         print(f"  e = {e:g}: exists {100 * rm.fraction('exists')[k]:.2f}%, exists & stable "
               f"{100 * rm.fraction('stable')[k]:.2f}% (area {rm.area('stable')[k]:.4g})")
-    for e, sh in zip(rm.e, rm.certified_shares()):
+    for e, sh in zip(rm.e, shares):
         parts = [f"{name} [{100 * v['share'][0]:.2f}, {100 * v['share'][1]:.2f}]%"
                  for name, v in sh.items() if name != "undecided"]
         print(f"  e = {e:g}, certified cells: " + ", ".join(parts)
@@ -87,26 +90,37 @@ def run(args) -> int:
     return 0
 
 
+def _certified_shares(rm) -> list:
+    """Per ``e``, each certified class's count and share interval (``[]`` uncertified)."""
+    if rm.certified is None:
+        return []
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.pair.certified import class_shares
+
+    return [{k: {**v, "share": list(v["share"])} for k, v in class_shares(f).items()}
+            for f in rm.certified]
+
+
 def _run_model(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.model_regions import model_region_map
+    from hybridpd.sweeps.model_regions import ModelSearch
+    from hybridpd.sweeps.regions import region_map
 
     cli.check_model_command(args, _PAIR, "sweep the file's entries with --x KEY and --y KEY", "KEY")
-    rm = model_region_map(args.model, tuple(args.x), tuple(args.y), contact=args.contact,
-                          wall=args.wall, event=args.event, period=args.period,
-                          periods=args.periods, tile=args.tile, executor=cli.executor_of(args),
-                          max_workers=args.workers, store=args.store,
-                          progress=cli.progress_wanted(args),
-                          options={"mode": args.mode} if args.mode else None)
+    fam = ModelSearch(args.model, contact=args.contact, wall=args.wall, event=args.event,
+                      period=args.period, periods=args.periods,
+                      options={"mode": args.mode} if args.mode else None)
+    rm = region_map(fam, tuple(args.x), tuple(args.y), tile=args.tile,
+                    executor=cli.executor_of(args), max_workers=args.workers,
+                    store=args.store, progress=cli.progress_wanted(args))
     rm = cli.stamp_controllers(rm, args)
     if args.out:
         rm.save(args.out)
     if args.plot:
         # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.pair.regions import RegionMap
         from hybridpd.plotting.regions import plot_region_panels
 
-        cli.write_figure(plot_region_panels(RegionMap.from_dataset(rm.to_dataset())), args.plot)
+        cli.write_figure(plot_region_panels(rm), args.plot)
     if args.json:
         cli.print_json(rm.to_dict())
         return 0

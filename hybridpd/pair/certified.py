@@ -629,7 +629,7 @@ def certified_map(case="collocated", *, x=("kp", 0.1, 50.0, 101), y=("kv", 0.1, 
     e : sequence of float
         Restitution coefficients in [0, 1], one map each.
     mu, omega, L or gamma, x10, m2, n, kp, kv
-        The fixed parameters (as for :func:`hybridpd.pair.regions.region_map`).
+        The fixed parameters (as for :class:`hybridpd.pair.regions.SymmetricFamily`).
     spacing : {"linear", "log"} or (x_spacing, y_spacing)
         The cells' convention of :func:`cell_edges`.
     depth : int

@@ -1,10 +1,12 @@
-"""plot bifurcation diagrams: see :mod:`hybridpd.plotting`."""
+"""plot bifurcation diagrams (of any family: the impact pair, a model file, any map): see
+:mod:`hybridpd.plotting`."""
 from __future__ import annotations
 
 import numpy as np
 
+from hybridpd.analysis.diagrams import CLASSES
 from hybridpd.pair.bifdiagram import COORDINATES, section_coordinate
-from hybridpd.plotting._common import _COLORS, figure
+from hybridpd.plotting._common import _COLORS, figure, model_title
 from hybridpd.plotting.branches import _grow
 from hybridpd.plotting.style import DOUBLE, styled
 
@@ -59,6 +61,13 @@ def _branch_cycles(branch):
 
 
 def _title(diagram):
+    md = diagram.metadata
+    src = md.get("source")
+    start = (", following" if md.get("follow") else
+             ", each value started from a simulation" if src else ", one initial condition")
+    run = f"last {diagram.points.shape[1]} of {md.get('iterations', '?')} iterates{start}"
+    if "fixed" not in md:        # not the impact pair's family
+        return (f"{model_title(src, md)}: " if src else "") + run
     f = diagram.fixed
     parts = [f"{diagram.case}"]
     for key in ("e", "mu", "kp", "kv", "omega", "m2", "xm", "x10"):
@@ -69,13 +78,29 @@ def _title(diagram):
     elif "L" in f and diagram.parameter_name != "gamma":
         parts.append(f"$L = {f['L']:g}$")
     path = r"$x_m$ from the design" if diagram.design else r"fixed $x_m$"
-    run = (f"last {diagram.keep} of {diagram.iterations} iterates"
-           + (", following" if diagram.follow else ", one initial condition"))
     return ", ".join(parts) + f"\n{path}; {run}"
 
 
+def _values_of(diagram, coordinate):
+    """``(coordinate, (M, keep) values, axis label)`` of the kept points; the pair's physical
+    coordinates from its half clearance ``L``."""
+    pair = "L" in diagram.variables and tuple(diagram.names) == COORDINATES[:4]
+    if coordinate is None:
+        names = list(diagram.names)
+        coordinate = "z1" if pair else (names[1] if names[0] == "phi" and len(names) > 1
+                                        else names[0])
+    if pair and coordinate in COORDINATES:
+        y = section_coordinate(diagram.points, coordinate, diagram.L[:, None])
+        return coordinate, y, _COORD_LABELS[coordinate]
+    if coordinate not in diagram.names:
+        allowed = COORDINATES if pair else tuple(diagram.names)
+        raise ValueError(f"coordinate must be one of {allowed}, got {coordinate!r}")
+    unit = " (model units)" if "source" in diagram.metadata else ""
+    return coordinate, diagram.coordinate(coordinate), f"{coordinate} at the section{unit}"
+
+
 @styled
-def plot_bifurcation(diagram, ax=None, coordinate: str = "z1", branches=(), *,
+def plot_bifurcation(diagram, ax=None, coordinate: str | None = None, branches=(), *,
                      events: bool = True, title: str | None = None, markersize: float = 1.0,
                      color: str = "k", label: str | None = None, legend: bool = True,
                      note: bool = True):
@@ -90,11 +115,13 @@ def plot_bifurcation(diagram, ax=None, coordinate: str = "z1", branches=(), *,
     Parameters
     ----------
     diagram : BifurcationDiagram
+        Of any family (:mod:`hybridpd.analysis.diagrams`).
     ax : matplotlib Axes, optional
         Drawn into when given, else a new Figure (no pyplot).
-    coordinate : str
-        One of :data:`~hybridpd.pair.bifdiagram.COORDINATES` (``phi, z1, z2, z4`` or the
-        physical ``x1, y1, x2, y2``).
+    coordinate : str, optional
+        One of the diagram's ``names``; for the impact pair also the physical ``x1, y1, x2,
+        y2`` (:data:`~hybridpd.pair.bifdiagram.COORDINATES`; default ``z1``). Default: the
+        first coordinate after the phase.
     branches : sequence of Branch or (Branch, label)
         Continued branches in the diagram's parameter (on the same parameter path); pieces
         with the same label share one colour and one legend entry.
@@ -120,18 +147,17 @@ def plot_bifurcation(diagram, ax=None, coordinate: str = "z1", branches=(), *,
     Examples
     --------
     >>> import numpy as np
-    >>> from hybridpd import ImpactPair, PDGains
-    >>> from hybridpd.pair.bifdiagram import bifurcation_diagram
-    >>> d = bifurcation_diagram(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0, "kv",
-    ...                         np.linspace(18, 20, 3), iterations=100, keep=10)
+    >>> from hybridpd import ImpactPair, PDGains, bifurcation_diagram
+    >>> from hybridpd.pair.bifdiagram import ImpactMapFamily
+    >>> fam = ImpactMapFamily(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0, "kv")
+    >>> d = bifurcation_diagram(fam, np.linspace(18, 20, 3), iterations=100, keep=10,
+    ...                         max_period=5, follow=False)
     >>> fig = plot_bifurcation(d, coordinate="x1")
     >>> fig.axes[0].get_xlabel()
     '$k_v$ (force$\\\\cdot$time/length)'
     """
-    if coordinate not in COORDINATES:
-        raise ValueError(f"coordinate must be one of {COORDINATES}, got {coordinate!r}")
+    coordinate, y, ylabel = _values_of(diagram, coordinate)
     fig, ax = figure(ax, house=(DOUBLE, 4.2))
-    y = diagram.coordinate(coordinate)
     x = np.repeat(diagram.values[:, None], y.shape[1], axis=1)
     ok = np.isfinite(y)
     if ok.any():
@@ -148,17 +174,24 @@ def plot_bifurcation(diagram, ax=None, coordinate: str = "z1", branches=(), *,
         _draw_branch(ax, br, coordinate, (_COLORS[k % len(_COLORS)],
                                           _BRANCH_MARKERS[k % len(_BRANCH_MARKERS)]),
                      name, events, seen)
-    ax.set_xlabel(PARAMETER_LABELS.get(diagram.parameter_name, diagram.parameter_name))
-    ax.set_ylabel(_COORD_LABELS[coordinate])
+    for v in diagram.values[diagram.code == CLASSES.index("undefined")]:
+        ax.axvline(v, color="0.85", lw=0.6, zorder=0)   # no map, or it stopped
+    ax.set_xlabel(PARAMETER_LABELS.get(diagram.parameter_name, diagram.parameter_name
+                                       + (" (model units)" if "source" in diagram.metadata
+                                          else "")))
+    ax.set_ylabel(ylabel)
     ax.set_xlim(float(np.min(diagram.values)), float(np.max(diagram.values)))
     ax.set_title(title if title is not None else _title(diagram))
     if legend:
         bifurcation_legend(ax)
     counts = {c: n for c, n in diagram.counts().items() if n and c != "periodic"}
-    per = {int(k): int(np.sum(diagram.period == k)) for k in np.unique(diagram.period) if k > 1}
+    per = {int(k): int(np.sum(diagram.periods == k)) for k in np.unique(diagram.periods)
+           if k > 1}
     lines = []
     if counts:
-        lines.append(", ".join(f"{n} {c.replace('_', ' ')}" for c, n in counts.items()))
+        lines.append(", ".join(f"{n} {c.replace('_', ' ')}" for c, n in counts.items())
+                     + (" (grey lines: no map, or it stopped)" if counts.get("undefined")
+                        else ""))
     if per:
         lines.append("period k (at " + ", ".join(f"{n} values: k = {k}" for k, n in per.items())
                      + "): the section points repeat every k applications of $P$")

@@ -5,7 +5,7 @@ The kind of a file is read from the file itself, never from its name:
 * ``.nc`` / ``.zarr`` datasets: their ``kind`` attribute (``region_map``, ``basin``);
 * ``.npz`` archives: the ``kind`` of their JSON metadata (``region_map``, ``basin``,
   ``attractor_basin``, ``branch``; see :mod:`hybridpd.sweeps.npz`), or the ``meta`` entry of
-  a bifurcation diagram (:meth:`~hybridpd.pair.bifdiagram.BifurcationDiagram.save`);
+  a bifurcation diagram (:meth:`~hybridpd.analysis.diagrams.BifurcationDiagram.save`);
 * ``.json`` documents: their ``kind`` key (``trajectory``, written by
   ``hybridpd simulate --out``).
 
@@ -27,7 +27,7 @@ KINDS = ("region_map", "basin", "attractor_basin", "bifurcation_diagram", "branc
          "trajectory", "model_basin", "model_diagram")
 
 #: The drawing options and the kinds that take them.
-OPTIONS = {"title": KINDS, "coordinate": ("bifurcation_diagram",),
+OPTIONS = {"title": KINDS, "coordinate": ("bifurcation_diagram", "model_diagram"),
            "quantity": ("branch",)}
 
 
@@ -137,8 +137,8 @@ def plot_file(path: str | os.PathLike, **options):
 
 def _region_map(path, title=None):
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.regions import load_region_map
     from hybridpd.plotting.regions import plot_region_panels
+    from hybridpd.sweeps.regions import load_region_map
 
     return plot_region_panels(load_region_map(path), title=title)
 
@@ -153,9 +153,9 @@ def _basin(path, title=None):
     return plot_basin(load_basin(path), title=title)
 
 
-def _diagram(path, title=None, coordinate="z1"):
+def _diagram(path, title=None, coordinate=None):
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.bifdiagram import load_diagram
+    from hybridpd.analysis.diagrams import load_diagram
     from hybridpd.plotting.bifurcation import plot_bifurcation
 
     return plot_bifurcation(load_diagram(path), coordinate=coordinate, title=title)
@@ -209,14 +209,6 @@ def _trajectory(path, title=None):
         raise _unreadable(path, f"trajectory without {exc}") from None
 
 
-def _model_diagram(path, title=None):
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.plotting.model_diagrams import plot_model_diagram
-    from hybridpd.sweeps.model_diagrams import load_model_diagram
-
-    return plot_model_diagram(load_model_diagram(path), title=title)
-
-
 _DRAW = {"region_map": _region_map, "basin": _basin, "attractor_basin": _basin,
          "bifurcation_diagram": _diagram, "branch": _branch, "trajectory": _trajectory,
-         "model_basin": _basin, "model_diagram": _model_diagram}
+         "model_basin": _basin, "model_diagram": _diagram}

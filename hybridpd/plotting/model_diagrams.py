@@ -1,61 +1,23 @@
-"""Draw a model file's bifurcation diagram (:class:`~hybridpd.sweeps.model_diagrams.ModelDiagram`)."""
+"""Deprecated: a model file's diagram is the one diagram, drawn by
+:func:`hybridpd.plotting.bifurcation.plot_bifurcation`."""
 from __future__ import annotations
 
-import numpy as np
+import warnings
 
-from hybridpd.plotting._common import figure, model_title
+from hybridpd._deprecated import REMOVAL
 
-__all__ = ["plot_model_diagram"]
-
-_COLORS = {"periodic": "#0072B2", "not_periodic": "#D55E00"}
-_MARK = {"periodic": ".", "not_periodic": "x"}
+__all__: list = []
 
 
-def plot_model_diagram(d, coordinate: str | None = None, ax=None, title=None):
-    """The kept section points of one coordinate against the swept entry.
-
-    Parameters
-    ----------
-    d : ModelDiagram
-    coordinate : str, optional
-        Section coordinate on the y axis (default: the first after ``phi``).
-    ax : matplotlib Axes, optional
-    title : str, optional
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-    """
+def __getattr__(name):
+    # the name of hybridpd 0.2.0, kept one more release
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.model_diagrams import DIAGRAM_CLASSES
+    from hybridpd.plotting.bifurcation import plot_bifurcation
 
-    names = list(d.coords)
-    if coordinate is None:
-        coordinate = names[1] if names[0] == "phi" and len(names) > 1 else names[0]
-    if coordinate not in names:
-        raise ValueError(f"coordinate must be one of {names}, got {coordinate!r}")
-    j = names.index(coordinate)
-    fig, ax = figure(ax, figsize=(7.2, 3.6), layout="constrained")
-    for c, cls in enumerate(DIAGRAM_CLASSES[:2]):
-        sel = d.code == c
-        if not np.any(sel):
-            continue
-        k = d.points.shape[1]
-        xs = np.repeat(d.values[sel], k)
-        ys = d.points[sel, :, j].ravel()
-        ax.plot(xs, ys, ls="none", marker=_MARK[cls], ms=2 if cls == "periodic" else 3,
-                color=_COLORS[cls], label=f"{cls.replace('_', ' ')} ({int(sel.sum())} values)")
-    und = d.code == 2
-    if np.any(und):
-        ax.plot(d.values[und], np.full(int(und.sum()), np.nan), ls="none")
-        for v in d.values[und]:
-            ax.axvline(v, color="0.8", lw=0.6, zorder=0)
-    ax.set_xlabel(f"{d.parameter_name} (model units)", fontsize=8)
-    ax.set_ylabel(f"{coordinate} at the section (model units)", fontsize=8)
-    ax.tick_params(labelsize=7)
-    ax.legend(fontsize=7, frameon=False, loc="best",
-              title=("grey lines: map undefined" if np.any(und) else None), title_fontsize=7)
-    ax.set_title(title if title is not None else
-                 f"{model_title(d.source, d.metadata)}: last {d.points.shape[1]} of "
-                 f"{d.metadata.get('iterations')} iterates", fontsize=8)
-    return fig
+    if name != "plot_model_diagram":
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    warnings.warn(f"{__name__}.plot_model_diagram is deprecated and will be removed in "
+                  f"hybridpd {REMOVAL}; use hybridpd.plotting.bifurcation.plot_bifurcation",
+                  DeprecationWarning, stacklevel=2)
+    return lambda d, coordinate=None, ax=None, title=None: plot_bifurcation(
+        d, ax=ax, coordinate=coordinate, title=title)

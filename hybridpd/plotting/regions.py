@@ -1,7 +1,9 @@
 """Region figures: Figs 4-5 with one panel per ``e``, and all ``e`` on one axes.
 
 Conventions of every figure here: the region where the orbit exists and is stable is filled;
-where it exists but is unstable is hatched (so "no orbit" is the only white); the existence
+where it exists but is unstable is hatched (so "no orbit" is the only white); cells whose
+orbit returns ``k > 1`` times to the section per period (a model's map records ``k``) carry
+one more hatch per ``k`` with the legend entry "k = 2 returns per period"; the existence
 boundary is a dashed line with short ticks on the side where the orbit exists; legend entries
 are built from the drawn artists (:mod:`hybridpd.plotting._common`) and sit outside the data;
 the parameters are stated on the figure. ``curves=`` takes traced boundary curves (objects with
@@ -46,6 +48,9 @@ CERTIFIED = {1: ("proved stable", FILL), 2: ("proved unstable", "#E69F00"),
              3: ("proved no orbit (white)", "white")}
 UNDECIDED = "undecided (hatched)"
 UNDECIDED_FACE, UNDECIDED_EDGE, UNDECIDED_HATCH = "0.88", "0.55", "xxxx"
+
+#: Cells whose orbit returns k > 1 times per period (one hatch per k, in order of k).
+RETURNS_HATCHES, RETURNS_EDGE = ("...", "ooo", "***", "+++"), "#7A1F00"
 
 #: Traced boundary kinds that bound existence (drawn like the existence boundary).
 _EXISTENCE_KINDS = ("existence", "grazing", "viability", "xm_zero", "sticking")
@@ -126,7 +131,7 @@ def _fill(ax, X, Y, mask, label, proxy, **kw):
 
 
 def _panel(ax, X, Y, ex, st, *, curves=None, mark=None, title=None, outline=None,
-           side_ticks=True):
+           side_ticks=True, returns=None):
     from matplotlib.patches import Rectangle
 
     bg = Rectangle((0, 0), 1, 1, transform=ax.transAxes, facecolor="white", edgecolor="none",
@@ -146,6 +151,8 @@ def _panel(ax, X, Y, ex, st, *, curves=None, mark=None, title=None, outline=None
     if st.any():
         _fill(ax, X, Y, st, LAB_FILL, patch_proxy(facecolor=FILL, edgecolor=FILL_EDGE, lw=0.6),
               colors=[FILL])
+    if returns is not None:
+        _returns(ax, X, Y, ex, returns)
     if curves is None:
         if ex.any() and not ex.all() and side_ticks:
             _side_ticks(ax, X, Y, ex, EXIST, LAB_EX)
@@ -182,6 +189,20 @@ def _panel(ax, X, Y, ex, st, *, curves=None, mark=None, title=None, outline=None
     ax.set_ylim(Y[0, 0], Y[-1, 0])
     if title:
         ax.set_title(title)
+
+
+def _returns(ax, X, Y, ex, returns):
+    """Cells whose orbit returns ``k > 1`` times per period: one hatch per ``k`` over the
+    stable fill or unstable hatch, with a legend entry each."""
+    k = np.where(ex, np.asarray(returns), 0)
+    for i, kk in enumerate(int(v) for v in np.unique(k) if v > 1):
+        hatch = RETURNS_HATCHES[i % len(RETURNS_HATCHES)]
+        _fill(ax, X, Y, k == kk, f"k = {kk} returns per period",
+              patch_proxy(facecolor="white", edgecolor=RETURNS_EDGE, hatch=hatch, lw=0.6),
+              colors="none", hatches=[hatch])
+        for a in ax.collections[-1:]:
+            a.set_edgecolor(RETURNS_EDGE)
+            a.set_linewidth(0.0)
 
 
 def _certified_panel(ax, rm, k, title=True):
@@ -316,7 +337,7 @@ def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, ti
                 cv = curves if row == 0 else None
             fe, fs = m.fraction("exists")[k], m.fraction("stable")[k]
             _panel(ax, X, Y, m.exists[k], m.stable[k], curves=cv, mark=mark,
-                   outline=outline if row == 0 else None,
+                   outline=outline if row == 0 else None, returns=m.returns()[k],
                    title=f"e = {e:g}{' (zoom)' if row else ''}: exists {_pct(fe)},\n"
                          f"exists and stable {_pct(fs)}")
             ax.set_xlabel(axis_label(m.x_name))

@@ -300,7 +300,7 @@ def render(d: dict) -> str:
     _figures(d, w)
     w("## Files\n")
     w("Per convention `m2=<value>/`: `regions_*.nc` (region maps, "
-      "`hybridpd.pair.regions.load_region_map`), `basin_*.nc` (attractor basins, "
+      "`hybridpd.load_region_map`), `basin_*.nc` (attractor basins, "
       "`hybridpd.analysis.basins.load_basin`); `robustness.json` (the "
       "comparison of conclusion 5); `hybridpd plot FILE` draws each `.nc` file.\n")
     w("## Timings (s)\n")

@@ -175,20 +175,22 @@ def m2_study(settings: Settings, *, log=None) -> M2Study:
 def _regions(run, settings, common, *, progress):
     """Region maps of Figs 4-5 on the scaled box (saved as .nc)."""
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.regions import region_map
+    from hybridpd.pair.regions import SymmetricFamily
+    from hybridpd.sweeps.regions import region_map
 
     s, d = run.scale, run.directory
     kpm, kvm, num = settings.gains
     for case in CASES:
         t0 = time.perf_counter()
-        rm = region_map(case, x=("kp", 0.1 * s, kpm * s, num), y=("kv", 0.1 * s, kvm * s, num),
-                        progress=progress, **common)
+        rm = region_map(SymmetricFamily(case, **common), x=("kp", 0.1 * s, kpm * s, num),
+                        y=("kv", 0.1 * s, kvm * s, num), progress=progress)
         rm.save(d / f"regions_{case}.nc")
         run.maps[case] = rm
         run.timings[f"regions {case}"] = time.perf_counter() - t0
     zk, zv, zn = settings.zoom
-    run.maps["zoom"] = region_map("noncollocated", x=("kp", 0.1 * s, zk * s, zn),
-                                  y=("kv", 0.1 * s, zv * s, zn), progress=progress, **common)
+    run.maps["zoom"] = region_map(SymmetricFamily("noncollocated", **common),
+                                  x=("kp", 0.1 * s, zk * s, zn), y=("kv", 0.1 * s, zv * s, zn),
+                                  progress=progress)
     run.maps["zoom"].save(d / "regions_noncollocated_zoom.nc")
 
 

@@ -1,7 +1,7 @@
 """Basins of attraction of any model file, labelled by attractor like the pair's.
 
 :func:`model_basin` finds a periodic orbit of one section of a model file (as
-:func:`hybridpd.sweeps.model_regions.model_region_map` does per cell), then labels a 2-D slice
+:class:`hybridpd.sweeps.model_regions.ModelSearch` does per cell), then labels a 2-D slice
 of the section (two section coordinates on a grid, the others at the orbit's values) by where
 the map takes each point: ``0`` the orbit; ``1, 2, ...`` other periodic attractors found
 among the points that do not reach it (each found by iterating the map from one such point
@@ -79,7 +79,7 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
     values : dict, optional
         ``{dotted path: value}`` set in the file first (e.g. ``{"controller.kp": 30}``).
     contact, wall, event, period, periods, mode
-        The section and the orbit (as in :func:`~hybridpd.sweeps.model_regions.
+        The section and the orbit (as in :class:`~hybridpd.sweeps.model_regions.
         model_region_map`; ``mode`` as in :class:`~hybridpd.analysis.model_orbits.
         SectionSpec`).
     n_iter, criterion

@@ -1,173 +1,117 @@
-"""Brute-force bifurcation diagrams of any model file in one of its numeric entries.
+"""Bifurcation diagrams of any model file in one of its numeric entries.
 
-:func:`model_diagram` sweeps one entry of a model file (a dotted path,
-:mod:`hybridpd.mechanics.params`) over ``N`` values; at each value it simulates the model from
-its initial state for a transient, takes the last crossing of the chosen section (in the
-mode where the motion crosses it), iterates the section map ``P^k`` ``iterations`` times and keeps the last ``keep`` section points. Each
-value is classified: ``periodic`` with the smallest period ``p`` (applications of ``P^k``)
-after which the kept points repeat (to ``1e-6`` relative), ``not_periodic`` (no period up to
-``max_period``: quasi-periodic or chaotic), or ``undefined`` (the map stopped: no crossing,
-divergence, sticking for good; the reason is kept). The values are independent, so they run
-as a sweep on any executor (a scheduler address runs them on an existing Dask cluster).
+A model file with one entry swept (a dotted path, :mod:`hybridpd.mechanics.params`) is a
+family of section maps, :class:`ModelFamily`: at each value it simulates the model from its
+initial state for a transient and starts the chosen section's map ``P^k`` (in the mode where
+the motion crosses it) from the last crossing. :func:`model_diagram` runs the one diagram,
+:func:`hybridpd.analysis.diagrams.bifurcation_diagram`, over that family as a sweep on any
+executor (:func:`hybridpd.sweeps.diagrams.diagram_sweep`; a scheduler address runs it on an
+existing Dask cluster). Without Lyapunov exponents every non-periodic value is
+``quasiperiodic`` (quasi-periodic or chaotic); a map that stops (no crossing, divergence,
+sticking for good) is ``undefined`` with its reason in ``status``.
 """
 from __future__ import annotations
 
+import importlib
 import math
-from dataclasses import dataclass, field
+import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from hybridpd._results import compact_repr
+from hybridpd._deprecated import REMOVAL
+from hybridpd.analysis.diagrams import BifurcationDiagram
 from hybridpd.analysis.model_orbits import SectionSpec, simulated_returns
 from hybridpd.mechanics.params import ModelTemplate
-from hybridpd.sweeps.labelled import decode_attrs, encode_attrs, load_result, save_result
 from hybridpd.sweeps.model_regions import template_of
 
-__all__ = ["DIAGRAM_CLASSES", "ModelDiagram", "load_model_diagram", "model_diagram"]
-
-#: Classes of a value of a model diagram.
-DIAGRAM_CLASSES = ("periodic", "not_periodic", "undefined")
+__all__ = ["ModelFamily", "model_diagram"]
 
 
 @dataclass(frozen=True, eq=False)
-class ModelDiagram:
-    """A brute-force bifurcation diagram of a model file (module docstring).
+class ModelFamily:
+    """A model file's section maps along one entry, started by simulation.
 
-    Attributes
+    Parameters
     ----------
+    data : dict
+        The parsed model file.
     source : str
-    parameter_name : str
+        Where it came from (for titles).
+    parameter : str
         The swept entry (dotted path).
-    values : ndarray, shape (M,)
-    points : ndarray, shape (M, keep, dim)
-        The last ``keep`` section points per value (NaN where the map stopped).
-    code : ndarray of int, shape (M,)
-        Index into :data:`DIAGRAM_CLASSES`.
-    period : ndarray of int, shape (M,)
-        Detected period (applications of ``P^k``), 0 unless periodic.
-    coords : tuple of str
-        Section coordinate names.
-    metadata : dict
-        Section, iterations, keep.
+    spec : dict
+        The fields of a :class:`~hybridpd.analysis.model_orbits.SectionSpec`.
+    main_mode : str
+        The mode of the diagram's chart (the points of maps in other modes are recorded in
+        its coordinates).
+
+    Calling it with a value gives ``(P, start)``: the section map in the mode where the
+    simulated motion crosses the section, and the last crossing (``ValueError`` where the
+    motion does not cross it).
+
+    Examples
+    --------
+    >>> pair = {"system": {"dofs": ["x1", "x2"], "masses": [0.1, 1.0], "input": [0.0, 1.0]},
+    ...         "contact": [{"between": ["x1", "x2"], "lo": -0.75, "hi": 0.75,
+    ...                      "restitution": 0.5}],
+    ...         "controller": {"type": "pd", "kp": 10.0, "kv": 20.0, "measure": "x2"},
+    ...         "reference": {"type": "sine", "amplitude": 0.4, "omega": 5.0,
+    ...                       "feedforward_mass": 1.0},
+    ...         "initial": {"q": [0.3, 0.0], "v": [0.5, 0.0]}}
+    >>> fam = ModelFamily.of(pair, "controller.kv")
+    >>> P, start = fam(20.0)
+    >>> P.names, bool(np.allclose(P(start), start, atol=1e-6))
+    (('phi', 'x1_dot', 'x2', 'x2_dot'), True)
     """
 
+    data: dict
     source: str
-    parameter_name: str
-    values: np.ndarray
-    points: np.ndarray = field(repr=False)
-    code: np.ndarray = field(repr=False)
-    period: np.ndarray = field(repr=False)
-    coords: tuple = ()
-    metadata: dict = field(default_factory=dict)
-    __repr__ = compact_repr
-
-    def counts(self) -> dict:
-        """``{class: number of values}``."""
-        return {c: int(np.sum(self.code == i)) for i, c in enumerate(DIAGRAM_CLASSES)}
-
-    def summary(self) -> str:
-        """A few lines in words."""
-        c = ", ".join(f"{n} {k}" for k, n in self.counts().items() if n)
-        per = {int(p): int(np.sum(self.period == p)) for p in np.unique(self.period) if p}
-        out = (f"{Path(self.source).name}: diagram in {self.parameter_name} "
-               f"[{self.values[0]:g}, {self.values[-1]:g}] ({len(self.values)} values): {c}")
-        if per:
-            out += "\n  periods: " + ", ".join(f"{p}: {n} values" for p, n in per.items())
-        return out
-
-    def to_dict(self) -> dict:
-        """JSON-ready form."""
-        return {"model": self.source, "parameter": self.parameter_name,
-                "values": self.values.tolist(),
-                "classification": [DIAGRAM_CLASSES[int(c)] for c in self.code],
-                "period": self.period.tolist(), "counts": self.counts(),
-                "coordinates": list(self.coords), "metadata": self.metadata}
-
-    def to_dataset(self):
-        """Dimensions ``(value, iterate, coordinate)``; attributes name the parameter."""
-        # deferred import: loaded only when this runs, for start-up time
-        import xarray as xr
-
-        data = {"points": (("value", "iterate", "coordinate"), self.points),
-                "code": ("value", self.code, {
-                    "flag_values": list(range(len(DIAGRAM_CLASSES))),
-                    "flag_meanings": " ".join(DIAGRAM_CLASSES)}),
-                "period": ("value", self.period)}
-        coords = {"value": ("value", self.values, {"long_name": self.parameter_name}),
-                  "coordinate": ("coordinate", list(self.coords))}
-        attrs = {"kind": "model_diagram", "model": self.source,
-                 "parameter_name": self.parameter_name,
-                 **encode_attrs({"metadata": dict(self.metadata)})}
-        return xr.Dataset(data, coords=coords, attrs=attrs)
+    parameter: str
+    spec: dict
+    main_mode: str = ""
 
     @classmethod
-    def from_dataset(cls, ds) -> ModelDiagram:
-        """Inverse of :meth:`to_dataset`."""
-        a = decode_attrs(ds.attrs)
-        if a.get("kind") != "model_diagram":
-            raise ValueError("the dataset does not hold a model diagram (attribute kind)")
-        return cls(a["model"], a["parameter_name"], ds["value"].values,
-                   ds["points"].transpose("value", "iterate", "coordinate").values,
-                   ds["code"].values.astype(np.int64), ds["period"].values.astype(np.int64),
-                   tuple(str(c) for c in ds["coordinate"].values),
-                   dict(a.get("metadata") or {}))
-
-    def save(self, path) -> Path:
-        """Write to ``.nc`` or ``.zarr`` (by suffix)."""
-        return save_result(self, path)
-
-
-def load_model_diagram(path) -> ModelDiagram:
-    """Read a :class:`ModelDiagram` written by :meth:`ModelDiagram.save`."""
-    return load_result(ModelDiagram, path)
-
-
-def _detect_period(pts, wrap, max_period):
-    scale = max(1.0, float(np.max(np.abs(pts))))
-    for p in range(1, min(int(max_period), len(pts) - 1) + 1):
-        d = wrap(pts[p:] - pts[:-p])
-        if float(np.max(np.abs(d))) <= 1e-6 * scale:
-            return p
-    return 0
-
-
-def _diagram_chunk(chunk, *, data, source, name, spec, iterations, keep, max_period, dim,
-                   main_mode=""):
-    """Values of one chunk (module-level: runs in worker processes)."""
-    template = ModelTemplate(data, source)
-    sspec = SectionSpec(**spec)
-    chart = sspec.section_map(template.model(), main_mode or None).section
-    m = len(chunk["value"])
-    pts = np.full((m, keep, dim), np.nan)
-    code = np.full(m, 2, np.int64)
-    period = np.zeros(m, np.int64)
-    k = 1 if sspec.period == "auto" else int(sspec.period)
-    for i in range(m):
+    def of(cls, model, parameter: str, spec: SectionSpec | None = None) -> ModelFamily:
+        """The family of ``model`` (path, dict or template) in ``parameter``; the chart's
+        mode is that of the motion of the file's own values."""
+        template = template_of(model)
+        spec = spec or SectionSpec()
+        base = template.model()
         try:
-            model = template.model({name: chunk["value"][i]})
-            sim = simulated_returns(model, sspec)
-            P = sspec.section_map(model, sim.mode)
-            s = sim.candidates[0][1]
+            P = spec.section_map(base, simulated_returns(base, spec).mode)
         except ValueError:
-            continue
-        it = P.iterate(s, iterations, k)
-        tail = it[-keep:]
-        if P.section.mode != chart.mode:       # the diagram's chart: that of the main mode
-            tail = np.array([chart.from_state(*P.section.to_state(q)) if np.all(np.isfinite(q))
-                             else np.full(dim, np.nan) for q in tail])
-        pts[i] = tail
-        if np.all(np.isfinite(tail)):
-            period[i] = _detect_period(tail, P.section.wrap, max_period)
-            code[i] = 0 if period[i] else 1
-    return {"points": pts, "code": code, "period": period}
+            P = spec.section_map(base)
+        fields = {k: getattr(spec, k) for k in spec.__dataclass_fields__}
+        return cls(template.data, template.source, parameter, fields, P.section.mode)
+
+    def __call__(self, value):
+        spec = SectionSpec(**self.spec)
+        model = ModelTemplate(self.data, self.source).model({self.parameter: value})
+        sim = simulated_returns(model, spec)
+        return spec.section_map(model, sim.mode), sim.candidates[0][1]
+
+    def project(self, P, points) -> np.ndarray:
+        """``points`` of ``P`` in the chart of :attr:`main_mode`."""
+        if P.section.mode == self.main_mode:
+            return points
+        chart = SectionSpec(**self.spec).section_map(
+            ModelTemplate(self.data, self.source).model(), self.main_mode or None).section
+        return np.array([chart.from_state(*P.section.to_state(q)) if np.all(np.isfinite(q))
+                         else np.full(len(q), np.nan) for q in points])
+
+    @property
+    def metadata(self) -> dict:
+        """``source`` and ``spec``."""
+        return {"source": self.source, "spec": dict(self.spec)}
 
 
 def model_diagram(model, param, *, contact: int = 0, wall: int | None = None,
                   event: str = "impact", period="auto", mode: str | None = None,
-                  iterations: int = 300,
-                  keep: int = 50, max_period: int = 16, executor="serial", max_workers=None,
-                  store=None, progress: bool = True) -> ModelDiagram:
+                  iterations: int = 300, keep: int = 50, max_period: int = 16,
+                  executor="serial", max_workers=None, store=None,
+                  progress: bool = True) -> BifurcationDiagram:
     """A brute-force bifurcation diagram of a model file in one numeric entry.
 
     Parameters
@@ -175,48 +119,52 @@ def model_diagram(model, param, *, contact: int = 0, wall: int | None = None,
     model : str, Path, dict or ModelTemplate
     param : (str, float, float, int)
         ``(KEY, MIN, MAX, NUM)``: a dotted path and its values.
-    contact, wall, event, period
-        The section, in whichever mode the motion crosses it at each value (``period``: the
-        diagram iterates ``P^k``; ``"auto"`` iterates ``P`` and detects the period; ``mode``
-        fixes the section's mode, as in :class:`~hybridpd.analysis.model_orbits.SectionSpec`).
+    contact, wall, event, period, mode
+        The section (:class:`~hybridpd.analysis.model_orbits.SectionSpec`; ``period``: the
+        diagram iterates ``P^k``, ``"auto"`` iterates ``P``).
     iterations, keep, max_period
-        Iterations per value, points kept, largest period detected.
+        Iterations per value, points kept (``8 <= keep <= iterations``), largest period
+        detected (at most ``keep // 2``).
     executor, max_workers, store, progress
         As in :func:`hybridpd.sweeps.sweep.run_sweep`.
 
     Returns
     -------
-    ModelDiagram
+    BifurcationDiagram
+        With ``names`` the section's coordinates and ``metadata`` holding ``source``,
+        ``spec`` and the section's period ``T``.
     """
     # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.sweeps.diagrams import diagram_sweep
     from hybridpd.sweeps.model_regions import _axis
-    from hybridpd.sweeps.sweep import run_sweep
 
     template = template_of(model)
     name, values = _axis("param", param, template)
-    if not (int(iterations) == iterations and 1 <= keep <= iterations):
-        raise ValueError(f"need 1 <= keep <= iterations, got keep = {keep!r}, iterations = "
-                         f"{iterations!r}")
-    if not 1 <= int(max_period) < keep:
-        raise ValueError(f"max_period must be in [1, keep), got {max_period!r}")
     spec = SectionSpec(contact=contact, wall=wall, event=event, period=period, mode=mode)
-    base = template.model()
-    try:
-        P = spec.section_map(base, simulated_returns(base, spec).mode)
-    except ValueError:
-        P = spec.section_map(base)
-    specd = {k: getattr(spec, k) for k in spec.__dataclass_fields__}
-    res = run_sweep(_diagram_chunk, {"value": values}, chunk_size=max(1, len(values) // 16),
-                    executor=executor, max_workers=max_workers, store=store,
-                    progress=progress, label=f"diagram of {Path(template.source).name}",
-                    func_kwargs={"data": template.data, "source": template.source,
-                                 "name": name, "spec": specd, "iterations": int(iterations),
-                                 "keep": int(keep), "max_period": int(max_period),
-                                 "dim": P.dim, "main_mode": P.section.mode},
-                    metadata={"kind": "model_diagram", "version": 1})
-    o = res.outputs
-    meta = {"spec": specd, "iterations": int(iterations), "keep": int(keep),
-            "max_period": int(max_period),
-            "T": P.section.period if P.section.has_phase else math.nan}
-    return ModelDiagram(template.source, name, values, o["points"], o["code"], o["period"],
-                        tuple(P.section.names), meta)
+    fam = ModelFamily.of(template, name, spec)
+    k = 1 if spec.period == "auto" else int(spec.period)
+    d = diagram_sweep(fam, values, period=k, iterations=iterations, keep=keep,
+                      max_period=min(int(max_period), int(keep) // 2), period_tol=1e-6,
+                      executor=executor, max_workers=max_workers, store=store,
+                      progress=progress, label=f"diagram of {Path(template.source).name}",
+                      parameter=name)
+    P = spec.section_map(template.model(), fam.main_mode or None)
+    T = P.section.period if P.section.has_phase else math.nan
+    return BifurcationDiagram(d.parameter_name, d.values, d.points, d.code, d.periods,
+                              d.status, d.spectrum, d.final, tuple(P.section.names), {},
+                              dict(d.metadata, T=T))
+
+
+_MOVED = {"ModelDiagram": "BifurcationDiagram", "load_model_diagram": "load_diagram",
+          "DIAGRAM_CLASSES": "CLASSES"}
+
+
+def __getattr__(name):
+    # names of hybridpd 0.2.0: a model's diagram is the one diagram now
+    if name not in _MOVED:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    new = _MOVED[name]
+    warnings.warn(f"{__name__}.{name} is deprecated and will be removed in hybridpd "
+                  f"{REMOVAL}; use hybridpd.analysis.diagrams.{new}", DeprecationWarning,
+                  stacklevel=2)
+    return getattr(importlib.import_module("hybridpd.analysis.diagrams"), new)

@@ -1,6 +1,7 @@
 """Region maps of any model file: where a periodic orbit of a section exists and is stable.
 
-:func:`model_region_map` sweeps two numeric entries of a model file (dotted paths,
+:class:`ModelSearch`, a family of :func:`hybridpd.sweeps.regions.region_map`, sweeps two
+numeric entries of a model file (dotted paths,
 :mod:`hybridpd.mechanics.params`) over a grid and, per cell, looks for the periodic orbits of
 one section (a contact's impacts or sticking releases, ``k`` returns per orbit) with
 :func:`hybridpd.analysis.model_orbits.solve_at`:
@@ -18,21 +19,24 @@ one section (a contact's impacts or sticking releases, ``k`` returns per orbit) 
   first two are kept (stable first).
 
 Every orbit is checked by :func:`~hybridpd.analysis.periodic.find_orbit` (whole number of
-reference periods, transversal, a simulated period returns to it). The result converts to
-the labelled xarray format of the pair's region maps (``hybridpd plot`` draws it) with the
-extra variables ``status``, ``section_point``, ``signature``, ``n_orbits`` and those of the
-second orbit. The per-cell work does not depend on the executor, so results are identical
+reference periods, transversal, a simulated period returns to it). The result is the one
+:class:`~hybridpd.sweeps.regions.RegionMap` (one layer) with the variables ``status``,
+``n_orbits``, ``attempts``, ``section_point``, ``signature``, ``period`` (returns ``k`` per
+period), ``section_mode``, ``section_state``, ``section_time`` and those of the second orbit
+(suffix ``2``). The per-cell work does not depend on the executor, so results are identical
 for serial, process-pool and cluster runs, and a run resumes from its Zarr store.
 """
 from __future__ import annotations
 
+import importlib
 import math
-from dataclasses import dataclass, field
+import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from hybridpd._results import compact_repr
+from hybridpd._deprecated import REMOVAL
 from hybridpd.analysis.model_orbits import (
     STATUS,
     OrbitSearch,
@@ -45,15 +49,9 @@ from hybridpd.analysis.model_orbits import (
 )
 from hybridpd.mechanics.sections import mode_code, mode_name
 from hybridpd.mechanics.params import ModelTemplate
-from hybridpd.sweeps.labelled import (
-    axis_attrs,
-    decode_attrs,
-    encode_attrs,
-    load_result,
-    save_result,
-)
+from hybridpd.sweeps.regions import RegionMap
 
-__all__ = ["ModelRegionMap", "load_model_region_map", "model_region_map", "template_of"]
+__all__ = ["ModelSearch", "template_of"]
 
 _SIG_LEN = 48          # jumps of a signature kept per cell
 _NEIGH = [(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)]
@@ -94,245 +92,6 @@ def _grid_spec(name, spec, what, check):
 def _axis(name, spec, template):
     key, (lo, hi, num) = _grid_spec(name, spec, "KEY", template.check)
     return key, np.linspace(lo, hi, num)
-
-
-@dataclass(frozen=True, eq=False)
-class ModelRegionMap:
-    """Existence and stability of a section's periodic orbits over a grid of two model entries.
-
-    Arrays are indexed ``[iy, ix]`` (``y`` the rows).
-
-    Attributes
-    ----------
-    source : str
-        The model file.
-    x_name, y_name : str
-        Dotted paths of the swept entries.
-    x, y : ndarray
-    spec : dict
-        The section and orbit settings (:class:`~hybridpd.analysis.model_orbits.SectionSpec`).
-    coords : tuple of str
-        Names of the section coordinates.
-    sig_table : tuple of (str, str)
-        The ``(guard, kind)`` pairs the signature codes index.
-    status : ndarray of int, shape (ny, nx)
-        :data:`~hybridpd.analysis.model_orbits.STATUS` code per cell.
-    spectral_radius, spectral_radius2 : ndarray, shape (ny, nx)
-        Of the first (stable first) and second orbit (NaN where none).
-    section_point, section_point2 : ndarray, shape (ny, nx, dim)
-    signature, signature2 : ndarray of int16, shape (ny, nx, 48)
-        Impact signatures as codes into ``sig_table`` (``-1`` padding, ``-2`` cut).
-    period, period2 : ndarray of int, shape (ny, nx)
-        Returns to the section per period of the first and second orbit (``k``; 0: none).
-    mode, mode2 : ndarray of int, shape (ny, nx)
-        The section's mode of each orbit (:func:`~hybridpd.mechanics.sections.mode_code`;
-        ``metadata["modes"]`` names the codes present; -1: none).
-    section_state, section_state2 : ndarray, shape (ny, nx, n)
-        Full pre-jump state of each orbit at its section point (``metadata["state_names"]``).
-    section_time, section_time2 : ndarray, shape (ny, nx)
-        Its time (the phase ``phi``).
-    status2 : ndarray of int, shape (ny, nx)
-        Status of the second orbit (``-1`` where there is none).
-    n_orbits : ndarray of int, shape (ny, nx)
-        Distinct orbits found.
-    attempts : ndarray of int, shape (ny, nx)
-        Newton runs made per cell.
-    metadata : dict
-    """
-
-    source: str
-    x_name: str
-    y_name: str
-    x: np.ndarray
-    y: np.ndarray
-    spec: dict
-    coords: tuple
-    sig_table: tuple
-    status: np.ndarray
-    spectral_radius: np.ndarray
-    section_point: np.ndarray = field(repr=False)
-    signature: np.ndarray = field(repr=False)
-    n_orbits: np.ndarray = field(repr=False)
-    status2: np.ndarray = field(repr=False)
-    spectral_radius2: np.ndarray = field(repr=False)
-    section_point2: np.ndarray = field(repr=False)
-    signature2: np.ndarray = field(repr=False)
-    attempts: np.ndarray = field(repr=False)
-    metadata: dict = field(default_factory=dict)
-    period: np.ndarray | None = field(default=None, repr=False)
-    period2: np.ndarray | None = field(default=None, repr=False)
-    mode: np.ndarray | None = field(default=None, repr=False)
-    mode2: np.ndarray | None = field(default=None, repr=False)
-    section_state: np.ndarray | None = field(default=None, repr=False)
-    section_time: np.ndarray | None = field(default=None, repr=False)
-    section_state2: np.ndarray | None = field(default=None, repr=False)
-    section_time2: np.ndarray | None = field(default=None, repr=False)
-    __repr__ = compact_repr
-
-    def __post_init__(self):
-        sh = self.status.shape
-        defaults = {"period": np.where(self.n_orbits > 0, 1, 0),
-                    "period2": np.where(self.status2 >= 0, 1, 0),
-                    "mode": np.full(sh, -1), "mode2": np.full(sh, -1),
-                    "section_time": np.full(sh, np.nan), "section_time2": np.full(sh, np.nan),
-                    "section_state": np.full((*sh, 0), np.nan),
-                    "section_state2": np.full((*sh, 0), np.nan)}
-        for k, v in defaults.items():
-            if getattr(self, k) is None:
-                object.__setattr__(self, k, v)
-
-    @property
-    def exists(self) -> np.ndarray:
-        """A periodic orbit was found (bool, ``(ny, nx)``)."""
-        return self.n_orbits > 0
-
-    @property
-    def stable(self) -> np.ndarray:
-        """A stable periodic orbit was found."""
-        return self.status == 0
-
-    def counts(self) -> dict:
-        """``{status name: cells}``."""
-        return {STATUS[c]: int(np.sum(self.status == c)) for c in STATUS}
-
-    def signature_of(self, iy: int, ix: int, which: int = 1) -> tuple:
-        """The impact signature ``((guard, kind), ...)`` of orbit `which` (1 or 2) of a cell."""
-        codes = (self.signature if which == 1 else self.signature2)[iy, ix]
-        return tuple(self.sig_table[c] if c >= 0 else ("...", "cut") for c in codes if c != -1)
-
-    def summary(self) -> str:
-        """A few lines: grid, share of each status, cells with two orbits, signatures."""
-        n = self.status.size
-        parts = [f"{name} {100 * c / n:.1f}%" for name, c in self.counts().items() if c]
-        head = (f"{Path(self.source).name}: periodic orbits of contact {self.spec['contact']}"
-                f" ({self.spec['event']}, k = {self.spec['period']}) on {self.x_name} x "
-                f"{self.y_name} = {len(self.x)} x {len(self.y)}")
-        ks = {int(k): int(np.sum(self.period[self.exists] == k))
-              for k in np.unique(self.period[self.exists])}
-        lines = [head,
-                 "  " + ", ".join(parts),
-                 f"  cells with two or more orbits: {int(np.sum(self.n_orbits > 1))}"]
-        if ks:
-            lines.append("  returns to the section per period (k): " + ", ".join(
-                f"k = {k}: {c} cells" for k, c in sorted(ks.items())))
-        sigs = {}
-        for iy, ix in zip(*np.nonzero(self.exists)):
-            s = self.signature_of(iy, ix)
-            sigs[s] = sigs.get(s, 0) + 1
-        for s, c in sorted(sigs.items(), key=lambda t: -t[1])[:4]:
-            lines.append(f"  signature ({c} cells): {_sig_text(s)}")
-        return "\n".join(lines)
-
-    def to_dict(self) -> dict:
-        """JSON-ready form (``regions --model --json``), arrays ``[iy][ix]``."""
-        f = lambda a: [[None if not np.isfinite(v) else float(v) for v in row] for row in a]
-        return {"model": self.source, "x_name": self.x_name, "y_name": self.y_name,
-                "x": self.x.tolist(), "y": self.y.tolist(), "spec": self.spec,
-                "coordinates": list(self.coords), "status": self.status.tolist(),
-                "statuses": {str(k): v for k, v in STATUS.items()}, "counts": self.counts(),
-                "exists": self.exists.tolist(), "stable": self.stable.tolist(),
-                "spectral_radius": f(self.spectral_radius), "n_orbits": self.n_orbits.tolist(),
-                "spectral_radius2": f(self.spectral_radius2),
-                "status2": self.status2.tolist()}
-
-    def to_dataset(self):
-        """The labelled form of the pair's region maps (dimensions ``e, y_name, x_name`` with
-        ``e`` the section contact's restitution, NaN for a compliant contact) plus the
-        per-cell ``status``, ``section_point``, ``signature`` and second-orbit variables."""
-        # deferred import: loaded only when this runs, for start-up time
-        import xarray as xr
-
-        e = np.array([self.metadata.get("restitution", math.nan)], float)
-        dims = ("e", self.y_name, self.x_name)
-        coords = {"e": ("e", e, axis_attrs("e")), self.y_name: (self.y_name, self.y),
-                  self.x_name: (self.x_name, self.x), "coordinate": ("coordinate",
-                                                                      list(self.coords))}
-        reason = np.where(self.exists, 0, self.status)
-        flags = sorted(STATUS)
-        one = lambda a: a[None]
-        data = {
-            "exists": (dims, one(self.exists), {"long_name": "a periodic orbit was found"}),
-            "stable": (dims, one(self.stable), {"long_name": "a stable periodic orbit was "
-                                                              "found"}),
-            "spectral_radius": (dims, one(self.spectral_radius),
-                                axis_attrs("spectral_radius")),
-            "xm": (dims, np.full((1, *self.status.shape), np.nan),
-                   {"long_name": "unused for model files"}),
-            "reason": (dims, one(reason), {"long_name": "why no orbit was found (0: found)",
-                                           "flag_values": flags,
-                                           "flag_meanings": " ".join(STATUS[c] for c in flags)}),
-            "status": (dims, one(self.status), {"long_name": "status of the cell",
-                                                "flag_values": flags,
-                                                "flag_meanings": " ".join(STATUS[c]
-                                                                          for c in flags)}),
-            "n_orbits": (dims, one(self.n_orbits), {"long_name": "distinct orbits found"}),
-            "attempts": (dims, one(self.attempts), {"long_name": "Newton runs"}),
-            "section_point": ((*dims, "coordinate"), one(self.section_point),
-                              {"long_name": "section point of the orbit"}),
-            "signature": ((*dims, "jump"), one(self.signature),
-                          {"long_name": "impact signature (codes into sig_table)"}),
-            "status2": (dims, one(self.status2), {"long_name": "status of a second orbit "
-                                                               "(-1: none)"}),
-            "spectral_radius2": (dims, one(self.spectral_radius2),
-                                 {"long_name": "spectral radius of a second orbit"}),
-            "section_point2": ((*dims, "coordinate"), one(self.section_point2),
-                               {"long_name": "section point of a second orbit"}),
-            "signature2": ((*dims, "jump"), one(self.signature2),
-                           {"long_name": "impact signature of a second orbit"}),
-            "period": (dims, one(self.period), {"long_name": "returns to the section per "
-                                                              "period of the orbit (0: none)"}),
-            "period2": (dims, one(self.period2), {"long_name": "returns per period of a "
-                                                                "second orbit"}),
-            "section_mode": (dims, one(self.mode), {"long_name": "mode of the section "
-                                                                 "(codes named in metadata)"}),
-            "section_mode2": (dims, one(self.mode2), {"long_name": "mode of the section of a "
-                                                                   "second orbit"}),
-            "section_time": (dims, one(self.section_time), {"long_name": "time of the "
-                                                                         "section point"}),
-            "section_time2": (dims, one(self.section_time2), {"long_name": "time of the "
-                                                                           "second orbit"}),
-            "section_state": ((*dims, "state"), one(self.section_state),
-                              {"long_name": "full state at the section point"}),
-            "section_state2": ((*dims, "state"), one(self.section_state2),
-                               {"long_name": "full state at the second orbit's point"})}
-        fixed = {"model": self.source, **{f"section_{k}": v for k, v in self.spec.items()}}
-        attrs = {"kind": "region_map", "case": f"{Path(self.source).name}",
-                 "model_kind": "model_region_map", "x_name": self.x_name,
-                 "y_name": self.y_name, "fixed_names": " ".join(fixed), **encode_attrs(fixed),
-                 **encode_attrs({"sig_table": [list(p) for p in self.sig_table],
-                                 "spec": self.spec, "metadata": self.metadata})}
-        return xr.Dataset(data, coords=coords, attrs=attrs)
-
-    @classmethod
-    def from_dataset(cls, ds) -> ModelRegionMap:
-        """Inverse of :meth:`to_dataset`."""
-        a = decode_attrs(ds.attrs)
-        if a.get("model_kind") != "model_region_map":
-            raise ValueError("the dataset does not hold a model region map (attribute "
-                             "model_kind)")
-        ds = ds.transpose("e", a["y_name"], a["x_name"], ...)
-        v = lambda k: ds[k].values[0]
-        return cls(a["model"], a["x_name"], a["y_name"], ds[a["x_name"]].values,
-                   ds[a["y_name"]].values, dict(a["spec"]), tuple(ds["coordinate"].values),
-                   tuple(tuple(p) for p in a["sig_table"]), v("status").astype(np.int64),
-                   v("spectral_radius"), v("section_point"), v("signature").astype(np.int16),
-                   v("n_orbits").astype(np.int64), v("status2").astype(np.int64),
-                   v("spectral_radius2"), v("section_point2"),
-                   v("signature2").astype(np.int16), v("attempts").astype(np.int64),
-                   dict(a.get("metadata") or {}),
-                   *(v(k).astype(np.int64) if k in ds else None
-                     for k in ("period", "period2", "section_mode", "section_mode2")),
-                   *(v(k) if k in ds else None for k in ("section_state", "section_time",
-                                                         "section_state2", "section_time2")))
-
-    def save(self, path) -> Path:
-        """Write to ``.nc`` or ``.zarr`` (by suffix)."""
-        return save_result(self, path)
-
-
-def load_model_region_map(path) -> ModelRegionMap:
-    """Read a :class:`ModelRegionMap` written by :meth:`ModelRegionMap.save`."""
-    return load_result(ModelRegionMap, path)
 
 
 def _sig_text(sig) -> str:
@@ -518,22 +277,15 @@ def _repair(out, order, nx, ny, template, x_name, y_name, xs, ys, ctx, rounds):
     return cells.a, changed_total
 
 
-def model_region_map(model, x, y, *, contact: int = 0, wall: int | None = None,
-                     event: str = "impact", period="auto", periods: int | None = None,
-                     tile: int = 8, repair_rounds: int = 20, executor="serial",
-                     max_workers=None, store=None, progress: bool = True,
-                     options: dict | None = None) -> ModelRegionMap:
-    """Map where a periodic orbit of a model file's section exists and is stable.
+@dataclass(frozen=True, eq=False)
+class ModelSearch:
+    """A model file's periodic orbits of one section: a family of
+    :func:`~hybridpd.sweeps.regions.region_map`, searched cell by cell (module docstring).
 
     Parameters
     ----------
     model : str, Path, dict or ModelTemplate
         The model file (or its parsed tables).
-    x, y : (str, float, float, int)
-        ``(KEY, MIN, MAX, NUM)``: a dotted path of a numeric entry of the file
-        (``"controller.kp"``) and its grid (``NUM >= 2`` points, ``MIN < MAX``); a pattern
-        (``"controller.*.kp"``) or a comma-separated list of paths sets every entry it
-        matches, and names the axis as given. The two axes set different entries.
     contact, wall, event, period, periods
         The section and the orbits sought (:class:`~hybridpd.analysis.model_orbits.
         SectionSpec`): contact ``contact``'s impacts (``event="impact"``) or sticking
@@ -541,54 +293,89 @@ def model_region_map(model, x, y, *, contact: int = 0, wall: int | None = None,
         ``period`` returns per orbit (``"auto"``: the neighbours', then what a simulation
         shows, up to ``options["max_period"]``, default 4; each cell records its ``k``),
         ``periods`` reference periods per orbit (None: any whole number).
-    tile : int
-        Side of the square tiles (sweep chunks) in cells.
-    repair_rounds : int
-        Bound on the rounds of retries from neighbours after the sweep.
-    executor, max_workers, store, progress
-        As in :func:`hybridpd.sweeps.sweep.run_sweep` (a scheduler address runs the tiles on
-        an existing Dask cluster; ``store``, a ``.zarr`` directory, is written as tiles
-        finish and resumed from).
     options : dict, optional
         Further :class:`SectionSpec` fields (``tol``, ``max_iter``, ``transient``,
         ``t_max``).
-
-    Returns
-    -------
-    ModelRegionMap
-
-    Raises
-    ------
-    ValueError
-        A path that names no numeric entry of the file (naming the entries that exist), a bad
-        grid or section, before anything runs.
 
     Examples
     --------
     >>> from pathlib import Path
     >>> import hybridpd
     >>> f = Path(hybridpd.__file__).parents[1] / "examples" / "models" / "drivetrain.toml"
-    >>> rm = model_region_map(f, ("controller.kp", 15, 25, 2), ("controller.kv", 4, 6, 2),
-    ...                       event="release", progress=False) if f.exists() else None
+    >>> rm = hybridpd.region_map(ModelSearch(f, event="release"), ("controller.kp", 15, 25, 2),
+    ...                          ("controller.kv", 4, 6, 2), progress=False) \\
+    ...     if f.exists() else None
     >>> rm is None or bool(rm.stable.all())
     True
     """
+
+    model: object
+    contact: int = 0
+    wall: int | None = None
+    event: str = "impact"
+    period: object = "auto"
+    periods: int | None = None
+    options: dict | None = None
+
+    def classify_grid(self, x, y, *, tile: int = 8, repair_rounds: int = 20,
+                      executor="serial", max_workers=None, store=None,
+                      progress: bool = True):
+        """Map where a periodic orbit of the section exists and is stable.
+
+        Parameters
+        ----------
+        x, y : (str, float, float, int)
+            ``(KEY, MIN, MAX, NUM)``: a dotted path of a numeric entry of the file
+            (``"controller.kp"``) and its grid (``NUM >= 2`` points, ``MIN < MAX``); a
+            pattern (``"controller.*.kp"``) or a comma-separated list of paths sets every
+            entry it matches, and names the axis as given. The two axes set different
+            entries.
+        tile : int
+            Side of the square tiles (sweep chunks) in cells.
+        repair_rounds : int
+            Bound on the rounds of retries from neighbours after the sweep.
+        executor, max_workers, store, progress
+            As in :func:`hybridpd.sweeps.sweep.run_sweep` (a scheduler address runs the
+            tiles on an existing Dask cluster; ``store``, a ``.zarr`` directory, is written
+            as tiles finish and resumed from).
+
+        Returns
+        -------
+        RegionMap
+            One layer (``e``: the section contact's restitution, NaN for a compliant one),
+            the variables of the module docstring.
+
+        Raises
+        ------
+        ValueError
+            A path that names no numeric entry of the file (naming the entries that exist),
+            a bad grid or section, before anything runs.
+        """
+        template = template_of(self.model)
+        x_name, xs = _axis("x", x, template)
+        y_name, ys = _axis("y", y, template)
+        if x_name == y_name:
+            raise ValueError(f"x and y must be different entries, both are {x_name!r}")
+        both = sorted(set(template.resolve(x_name)) & set(template.resolve(y_name)))
+        if both:
+            raise ValueError(f"x ({x_name}) and y ({y_name}) must set different entries, "
+                             f"both set {', '.join(both)}")
+        spec = SectionSpec(contact=self.contact, wall=self.wall, event=self.event,
+                           period=self.period, periods=self.periods,
+                           **dict(self.options or {}))
+        if isinstance(tile, bool) or int(tile) != tile or tile < 1:
+            raise ValueError(f"tile must be an int >= 1, got {tile!r}")
+        a, meta, P = _search(template, spec, x_name, xs, y_name, ys, int(tile), repair_rounds,
+                             executor=executor, max_workers=max_workers, store=store,
+                             progress=progress)
+        return _region_map_of(template, spec, x_name, xs, y_name, ys, a, meta, P)
+
+
+def _search(template, spec, x_name, xs, y_name, ys, tile, repair_rounds, **sweep):
+    """The tiles on the executor, then the repair rounds: per-cell arrays in grid order."""
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.sweep import run_sweep
 
-    template = template_of(model)
-    x_name, xs = _axis("x", x, template)
-    y_name, ys = _axis("y", y, template)
-    if x_name == y_name:
-        raise ValueError(f"x and y must be different entries, both are {x_name!r}")
-    both = sorted(set(template.resolve(x_name)) & set(template.resolve(y_name)))
-    if both:
-        raise ValueError(f"x ({x_name}) and y ({y_name}) must set different entries, both "
-                         f"set {', '.join(both)}")
-    spec = SectionSpec(contact=contact, wall=wall, event=event, period=period,
-                       periods=periods, **dict(options or {}))
-    if isinstance(tile, bool) or int(tile) != tile or tile < 1:
-        raise ValueError(f"tile must be an int >= 1, got {tile!r}")
     base = template.model()
     try:        # the map's chart: the mode where the motion crosses the section at the file's
         main_mode = simulated_returns(base, spec).mode      # values (else the default one)
@@ -597,33 +384,76 @@ def model_region_map(model, x, y, *, contact: int = 0, wall: int | None = None,
     P = spec.section_map(base, main_mode or None)
     specd = {k: getattr(spec, k) for k in spec.__dataclass_fields__}
     nx, ny = len(xs), len(ys)
-    order = _tile_order(nx, ny, int(tile))
+    order = _tile_order(nx, ny, tile)
     iy, ix = np.divmod(order, nx)
     points = {"x": xs[ix], "y": ys[iy], "ix": ix.astype(float), "iy": iy.astype(float)}
-    t = int(tile)
-    res = run_sweep(_tile_chunk, points, chunk_size=min(t * t, len(order)), executor=executor,
-                    max_workers=max_workers, store=store, progress=progress,
+    res = run_sweep(_tile_chunk, points, chunk_size=min(tile * tile, len(order)),
                     label=f"region map of {Path(template.source).name}",
                     func_kwargs={"data": template.data, "source": template.source,
                                  "x_name": x_name, "y_name": y_name, "spec": specd,
                                  "dim": P.dim, "n": base.automaton.automaton.n_states,
                                  "main_mode": main_mode},
-                    metadata={"kind": "model_region_map", "version": 2})
+                    metadata={"kind": "model_region_map", "version": 2}, **sweep)
     ctx = _Context(template, specd, main_mode)
     a, n_rep = _repair(res.outputs, order, nx, ny, template, x_name, y_name, xs, ys, ctx,
                        repair_rounds)
-    sh = (ny, nx)
-    c = base.automaton.contacts[int(contact)]
+    return a, {"repaired_cells": int(n_rep), "executor": res.executor,
+               "sig_table": [list(p) for p in ctx.table]}, P
+
+
+#: The variables of a model's region map and the arrays of the search they come from.
+_VARIABLES = {"status": "status", "n_orbits": "n_orbits", "attempts": "attempts",
+              "status2": "status2", "spectral_radius2": "rho2", "section_point": "s",
+              "section_point2": "s2", "signature": "sig", "signature2": "sig2",
+              "period": "k", "period2": "k2", "section_mode": "mode",
+              "section_mode2": "mode2", "section_state": "z", "section_time": "t",
+              "section_state2": "z2", "section_time2": "t2"}
+
+
+def _region_map_of(template, spec, x_name, xs, y_name, ys, a, meta, P):
+    """The :class:`~hybridpd.sweeps.regions.RegionMap` of a search (one layer)."""
+    base = template.model()
+    c = base.automaton.contacts[int(spec.contact)]
+    rigid = getattr(c, "rigid", False) and c.restitution is not None
     codes = sorted({int(v) for v in np.concatenate([a["mode"], a["mode2"]]) if v >= 0})
-    meta = {"repaired_cells": int(n_rep), "executor": res.executor,
-            "restitution": float(c.restitution) if getattr(c, "rigid", False) and
-            c.restitution is not None else math.nan, "chart_mode": P.section.mode,
-            "modes": {str(v): mode_name(base.automaton, v) for v in codes},
-            "state_names": list(base.automaton.state_names)}
-    grid = {k: a[k].reshape(*sh, *a[k].shape[1:]) for k in a}
-    return ModelRegionMap(template.source, x_name, y_name, xs, ys, specd, P.section.names,
-                          ctx.table, grid["status"], grid["rho"], grid["s"], grid["sig"],
-                          grid["n_orbits"], grid["status2"], grid["rho2"], grid["s2"],
-                          grid["sig2"], grid["attempts"], meta, grid["k"], grid["k2"],
-                          grid["mode"], grid["mode2"], grid["z"], grid["t"], grid["z2"],
-                          grid["t2"])
+    specd = {k: getattr(spec, k) for k in spec.__dataclass_fields__}
+    flags = {"values": sorted(STATUS), "meanings": " ".join(STATUS[k] for k in sorted(STATUS))}
+    meta = dict(meta, chart_mode=P.section.mode, spec=specd, coords=list(P.section.names),
+                restitution=float(c.restitution) if rigid else math.nan,
+                modes={str(v): mode_name(base.automaton, v) for v in codes},
+                state_names=list(base.automaton.state_names),
+                reasons={str(k): v for k, v in STATUS.items()},
+                flags={"status": flags, "status2": flags})
+    grid = {k: a[src].reshape(1, len(ys), len(xs), *a[src].shape[1:])
+            for k, src in _VARIABLES.items()}
+    exists = grid["n_orbits"] > 0
+    fixed = {"model": template.source, **{f"section_{k}": v for k, v in specd.items()}}
+    return RegionMap(Path(template.source).name, x_name, y_name, xs, ys,
+                     np.array([meta["restitution"]]), fixed, exists, grid["status"] == 0,
+                     a["rho"].reshape(1, len(ys), len(xs)),
+                     np.where(exists, 0, grid["status"]).astype(np.int64), grid, meta)
+
+
+def _legacy_model_region_map(model, x, y, *, contact=0, wall=None, event="impact",
+                             period="auto", periods=None, options=None, **kw):
+    """The call of hybridpd 0.2.0's ``model_region_map(model, x, y, ...)``."""
+    return ModelSearch(model, contact, wall, event, period, periods, options) \
+        .classify_grid(x, y, **kw)
+
+
+_MOVED = {"ModelRegionMap": "RegionMap", "load_model_region_map": "load_region_map"}
+
+
+def __getattr__(name):
+    # names of hybridpd 0.2.0: a model's region map is the one region map now
+    if name in _MOVED:
+        warnings.warn(f"{__name__}.{name} is deprecated and will be removed in hybridpd "
+                      f"{REMOVAL}; use hybridpd.sweeps.regions.{_MOVED[name]}",
+                      DeprecationWarning, stacklevel=2)
+        return getattr(importlib.import_module("hybridpd.sweeps.regions"), _MOVED[name])
+    if name == "model_region_map":
+        warnings.warn(f"{__name__}.model_region_map is deprecated and will be removed in "
+                      f"hybridpd {REMOVAL}; use hybridpd.region_map(ModelSearch(model, ...), "
+                      "x, y)", DeprecationWarning, stacklevel=2)
+        return _legacy_model_region_map
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
