@@ -349,11 +349,13 @@ def plot_scaled_regions(sm, *, ray=None, zoom=None, box=None, params=None, title
         ax = fig.add_subplot(1, ne, k + 1)
         _panel(ax, X, Y, sm.exists[k], sm.stable[k], side_ticks=False, title=f"e = {e:g}")
         if box is not None:
+            # dash-dotted: a hollow box with a solid edge would read as "no orbit" in the key
+            box_ls = (0, (6, 1.5, 1.5, 1.5))
             r = Rectangle((box[0], box[2]), box[1] - box[0], box[3] - box[2], facecolor="none",
-                          edgecolor="0.3", ls="-", lw=1.4, zorder=4)
+                          edgecolor="0.3", ls=box_ls, lw=1.4, zorder=4)
             ax.add_patch(r)
             register(ax, r, f"box of the certified verdicts ([{box[0]:g}, {box[1]:g}] squared)",
-                     patch_proxy(facecolor="none", edgecolor="0.3", ls="-", lw=1.4))
+                     patch_proxy(facecolor="none", edgecolor="0.3", ls=box_ls, lw=1.4))
         if zoom is not None:
             r = Rectangle((x[0], y[0]), zoom[0] - x[0], zoom[1] - y[0], facecolor="none",
                           edgecolor="k", ls=":", lw=1.0, zorder=4)
