@@ -18,10 +18,10 @@ from _common import best_of
 
 def main(quick=False):
     from hybridpd import ImpactPair, PDGains
-    from hybridpd.pair.orbits import symmetric_orbit
-    from hybridpd.pair.attractor_basins import attractor_basin
     from hybridpd.analysis.basins import basin_of_attraction
+    from hybridpd.pair.attractor_basins import attractor_basin
     from hybridpd.pair.basins import ImpactMapper
+    from hybridpd.pair.orbits import symmetric_orbit
 
     def paper(m, x1, y1):
         return basin_of_attraction(m.map, x1, y1, criterion=m, max_period=0)

@@ -38,9 +38,9 @@ def pair_rates():
     from hybridpd import ImpactPair, PDGains
     from hybridpd.analysis.hybridmap import SectionMap
     from hybridpd.analysis.periodic import SectionMapper
-    from hybridpd.pair.section import impact_pair_section
     from hybridpd.pair.impactmap import ImpactMap
     from hybridpd.pair.orbits import symmetric_orbit
+    from hybridpd.pair.section import impact_pair_section
 
     orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     P = SectionMap(impact_pair_section(orb.system()))

@@ -33,11 +33,11 @@ def _pair_region_map():
 
 def main(quick=False):
     from hybridpd import ImpactPair, PDGains
-    from hybridpd.pair.impactmap import ImpactMap
-    from hybridpd.pair.orbits import symmetric_orbit
-    from hybridpd.pair.batch import iterate_map, pack_params
     from hybridpd.analysis.basins import basin_of_attraction
     from hybridpd.pair.basins import ImpactMapper
+    from hybridpd.pair.batch import iterate_map, pack_params
+    from hybridpd.pair.impactmap import ImpactMap
+    from hybridpd.pair.orbits import symmetric_orbit
     region_map = _pair_region_map()
 
     num = 60 if quick else 200

@@ -56,10 +56,10 @@ def _store_runs(run, tmp: Path, repeat=3):
 def main(quick=False):
     import hybridpd
     from hybridpd import ImpactPair, PDGains
-    from hybridpd.pair.impactmap import ImpactMap
-    from hybridpd.pair.orbits import symmetric_orbit
     from hybridpd.analysis.basins import basin_of_attraction as basin
     from hybridpd.pair.basins import ImpactMapper
+    from hybridpd.pair.impactmap import ImpactMap
+    from hybridpd.pair.orbits import symmetric_orbit
 
     def basin_of_attraction(m, x1, y1, **options):
         # the paper's labels alone: the generic basin with the mapper as its criterion

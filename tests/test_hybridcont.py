@@ -10,12 +10,12 @@ from hybridpd.analysis.continuation import EVENT_KINDS
 from hybridpd.analysis.continuation import continue_orbit as continue_any
 from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.periodic import find_orbit
-from hybridpd.pair.section import impact_pair_section
 from hybridpd.hybrid.samples import impact_oscillator, oscillator_initial_state
 from hybridpd.pair.continuation import continue_orbit
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.impactpair import ControlledImpactPair
 from hybridpd.pair.orbits import symmetric_orbit
+from hybridpd.pair.section import impact_pair_section
 
 W = 5.0
 

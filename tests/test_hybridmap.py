@@ -18,7 +18,6 @@ from hybridpd.analysis.periodic import (
     find_orbit,
     measured_contraction,
 )
-from hybridpd.pair.section import impact_pair_section
 from hybridpd.hybrid.samples import (
     ball_initial_state,
     bouncing_ball,
@@ -28,6 +27,7 @@ from hybridpd.hybrid.samples import (
 from hybridpd.pair.basins import ImpactMapper, section_grid
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
+from hybridpd.pair.section import impact_pair_section
 from hybridpd.sweeps.section_basins import section_basin
 
 PAIR = ImpactPair(0.1, 0.5, 0.75)

@@ -8,9 +8,9 @@ import pytest
 from hybridpd import ImpactPair, PDGains
 from hybridpd.analysis.model_orbits import orbit_from_model
 from hybridpd.analysis.periodic import measured_contraction
-from hybridpd.mechanics.sections import mechanical_section
 from hybridpd.cli import main
 from hybridpd.mechanics.modelfile import load_model, model_from_dict
+from hybridpd.mechanics.sections import mechanical_section
 from hybridpd.pair.orbits import symmetric_orbit
 
 MODELS = Path(__file__).resolve().parents[1] / "examples" / "models"

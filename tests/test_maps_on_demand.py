@@ -14,9 +14,9 @@ from _chain_reference import ReferenceChain
 from hybridpd.analysis.hybridmap import Section, SectionMap
 from hybridpd.analysis.model_orbits import signature_table
 from hybridpd.analysis.periodic import SectionMapper
-from hybridpd.mechanics.sections import mechanical_section
 from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode
 from hybridpd.mechanics.samples import chain_model_text, mass_chain
+from hybridpd.mechanics.sections import mechanical_section
 
 
 def _section_points(ma, T=3.0):

@@ -10,9 +10,9 @@ import pytest
 from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.model_orbits import _guess_from_simulation, orbit_from_model
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
-from hybridpd.mechanics.sections import mechanical_section
 from hybridpd.cli import main
 from hybridpd.mechanics.modelfile import model_from_dict
+from hybridpd.mechanics.sections import mechanical_section
 
 MODELS = Path(__file__).resolve().parents[1] / "examples" / "models"
 

@@ -18,8 +18,8 @@ import pytest
 from scipy.optimize import brentq
 
 from hybridpd.analysis.model_orbits import orbit_from_model
-from hybridpd.mechanics.sections import mechanical_section
 from hybridpd.mechanics.modelfile import model_from_dict
+from hybridpd.mechanics.sections import mechanical_section
 
 OMEGA = 5.0
 T = 2 * math.pi / OMEGA

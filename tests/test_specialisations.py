@@ -26,12 +26,12 @@ from hybridpd import ImpactPair, PDGains
 from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.maps import MapResult, PoincareMap
 from hybridpd.analysis.periodic import SectionMapper, find_orbit
-from hybridpd.pair.section import impact_pair_section
 from hybridpd.loop import pd_controller
 from hybridpd.pair.basins import ImpactMapper
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.lti import filtered_pd, filtered_pid, lead_lag, lti_symmetric_orbit
 from hybridpd.pair.orbits import symmetric_orbit
+from hybridpd.pair.section import impact_pair_section
 
 W = 5.0
 CASES = ("collocated", "noncollocated")

@@ -9,11 +9,11 @@ from hybridpd import ImpactPair, PDGains, Reference
 from hybridpd.analysis.continuation import continue_orbit
 from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.pathfollow import corrector, follow_path
-from hybridpd.pair.section import impact_pair_section
 from hybridpd.cli import main
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.impactpair import ControlledImpactPair
 from hybridpd.pair.orbits import symmetric_orbit
+from hybridpd.pair.section import impact_pair_section
 
 W = 5.0
 

@@ -29,9 +29,9 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains
+from hybridpd.loop import pd_controller
 from hybridpd.pair.lti import filtered_pd, lead_lag, lti_symmetric_orbit
 from hybridpd.pair.orbits import symmetric_orbit
-from hybridpd.loop import pd_controller
 
 # sphinx_gallery_start_ignore
 sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py

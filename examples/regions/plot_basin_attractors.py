@@ -14,10 +14,10 @@ import sys
 from pathlib import Path
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.pair.orbits import symmetric_orbit
-from hybridpd.plotting import plot_basin
 from hybridpd.pair.attractor_basins import attractor_basin
 from hybridpd.pair.basins import ImpactMapper
+from hybridpd.pair.orbits import symmetric_orbit
+from hybridpd.plotting import plot_basin
 
 # sphinx_gallery_start_ignore
 sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py

@@ -13,11 +13,11 @@ from pathlib import Path
 from matplotlib.figure import Figure
 
 from hybridpd import ImpactPair, PDGains
+from hybridpd.analysis.basins import basin_of_attraction
+from hybridpd.pair.basins import ImpactMapper
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.plotting import plot_basin
-from hybridpd.analysis.basins import basin_of_attraction
-from hybridpd.pair.basins import ImpactMapper
 
 # sphinx_gallery_start_ignore
 sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py

@@ -47,8 +47,8 @@ from hybridpd.analysis.model_orbits import (
     simulated_returns,
     solve_at,
 )
-from hybridpd.mechanics.sections import mode_code, mode_name
 from hybridpd.mechanics.params import ModelTemplate
+from hybridpd.mechanics.sections import mode_code, mode_name
 from hybridpd.sweeps.regions import RegionMap
 
 __all__ = ["ModelSearch", "template_of"]
