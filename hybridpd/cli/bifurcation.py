@@ -74,7 +74,8 @@ def register(sub):
                    "displaced by 1e-3 in z1)")
     p.add_argument("--max-period", type=int, default=32,
                    help="largest period detected (default 32)")
-    add_output(p, out=(".nc", ".zarr"), what="the diagram (required)", plot="the diagram")
+    add_output(p, out=(".nc", ".zarr"), model_out=(".nc", ".zarr"), what="the diagram (required)",
+               plot="the diagram")
     p.add_argument("--coordinate", default="z1",
                    choices=["phi", "z1", "z2", "z4", "x1", "y1", "x2", "y2"],
                    help="section coordinate on the plot's y axis (default z1)")
