@@ -188,3 +188,13 @@ def model_title(source, metadata: dict | None = None) -> str:
     from pathlib import Path
 
     return f"{Path(str(source)).name}, {model_controllers(source, metadata)}"
+
+
+def suptitle(fig, text: str, chars_per_inch: float = 13.0):
+    """``fig.suptitle(text)`` wrapped to the figure's width (about `chars_per_inch`
+    characters of the house font per inch), so a long title (a model naming every
+    controller) is never cut at the figure's edge."""
+    import textwrap
+
+    width = max(20, int(fig.get_figwidth() * chars_per_inch))
+    return fig.suptitle("\n".join(textwrap.wrap(text, width)))

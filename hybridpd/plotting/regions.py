@@ -22,6 +22,7 @@ from hybridpd.plotting._common import (
     patch_proxy,
     register,
     set_all,
+    suptitle,
     tag,
 )
 from hybridpd.plotting.style import DOUBLE, axis_label, house_figure, series, styled
@@ -275,7 +276,7 @@ def plot_certified_panels(rm, *, params=None, title=None):
         axes.append(ax)
     legend_from_gids(fig, axes, ncol=4)
     head = title or f"{_CASE.get(rm.case, rm.case)} PD, certified"
-    fig.suptitle(f"{head}: {param_line(params or _params_of(rm))}")
+    suptitle(fig, f"{head}: {param_line(params or _params_of(rm))}")
     return fig
 
 
@@ -356,7 +357,7 @@ def plot_region_panels(rm, *, zoom=None, curves=None, mark=None, params=None, ti
                                     for a in ax.get_children()):
         head += f" (the point $k_p$ = {mark[0]:g}, $k_v$ = {mark[1]:g} lies outside the box)"
     line = _subject(rm) if params is None else param_line(params)
-    fig.suptitle(f"{head}: {line}" if line else head)
+    suptitle(fig, f"{head}: {line}" if line else head)
     return fig
 
 
