@@ -30,3 +30,22 @@ def naive_per_impact(case="collocated", e=0.5, kp=10.0, kv=20.0, xm=1.0, n_impac
                        rtol=1e-10, atol=1e-12)
     el = time.perf_counter() - t0
     return el / max(len(r.impact_times), 1), r
+
+
+def pair_region_map():
+    """The pair's region map as ``f(case, x=..., y=..., e=..., mu=..., ...)``, on this version
+    (the one region map over the pair's family) and on earlier ones (for comparison)."""
+    try:
+        from hybridpd.pair.regions import SymmetricFamily
+        from hybridpd.sweeps.regions import region_map
+    except ImportError:
+        from hybridpd.pair.regions import region_map
+
+        return region_map
+    names = set(SymmetricFamily.__dataclass_fields__)
+
+    def region_map_of_case(case, *, x, y, **kw):
+        fam = SymmetricFamily(case, **{k: kw.pop(k) for k in list(kw) if k in names})
+        return region_map(fam, x, y, **kw)
+
+    return region_map_of_case

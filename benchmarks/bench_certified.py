@@ -14,32 +14,14 @@ import argparse
 import time
 
 import numpy as np
-
-
-def _pair_region_map():
-    """The pair's region map as ``f(case, x=..., y=..., e=..., mu=..., ...)``, on this version
-    (the one region map over the pair's family) and on earlier ones (for comparison)."""
-    try:
-        from hybridpd.pair.regions import SymmetricFamily
-        from hybridpd.sweeps.regions import region_map
-    except ImportError:
-        from hybridpd.pair.regions import region_map
-
-        return region_map
-    names = set(SymmetricFamily.__dataclass_fields__)
-
-    def pair_region_map(case, *, x, y, **kw):
-        fam = SymmetricFamily(case, **{k: kw.pop(k) for k in list(kw) if k in names})
-        return region_map(fam, x, y, **kw)
-
-    return pair_region_map
+from _common import pair_region_map
 
 BOX = dict(mu=0.1, gamma=0.75, omega=5.0, e=(0.1, 0.5, 0.9))
 
 
 def main():
     from hybridpd.pair.certified import certified_map
-    region_map = _pair_region_map()
+    region_map = pair_region_map()
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--num", type=int, default=101, help="grid points per axis (101)")

@@ -9,26 +9,7 @@ import sys
 import time
 
 import numpy as np
-from _common import naive_per_impact
-
-
-def _pair_region_map():
-    """The pair's region map as ``f(case, x=..., y=..., e=..., mu=..., ...)``, on this version
-    (the one region map over the pair's family) and on earlier ones (for comparison)."""
-    try:
-        from hybridpd.pair.regions import SymmetricFamily
-        from hybridpd.sweeps.regions import region_map
-    except ImportError:
-        from hybridpd.pair.regions import region_map
-
-        return region_map
-    names = set(SymmetricFamily.__dataclass_fields__)
-
-    def pair_region_map(case, *, x, y, **kw):
-        fam = SymmetricFamily(case, **{k: kw.pop(k) for k in list(kw) if k in names})
-        return region_map(fam, x, y, **kw)
-
-    return pair_region_map
+from _common import naive_per_impact, pair_region_map
 
 
 def main(quick=False):
@@ -38,7 +19,7 @@ def main(quick=False):
     from hybridpd.pair.batch import iterate_map, pack_params
     from hybridpd.pair.impactmap import ImpactMap
     from hybridpd.pair.orbits import symmetric_orbit
-    region_map = _pair_region_map()
+    region_map = pair_region_map()
 
     num = 60 if quick else 200
     common = dict(e=(0.1, 0.5, 0.9), mu=0.1, omega=5.0, gamma=0.75)

@@ -13,26 +13,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from _common import best_of
-
-
-def _pair_region_map():
-    """The pair's region map as ``f(case, x=..., y=..., e=..., mu=..., ...)``, on this version
-    (the one region map over the pair's family) and on earlier ones (for comparison)."""
-    try:
-        from hybridpd.pair.regions import SymmetricFamily
-        from hybridpd.sweeps.regions import region_map
-    except ImportError:
-        from hybridpd.pair.regions import region_map
-
-        return region_map
-    names = set(SymmetricFamily.__dataclass_fields__)
-
-    def pair_region_map(case, *, x, y, **kw):
-        fam = SymmetricFamily(case, **{k: kw.pop(k) for k in list(kw) if k in names})
-        return region_map(fam, x, y, **kw)
-
-    return pair_region_map
+from _common import best_of, pair_region_map
 
 
 def _timed(label, fn, base=None, repeat=3):
@@ -64,7 +45,7 @@ def main(quick=False):
     def basin_of_attraction(m, x1, y1, **options):
         # the paper's labels alone: the generic basin with the mapper as its criterion
         return basin(m.map, x1, y1, criterion=m, max_period=0, **options)
-    region_map = _pair_region_map()
+    region_map = pair_region_map()
 
     print(f"hybridpd from {Path(hybridpd.__file__).parent}")
     num, nb = (60, 40) if quick else (200, 100)

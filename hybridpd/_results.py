@@ -45,8 +45,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["SUFFIXES", "Result", "check_suffix", "compact_repr", "decode_attrs", "encode_attrs",
-           "jsonable", "read_dataset", "short_repr", "write_dataset"]
+__all__ = ["SUFFIXES", "Result", "WithExtras", "check_suffix", "compact_repr", "decode_attrs",
+           "encode_attrs", "jsonable", "read_dataset", "short_repr", "write_dataset"]
 
 _MAX_ITEM = 60  # characters of one field's value before it is abbreviated
 _MAX_SEQ = 4    # a list/tuple with more items prints as its length
@@ -335,3 +335,18 @@ class Result:
     def load(cls, path: str | os.PathLike):
         """Read a result written by :meth:`save`."""
         return cls.from_dataset(read_dataset(path))
+
+
+class WithExtras:
+    """Mixin of results whose ``variables`` and ``metadata`` dicts hold optional entries
+    (a family's extra variables, a run's settings): each reads as an attribute
+    (``rm.xm``, ``d.keep``)."""
+
+    def __getattr__(self, name):
+        # the guard keeps copy/pickle, which probe before the fields exist, from recursing
+        if not name.startswith("_"):
+            for where in ("variables", "metadata"):
+                table = self.__dict__.get(where) or {}
+                if name in table:
+                    return table[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")

@@ -49,6 +49,7 @@ import numpy as np
 from hybridpd._jit import njit
 from hybridpd._results import (
     Result,
+    WithExtras,
     check_suffix,
     compact_repr,
     decode_attrs,
@@ -68,7 +69,7 @@ _MODEL_020 = {"periodic": 0, "not_periodic": 1, "undefined": 7}
 
 
 @dataclass(frozen=True, eq=False)
-class BifurcationDiagram(Result):
+class BifurcationDiagram(WithExtras, Result):
     """A brute-force bifurcation diagram of any family of maps (module docstring).
 
     Attributes
@@ -132,15 +133,6 @@ class BifurcationDiagram(Result):
     metadata: dict = field(default_factory=dict, repr=False)
     __repr__ = compact_repr
 
-    def __getattr__(self, name):
-        # per-value variables and settings read as attributes (``d.xm``, ``d.keep``); the
-        # guard keeps copy/pickle, which probe before the fields exist, from recursing
-        if not name.startswith("_"):
-            for where in ("variables", "metadata"):
-                table = self.__dict__.get(where) or {}
-                if name in table:
-                    return table[name]
-        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def __len__(self) -> int:
         return len(self.values)

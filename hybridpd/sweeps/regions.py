@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hybridpd._results import Result, compact_repr, decode_attrs, encode_attrs, jsonable
+from hybridpd._results import Result, WithExtras, compact_repr, decode_attrs, encode_attrs, jsonable
 from hybridpd.sweeps.labelled import axis_attrs, load_result, save_result
 
 __all__ = ["RegionMap", "load_region_map", "region_map"]
@@ -39,7 +39,7 @@ _CORE = ("exists", "stable", "spectral_radius", "reason")
 
 
 @dataclass(frozen=True, eq=False)
-class RegionMap(Result):
+class RegionMap(WithExtras, Result):
     """Existence and stability of periodic orbits over a grid of two parameters (module
     docstring). Arrays are indexed ``[layer, iy, ix]``.
 
@@ -96,15 +96,6 @@ class RegionMap(Result):
     metadata: dict = field(default_factory=dict, repr=False)
     __repr__ = compact_repr
 
-    def __getattr__(self, name):
-        # the family's variables and settings read as attributes (``rm.xm``, ``rm.spec``);
-        # the guard keeps copy/pickle, which probe before the fields exist, from recursing
-        if not name.startswith("_"):
-            for where in ("variables", "metadata"):
-                table = self.__dict__.get(where) or {}
-                if name in table:
-                    return table[name]
-        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     @property
     def certified(self):
