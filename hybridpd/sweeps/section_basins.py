@@ -1,17 +1,20 @@
 """Basins of any section map: a :class:`~hybridpd.analysis.periodic.SectionMapper` over a grid.
 
-The mapper takes one section point to a label (:mod:`hybridpd.analysis.labels`); this module is
-the thin layer that applies it over a 2-D slice of the section (the other coordinates at the
-fixed point's values), serially or through :func:`hybridpd.sweeps.sweep.run_sweep`.
+The mapper takes one section point to a label (:mod:`hybridpd.analysis.labels`);
+:func:`section_basin` is the one basin layer,
+:func:`~hybridpd.analysis.basins.basin_of_attraction`, with the mapper as its criterion and
+the hooks a section adds: a slice of two of its coordinates (the other coordinates at the
+fixed point's values), states outside its admissible set never iterated, and the labelling
+serial or through :func:`hybridpd.sweeps.sweep.run_sweep`.
 """
 from __future__ import annotations
 
 import pickle
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from hybridpd.analysis.basins import OUTCOMES, Attractor, BasinResult, from_criterion, outcome
+from hybridpd.analysis.basins import BasinResult, basin_of_attraction
 from hybridpd.analysis.labels import INADMISSIBLE
 from hybridpd.analysis.periodic import SectionMapper
 from hybridpd.model import check_axis
@@ -75,42 +78,63 @@ def section_basin(mapper: SectionMapper, axis_x, axis_y, x, y, *, executor="seri
     >>> b.labels.shape
     (2, 3)
     """
-    names = mapper.map.section.names
-    ix, iy = (_axis_index(a, mapper.map.section) for a in (axis_x, axis_y))
-    if ix == iy:
-        raise ValueError("axis_x and axis_y must differ")
-    xs, ys = check_axis("x", x), check_axis("y", y)
-    X, Y = np.meshgrid(xs, ys)
-    pts = np.tile(mapper.fixed_point, (X.size, 1))
-    pts[:, ix], pts[:, iy] = X.ravel(), Y.ravel()
-    sec = mapper.map.section
-    # states outside the admissible set (a gap beyond its bounds) are never iterated
-    bad = np.array([bool(sec.violations(sec.to_state(p)[0])) for p in pts]) if sec.bounds \
-        else np.zeros(len(pts), bool)
-    lab = np.full(len(pts), INADMISSIBLE, np.int64)
-    its = np.zeros(len(pts), np.int64)
-    todo = pts[~bad]
-    if not len(todo):
-        pass
-    elif executor == "serial":
-        lab[~bad], its[~bad] = mapper.labels(todo)
-    else:
-        res = run_sweep(_label_chunk, todo, names=[f"s{i}" for i in range(pts.shape[1])],
-                        chunk_size=chunk_size, executor=executor, max_workers=max_workers,
-                        progress=progress, func_kwargs={"mapper": _PickledMapper.of(mapper)},
-                        metadata={"kind": "section_basin"})
-        lab[~bad], its[~bad] = res.outputs["label"], res.outputs["iterations"]
-    crit = lab.reshape(Y.shape)
-    att = from_criterion(crit)
-    orbit = Attractor(0, f"period-{mapper.period} orbit", mapper.period,
-                      mapper.fixed_point.reshape(1, -1))
-    entries = (orbit,) + tuple(outcome(k, mapper.n_iter) for k in sorted(OUTCOMES, reverse=True)
-                               if np.any(att == k))
-    meta = {"n_iter": mapper.n_iter, "criterion": mapper.criterion,
-            "certified_radius": mapper.certified_radius, "period": mapper.period,
-            "inadmissible": int(bad.sum())}
-    return BasinResult(xs, ys, att, entries, its.reshape(Y.shape), names[ix], names[iy],
-                       mapper.fixed_point.copy(), tuple(names), crit, metadata=meta)
+    if not isinstance(mapper, SectionMapper):
+        raise ValueError(f"mapper must be a SectionMapper, got {type(mapper).__name__}")
+    crit = _SectionCriterion(mapper)
+    b = basin_of_attraction(mapper.map, x, y, axes=(axis_x, axis_y), criterion=crit,
+                            max_period=0, executor=executor, chunk_size=chunk_size,
+                            max_workers=max_workers, progress=progress)
+    return replace(b, metadata=dict(b.metadata, inadmissible=crit.inadmissible))
+
+
+class _SectionCriterion:
+    """A :class:`SectionMapper` with the hooks of
+    :func:`~hybridpd.analysis.basins.basin_of_attraction`: the slice of two section
+    coordinates (refused by name when the section fixes one), states outside the admissible
+    set labelled ``inadmissible`` and never iterated, the others labelled serially or on an
+    executor."""
+
+    def __init__(self, mapper: SectionMapper):
+        self.mapper = mapper
+        self.labels, self.fixed_point = mapper.labels, mapper.fixed_point
+        self.n_iter, self.criterion, self.period = mapper.n_iter, mapper.criterion, mapper.period
+        self.orbit_name = f"period-{mapper.period} orbit"
+        self.inadmissible = 0
+
+    def slice(self, x, y, axes) -> tuple:
+        sec = self.mapper.map.section
+        ix, iy = (_axis_index(a, sec) for a in axes)
+        if ix == iy:
+            raise ValueError("axis_x and axis_y must differ")
+        xs, ys = check_axis("x", x), check_axis("y", y)
+        X, Y = np.meshgrid(xs, ys)
+        S = np.tile(self.fixed_point, (X.size, 1))
+        S[:, ix], S[:, iy] = X.ravel(), Y.ravel()
+        return xs, ys, S, (sec.names[ix], sec.names[iy]), {}
+
+    def label_tails(self, S, tail: int = 0, *, executor="serial", chunk_size=None,
+                    max_workers=None, progress=False) -> dict:
+        sec = self.mapper.map.section
+        # states outside the admissible set (a gap beyond its bounds) are never iterated
+        bad = np.array([bool(sec.violations(sec.to_state(p)[0])) for p in S]) if sec.bounds \
+            else np.zeros(len(S), bool)
+        self.inadmissible = int(bad.sum())
+        lab = np.full(len(S), INADMISSIBLE, np.int64)
+        its = np.zeros(len(S), np.int64)
+        todo = S[~bad]
+        if len(todo) and executor == "serial":
+            lab[~bad], its[~bad] = self.mapper.labels(todo)
+        elif len(todo):
+            res = run_sweep(_label_chunk, todo, names=[f"s{i}" for i in range(S.shape[1])],
+                            chunk_size=chunk_size, executor=executor, max_workers=max_workers,
+                            progress=progress,
+                            func_kwargs={"mapper": _PickledMapper.of(self.mapper)},
+                            metadata={"kind": "section_basin"})
+            lab[~bad], its[~bad] = res.outputs["label"], res.outputs["iterations"]
+        return {"label": lab, "iterations": its}
+
+    def basin_metadata(self) -> dict:
+        return {"certified_radius": self.mapper.certified_radius, "period": self.period}
 
 
 def _axis_index(a, sec) -> int:
