@@ -41,8 +41,8 @@ AXES = ("kp", "kv", "mu", "L", "omega", "m2", "x10")
 
 @dataclass(frozen=True)
 class SymmetricFamily:
-    """The impact pair's symmetric orbits: a family of :func:`~hybridpd.sweeps.regions.
-    region_map`, classified in closed form.
+    """The impact pair's symmetric orbits, classified in closed form: a family of
+    :func:`~hybridpd.sweeps.regions.region_map`.
 
     Parameters
     ----------
