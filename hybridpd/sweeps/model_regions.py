@@ -94,18 +94,6 @@ def _axis(name, spec, template):
     return key, np.linspace(lo, hi, num)
 
 
-def _sig_text(sig) -> str:
-    out, prev, n = [], None, 0
-    for p in [*sig, None]:
-        if p == prev:
-            n += 1
-            continue
-        if prev is not None:
-            out.append(f"{prev[0]}({prev[1]})" + (f" x{n}" if n > 1 else ""))
-        prev, n = p, 1
-    return " ".join(out)
-
-
 # ----------------------------------------------------------------------------------------
 # the sweep: tiles with continuation inside, then repair rounds across the whole grid
 # ----------------------------------------------------------------------------------------
