@@ -87,7 +87,7 @@ _NAMES = {
     # continuation, boundaries, diagrams
     "continue_orbit": "hybridpd.analysis.continuation",
     "switch_branch": "hybridpd.pair.continuation",
-    "load_branch": "hybridpd.pair.continuation",
+    "load_branch": "hybridpd.analysis.continuation",
     "boundary_curves": "hybridpd.pair.boundaries",
     "bifurcation_diagram": "hybridpd.analysis.diagrams",
     # sweeps and result files

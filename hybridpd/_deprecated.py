@@ -55,7 +55,7 @@ MOVED_MODULES = {
     "hybridpd.analysis.design": "hybridpd.pair.design",
     # the pair's package once at hybridpd.analysis.continuation, whose name is now the one
     # continuation engine (that module serves the pair's names): its submodules
-    "hybridpd.analysis.continuation.branchio": "hybridpd.pair.continuation.events",
+    "hybridpd.analysis.continuation.branchio": "hybridpd.analysis.continuation",
     **{f"hybridpd.analysis.continuation.{m}": f"hybridpd.pair.continuation.{m}"
        for m in ("branch", "events", "newton", "switching", "symmetric", "trace")},
     "hybridpd.analysis.continuation.plot": "hybridpd.plotting.branches",

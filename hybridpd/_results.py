@@ -134,8 +134,8 @@ def check_suffix(path: str | os.PathLike, name: str = "path",
 
 def jsonable(v) -> Any:
     """`v` as JSON-ready Python values: arrays and tuples as lists, numpy scalars as Python
-    ones, non-finite floats as ``None``, complex numbers as ``[re, im]``, results as their
-    :meth:`Result.to_dict`.
+    ones, non-finite floats as ``None``, complex numbers as ``[re, im]``, results (anything
+    with a ``to_dict`` method) as their :meth:`Result.to_dict`.
 
     Examples
     --------
@@ -158,6 +158,8 @@ def jsonable(v) -> Any:
         return [jsonable(v.real), jsonable(v.imag)]
     if isinstance(v, float):
         return v if math.isfinite(v) else None
+    if callable(getattr(v, "to_dict", None)):   # results that are not datasets (events)
+        return jsonable(v.to_dict())
     return str(v)
 
 

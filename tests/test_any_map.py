@@ -117,9 +117,9 @@ def test_continue_orbit_finds_the_period_doubling():
     assert len(pd) == 1, [(e.kind, e.parameter) for e in branch.events]
     np.testing.assert_allclose(pd[0].parameter, A_PD1, rtol=1e-6)
     # every point of the branch is the closed-form fixed point
-    for p, s in zip(branch.p, branch.s):
+    for p, s in zip(branch.parameter, branch.points):
         np.testing.assert_allclose(s, _henon_fixed(p), rtol=1e-8, atol=1e-10)
-    assert branch.p[-1] == pytest.approx(0.6)
+    assert branch.parameter[-1] == pytest.approx(0.6)
 
 
 def test_continue_orbit_with_a_phase():

@@ -301,8 +301,8 @@ def test_continue_orbit_takes_a_builder_of_any_map():
     with pytest.deprecated_call(match="continue_family"):
         old = hp.continue_family
     b = old(build, [7.7, 1.66], 0.8, 0.81, section=sec, step=0.01)
-    np.testing.assert_allclose(a.s, b.s, rtol=0, atol=1e-12, err_msg="same engine, same path")
-    np.testing.assert_allclose(a.p, b.p, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a.points, b.points, rtol=0, atol=1e-12, err_msg="same engine, same path")
+    np.testing.assert_allclose(a.parameter, b.parameter, rtol=0, atol=1e-12)
     with pytest.raises(ValueError, match="builder"):
         hp.continue_orbit("not a builder", 0.8, 0.81, [7.7, 1.66])
 
@@ -339,13 +339,4 @@ def test_no_public_name_is_defined_in_two_modules():
             if isinstance(node, (ast.FunctionDef, ast.ClassDef)) and not node.name.startswith("_"):
                 where.setdefault(node.name, []).append(str(path.relative_to(ROOT)))
     twice = {k: v for k, v in where.items() if len(v) > 1 and k not in ("register", "run")}
-    # the impact pair's continuation stack is not yet a hook of the one engine
-    # (hybridpd.analysis.continuation): its branch, event and driver are the last
-    # concepts written twice; nothing may join them
-    pending = {"Branch", "BifurcationEvent", "continue_orbit"}
-    for name in pending:
-        assert sorted(twice.pop(name, [])) in ([], ["hybridpd/analysis/continuation.py",
-                                                    "hybridpd/pair/continuation/branch.py"],
-                                               ["hybridpd/analysis/continuation.py",
-                                                "hybridpd/pair/continuation/events.py"]), name
     assert not twice, twice

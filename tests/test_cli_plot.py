@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains
+from hybridpd._results import jsonable
 from hybridpd.cli import main
 
 PAIR = ["--case", "collocated", "--mu", "0.1", "--e", "0.5", "--omega", "5"]
@@ -87,7 +88,17 @@ def files(tmp_path_factory):
                         initial=np.asarray(diag.initial), meta=np.array(json.dumps(meta)))
     out["bifurcation_diagram.npz"] = d / "diagram.npz"
     br = continue_symmetric(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv", 23.0)
-    out["branch.npz"] = br.save(d / "branch.npz")
+    out["branch.nc"] = br.save(d / "branch.nc")
+    # the .npz branch file of earlier versions, in its layout
+    arrays = {k: np.asarray(getattr(br, k)) for k in (
+        "parameter", "points", "multipliers", "spectral_radius", "stable", "viable", "margin",
+        "min_impact_speed", "xm", "newton_iterations")}
+    meta = {"kind": "branch", "parameter_name": "kv", "period": 1,
+            "patterns": jsonable(br.patterns), "events": [e.to_dict() for e in br.events],
+            "termination": br.termination, "family": "symmetric", "method": br.method,
+            "case": "collocated", "fixed": br.fixed, "n_rejected": br.n_rejected}
+    np.savez_compressed(d / "branch.npz", **arrays, __metadata__=np.array(json.dumps(meta)))
+    out["branch.npz"] = d / "branch.npz"
     assert main(["simulate", *SIM, "--out", str(d / "pair.json")]) == 0
     out["trajectory.json"] = d / "pair.json"
     assert main(["simulate", "--model", MODEL, "--t-end", "3", "--samples", "400",
@@ -98,7 +109,7 @@ def files(tmp_path_factory):
 
 KINDS = ["region_map.nc", "region_map.zarr", "region_map.npz", "basin.nc", "basin.zarr",
          "basin.npz", "basin.attractors.nc", "basin.attractors.zarr", "basin.attractors.npz",
-         "bifurcation_diagram.npz", "bifurcation_diagram.nc", "branch.npz",
+         "bifurcation_diagram.npz", "bifurcation_diagram.nc", "branch.npz", "branch.nc",
          "trajectory.json", "model_trajectory.json"]
 
 
@@ -266,12 +277,13 @@ def test_branch_save_load_round_trip(files):
     from hybridpd.pair.continuation import continue_symmetric, load_branch
 
     br = continue_symmetric(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv", 23.0)
-    back = load_branch(files["branch.npz"])
-    for name in ("parameter", "points", "multipliers", "spectral_radius", "stable", "viable",
-                 "margin", "min_impact_speed", "xm", "newton_iterations"):
-        np.testing.assert_array_equal(getattr(back, name), getattr(br, name), err_msg=name)
-    assert back.to_dict() == br.to_dict()
-    assert back.patterns == br.patterns and back.case == br.case
-    assert [e.kind for e in back.events] == [e.kind for e in br.events]
+    for name in ("branch.nc", "branch.npz"):      # this version's file and the earlier one
+        back = load_branch(files[name])
+        for var in ("parameter", "points", "multipliers", "spectral_radius", "stable",
+                    "viable", "margin", "min_impact_speed", "xm", "newton_iterations"):
+            np.testing.assert_array_equal(getattr(back, var), getattr(br, var), err_msg=var)
+        assert back.to_dict() == br.to_dict(), name
+        assert back.patterns == br.patterns and back.case == br.case
+        assert [e.kind for e in back.events] == [e.kind for e in br.events]
     with pytest.raises(ValueError, match="path"):
-        br.save(Path(files["branch.npz"]).with_suffix(".nc"))
+        br.save(Path(files["branch.nc"]).with_suffix(".npz"))

@@ -41,13 +41,13 @@ def test_a_min_step_stop_names_the_maps_failure_and_the_parameter():
     br = continue_orbit(_kv_builder(pair, orb.xm), 20.0, 23.0, orb.fixed_point,
                          method="natural", step=0.5, max_step=0.5, min_step=1e-3)
     assert br.termination == "min_step"
-    last = br.points[-1].p
+    last = br[-1].p
     assert br.reason.startswith(f"step below min_step = 0.001 at p = {last:.10g}: corrector "
                                 "failed: map undefined: bad_start")
     assert br.to_dict()["reason"] == br.reason
     # independent check: the last point is a fixed point of the pair's closed-form map
     Q = ImpactMap(pair, PDGains(10, last), Reference(orb.xm, W))
-    np.testing.assert_allclose(Q(br.points[-1].s), br.points[-1].s, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(Q(br[-1].s), br[-1].s, rtol=0, atol=1e-8)
     assert 21.0 < last < 22.0
 
 
@@ -61,8 +61,8 @@ def test_the_other_stops_carry_their_reason():
                          max_step=0.5, max_steps=3)
     assert br.termination == "max_steps"
     assert len(br.points) == 3
-    assert br.reason == f"max_steps = 3 accepted points reached at p = {br.points[-1].p:.10g}"
-    np.testing.assert_allclose(br.points[-1].p, 21.0, rtol=0, atol=1e-12)
+    assert br.reason == f"max_steps = 3 accepted points reached at p = {br[-1].p:.10g}"
+    np.testing.assert_allclose(br[-1].p, 21.0, rtol=0, atol=1e-12)
     bad = continue_orbit(build, 20.0, 22.0, [0.0, 5.0, 5.0, -1.0])
     assert bad.termination.startswith("start failed") and "p = 20" in bad.reason
 

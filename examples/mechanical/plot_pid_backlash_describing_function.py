@@ -162,7 +162,7 @@ def ki_family(kis):
     br = continue_orbit(build, kis[0], kis[-1], orb0.s, method="natural",
                          step=(kis[-1] - kis[0]) / (len(kis) - 1))
     rows = []
-    for pt in br.points:
+    for pt in br:
         ma = model(ki=pt.p)
         P = build(pt.p)
         orb = find_orbit(P, pt.s)

@@ -34,7 +34,7 @@ from hybridpd import ImpactPair, PDGains, bifurcation_diagram
 from hybridpd.pair.bifdiagram import PAIR_SETTINGS, ImpactMapFamily
 from hybridpd.pair.continuation import (
     branch_map,
-    continue_orbit,
+    continue_pair_orbit,
     continue_symmetric,
     switch_branch,
 )
@@ -87,13 +87,13 @@ def branches(pair, kv_lo, kv_hi):
     report("  period-2 branch, upwards", up)
     # downwards: through the fold onto the unstable partner, then along it
     P0 = branch_map(sym, sw.start_parameters[0])
-    down = continue_orbit(P0, sw.starts[0], "kv", kv_lo, period=2, x10=X10)
+    down = continue_pair_orbit(P0, sw.starts[0], "kv", kv_lo, period=2, x10=X10)
     report("  period-2 branch, downwards", down)
     out = [(sym, "symmetric period-1"), (up, "period-2 (double impact)"),
            (down, "period-2 (double impact)")]
     if "turned back" in down.termination:
         Pf = branch_map(down, down.parameter[-1])
-        partner = continue_orbit(Pf, down.points[-1], "kv", kv_hi, period=2, x10=X10)
+        partner = continue_pair_orbit(Pf, down.points[-1], "kv", kv_hi, period=2, x10=X10)
         report("  unstable partner after the fold", partner)
         out.append((partner, "period-2 (double impact)"))
     at20 = [b for b, _ in out[1:] if b.stable.any()]

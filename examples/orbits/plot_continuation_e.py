@@ -27,7 +27,7 @@ from matplotlib.figure import Figure
 from hybridpd import ImpactPair, PDGains, Reference
 from hybridpd.analysis.periodic import find_orbit
 from hybridpd.pair.continuation import (
-    continue_orbit,
+    continue_pair_orbit,
     continue_symmetric,
 )
 from hybridpd.pair.impactmap import ImpactMap
@@ -79,7 +79,7 @@ print(f"\nperiod-2 cycle at kv = 20 (xm = {xm:.6f}): converged {cyc.converged}, 
       f"{cyc.walls}, multipliers {np.round(np.abs(cyc.multipliers), 6)}")
 for s in cyc.orbit:
     print("  ", np.round(s, 6))
-br2 = continue_orbit(P, cyc, "kv", 5.0, period=2)
+br2 = continue_pair_orbit(P, cyc, "kv", 5.0, period=2)
 report("period-2 cycle continued in kv (xm fixed)", br2)
 
 print(f"\ntotal {time.perf_counter() - t0:.1f} s")

@@ -33,8 +33,11 @@ A map knows its named parameters through its hook ``family``: e.g. the impact pa
 ``ImpactMap.family("kv")`` is a builder of the map at other damping gains, so
 ``continue_orbit(P.family("kv"), 20.0, 23.0, s0)`` follows the pair's orbits on this engine.
 
-The result is one :class:`Branch` of :class:`BranchPoint` with :class:`BifurcationEvent`
-(``kind``, ``index``, ``parameter``, ``detail``). The names of earlier versions
+The result is the package's one :class:`Branch` (per-point arrays; ``branch[i]`` is a
+:class:`BranchPoint`) with :class:`BifurcationEvent` (``kind``, ``index``, ``parameter``,
+``detail``): the impact pair's continuations return the same class, with their own
+quantities in ``variables`` and ``metadata``. Branches are saved as ``.nc`` or ``.zarr``
+(:meth:`Branch.save`, :func:`load_branch`). The names of earlier versions
 (``continue_family``, ``FamilyBranch``, ``FamilyEvent``, ``FAMILY_EVENTS``, the module path
 ``hybridpd.analysis.hybridcont``, and the impact pair's names once at this path, now in
 :mod:`hybridpd.pair.continuation`) still resolve with a ``DeprecationWarning``.
@@ -42,21 +45,31 @@ The result is one :class:`Branch` of :class:`BranchPoint` with :class:`Bifurcati
 from __future__ import annotations
 
 import importlib
+import json
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
 from hybridpd._deprecated import _message
-from hybridpd._results import compact_repr
+from hybridpd._results import (
+    Result,
+    WithExtras,
+    check_suffix,
+    compact_repr,
+    decode_attrs,
+    encode_attrs,
+    jsonable,
+)
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import Section, SectionMap
 from hybridpd.analysis.maps import PoincareMap, minimal_period
 from hybridpd.analysis.pathfollow import corrector, follow_path, illinois
 from hybridpd.analysis.periodic import find_orbit
 
-__all__ = ["EVENT_KINDS", "BifurcationEvent", "Branch", "BranchPoint", "continue_orbit"]
+__all__ = ["EVENT_KINDS", "BifurcationEvent", "Branch", "BranchPoint", "continue_orbit",
+           "load_branch"]
 
 #: Kinds of :class:`BifurcationEvent`.
 EVENT_KINDS = ("fold", "period_doubling", "neimark_sacker", "stability_change",
@@ -75,31 +88,62 @@ _UNDEFINED = {
 
 @dataclass(frozen=True, eq=False)
 class BranchPoint:
-    """One accepted point of a family: parameter ``p``, fixed point ``s`` and its stability."""
+    """One point of a family: parameter ``p``, fixed point ``s`` and its stability (what
+    ``branch[i]`` returns; ``DP`` is kept only while the branch is followed)."""
 
     p: float
     s: np.ndarray
-    DP: np.ndarray = field(repr=False)
+    DP: np.ndarray | None = field(repr=False)
     multipliers: np.ndarray
     spectral_radius: float
     stable: bool
     signature: tuple
-    t_period: float
+    t_period: float = math.nan
     __repr__ = compact_repr
 
 
-@dataclass(frozen=True)
-class BifurcationEvent:
-    """An event between points ``index`` and ``index + 1``, located at ``parameter``.
+@dataclass(frozen=True, eq=False)
+class BifurcationEvent(WithExtras):
+    """An event between branch points ``index`` and ``index + 1``, located at ``parameter``.
 
-    ``kind`` is one of :data:`EVENT_KINDS`; ``detail`` says what changed (and how it was
-    located).
+    Attributes
+    ----------
+    kind : str
+        One of :data:`EVENT_KINDS` (or an extra kind of a map's family, e.g. the impact
+        pair's ``grazing`` and ``existence``).
+    index : int
+    parameter : float
+        Parameter value of the located event (or of the nearer bracketing point when location
+        failed).
+    detail : str
+        What changed, and how it was located; starts with ``"uncertain"`` when only a sign
+        change between two points is known.
+    point : ndarray, shape (dim,), optional
+        Fixed point at the event (the phase in ``[0, T)``).
+    multipliers : ndarray, shape (dim,), complex, optional
+        Multipliers at the event.
+    test_value : float
+        Test function at the reported point (0 at an exact event).
+    located : bool
+        The location converged.
+    viable : bool
+        The orbit at the event is a genuine orbit (a stability change of a "virtual",
+        non-viable orbit of a closed-form family is reported with ``False``).
+    variables : dict
+        The family's own quantities at the event (the impact pair's reference amplitude
+        ``xm``); also readable as attributes (``ev.xm``).
     """
 
     kind: str
     index: int
     parameter: float
     detail: str = ""
+    point: np.ndarray | None = field(default=None, repr=False)
+    multipliers: np.ndarray | None = field(default=None, repr=False)
+    test_value: float = math.nan
+    located: bool = False
+    viable: bool = True
+    variables: dict = field(default_factory=dict, repr=False)
     __repr__ = compact_repr
 
     @property
@@ -108,62 +152,208 @@ class BifurcationEvent:
         return self.parameter
 
     def to_dict(self) -> dict:
-        return {"kind": self.kind, "index": self.index, "p": float(self.parameter),
-                "detail": self.detail}
+        """JSON-ready values (complex numbers as ``[re, im]``, the variables inline)."""
+        out = {f.name: jsonable(getattr(self, f.name)) for f in fields(self)
+               if f.name != "variables"}
+        return {**out, **jsonable(self.variables)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> BifurcationEvent:
+        """Inverse of :meth:`to_dict`."""
+        names = {f.name for f in fields(cls)} - {"variables"}
+        kw = {k: v for k, v in d.items() if k in names}
+        for k in ("point", "multipliers"):
+            if kw.get(k) is not None:
+                kw[k] = _array(kw[k])
+        for k in ("test_value", "parameter"):
+            kw[k] = math.nan if kw.get(k) is None else float(kw[k])
+        return cls(**kw, variables={k: (math.nan if v is None else v) for k, v in d.items()
+                                    if k not in names and k != "p"})
+
+
+def _array(values) -> np.ndarray:
+    """A list read from JSON as an array: ``[re, im]`` pairs as complex, ``None`` as NaN."""
+    nan = lambda v: math.nan if v is None else v
+    if values and isinstance(values[0], list):
+        return np.array([complex(nan(re), nan(im)) for re, im in values])
+    return np.array([nan(v) for v in values], float)
+
+
+def _tuples(obj):
+    return tuple(_tuples(o) for o in obj) if isinstance(obj, list) else obj
+
+
+#: Per-point fields of a branch and their dimensions in its dataset.
+_COLUMNS = {"points": ("point", "coordinate"), "multipliers": ("point", "coordinate"),
+            "spectral_radius": ("point",), "stable": ("point",)}
 
 
 @dataclass(frozen=True, eq=False)
-class Branch:
-    """Result of :func:`continue_orbit`.
+class Branch(WithExtras, Result):
+    """A continued family of periodic orbits, one row per accepted point.
+
+    The same class holds a family of any map (:func:`continue_orbit`) and the impact pair's
+    (map continuation, or its closed-form symmetric family); what only a family has lives in
+    ``variables`` and ``metadata``.
 
     Attributes
     ----------
-    points : list of BranchPoint
-    events : list of BifurcationEvent
-    termination : str
-        ``"reached"`` (the end value), ``"max_steps"``, ``"min_step"`` (the corrector failed at
-        the smallest step), ``"turned back: left the parameter range"`` (after a fold), or
-        ``"start failed: <reason>"``.
-    method : str
+    parameter_name : str
+    parameter : ndarray, shape (N,)
+    points : ndarray, shape (N, dim)
+        Fixed points of ``P^k`` (a phase coordinate in ``[0, T)``).
+    multipliers : ndarray, shape (N, dim), complex
+        Floquet multipliers (NaN where undefined).
+    spectral_radius : ndarray, shape (N,)
+    stable : ndarray of bool, shape (N,)
+        Spectral radius below 1 (and, where the family says, viable).
     period : int
+        ``k`` of ``P^k``.
+    events : list of BifurcationEvent
+        In branch order.
+    termination : str
+        ``"reached"``, ``"max_steps"``, ``"min_step"``, ``"turned back: ..."`` or ``"start
+        failed: <reason>"`` (the impact pair's engine says it in words).
+    method : str
+        ``"arclength"``, ``"natural"`` or ``"closed_form"``.
     reason : str
-        Why it stopped, in words, with the parameter value: e.g. ``"step below min_step =
-        1e-05 at p = 0.8123: corrector failed: map undefined: grazing (Newton: line search
-        failed ...)"`` (the map could not be applied at the points Newton tried: a grazing
-        contact, no return within ``t_max``, ...), ``"max_steps = 200 accepted points reached
-        at p = ..."``,
-        ``"reached the end value p = ..."``.
+        Why it stopped, in words, with the parameter value.
+    patterns : tuple
+        Per point, the jump (impact) signature of one period.
+    variables : dict of str to ndarray (N,)
+        Per-point quantities of the family: ``t_period`` (time of one period of ``P^k``); the
+        impact pair's ``viable``, ``margin``, ``min_impact_speed``, ``xm`` and
+        ``newton_iterations``. Also readable as attributes (``br.margin``).
+    metadata : dict
+        The family's settings (the pair's ``family``, ``case``, ``fixed``, ``n_rejected``);
+        also readable as attributes.
     """
 
-    points: list
+    kind = "branch"
+    parameter_name: str
+    parameter: np.ndarray
+    points: np.ndarray = field(repr=False)
+    multipliers: np.ndarray = field(repr=False)
+    spectral_radius: np.ndarray = field(repr=False)
+    stable: np.ndarray = field(repr=False)
+    period: int
     events: list
     termination: str
     method: str
-    period: int
     reason: str = ""
+    patterns: tuple = field(default=(), repr=False)
+    variables: dict = field(default_factory=dict, repr=False)
+    metadata: dict = field(default_factory=dict, repr=False)
     __repr__ = compact_repr
+
+    @classmethod
+    def from_points(cls, points, events, termination, method, period, reason="", *,
+                    parameter_name="p", dim=0, variables=None, metadata=None) -> Branch:
+        """A branch from its points (:class:`BranchPoint`), in order."""
+        pts = list(points)
+        col = lambda name, shape, dtype=float: (np.array([getattr(q, name) for q in pts],
+                                                         dtype) if pts else np.zeros(shape, dtype))
+        return cls(parameter_name, col("p", 0), col("s", (0, dim)),
+                   col("multipliers", (0, dim), complex), col("spectral_radius", 0),
+                   col("stable", 0, bool), int(period), list(events), termination, method,
+                   reason, tuple(q.signature for q in pts),
+                   {"t_period": col("t_period", 0), **(variables or {})}, dict(metadata or {}))
+
+    def __len__(self) -> int:
+        return int(np.size(self.parameter))
+
+    def __getitem__(self, i) -> BranchPoint:
+        """Point ``i`` of the branch."""
+        return BranchPoint(float(self.parameter[i]), self.points[i], None, self.multipliers[i],
+                           float(self.spectral_radius[i]), bool(self.stable[i]),
+                           self.patterns[i] if self.patterns else (),
+                           float(self.variables.get("t_period", [math.nan] * len(self))[i]))
+
+    def __iter__(self):
+        return (self[i] for i in range(len(self)))
 
     @property
     def p(self) -> np.ndarray:
-        return np.array([q.p for q in self.points])
+        """``parameter`` (the name of earlier versions; deprecated)."""
+        warnings.warn("Branch.p is deprecated; use Branch.parameter", DeprecationWarning, 2)
+        return self.parameter
 
     @property
     def s(self) -> np.ndarray:
-        """The fixed points, shape ``(len(points), dim)``."""
-        return np.array([q.s for q in self.points])
-
-    @property
-    def spectral_radius(self) -> np.ndarray:
-        return np.array([q.spectral_radius for q in self.points])
+        """``points`` (the name of earlier versions; deprecated)."""
+        warnings.warn("Branch.s is deprecated; use Branch.points", DeprecationWarning, 2)
+        return self.points
 
     def events_of(self, kind: str) -> list:
+        """The events of one kind."""
         return [e for e in self.events if e.kind == kind]
 
     def to_dict(self) -> dict:
-        return {"p": self.p.tolist(), "spectral_radius": self.spectral_radius.tolist(),
-                "stable": [bool(q.stable) for q in self.points],
-                "events": [e.to_dict() for e in self.events], "termination": self.termination,
-                "reason": self.reason, "method": self.method, "period": self.period}
+        """JSON-ready values (complex numbers as ``[re, im]``; the variables and metadata
+        inline)."""
+        out = {f.name: jsonable(getattr(self, f.name)) for f in fields(self)
+               if f.name not in ("variables", "metadata")}
+        return {**out, **jsonable(self.variables), **jsonable(self.metadata)}
+
+    def to_dataset(self):
+        """The branch as an :class:`xarray.Dataset`: per-point variables over ``point``, the
+        events, patterns and metadata as JSON attributes."""
+        import xarray as xr
+
+        data = {k: (dims, np.asarray(getattr(self, k))) for k, dims in _COLUMNS.items()}
+        data.update({k: ("point", np.asarray(v)) for k, v in self.variables.items()})
+        attrs = {"kind": self.kind, "parameter_name": self.parameter_name,
+                 "period": int(self.period), "termination": self.termination,
+                 "method": self.method, "reason": self.reason,
+                 "events": [e.to_dict() for e in self.events],
+                 "patterns": jsonable(self.patterns), "metadata": jsonable(self.metadata),
+                 "variables": list(self.variables)}
+        return xr.Dataset(data, coords={"parameter": ("point", np.asarray(self.parameter))},
+                          attrs=encode_attrs(attrs))
+
+    @classmethod
+    def from_dataset(cls, ds) -> Branch:
+        """Inverse of :meth:`to_dataset`."""
+        a = decode_attrs(ds.attrs)
+        if a.get("kind") != cls.kind:
+            raise ValueError(f"the dataset holds a {a.get('kind')!r}, not a branch")
+        return cls(a["parameter_name"], ds["parameter"].values,
+                   *(ds[k].values for k in _COLUMNS), int(a["period"]),
+                   [BifurcationEvent.from_dict(d) for d in a["events"]], a["termination"],
+                   a["method"], a.get("reason", ""), _tuples(a["patterns"]),
+                   {k: ds[k].values for k in a["variables"]}, a["metadata"])
+
+
+def load_branch(path) -> Branch:
+    """Read a :class:`Branch` written by :meth:`Branch.save` (``.nc`` or ``.zarr``; the
+    ``.npz`` branch files of earlier versions too).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hybridpd import ImpactPair, PDGains
+    >>> from hybridpd.pair.continuation import continue_symmetric
+    >>> br = continue_symmetric(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv", 23.0)
+    >>> p = br.save(Path(tempfile.mkdtemp()) / "kv.nc")
+    >>> back = load_branch(p)
+    >>> bool((back.spectral_radius == br.spectral_radius).all()), len(back.events)
+    (True, 1)
+    """
+    if check_suffix(path, "path") != ".npz":
+        return Branch.load(path)
+    with np.load(path, allow_pickle=False) as z:
+        a = {k: z[k] for k in z.files}
+    meta = json.loads(str(a.pop("__metadata__", np.array("{}"))[()]))
+    if meta.get("kind") != "branch":
+        raise ValueError(f"{path} does not hold a continued branch")
+    columns = ("parameter", *_COLUMNS)
+    return Branch(meta.pop("parameter_name"), *(a.pop(k) for k in columns),
+                  int(meta.pop("period")),
+                  [BifurcationEvent.from_dict(d) for d in meta.pop("events")],
+                  meta.pop("termination"), meta.pop("method"), "",
+                  _tuples(meta.pop("patterns")), a,
+                  {k: v for k, v in meta.items() if k != "kind"})
 
 
 def _map_factory(builder, section, map_options):
@@ -285,7 +475,7 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
     **options
         Only for the impact pair's call of earlier versions ``continue_orbit(P, s0,
         parameter, stop, ...)`` (deprecated: it runs
-        :func:`hybridpd.pair.continuation.continue_orbit`).
+        :func:`hybridpd.pair.continuation.continue_pair_orbit`).
 
     Returns
     -------
@@ -309,7 +499,7 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
     >>> sec = {"mode": "free", "guard": "impact",
     ...        "reference": (oscillator_initial_state(0, 0, omega=0.8), 0.0)}
     >>> br = hp.continue_orbit(build, 0.8, 0.82, [7.7, 1.66], section=sec, step=0.01)
-    >>> br.termination, round(br.points[-1].p, 6), bool(br.points[-1].stable)
+    >>> br.termination, round(br[-1].p, 6), bool(br[-1].stable)
     ('reached', 0.82, True)
     >>> br.reason
     'reached the end value p = 0.82'
@@ -317,7 +507,7 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
     if isinstance(p_end, str):
         # the impact pair's form of earlier versions: continue_orbit(P, s0, "kv", stop)
         warnings.warn(_message(f"{__name__}.continue_orbit(P, s0, parameter, stop)",
-                               "hybridpd.pair.continuation.continue_orbit, or "
+                               "hybridpd.pair.continuation.continue_pair_orbit, or "
                                "continue_orbit(P.family(parameter), p0, stop, s0)"),
                       DeprecationWarning, stacklevel=2)
         named = dict(period=period, section=section, method=method, step=step,
@@ -325,7 +515,7 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
                      fd_step=fd_step, locate=locate, map_options=map_options)
         given = {k: v for k, v in named.items() if v is not continue_orbit.__kwdefaults__[k]}
         pair = importlib.import_module("hybridpd.pair.continuation")
-        return pair.continue_orbit(builder, p0, p_end, s0, **given, **options)
+        return pair.continue_pair_orbit(builder, p0, p_end, s0, **given, **options)
     if options:
         raise TypeError(f"continue_orbit() got unexpected keyword arguments {sorted(options)}")
     if not callable(builder):
@@ -353,9 +543,9 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
     first = find_orbit(P, s0, k, tol=tol)
     if not first.converged:
         detail = f" ({first.detail})" if first.detail else ""
-        return Branch([], [], f"start failed: {first.reason}", method, k,
-                            f"no fixed point of P^{k} at p = {p0:.10g} to start from: "
-                            f"{first.reason}{detail}")
+        return Branch.from_points([], [], f"start failed: {first.reason}", method, k,
+                                  f"no fixed point of P^{k} at p = {p0:.10g} to start from: "
+                                  f"{first.reason}{detail}", dim=P.dim)
     path = _Path(make, k, fd_step * max(1.0, abs(p0)), P.dim)
     correct = corrector(path.F, path.Fs, path.Fp, tol=tol, max_iter=15,
                         scale=lambda x: max(1.0, float(np.max(np.abs(x[:path.dim])))),
@@ -378,7 +568,8 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
     for key, short in (("reached", "reached"), ("max_steps", "max_steps"),
                        ("step below", "min_step")):
         termination = short if termination.startswith(key) else termination
-    return Branch([q.fam for q in pts], events, termination, method, k, reason)
+    return Branch.from_points([q.fam for q in pts], events, termination, method, k, reason,
+                              dim=P.dim)
 
 
 def _reason(termination: str, p_last: float, p_end: float, lo: float, hi: float,

@@ -3,7 +3,7 @@
 Unknowns ``u = (s, p)``: a section point and the parameter; :func:`follow_path` continues a
 solution of ``F(u) = P^k(s; p) - s = 0`` by natural or pseudo-arclength steps (passing
 folds). Its callers (:func:`hybridpd.analysis.continuation.continue_orbit` for any map,
-:func:`hybridpd.pair.continuation.continue_orbit` for the impact pair) give the map
+:func:`hybridpd.pair.continuation.continue_pair_orbit` for the impact pair) give the map
 through ``F``, ``Fs``, ``Fp`` and ``make_point`` and their events through ``detect``.
 :func:`newton` (damped; with Broyden updates for
 :func:`~hybridpd.analysis.periodic.find_orbit`) is the Newton method of the correctors and of

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hybridpd.pair.continuation.events import Branch
+from hybridpd.analysis.continuation import Branch
 
 _EVENT_STYLE = {
     "fold": ("s", "tab:red"),

@@ -118,7 +118,7 @@ def plot_file(path: str | os.PathLike, **options):
     >>> from hybridpd import ImpactPair, PDGains
     >>> from hybridpd.pair.continuation import continue_symmetric
     >>> br = continue_symmetric(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv", 23.0)
-    >>> p = br.save(Path(tempfile.mkdtemp()) / "branch.npz")
+    >>> p = br.save(Path(tempfile.mkdtemp()) / "branch.nc")
     >>> file_kind(p)
     'branch'
     >>> plot_file(p, quantity="margin").axes[0].get_xlabel()
@@ -168,7 +168,7 @@ _BRANCH_UNITS = {"spectral_radius": "(1)", "multipliers": "(1)", "margin": "(len
 
 def _branch(path, title=None, quantity="spectral_radius"):
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.continuation import load_branch
+    from hybridpd.analysis.continuation import load_branch
     from hybridpd.plotting.branches import plot_branch
     from hybridpd.plotting.style import DOUBLE, axis_label, house_figure, house_style
 
@@ -183,9 +183,9 @@ def _branch(path, title=None, quantity="spectral_radius"):
             ax.set_ylabel(f"{ax.get_ylabel()} {unit}".strip())
         # the termination names why and where it stopped (the corrector's failure at the
         # smallest step, say): shortened to one line under the title, whole in the file
+        family = " ".join(filter(None, (br.metadata.get("case"), br.metadata.get("family"))))
         ax.set_title(title if title is not None else
-                     f"{br.case.value} {br.family} branch in {br.parameter_name} "
-                     f"({len(br)} points)\nstopped: "
+                     f"{family} branch in {br.parameter_name} ({len(br)} points)\nstopped: "
                      + textwrap.shorten(str(br.termination), 100, placeholder=" ..."))
     return fig
 

@@ -8,7 +8,7 @@ Two complementary tools:
   contacts, sticking phases included); the map's hook
   :meth:`~hybridpd.pair.impactmap.ImpactMap.point_quantities` adds the pair's walls, flight
   margins and contact pattern to the orbit (:func:`.trace.orbit_quantities`).
-* :func:`continue_orbit` follows a fixed point of ``P^k`` in one parameter among
+* :func:`continue_pair_orbit` follows a fixed point of ``P^k`` in one parameter among
   :data:`PARAMETERS` (natural-parameter continuation with a secant predictor, or
   pseudo-arclength continuation which passes folds); :func:`continue_symmetric` follows the
   closed-form symmetric orbit family of :mod:`hybridpd.pair.orbits` (``x10`` fixed, ``xm``
@@ -43,9 +43,16 @@ Coordinates: a section point is ``s = (phi, z1, z2, z4)`` (pre-impact at ``z3 = 
 ``z4 > 0``), ``phi`` in time units in ``[0, T)``, ``T = 2 pi / omega``; positions in length
 units, velocities in length/time.
 
+Both return the package's one :class:`~hybridpd.analysis.continuation.Branch` of
+:class:`~hybridpd.analysis.continuation.BifurcationEvent` (re-exported here), with the
+pair's per-point variables (``viable``, ``margin``, ``min_impact_speed``, ``xm``,
+``newton_iterations``) and metadata (``family``, ``case``, ``fixed``, ``n_rejected``).
+``continue_orbit`` of earlier versions is :func:`continue_pair_orbit` (the general name
+belongs to :func:`hybridpd.continue_orbit`, which follows any map's orbits).
+
 Modules: :mod:`.trace` (one application of ``P`` with its impact pattern), :mod:`.newton`
-(``P^k`` and its Jacobian), :mod:`.events` (:class:`Branch`, :class:`BifurcationEvent`, event location), :mod:`.branch`
-(:func:`continue_orbit`), :mod:`.symmetric` (:func:`continue_symmetric`), :mod:`.switching`
+(``P^k`` and its Jacobian), :mod:`.events` (event detection and location), :mod:`.branch`
+(:func:`continue_pair_orbit`), :mod:`.symmetric` (:func:`continue_symmetric`), :mod:`.switching`
 (:func:`switch_branch`: the period-doubled branch at a flip, the crossing branch at a branch
 point, the motion reached past a grazing point); branches are drawn by
 :func:`hybridpd.plotting.branches.plot_branch`.
@@ -56,6 +63,7 @@ import importlib
 import warnings
 
 from hybridpd._deprecated import _message
+from hybridpd.analysis.continuation import BifurcationEvent, Branch, load_branch
 from hybridpd.analysis.periodic import PeriodicOrbit as _PeriodicOrbit
 from hybridpd.analysis.periodic import find_orbit as _find_orbit
 from hybridpd.pair.continuation._common import (
@@ -65,8 +73,7 @@ from hybridpd.pair.continuation._common import (
     SYMMETRIC_PARAMETERS,
     design_xm,
 )
-from hybridpd.pair.continuation.branch import continue_orbit
-from hybridpd.pair.continuation.events import BifurcationEvent, Branch, load_branch
+from hybridpd.pair.continuation.branch import continue_pair_orbit
 from hybridpd.pair.continuation.newton import map_power_jacobian
 from hybridpd.pair.continuation.switching import BranchSwitch, branch_map, switch_branch
 from hybridpd.pair.continuation.symmetric import continue_symmetric
@@ -74,7 +81,8 @@ from hybridpd.pair.continuation.trace import ImpactStep, MapTrace, trace_map
 
 __all__ = ["DESIGN_PARAMETERS", "EVENT_KINDS", "PARAMETERS", "SYMMETRIC_PARAMETERS",
            "BifurcationEvent", "Branch", "BranchSwitch", "ImpactStep", "MapTrace",
-           "branch_map", "continue_orbit", "continue_symmetric", "design_xm", "load_branch", "map_power_jacobian", "switch_branch", "trace_map"]
+           "branch_map", "continue_pair_orbit", "continue_symmetric", "design_xm", "load_branch",
+           "map_power_jacobian", "switch_branch", "trace_map"]
 
 
 def _find_periodic_orbit(impact_map_, s0, period: int = 1, *, tol: float = 1e-12,
@@ -96,6 +104,8 @@ def __getattr__(name):
         obj, new = _find_periodic_orbit, "hybridpd.analysis.periodic.find_orbit"
     elif name == "PeriodicOrbit":
         obj, new = _PeriodicOrbit, "hybridpd.analysis.periodic.PeriodicOrbit"
+    elif name == "continue_orbit":  # the general name is the one engine's
+        obj, new = continue_pair_orbit, f"{__name__}.continue_pair_orbit"
     elif name == "plot_branch":     # by name: the plotting layer sits above the pair
         new = "hybridpd.plotting.branches.plot_branch"
         obj = importlib.import_module("hybridpd.plotting.branches").plot_branch

@@ -85,10 +85,6 @@ def _scale(x):
     return max(1.0, float(np.max(np.abs(x[1:4]))))
 
 
-def _f(x):
-    return None if x is None or not np.isfinite(x) else float(x)
-
-
 def _path_steps(name, p0, stop, step, max_step, min_step, max_steps, defaults):
     """Validate a continuation path ``p0 -> stop`` and its step sizes.
 

@@ -1,4 +1,4 @@
-"""Continuation of fixed points of ``P^k`` in one parameter (:func:`continue_orbit`)."""
+"""Continuation of fixed points of ``P^k`` in one parameter (:func:`continue_pair_orbit`)."""
 from __future__ import annotations
 
 import math
@@ -6,6 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from hybridpd.analysis.continuation import BifurcationEvent, Branch
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.maps import minimal_period
 from hybridpd.analysis.pathfollow import bisect_predicate, corrector, follow_path
@@ -31,8 +32,6 @@ from hybridpd.pair.continuation._common import (
     _wrap_diff,
 )
 from hybridpd.pair.continuation.events import (
-    BifurcationEvent,
-    Branch,
     _branch_from_points,
     _empty_branch,
     _Point,
@@ -46,7 +45,7 @@ from hybridpd.pair.continuation.trace import trace_orbit
 from hybridpd.pair.impactmap import ImpactMap
 
 
-def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
+def continue_pair_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
                    period: int = 1, method: str = "arclength", step: float | None = None,
                    min_step: float | None = None, max_step: float | None = None,
                    max_steps: int = 400, tol: float = 1e-10, max_newton: int = 12,
@@ -127,7 +126,7 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
     >>> pair = ImpactPair(mu=0.1, e=0.1, L=0.75)
     >>> orb = symmetric_orbit(pair, PDGains(10, 20), 5.0)
     >>> P = ImpactMap(pair, PDGains(10, 20), Reference(orb.xm, 5.0))
-    >>> br = continue_orbit(P, orb.fixed_point, "kv", 23.0, step=0.5)
+    >>> br = continue_pair_orbit(P, orb.fixed_point, "kv", 23.0, step=0.5)
     >>> [ev.kind for ev in br.events][:1]
     ['grazing']
     """
@@ -245,7 +244,7 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
         return BifurcationEvent(kind=kind, parameter=float(pt.u[4]), point=s,
                                 multipliers=pt.mult.copy(), index=index, detail=detail,
                                 test_value=float(fv), located=bool(ok), viable=True,
-                                xm=float(pt.xm))
+                                variables={"xm": float(pt.xm)})
 
     tracker = _Tracker(events, evaluate_between, lambda a, b: float(np.linalg.norm(b.u - a.u)),
                        event_tol, 60, locate, to_event, turn_test=turn_test)
@@ -325,5 +324,5 @@ def continue_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float, *,
     if design is not None:
         fixed = {kk: v for kk, v in br.fixed.items() if kk not in ("xm", name)}
         fixed.update({"x10": design.x10, "n": design.n})
-        br = replace(br, fixed=fixed)
+        br = replace(br, metadata={**br.metadata, "fixed": fixed})
     return br

@@ -1,176 +1,21 @@
-"""Branches, bifurcation events and their detection/location along a branch (shared by the
-continuation methods), and the branch file (:meth:`Branch.save`, :func:`load_branch`)."""
+"""Detection and location of bifurcation events along the impact pair's branches (shared by
+its map continuation and its closed-form symmetric family), and the pair's :class:`Branch`
+(the one branch type, with the pair's variables)."""
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from hybridpd._results import compact_repr
+from hybridpd.analysis.continuation import Branch
 from hybridpd.analysis.pathfollow import illinois as _illinois
 from hybridpd.model import Case
 from hybridpd.pair.continuation._common import (
     _END_GRAZE,
     _JUMP_TOL,
     _NONREAL_TOL,
-    _f,
     _fixed_parameters,
 )
-
-
-@dataclass(frozen=True)
-class BifurcationEvent:
-    """A detected (and, where possible, located) event on a branch.
-
-    Attributes
-    ----------
-    kind : str
-        One of :data:`EVENT_KINDS`.
-    parameter : float
-        Parameter value at the located event (or the midpoint of the bracketing steps when
-        location failed).
-    point : ndarray, shape (4,)
-        Fixed point at the event (``phi`` in ``[0, T)``).
-    multipliers : ndarray, shape (4,), complex
-        Multipliers at the event (by decreasing modulus); NaN where undefined.
-    index : int
-        The event lies between branch points ``index`` and ``index + 1``.
-    detail : str
-        Human-readable description (direction of the crossing, fold vs branch point, ...).
-    test_value : float
-        Test function at the reported point (0 at an exact event; for grazing the margin or
-        the smallest approach speed).
-    located : bool
-        The location converged (bracket below the tolerance). When False the event is
-        uncertain: only a sign change between points ``index`` and ``index + 1`` is known,
-        and :attr:`detail` starts with ``"uncertain"``.
-    viable : bool
-        The orbit at the event is a genuine orbit (symmetric family: viability holds; a
-        stability change of a non-viable, "virtual" orbit is reported with ``False``).
-    xm : float
-        Reference amplitude at the event.
-    """
-
-    kind: str
-    parameter: float
-    point: np.ndarray
-    multipliers: np.ndarray
-    index: int
-    detail: str = ""
-    test_value: float = np.nan
-    located: bool = False
-    viable: bool = True
-    xm: float = np.nan
-    __repr__ = compact_repr
-
-    def to_dict(self) -> dict:
-        """JSON-ready summary."""
-        return {"kind": self.kind, "parameter": float(self.parameter),
-                "point": [_f(v) for v in self.point],
-                "multipliers": [[_f(z.real), _f(z.imag)] for z in self.multipliers],
-                "index": int(self.index), "detail": self.detail,
-                "test_value": _f(self.test_value), "located": bool(self.located),
-                "viable": bool(self.viable), "xm": _f(self.xm)}
-
-
-@dataclass(frozen=True)
-class Branch:
-    """A continued family of periodic orbits (one row per accepted step).
-
-    Attributes
-    ----------
-    parameter_name : str
-    parameter : ndarray, shape (N,)
-    points : ndarray, shape (N, 4)
-        Fixed points ``(phi, z1, z2, z4)`` (``phi`` in ``[0, T)``).
-    multipliers : ndarray, shape (N, 4), complex
-        By decreasing modulus (NaN where undefined).
-    spectral_radius : ndarray, shape (N,)
-    stable : ndarray of bool, shape (N,)
-        Viable and spectral radius < 1.
-    viable : ndarray of bool, shape (N,)
-        The orbit exists as such (symmetric family: paper's existence incl. viability; map
-        continuation: always True, the orbits are simulated).
-    margin : ndarray, shape (N,)
-        Viability margin (symmetric family, signed: negative when violated) or the smallest
-        interior wall distance over ``L`` of the flights (map continuation).
-    min_impact_speed : ndarray, shape (N,)
-        Smallest approach speed at an impact on the orbit (length/time).
-    xm : ndarray, shape (N,)
-        Reference amplitude (varies on the symmetric family, or when it is the parameter).
-    period : int
-        ``k`` of ``P^k`` (1 on the symmetric family).
-    patterns : tuple
-        Per point, the impact signature ``(((wall, kind), ...) per iteration)``.
-    events : list of BifurcationEvent
-        In branch order.
-    termination : str
-        Why the continuation stopped.
-    family : str
-        ``"periodic"`` (Newton on ``P^k``) or ``"symmetric"`` (closed form).
-    method : str
-        ``"natural"``, ``"arclength"`` or ``"closed_form"``.
-    case : Case
-    fixed : dict
-        The other parameters.
-    n_rejected : int
-        Rejected (halved) steps.
-    newton_iterations : ndarray of int, shape (N,)
-        Corrector iterations per point (0 on the closed-form family).
-    """
-
-    parameter_name: str
-    parameter: np.ndarray
-    points: np.ndarray
-    multipliers: np.ndarray
-    spectral_radius: np.ndarray
-    stable: np.ndarray
-    viable: np.ndarray
-    margin: np.ndarray
-    min_impact_speed: np.ndarray
-    xm: np.ndarray
-    period: int
-    patterns: tuple
-    events: list
-    termination: str
-    family: str
-    method: str
-    case: Case
-    fixed: dict
-    n_rejected: int = 0
-    newton_iterations: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
-    __repr__ = compact_repr
-
-    def __len__(self) -> int:
-        return int(self.parameter.size)
-
-    def events_of(self, kind: str) -> list:
-        """The events of one kind."""
-        return [ev for ev in self.events if ev.kind == kind]
-
-    def save(self, path):
-        """Write to ``.npz`` (read back with
-        :func:`hybridpd.pair.continuation.load_branch`); returns the path."""
-        return save_branch(self, path)
-
-    def to_dict(self) -> dict:
-        """JSON-ready summary (arrays as lists, complex numbers as ``[re, im]``)."""
-        return {
-            "parameter_name": self.parameter_name, "family": self.family,
-            "method": self.method, "case": self.case.value, "period": self.period,
-            "fixed": {k: (v if isinstance(v, str) else float(v)) for k, v in self.fixed.items()},
-            "parameter": [float(v) for v in self.parameter],
-            "points": [[_f(v) for v in row] for row in self.points],
-            "multipliers": [[[_f(z.real), _f(z.imag)] for z in row] for row in self.multipliers],
-            "spectral_radius": [_f(v) for v in self.spectral_radius],
-            "stable": [bool(v) for v in self.stable], "viable": [bool(v) for v in self.viable],
-            "margin": [_f(v) for v in self.margin],
-            "min_impact_speed": [_f(v) for v in self.min_impact_speed],
-            "xm": [_f(v) for v in self.xm],
-            "events": [ev.to_dict() for ev in self.events],
-            "termination": self.termination, "n_rejected": int(self.n_rejected)}
 
 
 @dataclass
@@ -379,15 +224,25 @@ def _sig_str(sig):
                       for it in sig)
 
 
+def _pair_branch(name, k, method, termination, *, parameter, points, multipliers, rho,
+                 viable, patterns=(), events=(), variables=None, case=None, fixed=None,
+                 n_rejected=0) -> Branch:
+    """The pair's branch: the one :class:`Branch` with its variables and metadata."""
+    return Branch(name, parameter, points, multipliers, rho, viable & (rho < 1.0), k,
+                  list(events), termination, method, "", tuple(patterns),
+                  {"viable": viable, **(variables or {})},
+                  {"family": "periodic" if method != "closed_form" else "symmetric",
+                   "case": None if case is None else Case.parse(case).value, "fixed": fixed, "n_rejected": int(n_rejected)})
+
+
 def _empty_branch(name, P, k, method, reason) -> Branch:
     z = np.zeros(0)
-    return Branch(parameter_name=name, parameter=z, points=np.zeros((0, 4)),
-                  multipliers=np.zeros((0, 4), complex), spectral_radius=z,
-                  stable=np.zeros(0, bool), viable=np.zeros(0, bool), margin=z,
-                  min_impact_speed=z, xm=z, period=k, patterns=(), events=[],
-                  termination=reason, family="periodic", method=method, case=P.case,
-                  fixed=_fixed_parameters(P), n_rejected=0,
-                  newton_iterations=np.zeros(0, int))
+    return _pair_branch(name, k, method, reason, parameter=z, points=np.zeros((0, 4)),
+                        multipliers=np.zeros((0, 4), complex), rho=z,
+                        viable=np.zeros(0, bool),
+                        variables={"margin": z, "min_impact_speed": z, "xm": z,
+                                   "newton_iterations": np.zeros(0, int)},
+                        case=P.case, fixed=_fixed_parameters(P))
 
 
 def _branch_from_points(pts, evs, name, P0, k, method, termination, rejected, *,
@@ -398,107 +253,11 @@ def _branch_from_points(pts, evs, name, P0, k, method, termination, rejected, *,
         omega, case, fixed = P0.reference.omega, P0.case, _fixed_parameters(P0)
     w = p if name == "omega" else omega
     S[:, 0] = np.mod(S[:, 0], 2 * np.pi / w)
-    mult = np.array([pt.mult for pt in pts])
-    rho = np.array([pt.rho for pt in pts])
-    viable = np.array([pt.viable for pt in pts])
-    return Branch(
-        parameter_name=name, parameter=p, points=S, multipliers=mult, spectral_radius=rho,
-        stable=viable & (rho < 1.0), viable=viable, margin=np.array([pt.margin for pt in pts]),
-        min_impact_speed=np.array([pt.min_speed for pt in pts]),
-        xm=np.array([pt.xm for pt in pts]), period=k,
-        patterns=tuple(pt.signature for pt in pts), events=evs, termination=termination,
-        family="periodic" if method != "closed_form" else "symmetric", method=method,
-        case=case, fixed=fixed, n_rejected=rejected,
-        newton_iterations=np.array([pt.newton_its for pt in pts]))
-
-
-# ----------------------------------------------------------------------------------------
-# the branch file: ``.npz`` in the layout of :mod:`hybridpd.sweeps.npz` (readable by
-# :func:`numpy.load` without pickle): the per-point arrays as NumPy arrays, everything else
-# (parameter name, family, case, fixed parameters, impact patterns, events) as JSON in the 0-d
-# entry ``__metadata__`` with ``"kind": "branch"``. Written here directly because analyses do
-# not import the sweeps layer.
-# ----------------------------------------------------------------------------------------
-_ARRAYS = ("parameter", "points", "multipliers", "spectral_radius", "stable", "viable",
-           "margin", "min_impact_speed", "xm", "newton_iterations")
-
-
-def _nan(v):
-    return np.nan if v is None else float(v)
-
-
-def _tuples(obj):
-    return tuple(_tuples(o) for o in obj) if isinstance(obj, list) else obj
-
-
-def save_branch(branch: Branch, path):
-    """Write `branch` to an ``.npz`` file (see the module docstring); returns the path."""
-    _check_npz(path)
-    arrays = {k: np.asarray(getattr(branch, k)) for k in _ARRAYS}
-    meta = {"kind": "branch", "parameter_name": branch.parameter_name,
-            "period": int(branch.period), "patterns": branch.patterns,
-            "events": [ev.to_dict() for ev in branch.events],
-            "termination": branch.termination, "family": branch.family,
-            "method": branch.method, "case": Case.parse(branch.case).value,
-            "fixed": dict(branch.fixed), "n_rejected": int(branch.n_rejected)}
-    text = json.dumps(meta, sort_keys=True, default=_plain)
-    path = Path(path)
-    with open(path, "wb") as fh:  # a file object: numpy would otherwise append .npz
-        np.savez_compressed(fh, **arrays, __metadata__=np.array(text))
-    return path
-
-
-def _plain(v):
-    if isinstance(v, np.generic):
-        return v.item()
-    if isinstance(v, np.ndarray):
-        return v.tolist()
-    raise TypeError(f"cannot store {type(v).__name__} in the branch metadata")
-
-
-def _check_npz(path):
-    if not isinstance(path, (str, Path)) or Path(path).suffix.lower() != ".npz":
-        raise ValueError(f"path must end in .npz, got {path!r}")
-
-
-def _event(d: dict) -> BifurcationEvent:
-    mult = np.array([complex(_nan(re), _nan(im)) for re, im in d["multipliers"]])
-    return BifurcationEvent(kind=d["kind"], parameter=float(d["parameter"]),
-                            point=np.array([_nan(v) for v in d["point"]]), multipliers=mult,
-                            index=int(d["index"]), detail=d["detail"],
-                            test_value=_nan(d["test_value"]), located=bool(d["located"]),
-                            viable=bool(d["viable"]), xm=_nan(d["xm"]))
-
-
-def load_branch(path) -> Branch:
-    """Read a :class:`Branch` written by :meth:`Branch.save`.
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> from pathlib import Path
-    >>> from hybridpd import ImpactPair, PDGains
-    >>> from hybridpd.pair.continuation import continue_symmetric
-    >>> br = continue_symmetric(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv", 23.0)
-    >>> p = br.save(Path(tempfile.mkdtemp()) / "kv.npz")
-    >>> back = load_branch(p)
-    >>> bool((back.spectral_radius == br.spectral_radius).all()), len(back.events)
-    (True, 1)
-    """
-    _check_npz(path)
-    with np.load(path, allow_pickle=False) as z:
-        a = {k: z[k] for k in z.files}
-    meta = json.loads(str(a.pop("__metadata__", np.array("{}"))[()]))
-    if meta.get("kind") != "branch":
-        raise ValueError(f"{path} does not hold a continued branch")
-    return Branch(parameter_name=meta["parameter_name"], parameter=a["parameter"],
-                  points=a["points"], multipliers=a["multipliers"],
-                  spectral_radius=a["spectral_radius"], stable=a["stable"].astype(bool),
-                  viable=a["viable"].astype(bool), margin=a["margin"],
-                  min_impact_speed=a["min_impact_speed"], xm=a["xm"],
-                  period=int(meta["period"]), patterns=_tuples(meta["patterns"]),
-                  events=[_event(d) for d in meta["events"]],
-                  termination=meta["termination"], family=meta["family"],
-                  method=meta["method"], case=Case.parse(meta["case"]), fixed=meta["fixed"],
-                  n_rejected=int(meta["n_rejected"]),
-                  newton_iterations=a["newton_iterations"].astype(np.int64))
+    col = lambda attr: np.array([getattr(pt, attr) for pt in pts])
+    return _pair_branch(
+        name, k, method, termination, parameter=p, points=S, multipliers=col("mult"),
+        rho=col("rho"), viable=col("viable").astype(bool), events=evs,
+        patterns=tuple(pt.signature for pt in pts),
+        variables={"margin": col("margin"), "min_impact_speed": col("min_speed"),
+                   "xm": col("xm"), "newton_iterations": col("newton_its")},
+        case=case, fixed=fixed, n_rejected=rejected)

@@ -1,6 +1,6 @@
 """Branch switching: start the family born at a bifurcation point of a continued branch.
 
-Three kinds of switch, chosen from the :class:`~hybridpd.pair.continuation.events.BifurcationEvent`:
+Three kinds of switch, chosen from the :class:`~hybridpd.analysis.continuation.BifurcationEvent`:
 
 ``period_doubling``
     A real multiplier of ``DP^k`` at -1 with eigenvector ``v``. The period-``2k`` orbit born
@@ -28,7 +28,7 @@ Three kinds of switch, chosen from the :class:`~hybridpd.pair.continuation.event
     it. This is a *nonsmooth* switch: the new branch does not emanate from the grazing
     point, it is the attractor reached from it.
 
-The new orbit is then continued with :func:`~hybridpd.pair.continuation.branch.continue_orbit`
+The new orbit is then continued with :func:`~hybridpd.pair.continuation.branch.continue_pair_orbit`
 on the parent's parameter path (the design path ``x10`` fixed, ``xm`` following, for a branch
 of :func:`~hybridpd.pair.continuation.symmetric.continue_symmetric` or a design-path
 map continuation; fixed ``xm`` otherwise).
@@ -41,6 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hybridpd._results import compact_repr
+from hybridpd.analysis.continuation import BifurcationEvent, Branch
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
 from hybridpd.model import Case, ImpactPair, PDGains, Reference
 from hybridpd.pair.continuation._common import (
@@ -52,8 +53,7 @@ from hybridpd.pair.continuation._common import (
     _scale,
     _wrap_diff,
 )
-from hybridpd.pair.continuation.branch import continue_orbit
-from hybridpd.pair.continuation.events import BifurcationEvent, Branch
+from hybridpd.pair.continuation.branch import continue_pair_orbit
 from hybridpd.pair.continuation.newton import (
     _newton,
     _param_derivative,
@@ -336,7 +336,7 @@ def switch_branch(branch: Branch, event: BifurcationEvent, stop: float | None = 
     Parameters
     ----------
     branch : Branch
-        The parent branch (:func:`continue_orbit` or :func:`continue_symmetric`).
+        The parent branch (:func:`continue_pair_orbit` or :func:`continue_symmetric`).
     event : BifurcationEvent
         One of ``branch.events``: ``period_doubling`` (switch to the period-doubled
         branch), ``fold`` that is a *branch point* (a multiplier at +1 while the parent goes
@@ -344,7 +344,7 @@ def switch_branch(branch: Branch, event: BifurcationEvent, stop: float | None = 
         past the grazing point). See the module docstring for the method.
     stop : float, optional
         Continue every new branch found from its start to this parameter value with
-        :func:`continue_orbit` (on the parent's parameter path); not continued when None.
+        :func:`continue_pair_orbit` (on the parent's parameter path); not continued when None.
     amplitudes : sequence of float
         Steps ``a`` along the critical eigenvector tried in turn (smooth switches).
     offset : float
@@ -358,7 +358,7 @@ def switch_branch(branch: Branch, event: BifurcationEvent, stop: float | None = 
     fd_step : float
         Relative finite-difference step.
     **continue_kwargs
-        Passed to :func:`continue_orbit` (e.g. ``step``, ``max_steps``, ``method``); its
+        Passed to :func:`continue_pair_orbit` (e.g. ``step``, ``max_steps``, ``method``); its
         corrector tolerance defaults to ``1e-12`` here.
 
     Returns
@@ -425,7 +425,7 @@ def switch_branch(branch: Branch, event: BifurcationEvent, stop: float | None = 
             if design is not None:
                 kw.setdefault("x10", design.x10)
                 kw.setdefault("n", design.n)
-            branches.append(continue_orbit(P, orb, name, stop, period=K, **kw))
+            branches.append(continue_pair_orbit(P, orb, name, stop, period=K, **kw))
     return BranchSwitch(
         kind=kind, event=event, parameter_name=name, critical_value=float(event.parameter),
         eigenvector=v, critical_multiplier=complex(lam), starts=tuple(starts),

@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 
+from hybridpd.analysis.continuation import BifurcationEvent, Branch
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.pathfollow import _MAX_HALVINGS, bisect_predicate
 from hybridpd.model import Case, ImpactPair, PDGains, as_gains, check_finite, check_odd_order
@@ -20,8 +21,6 @@ from hybridpd.pair.continuation._common import (
     _wrap_diff,
 )
 from hybridpd.pair.continuation.events import (
-    BifurcationEvent,
-    Branch,
     _branch_from_points,
     _changes,
     _Point,
@@ -167,7 +166,7 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
         return BifurcationEvent(kind=kind, parameter=float(pt.u[-1]), point=s,
                                 multipliers=pt.mult.copy(), index=index, detail=detail,
                                 test_value=float(fv), located=bool(ok), viable=pt.viable,
-                                xm=pt.xm)
+                                variables={"xm": float(pt.xm)})
 
     def size(pa, pb):
         return abs(pb.u[-1] - pa.u[-1]) / max(1.0, abs(pa.u[-1]))
