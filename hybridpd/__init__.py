@@ -97,7 +97,7 @@ _NAMES = {
     "basin_of_attraction": "hybridpd.analysis.basins",
     "ImpactMapper": "hybridpd.pair.basins",
     "load_basin": "hybridpd.analysis.basins",
-    "attractor_basin": "hybridpd.pair.attractor_basins",
+    "attractor_basin": "hybridpd.pair.basins",
     "section_basin": "hybridpd.sweeps.section_basins",
     # design, figures, the paper
     "design": "hybridpd.pair.design",

@@ -64,7 +64,8 @@ MOVED_MODULES = {
     "hybridpd.analysis.bifdiagram": "hybridpd.pair.bifdiagram",
     "hybridpd.analysis.attractors": "hybridpd.pair.attractors",
     "hybridpd.sweeps.basins": "hybridpd.pair.basins",
-    "hybridpd.sweeps.attractor_basins": "hybridpd.pair.attractor_basins",
+    "hybridpd.sweeps.attractor_basins": "hybridpd.pair.basins",
+    "hybridpd.pair.attractor_basins": "hybridpd.pair.basins",
     "hybridpd.sweeps.diagram_sweep": "hybridpd.pair.bifdiagram",
     # the executor sweep of diagrams is generic (hybridpd.sweeps.diagrams); the pair's
     # pair_diagram is served, with its old signature, by hybridpd.pair.bifdiagram

@@ -91,7 +91,6 @@ OLD_MODULES = {
 
 # Names moved out of a module that still exists: (old module, name, new module).
 MOVED_NAMES = [
-    ("hybridpd.pair.basins", "attractor_basin", "hybridpd.pair.attractor_basins"),
     ("hybridpd.pair.basins", "BasinMeasure", "hybridpd.analysis.basins"),
     ("hybridpd.pair.basins", "format_percent", "hybridpd._format"),
     ("hybridpd.pair.basins", "BasinResult", "hybridpd.analysis.basins"),
@@ -100,7 +99,7 @@ MOVED_NAMES = [
     ("hybridpd.pair.attractors", "Attractor", "hybridpd.analysis.basins"),
     ("hybridpd.pair.attractors", "OUTCOMES", "hybridpd.analysis.basins"),
     ("hybridpd.pair.attractors", "outcome", "hybridpd.analysis.basins"),
-    ("hybridpd.pair.attractor_basins", "BasinMeasure", "hybridpd.analysis.basins"),
+    ("hybridpd.pair.basins", "BasinMeasure", "hybridpd.analysis.basins"),
     ("hybridpd.analysis.periodic", "section_basin", "hybridpd.sweeps.section_basins"),
     ("hybridpd.analysis.periodic", "orbit_from_model", "hybridpd.analysis.model_orbits"),
     ("hybridpd.analysis.hybridmap", "impact_pair_section", "hybridpd.pair.section"),
@@ -233,9 +232,9 @@ def test_moved_names_warn_and_resolve(old, name, new):
 # Names replaced by another (old module, old name, new module, new name).
 RENAMED = [
     ("hybridpd.pair.basins", "AttractorBasin", "hybridpd.analysis.basins", "BasinResult"),
-    ("hybridpd.pair.attractor_basins", "AttractorBasin", "hybridpd.analysis.basins",
+    ("hybridpd.pair.basins", "AttractorBasin", "hybridpd.analysis.basins",
      "BasinResult"),
-    ("hybridpd.pair.attractor_basins", "load_attractor_basin", "hybridpd.analysis.basins",
+    ("hybridpd.pair.basins", "load_attractor_basin", "hybridpd.analysis.basins",
      "load_basin"),
     ("hybridpd.sweeps.model_basins", "ModelBasin", "hybridpd.analysis.basins", "BasinResult"),
     ("hybridpd.sweeps.model_basins", "load_model_basin", "hybridpd.analysis.basins",
@@ -265,7 +264,7 @@ def test_a_moved_name_warning_points_at_the_caller():
     mod = importlib.import_module("hybridpd.pair.basins")
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
-        mod.attractor_basin  # noqa: B018
+        mod.load_attractor_basin  # noqa: B018
     assert rec and Path(rec[0].filename).name == Path(__file__).name
 
 

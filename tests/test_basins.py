@@ -14,9 +14,8 @@ from hybridpd.analysis.basins import (
     load_basin,
 )
 from hybridpd.analysis.labels import LABELS
-from hybridpd.pair.attractor_basins import attractor_basin
 from hybridpd.pair.attractors import CycleCatalog, paper_distance2
-from hybridpd.pair.basins import ImpactMapper, section_grid
+from hybridpd.pair.basins import ImpactMapper, attractor_basin, section_grid
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
 

@@ -9,7 +9,8 @@ import pytest
 from matplotlib.text import Text
 
 from hybridpd.cli import main
-from hybridpd.plotting._common import describe_controllers, model_title
+from hybridpd.mechanics.modelfile import describe_controllers
+from hybridpd.plotting._common import model_title
 from hybridpd.plotting.files import plot_file
 from hybridpd.plotting.style import DOUBLE, MAX_HEIGHT, MIN_FONT
 

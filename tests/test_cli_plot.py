@@ -48,8 +48,7 @@ def files(tmp_path_factory):
     """One small file of every kind hybridpd writes (in every format it writes it in)."""
     from hybridpd.analysis.basins import basin_of_attraction
     from hybridpd.analysis.diagrams import CLASSES, bifurcation_diagram
-    from hybridpd.pair.attractor_basins import attractor_basin
-    from hybridpd.pair.basins import ImpactMapper
+    from hybridpd.pair.basins import ImpactMapper, attractor_basin
     from hybridpd.pair.bifdiagram import PAIR_SETTINGS, ImpactMapFamily
     from hybridpd.pair.continuation import continue_symmetric
     from hybridpd.pair.orbits import symmetric_orbit

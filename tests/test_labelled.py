@@ -181,7 +181,7 @@ def test_basin_files_of_earlier_versions_read_as_the_one_basin_result():
     (tests/data) read back as one :class:`BasinResult` equal to a fresh computation."""
     from _pair_model import PAIR
 
-    from hybridpd.pair.attractor_basins import attractor_basin
+    from hybridpd.pair.basins import attractor_basin
     from hybridpd.sweeps.model_basins import model_basin
 
     orb = symmetric_orbit(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0)

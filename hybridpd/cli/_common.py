@@ -273,8 +273,8 @@ def controllers_of(args) -> str:
     """The controllers of ``--model`` (with the ``--set`` values) in words, for titles and
     for the ``controllers`` entry of a result's metadata (figures drawn later name them)."""
     # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.mechanics.modelfile import describe_controllers
     from hybridpd.mechanics.params import ModelTemplate
-    from hybridpd.plotting._common import describe_controllers
 
     return describe_controllers(ModelTemplate.load(args.model).with_values(set_option_values(args)))
 

@@ -66,8 +66,7 @@ def run(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.labels import LABELS
     from hybridpd.model import ImpactPair, PDGains
-    from hybridpd.pair.attractor_basins import attractor_basin
-    from hybridpd.pair.basins import ImpactMapper
+    from hybridpd.pair.basins import ImpactMapper, attractor_basin
     from hybridpd.pair.orbits import symmetric_orbit
 
     if args.model is not None:

@@ -77,7 +77,8 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["MechanicalModel", "load_model", "model_from_dict"]
+__all__ = ["CONTROLLER_NAMES", "MechanicalModel", "describe_controller", "describe_controllers",
+           "load_model", "model_from_dict"]
 
 _TABLES = {
     "system": {"dofs", "mass", "masses", "damping", "stiffness", "input"},
@@ -500,3 +501,47 @@ def _initial(t, system):
     x0 = np.empty(2 * n)
     x0[0::2], x0[1::2] = q, v
     return x0, t0
+
+
+#: How a controller type reads in words (figure titles, summaries).
+CONTROLLER_NAMES = {"pd": "PD", "pid": "PID", "p": "P", "pi": "PI",
+                    "tf": "transfer-function controller", "ss": "state-space controller"}
+
+
+def describe_controller(table: dict) -> str:
+    """A model file's controller table in words: its type, whether it is sampled (and its
+    period ``dt``, in the file's time unit) and the DOF it measures.
+
+    Examples
+    --------
+    >>> describe_controller({"type": "pid", "kp": 20, "dt": 0.001, "measure": "motor"})
+    'sampled PID on motor (dt = 0.001)'
+    >>> describe_controller({"type": "pd", "kp": 20, "kv": 5})
+    'continuous PD'
+    """
+    kind = str(table.get("type", "")).strip().lower()
+    name = CONTROLLER_NAMES.get(kind, f"{kind} controller" if kind else "controller")
+    dt = table.get("dt")
+    sampled = isinstance(dt, (int, float)) and not isinstance(dt, bool) and dt > 0
+    text = f"{'sampled' if sampled else 'continuous'} {name}"
+    if table.get("measure") is not None:
+        measure = table["measure"]
+        text += f" on {measure if isinstance(measure, str) else ', '.join(map(str, measure))}"
+    return text + (f" (dt = {dt:g})" if sampled else "")
+
+
+def describe_controllers(data: dict) -> str:
+    """Every controller of a parsed model file (``[controller]`` or ``[[controller]]``) in
+    words (:func:`describe_controller`), joined by ``" + "``.
+
+    Examples
+    --------
+    >>> describe_controllers({"controller": [{"type": "pd"}, {"type": "pid", "dt": 0.01}]})
+    'continuous PD + sampled PID (dt = 0.01)'
+    """
+    tables = data.get("controller") if isinstance(data, dict) else None
+    if isinstance(tables, dict):
+        tables = [tables]
+    if not tables:
+        return "no controller"
+    return " + ".join(describe_controller(t) for t in tables if isinstance(t, dict))

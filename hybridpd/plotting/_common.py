@@ -118,49 +118,6 @@ def param_line(params: dict) -> str:
 
 
 #: How a model file's ``controller.type`` is named in titles and legends.
-CONTROLLER_NAMES = {"pd": "PD", "pid": "PID", "p": "P", "pi": "PI",
-                    "tf": "transfer-function controller", "ss": "state-space controller"}
-
-
-def describe_controller(table: dict) -> str:
-    """A model file's controller table in words: its type, whether it is sampled (and its
-    period ``dt``, in the file's time unit) and the DOF it measures.
-
-    Examples
-    --------
-    >>> describe_controller({"type": "pid", "kp": 20, "dt": 0.001, "measure": "motor"})
-    'sampled PID on motor (dt = 0.001)'
-    >>> describe_controller({"type": "pd", "kp": 20, "kv": 5})
-    'continuous PD'
-    """
-    kind = str(table.get("type", "")).strip().lower()
-    name = CONTROLLER_NAMES.get(kind, f"{kind} controller" if kind else "controller")
-    dt = table.get("dt")
-    sampled = isinstance(dt, (int, float)) and not isinstance(dt, bool) and dt > 0
-    text = f"{'sampled' if sampled else 'continuous'} {name}"
-    if table.get("measure") is not None:
-        measure = table["measure"]
-        text += f" on {measure if isinstance(measure, str) else ', '.join(map(str, measure))}"
-    return text + (f" (dt = {dt:g})" if sampled else "")
-
-
-def describe_controllers(data: dict) -> str:
-    """Every controller of a parsed model file (``[controller]`` or ``[[controller]]``) in
-    words (:func:`describe_controller`), joined by ``" + "``.
-
-    Examples
-    --------
-    >>> describe_controllers({"controller": [{"type": "pd"}, {"type": "pid", "dt": 0.01}]})
-    'continuous PD + sampled PID (dt = 0.01)'
-    """
-    tables = data.get("controller") if isinstance(data, dict) else None
-    if isinstance(tables, dict):
-        tables = [tables]
-    if not tables:
-        return "no controller"
-    return " + ".join(describe_controller(t) for t in tables if isinstance(t, dict))
-
-
 def model_controllers(source, metadata: dict | None = None) -> str:
     """The controllers of the model a result was computed for, in words: the result's
     ``metadata["controllers"]`` if it holds them, else read from the model file at `source`
@@ -174,7 +131,7 @@ def model_controllers(source, metadata: dict | None = None) -> str:
     try:
         if source is not None and Path(str(source)).is_file():
             # deferred import: loaded only when this runs, for start-up time
-            from hybridpd.mechanics.modelfile import read_model_file
+            from hybridpd.mechanics.modelfile import describe_controllers, read_model_file
 
             return describe_controllers(read_model_file(source)[0])
     except (ValueError, OSError):

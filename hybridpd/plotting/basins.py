@@ -92,7 +92,7 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     Parameters
     ----------
     basin : BasinResult
-        The impact pair's slice ``(x1, y1)`` (:func:`hybridpd.pair.attractor_basins.
+        The impact pair's slice ``(x1, y1)`` (:func:`hybridpd.pair.basins.
         attractor_basin`, :func:`hybridpd.pair.basins.basin_of_attraction`); a basin of any
         other map or model file is drawn by
         :func:`plot_model_basin`.

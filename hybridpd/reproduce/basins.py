@@ -51,7 +51,7 @@ class SharedWindowBasins:
 
 def _label_all(mappers, window, grid, **kw):
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.attractor_basins import attractor_basin
+    from hybridpd.pair.basins import attractor_basin
 
     x0, x1, y0, y1 = window
     nx, ny = grid
@@ -78,7 +78,7 @@ def shared_window_basins(orbits: dict, window, grid, *, n_iter=1500, max_growths
     max_growths : int
         The cap: times the window may grow.
     executor, max_workers, progress
-        As in :func:`hybridpd.pair.attractor_basins.attractor_basin`.
+        As in :func:`hybridpd.pair.basins.attractor_basin`.
     log : callable, optional
         Receives a line per growth.
 
@@ -87,8 +87,7 @@ def shared_window_basins(orbits: dict, window, grid, *, n_iter=1500, max_growths
     SharedWindowBasins
     """
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.attractor_basins import _grow
-    from hybridpd.pair.basins import ImpactMapper
+    from hybridpd.pair.basins import ImpactMapper, _grow
 
     if not (int(max_growths) == max_growths and max_growths >= 0):
         raise ValueError(f"max_growths must be an integer >= 0, got {max_growths!r}")
@@ -156,7 +155,7 @@ def boundary_distance(basin, *, x10, omega) -> dict:
     --------
     >>> from hybridpd import ImpactPair, PDGains
     >>> from hybridpd.pair.orbits import symmetric_orbit
-    >>> from hybridpd.pair.attractor_basins import attractor_basin
+    >>> from hybridpd.pair.basins import attractor_basin
     >>> from hybridpd.pair.basins import ImpactMapper
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> b = attractor_basin(ImpactMapper.from_orbit(orb, n_iter=200), (-3, 5, 9), (-2, 10, 9))
