@@ -45,7 +45,7 @@ from scipy.linalg import expm
 from hybridpd._deprecated import moved_names
 from hybridpd._jit import njit
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
-from hybridpd.hybrid._kernel import _RC_NEED_MODE, _other_active
+from hybridpd.hybrid._kernel import _RC_NEED_MODE, RunBuffers, _other_active
 from hybridpd.hybrid.automaton import ZenoOptions, run_hybrid
 from hybridpd.hybrid.section import Section, _moves, common_multiple, exosystem
 from hybridpd.model import check_finite
@@ -103,10 +103,10 @@ def _pending_guard(w, mode, G, ng):
 
 
 @njit(cache=True)
-def _to_return(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh, target, zt, rz,
-               dt_min, zf, zi, w0, t0, gm, gi, k, t_max, J0, J_max, max_steps, w, fc,
-               ic, jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out):
+def _to_return(pk, dt_min, zf, zi, w0, t0, gm, gi, k, t_max, J0, J_max, max_steps, rb):
     """Run from the pre-jump state ``w0`` (mode ``gm``) to the ``(k+1)``-th firing of ``gi``.
+
+    ``pk`` are the automaton's tables, ``rb`` the run's buffers (:mod:`hybridpd.hybrid._kernel`).
 
     Returns ``(status, n_before, J)``: ``n_before`` jumps precede the target firing; its
     pre-jump state is left in ``w`` and its time in ``fc[0]``; the tables hold the run.
@@ -114,6 +114,9 @@ def _to_return(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh, t
     Zeno switch whose reset is not packed (``ic[16]``, ``ic[17]``): complete the tables
     (:meth:`SectionMap._complete`) and run again.
     """
+    w, fc, ic, jt, jg, jsrc, jkind, jpre = (rb.w, rb.fc, rb.ic, rb.jt, rb.jg, rb.jsrc, rb.jkind,
+                                            rb.jpre)
+    G, ng = pk.G, pk.ng
     N1 = w0.shape[0]
     J = min(max(J0, k), J_max)
     while True:
@@ -125,9 +128,7 @@ def _to_return(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh, t
         ic[0] = gm
         ic[2] = -1
         ic[3] = -1
-        rc = run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh, target,
-                        zt, rz, dt_min, t0 + t_max, J, max_steps, zf, zi, w, fc, ic, jt, jj, jg,
-                        jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out)
+        rc = run_hybrid(pk, dt_min, t0 + t_max, J, max_steps, zf, zi, rb)
         nj = ic[9]
         if nj == 0 or jsrc[0] != gm or jg[0] != gi or jt[0] != t0 or jkind[0] == 3:
             return ST_BAD_START, 0, J
@@ -251,16 +252,14 @@ class SectionMap(PoincareMap):
     def _kernel_args(self) -> tuple:
         """The jump loop's tables over the modes built so far (taken afresh whenever they
         changed: a mode built or a reset packed may make them new arrays), ``dt_min`` and
-        the Zeno options, in the order of ``_to_return``."""
+        the Zeno options: the first arguments of ``_to_return``."""
         ha = self.section.automaton
         if self._tables_for != ha._store.version:
             self._check_exosystem()
             pk = ha.packed
             dt_min = (pk.h * 1e-9 if self.zeno.dt_min is None
                       else np.full(pk.h.shape[0], float(self.zeno.dt_min)))
-            self._args = (pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs, pk.gsum,
-                          pk.cnorm, pk.prio, pk.ng, pk.R, pk.rh, pk.target, pk.zt, pk.rz, dt_min,
-                          self._zf, self._zi)
+            self._args = (pk, dt_min, self._zf, self._zi)
             self._groups = ha._store.gkind()
             self._tables_for = ha._store.version
         return self._args
@@ -436,15 +435,8 @@ class SectionMap(PoincareMap):
             return self.t_max
         return 50.0 * k * self.section.period if self.section.has_phase else 1000.0
 
-    def _buffers(self):
-        cap = self.max_jumps + 4
-        N1 = self.section.automaton.n_states + 1
-        return (np.empty(N1), np.zeros(8), np.zeros(18, np.int64), np.empty(cap),
-                np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap, np.int64),
-                np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty((cap, N1)),
-                np.empty((cap, N1)), np.empty(cap + 2), np.empty(cap + 2),
-                np.empty(cap + 2, np.int64), np.empty(cap + 2, np.int64),
-                np.empty((cap + 2, N1)), np.empty(cap))
+    def _buffers(self) -> RunBuffers:
+        return RunBuffers.empty(self.max_jumps + 4, self.section.automaton.n_states + 1)
 
     def _run(self, s, k):
         sec = self.section
@@ -459,10 +451,10 @@ class SectionMap(PoincareMap):
         while True:
             st, nb, _J = _to_return(*self._kernel_args, w0, t0, sec.mode_index,
                                     sec.guard_index, int(k), self._t_max(k), J0,
-                                    self.max_jumps, self.max_steps, *bufs)
+                                    self.max_jumps, self.max_steps, bufs)
             if st != ST_NEED_MODE:
                 break
-            if not self._complete(bufs[2]):
+            if not self._complete(bufs.ic):
                 st = ST_TOO_MANY_MODES
                 break
         if st == ST_RETURNED:
@@ -488,8 +480,8 @@ class SectionMap(PoincareMap):
         k = check_returns(k)
         sec = self.section
         st, nb, z0, t0, bufs = self._run(sec.check_point(s), k)
-        w, fc, ic = bufs[0], bufs[1], bufs[2]
-        jt, jg, jsrc, jdst, jkind = bufs[3], bufs[5], bufs[6], bufs[7], bufs[8]
+        w, fc, ic = bufs.w, bufs.fc, bufs.ic
+        jt, jg, jsrc, jdst, jkind = bufs.jt, bufs.jg, bufs.jsrc, bufs.jdst, bufs.jkind
         ha = sec.automaton
         n = ha.n_states
         mn = ha.built_mode_names
@@ -525,19 +517,19 @@ class SectionMap(PoincareMap):
     def _joint_jump(self, bufs, nb) -> bool:
         """Whether one of the first ``nb`` jumps fired while another guard of its group was
         on its guard or closing onto it within ``simtol (1 + |t|)`` (the simulation's rule)."""
-        ka = self._kernel_args                 # h, ..., G (index 5), ..., ng (index 10)
+        pk = self._kernel_args[0]
         if self.simtol is None or not self._groups.any():
             return False
-        return _any_joint(ka[5], ka[10], ka[0], self._groups, bufs[3], bufs[5], bufs[6],
-                          bufs[8], bufs[9], int(nb), self.simtol)
+        return _any_joint(pk.G, pk.ng, pk.h, self._groups, bufs.jt, bufs.jg, bufs.jsrc,
+                          bufs.jkind, bufs.jpre, int(nb), self.simtol)
 
     def _jacobian(self, s, bufs, nb, z_hit) -> np.ndarray:
         sec = self.section
         ha = sec.automaton
         n = ha.n_states
-        jt = bufs[3]
-        st0, st1, smode, sj = bufs[11], bufs[12], bufs[13], bufs[14]
-        nseg = int(bufs[2][10])
+        jt = bufs.jt
+        st0, st1, smode, sj = bufs.st0, bufs.st1, bufs.smode, bufs.sj
+        nseg = int(bufs.ic[10])
         Z = np.eye(n)
         q = 0
         tangent = False
@@ -582,8 +574,8 @@ class SectionMap(PoincareMap):
         from the impact-time sensitivities: the derivative of the simulated map.
         """
         n = self.section.automaton.n_states
-        jg, jsrc, jdst, jkind, jpre, jpost = (bufs[5], bufs[6], bufs[7], bufs[8], bufs[9],
-                                              bufs[10])
+        jg, jsrc, jdst, jkind, jpre, jpost = (bufs.jg, bufs.jsrc, bufs.jdst, bufs.jkind,
+                                              bufs.jpre, bufs.jpost)
         src, dst, g = int(jsrc[q]), int(jdst[q]), int(jg[q])
         ms, md = modes[src], modes[dst]
         zm, zp = jpre[q, :n], jpost[q, :n]
@@ -637,7 +629,7 @@ def _flow_sensitivity(A, tau, Z) -> np.ndarray:
 def _accumulating(bufs, nb) -> np.ndarray:
     """Per jump ``q < nb``: a crossing of a burst that ends in a Zeno switch (the jumps from
     ``q`` on fire the same guard of the same mode up to a jump of kind ``'zeno'`` of it)."""
-    jg, jsrc, jkind = bufs[5], bufs[6], bufs[8]
+    jg, jsrc, jkind = bufs.jg, bufs.jsrc, bufs.jkind
     out = np.zeros(nb, bool)
     ends = False
     for q in range(nb - 1, -1, -1):

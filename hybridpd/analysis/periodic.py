@@ -479,11 +479,12 @@ def _dist(s, fp, T, Q):
 
 
 @njit(cache=True)
-def _label_kernel(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh, target, zt, rz,
-                  dt_min, zf, zi, W0, T0, gm, gi, k, t_max, J_max, max_steps, C, T,
-                  FP, n_iter, criterion, QS, R2, escape, S_out, lab, its, p0, w, fc, ic, jt,
-                  jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out):
+def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, k, t_max, J_max, max_steps, C, T,
+                  FP, n_iter, criterion, QS, R2, escape, S_out, lab, its, p0, rb):
     """Label the points ``p0, p0 + 1, ...`` (rows of ``W0``, ``T0``) into ``lab``, ``its``.
+
+    ``pk``, ``dt_min``, ``zf``, ``zi``: the map's tables and options
+    (``SectionMap._kernel_args``); ``rb``: the run's buffers (:mod:`hybridpd.hybrid._kernel`).
 
     Returns ``(p, code)``: ``p = N`` when every point is labelled; otherwise the run of
     point ``p`` handed back (``ST_NEED_MODE``: a mode not built yet, code ``code``, or a Zeno
@@ -491,6 +492,7 @@ def _label_kernel(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh
     iterations so far in ``its[p]``, so that a call from ``p`` (the tables completed)
     resumes it there.
     """
+    w, fc, ic = rb.w, rb.fc, rb.ic
     N = W0.shape[0]
     N1 = W0.shape[1]
     w0 = np.empty(N1)
@@ -503,10 +505,8 @@ def _label_kernel(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh
         label = -1
         e2 = np.inf
         for it in range(its[p], n_iter):
-            st, nb, _J = _to_return(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng,
-                                    R, rh, target, zt, rz, dt_min, zf, zi, w0, t0, gm, gi, k,
-                                    t_max, Jh, J_max, max_steps, w, fc, ic, jt, jj, jg, jsrc,
-                                    jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out)
+            st, nb, _J = _to_return(pk, dt_min, zf, zi, w0, t0, gm, gi, k, t_max, Jh, J_max,
+                                    max_steps, rb)
             if st == ST_NEED_MODE:
                 for i in range(N1):
                     W0[p, i] = w0[i]
@@ -657,8 +657,8 @@ class SectionMapper(BasinMapper):
                                     self.period, P._t_max(self.period), P.max_jumps,
                                     P.max_steps, np.ascontiguousarray(sec.C),
                                     sec.period or 0.0, targets, int(n_iter), self.criterion,
-                                    Qs, r2s, self.escape, sub, lab, its, p, *bufs)
-            if p < N and not P._complete(bufs[2]):
+                                    Qs, r2s, self.escape, sub, lab, its, p, bufs)
+            if p < N and not P._complete(bufs.ic):
                 lab[p] = _UNRESOLVED        # its run needs a mode beyond the tables' bound
                 its[p] += 1
                 p += 1

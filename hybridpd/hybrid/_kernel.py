@@ -8,9 +8,9 @@ compiled lazily (:mod:`hybridpd._jit`).
 
 Calling contract
 ----------------
-``run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh, target, zt, rz, dt_min,
-t_end, max_jumps, max_steps, zf, zi, w, fc, ic, jt, jj, jg, jsrc, jdst, jkind, jpre, jpost,
-st0, st1, smode, sj, sw, zt_out) -> code``
+``run_hybrid(pk, dt_min, t_end, max_jumps, max_steps, zf, zi, rb) -> code``, with ``pk`` the
+tables (a :class:`PackedAutomaton`) and ``rb`` the carried state and record buffers (a
+:class:`RunBuffers`); the kernels read both by name.
 
 The per-mode arrays are stacked over ``M`` modes and padded to ``GM`` guards
 (:attr:`HybridAutomaton.packed`, a :class:`PackedAutomaton`): ``h (M,)``, ``Phi, Ah (M, N1, N1)``,
@@ -35,7 +35,7 @@ until then); a negative or missing entry accepts it at once. A fourth entry ``ma
 stops the run with code 8 (diverged) when a state component exceeds it in magnitude at the
 start of a flow.
 
-``run_hybrid_ex(..., zt_out, gkind, simtol, gid, fired)`` adds two returns to the same loop:
+``run_hybrid_ex(pk, ..., rb, gkind, simtol, gid, fired)`` adds two returns to the same loop:
 code 6 when the current mode ``ic[0]`` is not built: a target (or Zeno target) ``-2 - r``
 names the mode reserved as number ``r`` (the jump is applied and recorded with that code as
 target, then the loop returns; build the mode, set ``ic[0]`` to its index, patch the tables
@@ -76,7 +76,7 @@ from hybridpd.hybrid.events import (
     flow_to,
 )
 
-__all__ = ["PackedAutomaton", "run_hybrid", "run_hybrid_ex"]
+__all__ = ["PackedAutomaton", "RunBuffers", "run_hybrid", "run_hybrid_ex"]
 
 _RC_BUFFER_FULL = 5
 _RC_STEP_LIMIT = 4
@@ -140,9 +140,54 @@ class _Resets:
         return self._R[(self._rows[key[0], key[1]],) + key[2:]]
 
 
+class RunBuffers(NamedTuple):
+    """The carried state and the record buffers of one run of the jump loop (module
+    docstring): ``w (N1,)``, ``fc (8,)``, ``ic (18,) int64``; jumps ``jt, jj, jg, jsrc, jdst,
+    jkind (cap,)``, ``jpre, jpost (cap, N1)``; segments ``st0, st1, smode, sj (cap + 2,)``,
+    ``sw (cap + 2, N1)``; Zeno times ``zt_out (cap,)``. The kernels read them by name."""
+
+    w: np.ndarray
+    fc: np.ndarray
+    ic: np.ndarray
+    jt: np.ndarray
+    jj: np.ndarray
+    jg: np.ndarray
+    jsrc: np.ndarray
+    jdst: np.ndarray
+    jkind: np.ndarray
+    jpre: np.ndarray
+    jpost: np.ndarray
+    st0: np.ndarray
+    st1: np.ndarray
+    smode: np.ndarray
+    sj: np.ndarray
+    sw: np.ndarray
+    zt_out: np.ndarray
+
+    @classmethod
+    def empty(cls, cap: int, n1: int, w=None, fc=None, ic=None) -> RunBuffers:
+        """Buffers for ``cap`` jumps of states of length ``n1`` (the carried ``w``, ``fc``,
+        ``ic`` fresh unless given)."""
+        i64 = np.int64
+        return cls(np.empty(n1) if w is None else w, np.zeros(8) if fc is None else fc,
+                   np.zeros(18, i64) if ic is None else ic, np.empty(cap),
+                   *(np.empty(cap, i64) for _ in range(5)), np.empty((cap, n1)),
+                   np.empty((cap, n1)), np.empty(cap + 2), np.empty(cap + 2),
+                   np.empty(cap + 2, i64), np.empty(cap + 2, i64), np.empty((cap + 2, n1)),
+                   np.empty(cap))
+
+    def records(self) -> dict:
+        """Copies of what the run recorded (jumps, segments, Zeno times), by name."""
+        nj, ns, nz = int(self.ic[9]), int(self.ic[10]), int(self.ic[11])
+        return {k: (v[:nj] if k.startswith("j") else v[:ns] if k.startswith("s")
+                    else v[:nz]).copy() for k, v in self._asdict().items()
+                if k not in ("w", "fc", "ic")}
+
+
 
 @njit(cache=True)
-def _add_seg(st0, st1, smode, sj, sw, ic, t0, t1, mode, j, w):
+def _add_seg(rb, t0, t1, mode, j, w):
+    st0, st1, smode, sj, sw, ic = rb.st0, rb.st1, rb.smode, rb.sj, rb.sw, rb.ic
     si = ic[10]
     st0[si] = t0
     st1[si] = t1
@@ -154,8 +199,9 @@ def _add_seg(st0, st1, smode, sj, sw, ic, t0, t1, mode, j, w):
 
 
 @njit(cache=True)
-def _add_jump(jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, ic, t, j, g, src, dst, kind, pre,
-              post):
+def _add_jump(rb, t, j, g, src, dst, kind, pre, post):
+    jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, ic = (rb.jt, rb.jj, rb.jg, rb.jsrc, rb.jdst,
+                                                      rb.jkind, rb.jpre, rb.jpost, rb.ic)
     k = ic[9]
     jt[k] = t
     jj[k] = j
@@ -178,27 +224,28 @@ def _finite(w):
 
 
 @njit(cache=True)
-def _zeno_switch(mode, g, t_k, t_inf, h, Phi, Ah, R, rz, zt, max_jumps, Kp1, w, fc, ic,
-                 jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out):
-    """Accumulation of guard ``g`` of ``mode`` at ``t_inf`` from state ``w`` at ``t_k``.
+def _zeno_switch(pk, rb, mode, g, t_k, t_inf, max_jumps, Kp1):
+    """Accumulation of guard ``g`` of ``mode`` at ``t_inf`` from state ``rb.w`` at ``t_k``.
 
     Returns -1 to continue the run, else a termination code.
     """
+    h, Phi, Ah, R, rz, zt = pk.h, pk.Phi, pk.Ah, pk.R, pk.rz, pk.zt
+    w, fc, ic, zt_out = rb.w, rb.fc, rb.ic, rb.zt_out
     N1 = w.shape[0]
     zt_out[ic[11]] = t_inf
     ic[11] += 1
     target = zt[mode, g]
     if target == -1:
-        _add_seg(st0, st1, smode, sj, sw, ic, t_k, t_k, mode, ic[1], w)
+        _add_seg(rb, t_k, t_k, mode, ic[1], w)
         return 2
     if ic[1] >= max_jumps:
-        _add_seg(st0, st1, smode, sj, sw, ic, t_k, t_k, mode, ic[1], w)
+        _add_seg(rb, t_k, t_k, mode, ic[1], w)
         return 1
     wz = np.empty(N1)
     post = np.empty(N1)
     if t_inf > t_k:
         # the mode's own flow over the unresolved tail of the accumulation
-        _add_seg(st0, st1, smode, sj, sw, ic, t_k, t_inf, mode, ic[1], w)
+        _add_seg(rb, t_k, t_inf, mode, ic[1], w)
         flow_to(w, t_inf - t_k, h[mode], Phi[mode], Ah[mode], Kp1, wz)
     else:
         for i in range(N1):
@@ -213,7 +260,7 @@ def _zeno_switch(mode, g, t_k, t_inf, h, Phi, Ah, R, rz, zt, max_jumps, Kp1, w, 
         _matvec(R[rz[mode, g]], wz, post)
     post[N1 - 1] = 1.0
     ic[1] += 1
-    _add_jump(jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, ic, t_inf, ic[1], g, mode, target, 3,
+    _add_jump(rb, t_inf, ic[1], g, mode, target, 3,
               wz, post)
     for i in range(N1):
         w[i] = post[i]
@@ -233,17 +280,19 @@ def _zeno_switch(mode, g, t_k, t_inf, h, Phi, Ah, R, rz, zt, max_jumps, Kp1, w, 
         ic[17] = g
         return _RC_NEED_MODE
     if not _finite(post):
-        _add_seg(st0, st1, smode, sj, sw, ic, t_inf, t_inf, target, ic[1], w)
+        _add_seg(rb, t_inf, t_inf, target, ic[1], w)
         return 3
     return -1
 
 
 @njit(cache=True)
-def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh, target, zt, rz,
-                  dt_min, t_end, max_jumps, max_steps, zf, zi, w, fc, ic,
-                  jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out,
-                  gkind, simtol, gid, fired):
+def run_hybrid_ex(pk, dt_min, t_end, max_jumps, max_steps, zf, zi, rb, gkind, simtol, gid,
+                  fired):
     """:func:`run_hybrid` with modes built on demand and simultaneity groups (module docstring)."""
+    h, Phi, Ah, dinv, trunc, G, gabs = pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs
+    gsum, cnorm, prio, ng, R, rh, target = (pk.gsum, pk.cnorm, pk.prio, pk.ng, pk.R, pk.rh,
+                                            pk.target)
+    w, fc, ic, jt, st0, st1, zt_out = rb.w, rb.fc, rb.ic, rb.jt, rb.st0, rb.st1, rb.zt_out
     # One function on purpose: numba compiles the whole jump loop into one native loop.
     N1 = w.shape[0]
     Kp1 = G.shape[2]
@@ -265,12 +314,12 @@ def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh
         if max_state > 0.0:
             for i in range(N1 - 1):
                 if abs(w[i]) > max_state:
-                    _add_seg(st0, st1, smode, sj, sw, ic, fc[0], fc[0], ic[0], ic[1], w)
+                    _add_seg(rb, fc[0], fc[0], ic[0], ic[1], w)
                     return _RC_DIVERGED
         t = fc[0]
         mode = ic[0]
         si = ic[10]
-        _add_seg(st0, st1, smode, sj, sw, ic, t, t, mode, ic[1], w)
+        _add_seg(rb, t, t, mode, ic[1], w)
         code, tev, g, nst, err = advance(
             w, t, t_end, h[mode], Phi[mode], Ah[mode], dinv[mode], trunc[mode], G[mode],
             gabs[mode], gsum[mode], cnorm[mode], prio[mode], ng[mode], ic[2], fc[1],
@@ -288,9 +337,7 @@ def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh
             return 4
         if code == EV_START and g == ic[2] and zon:
             # immediate accumulation: the guard that just fired fires again at once
-            rc = _zeno_switch(mode, g, t, t, h, Phi, Ah, R, rz, zt, max_jumps, Kp1, w, fc, ic,
-                              jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode,
-                              sj, sw, zt_out)
+            rc = _zeno_switch(pk, rb, mode, g, t, t, max_jumps, Kp1)
             if rc >= 0:
                 return rc
             continue
@@ -316,7 +363,7 @@ def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh
         tgt = target[mode, g]
         kind = 2 if code == EV_GRAZING else 1
         ic[1] += 1
-        _add_jump(jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, ic, tev, ic[1], g, mode, tgt,
+        _add_jump(rb, tev, ic[1], g, mode, tgt,
                   kind, wout, post)
         for i in range(N1):
             w[i] = post[i]
@@ -329,7 +376,7 @@ def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh
             ic[2] = -1
             fc[1] = 0.0
         if not _finite(post):
-            _add_seg(st0, st1, smode, sj, sw, ic, tev, tev, tgt, ic[1], w)
+            _add_seg(rb, tev, tev, tgt, ic[1], w)
             return 3
         if not zon:
             continue
@@ -338,7 +385,7 @@ def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh
             if ic[7] > max_inst:
                 zt_out[ic[11]] = tev
                 ic[11] += 1
-                _add_seg(st0, st1, smode, sj, sw, ic, tev, tev, tgt, ic[1], w)
+                _add_seg(rb, tev, tev, tgt, ic[1], w)
                 return 2
         else:
             ic[7] = 0
@@ -379,9 +426,7 @@ def run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh
             if dt <= dt_min[mode] and t_inf > t_end:
                 t_inf = t_end
             if t_inf <= t_end:
-                rc = _zeno_switch(mode, g, tev, t_inf, h, Phi, Ah, R, rz, zt, max_jumps, Kp1, w,
-                                  fc, ic, jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1,
-                                  smode, sj, sw, zt_out)
+                rc = _zeno_switch(pk, rb, mode, g, tev, t_inf, max_jumps, Kp1)
                 if rc >= 0:
                     return rc
 
@@ -438,12 +483,8 @@ def _other_active(Gm, ngm, gk, g, w, hm, tau):
 
 
 @njit(cache=True)
-def run_hybrid(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh, target, zt, rz,
-               dt_min, t_end, max_jumps, max_steps, zf, zi, w, fc, ic,
-               jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out):
+def run_hybrid(pk, dt_min, t_end, max_jumps, max_steps, zf, zi, rb):
     """Run the automaton from the carried state; see the module docstring for the contract."""
-    return run_hybrid_ex(h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, R, rh,
-                         target, zt, rz, dt_min, t_end, max_jumps, max_steps, zf, zi, w, fc, ic, jt, jj,
-                         jg, jsrc, jdst, jkind, jpre, jpost, st0, st1, smode, sj, sw, zt_out,
+    return run_hybrid_ex(pk, dt_min, t_end, max_jumps, max_steps, zf, zi, rb,
                          np.zeros((1, 1), np.int64), -1.0, np.zeros((1, 1), np.int64),
                          np.zeros(1, np.int64))
