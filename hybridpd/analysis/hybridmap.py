@@ -46,7 +46,7 @@ from hybridpd._deprecated import moved_names
 from hybridpd._jit import njit
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
 from hybridpd.hybrid._kernel import _RC_NEED_MODE, RunBuffers, _other_active
-from hybridpd.hybrid.automaton import ZenoOptions, run_hybrid
+from hybridpd.hybrid.automaton import TerminationCause, ZenoOptions, run_hybrid
 from hybridpd.hybrid.section import Section, _moves, common_multiple, exosystem
 from hybridpd.model import check_finite
 
@@ -417,7 +417,8 @@ class SectionMap(PoincareMap):
         try:
             tr = sec.automaton.simulate(z0, sec.mode, (t0, t0 + t_per * (1 + 1e-9) + 1e-12),
                                         max_jumps=self.max_jumps, max_steps=self.max_steps,
-                                        zeno=self.zeno)
+                                        zeno=self.zeno, resolver=sec.resolver,
+                                        simtol=1e-12 if self.simtol is None else self.simtol)
         except (ValueError, RuntimeError, FloatingPointError):
             return math.inf
         J = tr.jumps
@@ -496,6 +497,8 @@ class SectionMap(PoincareMap):
         t_hit = float(fc[0])
         if self._joint_jump(bufs, nb):     # the sequential answer is not the model's
             st = ST_SIMULTANEOUS
+        if st in (ST_ZENO, ST_SIMULTANEOUS) and sec.resolver is not None:
+            return self._resolved(k, z0, t0)
         mode_final = ha._name_of(int(ic[0])) if st != ST_RETURNED else sec.mode
         if st != ST_RETURNED:
             return MapResult(np.full(self.dim, np.nan), False, MAP_STATUS[st], t0, t_hit,
@@ -513,6 +516,43 @@ class SectionMap(PoincareMap):
             grazing = grazing or tangent
         return MapResult(img, True, "returned", t0, t_hit, z_hit, mode_final, jumps, grazing,
                          DP)
+
+    def _resolved(self, k, z0, t0) -> MapResult:
+        """``P^k`` by the simulator with the section's resolver: the application where the
+        compiled run meets what only the resolver decides (a joint jump, or contacts that
+        keep refiring at one instant), exactly as a simulation of the model takes it. The
+        span grows from ``(k + 1/2)`` periods up to ``t_max``; ``DP`` is left to finite
+        differences (no saltation matrix of a joint jump)."""
+        sec = self.section
+        ha = sec.automaton
+        t_max = self._t_max(k)
+        span = min((k + 0.5) * sec.period, t_max) if sec.has_phase else t_max
+        while True:
+            tr = ha.simulate(z0, sec.mode, (t0, t0 + span), max_jumps=self.max_jumps,
+                             max_steps=self.max_steps, zeno=self.zeno, resolver=sec.resolver,
+                             simtol=1e-12 if self.simtol is None else self.simtol)
+            J = tr.jumps
+            hits = [i for i in range(len(J)) if J.source[i] == sec.mode
+                    and J.guard[i] == sec.guard and J.kind[i] != "zeno"]
+            if not hits or J.t[hits[0]] != t0:
+                return MapResult(np.full(self.dim, np.nan), False, MAP_STATUS[ST_BAD_START],
+                                 t0, t0, z0, sec.mode, (), False)
+            ended = tr.termination is TerminationCause.END_TIME
+            if len(hits) > k or not ended or span >= t_max:
+                break
+            span = min(2.0 * span, t_max)
+        nb = hits[k] if len(hits) > k else len(J)
+        jumps = tuple((float(J.t[q]), J.source[q], J.guard[q], J.target[q], J.kind[q])
+                      for q in range(nb))
+        grazing = any(j[4] == "grazing" for j in jumps)
+        if len(hits) <= k:
+            cause = tr.termination.name.lower()
+            status = "nonfinite" if cause == "diverged" else cause
+            return MapResult(np.full(self.dim, np.nan), False, status, t0, float(tr.t_final),
+                             np.asarray(tr.x_final, float), tr.mode_final, jumps, grazing)
+        z_hit, t_hit = J.pre[nb].copy(), float(J.t[nb])
+        return MapResult(sec.from_state(z_hit, t_hit), True, "returned", t0, t_hit, z_hit,
+                         sec.mode, jumps, grazing)
 
     def _joint_jump(self, bufs, nb) -> bool:
         """Whether one of the first ``nb`` jumps fired while another guard of its group was

@@ -172,6 +172,12 @@ class Section:
         ``(row, lo, hi, name)``: the admissible set ``lo <= row . z <= hi`` (e.g. every
         contact's gap within its bounds; ``None`` for a missing bound), checked by
         :meth:`violations`.
+    resolver : callable, optional
+        The joint-jump resolver a simulation of the automaton uses
+        (:meth:`HybridAutomaton.simulate`; a mechanical model's
+        :meth:`~hybridpd.mechanics.automaton.MechanicalAutomaton.resolver`): the section map
+        hands it the runs that its compiled loop cannot finish alone (module
+        :mod:`hybridpd.analysis.hybridmap`).
 
     Attributes
     ----------
@@ -199,7 +205,7 @@ class Section:
 
     def __init__(self, automaton: HybridAutomaton, mode: str, guard: str, *, exo_state=None,
                  reference=None, exo=None, period=None, coords=None, names=None, clocks=None,
-                 sample_time: float = 0.0, constraints=None, bounds=None):
+                 sample_time: float = 0.0, constraints=None, bounds=None, resolver=None):
         if not isinstance(automaton, HybridAutomaton):
             raise ValueError(f"automaton must be a HybridAutomaton, got {type(automaton).__name__}")
         self.automaton = automaton
@@ -239,6 +245,9 @@ class Section:
         self._eig = None
         self.constraints = self._constraints(constraints)
         self.bounds = self._bounds(bounds)
+        if resolver is not None and not callable(resolver):
+            raise ValueError(f"resolver must be callable or None, got {resolver!r}")
+        self.resolver = resolver
         # the guard and the constraints: rows that every section point satisfies
         self._rows = np.vstack([self.c[None, :]] + [r[None, :] for r, _, _ in self.constraints])
         self._values = np.array([-self.d] + [v for _, v, _ in self.constraints])

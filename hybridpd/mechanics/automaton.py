@@ -74,6 +74,7 @@ modes visited. An analysis that needs every mode calls
 """
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -209,8 +210,8 @@ class MechanicalAutomaton:
         there) resolves the contacts on their bounds together (module docstring) and may
         return a fourth entry, the kind ``'zeno'``.
         """
-        return lambda mode, guard, t, z, refire=0: _resolve(self, time_tol, mode, guard, t, z,
-                                                            refire)
+        # a partial, not a closure: sections that carry it go to worker processes
+        return functools.partial(_resolve, self, time_tol)
 
     def initial_state(self, q0, v0, t0: float = 0.0, controller_state=None) -> np.ndarray:
         """Full state at ``t0`` (see :meth:`MechanicalLoop.initial_state`)."""

@@ -70,7 +70,8 @@ def mechanical_section(model, contact: int = 0, wall: int = 1, *, period=None,
     clocks = getattr(loop, "clocks", ())
     return Section(model.automaton, mode, name, exo=exo, period=period,
                    exo_state=loop.exo_state(0.0), clocks=clocks or None, sample_time=sample_time,
-                   constraints=held_constraints(model, mode), bounds=contact_bounds(model))
+                   constraints=held_constraints(model, mode), bounds=contact_bounds(model),
+                   resolver=model.resolver())
 
 
 def _contact_label(model, k) -> str:
