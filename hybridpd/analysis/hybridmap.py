@@ -45,7 +45,20 @@ from scipy.linalg import expm
 from hybridpd._deprecated import moved_names
 from hybridpd._jit import njit
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
-from hybridpd.hybrid._kernel import _RC_NEED_MODE, RunBuffers, _other_active
+from hybridpd.hybrid._kernel import (
+    _RC_NEED_MODE,
+    FC_T,
+    IC_BURST_MODE,
+    IC_LAST_GUARD,
+    IC_LAZY_GUARD,
+    IC_LAZY_MODE,
+    IC_MODE,
+    IC_NJ,
+    IC_NS,
+    IC_NZ,
+    RunBuffers,
+    _other_active,
+)
 from hybridpd.hybrid.automaton import TerminationCause, ZenoOptions, run_hybrid
 from hybridpd.hybrid.section import Section, _moves, common_multiple, exosystem
 from hybridpd.model import check_finite
@@ -123,13 +136,13 @@ def _to_return(pk, dt_min, zf, zi, w0, t0, gm, gi, k, t_max, J0, J_max, max_step
         for i in range(N1):
             w[i] = w0[i]
         fc[:] = 0.0
-        fc[0] = t0
+        fc[FC_T] = t0
         ic[:] = 0
-        ic[0] = gm
-        ic[2] = -1
-        ic[3] = -1
+        ic[IC_MODE] = gm
+        ic[IC_LAST_GUARD] = -1
+        ic[IC_BURST_MODE] = -1
         rc = run_hybrid(pk, dt_min, t0 + t_max, J, max_steps, zf, zi, rb)
-        nj = ic[9]
+        nj = ic[IC_NJ]
         if nj == 0 or jsrc[0] != gm or jg[0] != gi or jt[0] != t0 or jkind[0] == 3:
             return ST_BAD_START, 0, J
         count = 0
@@ -142,13 +155,13 @@ def _to_return(pk, dt_min, zf, zi, w0, t0, gm, gi, k, t_max, J0, J_max, max_step
                 if count == k + 1:
                     for i in range(N1):
                         w[i] = jpre[q, i]
-                    fc[0] = jt[q]
+                    fc[FC_T] = jt[q]
                     return ST_RETURNED, q, J
         if rc == _RC_NEED_MODE:
             return ST_NEED_MODE, nj, J
         if rc != 1:
             return ST_END_TIME if rc == 0 else rc, nj, J
-        if count == k and ic[11] == nzj and ic[0] == gm:
+        if count == k and ic[IC_NZ] == nzj and ic[IC_MODE] == gm:
             pg = _pending_guard(w, gm, G, ng)
             if pg == gi:
                 return ST_RETURNED, nj, J
@@ -289,13 +302,13 @@ class SectionMap(PoincareMap):
         is then made again. False (nothing done) when a mode is needed and the tables have
         reached ``max_table_bytes``."""
         ha = self.section.automaton
-        if ic[0] < -1 and ha.table_bytes >= self.max_table_bytes:
+        if ic[IC_MODE] < -1 and ha.table_bytes >= self.max_table_bytes:
             return False
-        if ic[16]:
-            ha._zeno_reset(int(ic[16]) - 1, int(ic[17]))
-            ic[16] = 0
-        if ic[0] < -1:
-            ha.build_code(int(ic[0]))
+        if ic[IC_LAZY_MODE]:
+            ha._zeno_reset(int(ic[IC_LAZY_MODE]) - 1, int(ic[IC_LAZY_GUARD]))
+            ic[IC_LAZY_MODE] = 0
+        if ic[IC_MODE] < -1:
+            ha.build_code(int(ic[IC_MODE]))
         return True
 
     @property
@@ -494,12 +507,12 @@ class SectionMap(PoincareMap):
         jumps = tuple((float(jt[q]), mn[jsrc[q]], modes[jsrc[q]].guards[jg[q]].name,
                        ha._name_of(int(jdst[q])), kinds[int(jkind[q])]) for q in range(nb))
         z_hit = w[:n].copy()
-        t_hit = float(fc[0])
+        t_hit = float(fc[FC_T])
         if self._joint_jump(bufs, nb):     # the sequential answer is not the model's
             st = ST_SIMULTANEOUS
         if st in (ST_ZENO, ST_SIMULTANEOUS) and sec.resolver is not None:
             return self._resolved(k, z0, t0)
-        mode_final = ha._name_of(int(ic[0])) if st != ST_RETURNED else sec.mode
+        mode_final = ha._name_of(int(ic[IC_MODE])) if st != ST_RETURNED else sec.mode
         if st != ST_RETURNED:
             return MapResult(np.full(self.dim, np.nan), False, MAP_STATUS[st], t0, t_hit,
                              z_hit, mode_final, jumps, any(j[4] == "grazing" for j in jumps))
@@ -569,7 +582,7 @@ class SectionMap(PoincareMap):
         n = ha.n_states
         jt = bufs.jt
         st0, st1, smode, sj = bufs.st0, bufs.st1, bufs.smode, bufs.sj
-        nseg = int(bufs.ic[10])
+        nseg = int(bufs.ic[IC_NS])
         Z = np.eye(n)
         q = 0
         tangent = False

@@ -42,6 +42,7 @@ from hybridpd.analysis.hybridmap import (
 from hybridpd.analysis.labels import OFF_SECTION
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
 from hybridpd.analysis.pathfollow import newton
+from hybridpd.hybrid._kernel import FC_T, IC_MODE
 
 __all__ = [
     "ORBIT_REFUSALS",
@@ -512,11 +513,11 @@ def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, k, t_max, J_max, max_steps
                     W0[p, i] = w0[i]
                 T0[p] = t0
                 its[p] = it
-                return p, ic[0]
+                return p, ic[IC_MODE]
             its[p] = it + 1
             if st != ST_RETURNED:
                 if st == 6:
-                    label = _ZENO_STICKING if ic[0] != gm else _DIVERGED
+                    label = _ZENO_STICKING if ic[IC_MODE] != gm else _DIVERGED
                 elif st == 2:
                     label = _ZENO_STICKING
                 elif st == 3:
@@ -525,7 +526,7 @@ def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, k, t_max, J_max, max_steps
                     label = _UNRESOLVED
                 break
             Jh = max(nb, 1)
-            _coords(w, fc[0], C, T, s)
+            _coords(w, fc[FC_T], C, T, s)
             for i in range(s.shape[0]):
                 S_out[p, i] = s[i]
             e2 = np.inf
@@ -547,7 +548,7 @@ def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, k, t_max, J_max, max_steps
                 break
             for i in range(N1):
                 w0[i] = w[i]
-            t0 = fc[0]
+            t0 = fc[FC_T]
         if label < 0:
             label = _CONVERGED if e2 < criterion else _NOT_CONVERGED
         lab[p] = label

@@ -84,6 +84,19 @@ _RC_NEED_MODE = 6
 _RC_SIMULTANEOUS = 7
 _RC_DIVERGED = 8
 _KIND_NAMES = {1: "crossing", 2: "grazing", 3: "zeno", 4: "simultaneous"}
+#: Entries of the carried integer state ``ic`` (module docstring): the mode, the jump count,
+#: the guard whose start event is suppressed, the burst being tracked for an accumulation
+#: (its mode, guard, length and run of equal ratios), the jumps at the current instant, the
+#: flow steps taken, the entries written to the jump/segment/Zeno buffers, the guard of a
+#: joint jump handed back and whether it refired, the guards of groups fired at the instant
+#: and the joint jumps there, and the Zeno reset to apply (mode + 1, guard).
+(IC_MODE, IC_JUMPS, IC_LAST_GUARD, IC_BURST_MODE, IC_BURST_GUARD, IC_BURST_LEN, IC_RATIOS,
+ IC_INSTANT, IC_STEPS, IC_NJ, IC_NS, IC_NZ, IC_JOINT_GUARD, IC_REFIRE, IC_FIRED, IC_JOINTS,
+ IC_LAZY_MODE, IC_LAZY_GUARD) = range(18)
+#: Entries of the carried float state ``fc``: the time, the last event's location error,
+#: the tracked burst's last jump time, interval and ratio, the current instant of group
+#: firings, and the start of the flow that ended there.
+FC_T, FC_LOC_ERR, FC_BURST_T, FC_BURST_DT, FC_BURST_RATIO, FC_INSTANT, FC_FLOW_START = range(7)
 # a guard of a group firing at one instant after this many firings of it there goes to the
 # resolver: a short cascade of impacts (a contact hit twice) stays in the loop, impacts
 # that keep coming back are resolved together
@@ -178,7 +191,7 @@ class RunBuffers(NamedTuple):
 
     def records(self) -> dict:
         """Copies of what the run recorded (jumps, segments, Zeno times), by name."""
-        nj, ns, nz = int(self.ic[9]), int(self.ic[10]), int(self.ic[11])
+        nj, ns, nz = int(self.ic[IC_NJ]), int(self.ic[IC_NS]), int(self.ic[IC_NZ])
         return {k: (v[:nj] if k.startswith("j") else v[:ns] if k.startswith("s")
                     else v[:nz]).copy() for k, v in self._asdict().items()
                 if k not in ("w", "fc", "ic")}
@@ -188,21 +201,21 @@ class RunBuffers(NamedTuple):
 @njit(cache=True)
 def _add_seg(rb, t0, t1, mode, j, w):
     st0, st1, smode, sj, sw, ic = rb.st0, rb.st1, rb.smode, rb.sj, rb.sw, rb.ic
-    si = ic[10]
+    si = ic[IC_NS]
     st0[si] = t0
     st1[si] = t1
     smode[si] = mode
     sj[si] = j
     for i in range(w.shape[0]):
         sw[si, i] = w[i]
-    ic[10] = si + 1
+    ic[IC_NS] = si + 1
 
 
 @njit(cache=True)
 def _add_jump(rb, t, j, g, src, dst, kind, pre, post):
     jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, ic = (rb.jt, rb.jj, rb.jg, rb.jsrc, rb.jdst,
                                                       rb.jkind, rb.jpre, rb.jpost, rb.ic)
-    k = ic[9]
+    k = ic[IC_NJ]
     jt[k] = t
     jj[k] = j
     jg[k] = g
@@ -212,7 +225,7 @@ def _add_jump(rb, t, j, g, src, dst, kind, pre, post):
     for i in range(pre.shape[0]):
         jpre[k, i] = pre[i]
         jpost[k, i] = post[i]
-    ic[9] = k + 1
+    ic[IC_NJ] = k + 1
 
 
 @njit(cache=True)
@@ -232,20 +245,20 @@ def _zeno_switch(pk, rb, mode, g, t_k, t_inf, max_jumps, Kp1):
     h, Phi, Ah, R, rz, zt = pk.h, pk.Phi, pk.Ah, pk.R, pk.rz, pk.zt
     w, fc, ic, zt_out = rb.w, rb.fc, rb.ic, rb.zt_out
     N1 = w.shape[0]
-    zt_out[ic[11]] = t_inf
-    ic[11] += 1
+    zt_out[ic[IC_NZ]] = t_inf
+    ic[IC_NZ] += 1
     target = zt[mode, g]
     if target == -1:
-        _add_seg(rb, t_k, t_k, mode, ic[1], w)
+        _add_seg(rb, t_k, t_k, mode, ic[IC_JUMPS], w)
         return 2
-    if ic[1] >= max_jumps:
-        _add_seg(rb, t_k, t_k, mode, ic[1], w)
+    if ic[IC_JUMPS] >= max_jumps:
+        _add_seg(rb, t_k, t_k, mode, ic[IC_JUMPS], w)
         return 1
     wz = np.empty(N1)
     post = np.empty(N1)
     if t_inf > t_k:
         # the mode's own flow over the unresolved tail of the accumulation
-        _add_seg(rb, t_k, t_inf, mode, ic[1], w)
+        _add_seg(rb, t_k, t_inf, mode, ic[IC_JUMPS], w)
         flow_to(w, t_inf - t_k, h[mode], Phi[mode], Ah[mode], Kp1, wz)
     else:
         for i in range(N1):
@@ -259,28 +272,28 @@ def _zeno_switch(pk, rb, mode, g, t_k, t_inf, max_jumps, Kp1):
     else:
         _matvec(R[rz[mode, g]], wz, post)
     post[N1 - 1] = 1.0
-    ic[1] += 1
-    _add_jump(rb, t_inf, ic[1], g, mode, target, 3,
+    ic[IC_JUMPS] += 1
+    _add_jump(rb, t_inf, ic[IC_JUMPS], g, mode, target, 3,
               wz, post)
     for i in range(N1):
         w[i] = post[i]
-    fc[0] = t_inf
-    fc[1] = 0.0
-    ic[0] = target
-    ic[2] = -1
-    ic[3] = -1
-    ic[5] = 0
-    ic[6] = 0
+    fc[FC_T] = t_inf
+    fc[FC_LOC_ERR] = 0.0
+    ic[IC_MODE] = target
+    ic[IC_LAST_GUARD] = -1
+    ic[IC_BURST_MODE] = -1
+    ic[IC_BURST_LEN] = 0
+    ic[IC_RATIOS] = 0
     if t_inf > t_k:
-        ic[7] = 0           # an instant accumulation still counts towards an instant loop
+        ic[IC_INSTANT] = 0           # an instant accumulation still counts towards an instant loop
     else:
-        ic[7] += 1
+        ic[IC_INSTANT] += 1
     if lazy:
-        ic[16] = mode + 1
-        ic[17] = g
+        ic[IC_LAZY_MODE] = mode + 1
+        ic[IC_LAZY_GUARD] = g
         return _RC_NEED_MODE
     if not _finite(post):
-        _add_seg(rb, t_inf, t_inf, target, ic[1], w)
+        _add_seg(rb, t_inf, t_inf, target, ic[IC_JUMPS], w)
         return 3
     return -1
 
@@ -306,45 +319,45 @@ def run_hybrid_ex(pk, dt_min, t_end, max_jumps, max_steps, zf, zi, rb, gkind, si
     tail_tol = zf[2] if zf.shape[0] > 2 else -1.0
     max_state = zf[3] if zf.shape[0] > 3 else -1.0
     while True:
-        if (ic[9] + 2 > jt.shape[0] or ic[10] + 3 > st0.shape[0]
-                or ic[11] + 2 > zt_out.shape[0]):
+        if (ic[IC_NJ] + 2 > jt.shape[0] or ic[IC_NS] + 3 > st0.shape[0]
+                or ic[IC_NZ] + 2 > zt_out.shape[0]):
             return 5
-        if ic[0] < 0 or ng[ic[0]] < 0:
+        if ic[IC_MODE] < 0 or ng[ic[IC_MODE]] < 0:
             return _RC_NEED_MODE
         if max_state > 0.0:
             for i in range(N1 - 1):
                 if abs(w[i]) > max_state:
-                    _add_seg(rb, fc[0], fc[0], ic[0], ic[1], w)
+                    _add_seg(rb, fc[FC_T], fc[FC_T], ic[IC_MODE], ic[IC_JUMPS], w)
                     return _RC_DIVERGED
-        t = fc[0]
-        mode = ic[0]
-        si = ic[10]
-        _add_seg(rb, t, t, mode, ic[1], w)
+        t = fc[FC_T]
+        mode = ic[IC_MODE]
+        si = ic[IC_NS]
+        _add_seg(rb, t, t, mode, ic[IC_JUMPS], w)
         code, tev, g, nst, err = advance(
             w, t, t_end, h[mode], Phi[mode], Ah[mode], dinv[mode], trunc[mode], G[mode],
-            gabs[mode], gsum[mode], cnorm[mode], prio[mode], ng[mode], ic[2], fc[1],
-            max_steps - ic[8], wout)
-        ic[8] += nst
+            gabs[mode], gsum[mode], cnorm[mode], prio[mode], ng[mode], ic[IC_LAST_GUARD], fc[FC_LOC_ERR],
+            max_steps - ic[IC_STEPS], wout)
+        ic[IC_STEPS] += nst
         st1[si] = tev
         if code == EV_NONE or code == EV_NONFINITE or code == EV_STEP_LIMIT:
             for i in range(N1):
                 w[i] = wout[i]
-            fc[0] = tev
+            fc[FC_T] = tev
             if code == EV_NONE:
                 return 0
             if code == EV_NONFINITE:
                 return 3
             return 4
-        if code == EV_START and g == ic[2] and zon:
+        if code == EV_START and g == ic[IC_LAST_GUARD] and zon:
             # immediate accumulation: the guard that just fired fires again at once
             rc = _zeno_switch(pk, rb, mode, g, t, t, max_jumps, Kp1)
             if rc >= 0:
                 return rc
             continue
-        if ic[1] >= max_jumps:
+        if ic[IC_JUMPS] >= max_jumps:
             for i in range(N1):
                 w[i] = wout[i]
-            fc[0] = tev
+            fc[FC_T] = tev
             return 1
         if simtol >= 0.0 and gkind[mode, g] != 0:
             again = _fired_before(gid[mode, g], tev, fc, ic, fired) >= _REFIRE_AFTER
@@ -352,71 +365,71 @@ def run_hybrid_ex(pk, dt_min, t_end, max_jumps, max_steps, zf, zi, rb, gkind, si
                                       simtol * (1.0 + abs(tev))):
                 for i in range(N1):
                     w[i] = wout[i]
-                fc[0] = tev
-                fc[6] = t
-                ic[12] = g
-                ic[13] = 1 if again else 0
+                fc[FC_T] = tev
+                fc[FC_FLOW_START] = t
+                ic[IC_JOINT_GUARD] = g
+                ic[IC_REFIRE] = 1 if again else 0
                 return _RC_SIMULTANEOUS
             _note_fired(gid[mode, g], ic, fired)
         _matvec(R[rh[mode, g]], wout, post)
         post[N1 - 1] = 1.0
         tgt = target[mode, g]
         kind = 2 if code == EV_GRAZING else 1
-        ic[1] += 1
-        _add_jump(rb, tev, ic[1], g, mode, tgt,
+        ic[IC_JUMPS] += 1
+        _add_jump(rb, tev, ic[IC_JUMPS], g, mode, tgt,
                   kind, wout, post)
         for i in range(N1):
             w[i] = post[i]
-        fc[0] = tev
-        ic[0] = tgt
+        fc[FC_T] = tev
+        ic[IC_MODE] = tgt
         if tgt == mode:
-            ic[2] = g
-            fc[1] = err
+            ic[IC_LAST_GUARD] = g
+            fc[FC_LOC_ERR] = err
         else:
-            ic[2] = -1
-            fc[1] = 0.0
+            ic[IC_LAST_GUARD] = -1
+            fc[FC_LOC_ERR] = 0.0
         if not _finite(post):
-            _add_seg(rb, tev, tev, tgt, ic[1], w)
+            _add_seg(rb, tev, tev, tgt, ic[IC_JUMPS], w)
             return 3
         if not zon:
             continue
         if tev == t:
-            ic[7] += 1
-            if ic[7] > max_inst:
-                zt_out[ic[11]] = tev
-                ic[11] += 1
-                _add_seg(rb, tev, tev, tgt, ic[1], w)
+            ic[IC_INSTANT] += 1
+            if ic[IC_INSTANT] > max_inst:
+                zt_out[ic[IC_NZ]] = tev
+                ic[IC_NZ] += 1
+                _add_seg(rb, tev, tev, tgt, ic[IC_JUMPS], w)
                 return 2
         else:
-            ic[7] = 0
+            ic[IC_INSTANT] = 0
         if tgt != mode:
-            ic[3] = -1
+            ic[IC_BURST_MODE] = -1
             continue
-        if not (ic[3] == mode and ic[4] == g and ic[5] >= 1):
-            ic[3] = mode
-            ic[4] = g
-            ic[5] = 1
-            ic[6] = 0
-            fc[2] = tev
-            fc[3] = -1.0
-            fc[4] = -1.0
+        if not (ic[IC_BURST_MODE] == mode and ic[IC_BURST_GUARD] == g and ic[IC_BURST_LEN] >= 1):
+            ic[IC_BURST_MODE] = mode
+            ic[IC_BURST_GUARD] = g
+            ic[IC_BURST_LEN] = 1
+            ic[IC_RATIOS] = 0
+            fc[FC_BURST_T] = tev
+            fc[FC_BURST_DT] = -1.0
+            fc[FC_BURST_RATIO] = -1.0
             continue
-        dt = tev - fc[2]
-        if fc[3] > 0.0:
-            r = dt / fc[3]
+        dt = tev - fc[FC_BURST_T]
+        if fc[FC_BURST_DT] > 0.0:
+            r = dt / fc[FC_BURST_DT]
             if r < ratio_max:
-                if ic[6] >= 1 and abs(r - fc[4]) <= rtol * fc[4]:
-                    ic[6] += 1
+                if ic[IC_RATIOS] >= 1 and abs(r - fc[FC_BURST_RATIO]) <= rtol * fc[FC_BURST_RATIO]:
+                    ic[IC_RATIOS] += 1
                 else:
-                    ic[6] = 1
+                    ic[IC_RATIOS] = 1
             else:
-                ic[6] = 0
-            fc[4] = r
-        fc[3] = dt
-        fc[2] = tev
-        ic[5] += 1
-        if dt <= dt_min[mode] or ic[6] >= min_ratios:
-            r = fc[4]
+                ic[IC_RATIOS] = 0
+            fc[FC_BURST_RATIO] = r
+        fc[FC_BURST_DT] = dt
+        fc[FC_BURST_T] = tev
+        ic[IC_BURST_LEN] += 1
+        if dt <= dt_min[mode] or ic[IC_RATIOS] >= min_ratios:
+            r = fc[FC_BURST_RATIO]
             t_inf = tev
             if 0.0 < r < 1.0:
                 t_inf = tev + dt * r / (1.0 - r)
@@ -439,13 +452,13 @@ def _fired_before(me, tev, fc, ic, fired):
     (beyond its capacity further ones are not kept: the instant-jump bound still holds);
     a later instant starts afresh (``ic[15]``, the joint jumps of the instant, too).
     """
-    if fc[5] != tev:
-        fc[5] = tev
-        ic[14] = 0
-        ic[15] = 0
+    if fc[FC_INSTANT] != tev:
+        fc[FC_INSTANT] = tev
+        ic[IC_FIRED] = 0
+        ic[IC_JOINTS] = 0
         return 0
     count = 0
-    for q in range(min(ic[14], fired.shape[0])):
+    for q in range(min(ic[IC_FIRED], fired.shape[0])):
         if fired[q] == me:
             count += 1
     return count
@@ -453,9 +466,9 @@ def _fired_before(me, tev, fc, ic, fired):
 
 @njit(cache=True)
 def _note_fired(me, ic, fired):
-    if ic[14] < fired.shape[0]:
-        fired[ic[14]] = me
-    ic[14] += 1
+    if ic[IC_FIRED] < fired.shape[0]:
+        fired[ic[IC_FIRED]] = me
+    ic[IC_FIRED] += 1
 
 
 @njit(cache=True)

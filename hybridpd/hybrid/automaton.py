@@ -91,6 +91,23 @@ from hybridpd.hybrid._kernel import (
     _RC_NEED_MODE,
     _RC_SIMULTANEOUS,
     _RC_STEP_LIMIT,
+    FC_FLOW_START,
+    FC_LOC_ERR,
+    FC_T,
+    IC_BURST_MODE,
+    IC_FIRED,
+    IC_INSTANT,
+    IC_JOINT_GUARD,
+    IC_JOINTS,
+    IC_JUMPS,
+    IC_LAST_GUARD,
+    IC_LAZY_GUARD,
+    IC_LAZY_MODE,
+    IC_MODE,
+    IC_NJ,
+    IC_NZ,
+    IC_REFIRE,
+    IC_STEPS,
     PackedAutomaton,
     RunBuffers,
     run_hybrid,
@@ -504,11 +521,11 @@ class HybridAutomaton:
             raise ValueError(f"max_state must be > 0, got {max_state!r}")
         w = np.append(x0, 1.0)
         fc = np.zeros(8)
-        fc[0] = t0
+        fc[FC_T] = t0
         ic = np.zeros(18, np.int64)
-        ic[0] = mi
-        ic[2] = -1
-        ic[3] = -1
+        ic[IC_MODE] = mi
+        ic[IC_LAST_GUARD] = -1
+        ic[IC_BURST_MODE] = -1
         opts = (zeno, resolver, float(simtol), -1.0 if max_state is None else float(max_state))
         rc, cat = self._run_chunks(t0, t1, max_jumps, max_steps, opts, w, fc, ic)
         traj = self._make_trajectory(t0, rc, cat, w, fc, ic)
@@ -547,25 +564,25 @@ class HybridAutomaton:
             extra = {} if simtol < 0 else {"gkind": gk, "simtol": simtol,
                                            "gid": self._store.gid(), "fired": fired}
             interp = small and kern.prefer_interpreter()
-            steps = min(max_steps, int(ic[8]) + _INTERP_MAX_STEPS) if interp else max_steps
+            steps = min(max_steps, int(ic[IC_STEPS]) + _INTERP_MAX_STEPS) if interp else max_steps
             if interp:
                 cap = min(cap, _INTERP_JUMPS + 4)
             if bufs is None or bufs.jt.shape[0] != cap:
                 bufs = RunBuffers.empty(cap, N1, w, fc, ic)
-            ic[9:12] = 0
+            ic[IC_NJ:IC_NZ + 1] = 0
             run = kern.interpret if interp else kern
             rc = run(pk, dt_min, t1, max_jumps, steps, zf, zi, bufs, **extra)
             # the records are copied out: the buffers serve the next chunk, and a run that
             # returns often (joint jumps, modes built) holds only what it recorded
             chunks.append(bufs.records())
             if rc == _RC_NEED_MODE:
-                if ic[16]:
+                if ic[IC_LAZY_MODE]:
                     self._apply_zeno(w, ic, chunks[-1])
-                if ic[0] < 0:
-                    ic[0] = self.build_code(int(ic[0]))
+                if ic[IC_MODE] < 0:
+                    ic[IC_MODE] = self.build_code(int(ic[IC_MODE]))
                 continue
             if rc == _RC_SIMULTANEOUS:
-                if int(ic[1]) >= max_jumps:
+                if int(ic[IC_JUMPS]) >= max_jumps:
                     rc = 1
                     break
                 rc = self._resolve(resolver, w, fc, ic, chunks, fired, int(zeno.max_instant_jumps))
@@ -573,7 +590,7 @@ class HybridAutomaton:
                     break
                 continue
             if rc == _RC_BUFFER_FULL or (rc == _RC_STEP_LIMIT and steps < max_steps):
-                cap = min(max(max_jumps - int(ic[1]), 0) + 4, 65536)
+                cap = min(max(max_jumps - int(ic[IC_JUMPS]), 0) + 4, 65536)
                 continue
             break
         names = []
@@ -588,11 +605,11 @@ class HybridAutomaton:
     def _apply_zeno(self, w, ic, chunk) -> None:
         """Apply the Zeno reset the jump loop handed back (``ic[16] = mode + 1``, ``ic[17]``
         the guard) to ``w`` and to the post state of the last jump recorded."""
-        Rz = self._zeno_reset(int(ic[16]) - 1, int(ic[17]))
+        Rz = self._zeno_reset(int(ic[IC_LAZY_MODE]) - 1, int(ic[IC_LAZY_GUARD]))
         w[:] = Rz @ w
         w[-1] = 1.0
         chunk["jpost"][-1] = w
-        ic[16] = 0
+        ic[IC_LAZY_MODE] = 0
 
     def _resolve(self, resolver, w, fc, ic, chunks, fired, max_inst):
         """Apply the resolver's joint jump to the carried state.
@@ -602,16 +619,16 @@ class HybridAutomaton:
         instant (the joint jumps count like the kernel's own).
         """
         n = self._n
-        mode = int(ic[0])
-        g = int(ic[12])
+        mode = int(ic[IC_MODE])
+        g = int(ic[IC_JOINT_GUARD])
         src = self._names[mode]
-        t = float(fc[0])
+        t = float(fc[FC_T])
         gname = self._built[mode].guards[g].name
-        if ic[13]:
+        if ic[IC_REFIRE]:
             # a guard of the group fires again at this instant: the resolver is told how
             # often this happened, so that it can resolve the contacts' accumulation
-            ic[15] += 1
-            out = resolver(src, gname, t, w[:n].copy(), refire=int(ic[15]))
+            ic[IC_JOINTS] += 1
+            out = resolver(src, gname, t, w[:n].copy(), refire=int(ic[IC_JOINTS]))
         else:
             out = resolver(src, gname, t, w[:n].copy())
         if out is None:
@@ -628,35 +645,35 @@ class HybridAutomaton:
         post = np.append(z_post, 1.0)
         zeno = kind == "zeno"
         chunks.append({
-            "jt": np.full(k, t), "jj": int(ic[1]) + 1 + np.arange(k, dtype=np.int64),
+            "jt": np.full(k, t), "jj": int(ic[IC_JUMPS]) + 1 + np.arange(k, dtype=np.int64),
             "jg": np.full(k, -1, np.int64), "jsrc": np.full(k, mode, np.int64),
             "jdst": np.full(k, tgt, np.int64), "jkind": np.full(k, 3 if zeno else 4, np.int64),
             "jpre": np.tile(pre, (k, 1)), "jpost": np.tile(post, (k, 1)),
             "st0": np.empty(0), "st1": np.empty(0), "smode": np.empty(0, np.int64),
             "sj": np.empty(0, np.int64), "sw": np.empty((0, n + 1)),
             "zt_out": np.full(1 if zeno else 0, t), "jname": list(names)})
-        ic[1] += k
+        ic[IC_JUMPS] += k
         w[:] = post
-        ic[0] = tgt
-        ic[2] = -1
-        ic[3] = -1
-        fc[1] = 0.0
+        ic[IC_MODE] = tgt
+        ic[IC_LAST_GUARD] = -1
+        ic[IC_BURST_MODE] = -1
+        fc[FC_LOC_ERR] = 0.0
         ids = self._store.guard_ids
         for nm in names:       # the joint jump fires each named guard at this instant
             if nm in ids:
-                if ic[14] < fired.shape[0]:
-                    fired[ic[14]] = ids[nm]
-                ic[14] += 1
+                if ic[IC_FIRED] < fired.shape[0]:
+                    fired[ic[IC_FIRED]] = ids[nm]
+                ic[IC_FIRED] += 1
         # fc[6]: the start of the flow that ended here; no flow between: one more jump at
         # this instant
-        ic[7] = ic[7] + 1 if fc[0] == fc[6] else 0
-        if ic[7] > max_inst:
+        ic[IC_INSTANT] = ic[IC_INSTANT] + 1 if fc[FC_T] == fc[FC_FLOW_START] else 0
+        if ic[IC_INSTANT] > max_inst:
             chunks.append({
                 "jt": np.empty(0), "jj": np.empty(0, np.int64), "jg": np.empty(0, np.int64),
                 "jsrc": np.empty(0, np.int64), "jdst": np.empty(0, np.int64),
                 "jkind": np.empty(0, np.int64), "jpre": np.empty((0, n + 1)),
                 "jpost": np.empty((0, n + 1)), "st0": np.array([t]), "st1": np.array([t]),
-                "smode": np.array([tgt], np.int64), "sj": np.array([ic[1]], np.int64),
+                "smode": np.array([tgt], np.int64), "sj": np.array([ic[IC_JUMPS]], np.int64),
                 "sw": post[None, :].copy(), "zt_out": np.array([t]), "jname": []})
             return TerminationCause.ZENO.value
         return None
@@ -672,8 +689,8 @@ class HybridAutomaton:
                     # bound): built now, so that the trajectory's modes all have tables
                     self.build_code(int(code))
                 cat[key][cat[key] == code] = self._code_rows[int(code)]
-        if ic[0] < 0:
-            ic[0] = self.build_code(int(ic[0]))
+        if ic[IC_MODE] < 0:
+            ic[IC_MODE] = self.build_code(int(ic[IC_MODE]))
         jsrc = cat["jsrc"]
         guard = tuple(nm if nm is not None else gnames[s][g]
                       for s, g, nm in zip(jsrc, cat["jg"], cat["jname"]))
@@ -687,10 +704,10 @@ class HybridAutomaton:
                             mode=tuple(mn[m] for m in cat["smode"]), j=cat["sj"],
                             x_start=cat["sw"][:, :n])
         return HybridTrajectory(
-            t0=t0, t_final=float(fc[0]), termination=TerminationCause(int(rc)),
+            t0=t0, t_final=float(fc[FC_T]), termination=TerminationCause(int(rc)),
             segments=segs, jumps=jumps, zeno_times=cat["zt_out"].copy(),
-            x_final=w[:n].copy(), mode_final=mn[int(ic[0])], j_final=int(ic[1]),
-            n_steps=int(ic[8]), state_names=self._state_names, _automaton=self,
+            x_final=w[:n].copy(), mode_final=mn[int(ic[IC_MODE])], j_final=int(ic[IC_JUMPS]),
+            n_steps=int(ic[IC_STEPS]), state_names=self._state_names, _automaton=self,
             _seg_mode_idx=cat["smode"].copy(), _seg_w=np.ascontiguousarray(cat["sw"]))
 
 
