@@ -73,6 +73,7 @@ ST_END_TIME, ST_BAD_START, ST_SIMULTANEOUS = 6, 7, 8
 ST_NEED_MODE = 9           # internal: the run entered a mode not built yet
 ST_TOO_MANY_MODES = 10
 _ON_GUARD_RTOL = 1e-9      # |g| below this (relative) at a pending event: on that guard
+_RESOLVED = 4              # a resolved run's bound on jumps, in units of max_jumps
 #: Why a return within one burst of impacts is no orbit, and what to do.
 FAST_RETURN_HINT = ("the section's guard fires again within one burst of impacts (rebounds); "
                     "section on the ends of the sticking phases instead (event='release', "
@@ -192,7 +193,9 @@ class SectionMap(PoincareMap):
         Bound on the time of one application of ``P^k`` (default ``50 k T``, or ``1000`` time
         units without exosystem phase).
     max_jumps : int
-        Bound on the jumps of one application of ``P^k`` (including Zeno switches).
+        Bound on the jumps of one application of ``P^k`` (including Zeno switches); a run
+        handed to the resolver (:meth:`apply`) may take four times as many, since it records
+        one jump per contact of a joint jump.
     max_steps : int
         Bound on the exact flow steps of one application.
     zeno : ZenoOptions, optional
@@ -428,8 +431,9 @@ class SectionMap(PoincareMap):
         sec = self.section
         z0, t0 = sec.to_state(s)
         try:
+            jumps = self.max_jumps * (_RESOLVED if sec.resolver is not None else 1)
             tr = sec.automaton.simulate(z0, sec.mode, (t0, t0 + t_per * (1 + 1e-9) + 1e-12),
-                                        max_jumps=self.max_jumps, max_steps=self.max_steps,
+                                        max_jumps=jumps, max_steps=self.max_steps,
                                         zeno=self.zeno, resolver=sec.resolver,
                                         simtol=1e-12 if self.simtol is None else self.simtol)
         except (ValueError, RuntimeError, FloatingPointError):
@@ -541,8 +545,9 @@ class SectionMap(PoincareMap):
         t_max = self._t_max(k)
         span = min((k + 0.5) * sec.period, t_max) if sec.has_phase else t_max
         while True:
-            tr = ha.simulate(z0, sec.mode, (t0, t0 + span), max_jumps=self.max_jumps,
-                             max_steps=self.max_steps, zeno=self.zeno, resolver=sec.resolver,
+            tr = ha.simulate(z0, sec.mode, (t0, t0 + span),
+                             max_jumps=_RESOLVED * self.max_jumps, max_steps=self.max_steps,
+                             zeno=self.zeno, resolver=sec.resolver,
                              simtol=1e-12 if self.simtol is None else self.simtol)
             J = tr.jumps
             hits = [i for i in range(len(J)) if J.source[i] == sec.mode
