@@ -198,8 +198,10 @@ def test_held_contact_takes_part_in_the_impact():
 
 
 def test_section_map_reports_a_joint_impact_instead_of_a_sequential_one():
-    """The section map applies jumps one at a time; where the simulation would take a joint
-    impact (two stops reached together) the map says so rather than give another answer."""
+    """The section map's compiled run applies jumps one at a time; where the simulation would
+    take a joint impact (two stops reached together) the map says so rather than give another
+    answer, or (``joint="resolve"``) takes it with the model's resolver as the simulation
+    does."""
     from hybridpd.analysis.hybridmap import SectionMap
     from hybridpd.mechanics.sections import mechanical_section
 
@@ -210,6 +212,11 @@ def test_section_map_reports_a_joint_impact_instead_of_a_sequential_one():
     z_at = np.r_[_x0([0.5, 0.5], [1.0, 1.0]), 0.0]      # both stops reached at once
     r = P.apply(sec.from_state(z_at, 0.0))
     assert not r.ok and r.status == "simultaneous"
+    r = SectionMap(sec, t_max=5.0, joint="resolve").apply(sec.from_state(z_at, 0.0))
+    assert [j[4] for j in r.jumps[:2]] == ["simultaneous", "simultaneous"]
+    ref = ma.automaton.simulate(z_at, sec.mode, (0.0, 5.0), resolver=ma.resolver())
+    assert [j[:2] for j in r.jumps] == [(float(t), m) for t, m in
+                                        zip(ref.jumps.t, ref.jumps.source)][:len(r.jumps)]
     z_apart = np.r_[_x0([0.5, 0.3], [1.0, 1.0]), 0.0]   # the second one 0.2 later
     r = SectionMap(sec, t_max=5.0).apply(sec.from_state(z_apart, 0.0))
     assert r.status != "simultaneous"

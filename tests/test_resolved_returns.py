@@ -1,5 +1,6 @@
-"""The section map hands the runs its compiled loop cannot finish alone (a joint jump, contacts
-that keep refiring at one instant) to the section's resolver, as a simulation does.
+"""The section map hands the runs its compiled loop cannot finish alone (contacts that keep
+refiring at one instant; a joint jump, with ``joint="resolve"``) to the section's resolver, as
+a simulation does.
 
 Reference: two identical, uncoupled forced oscillators against their own stops, started in
 step. Their impacts are simultaneous, so the compiled run reports a joint jump; the resolver
@@ -56,10 +57,11 @@ def _single():
     return SectionMap(Section(ha, "free", "impact", reference=ref))
 
 
-def _pair(resolver):
+def _pair(resolver, joint="resolve"):
     z = oscillator_initial_state(0, 0, omega=W)
     ref = (np.array([z[0], z[1], z[0], z[1], z[2], z[3]]), 0.0)
-    return SectionMap(Section(_twins(), "free", "impact1", reference=ref, resolver=resolver))
+    return SectionMap(Section(_twins(), "free", "impact1", reference=ref, resolver=resolver),
+                      joint=joint)
 
 
 def _in_step(P2, z1, t):
@@ -83,10 +85,13 @@ def test_a_joint_jump_goes_to_the_resolver_and_gives_the_uncoupled_answer():
         np.testing.assert_allclose(r2.z_hit, [zh[0], zh[1], zh[0], zh[1], zh[2], zh[3]],
                                    rtol=1e-10, atol=1e-10)
         assert r2.t_hit == pytest.approx(r1.t_hit, rel=1e-12, abs=1e-12)
-    # without a resolver the same run is refused, as before
+    # without a resolver, or by default, the same run is refused
     z1, t1 = P1.section.to_state(orb.s)
-    r0 = _pair(None).apply(_in_step(P2, z1, t1))
-    assert not r0.ok and r0.status == "simultaneous"
+    for P in (_pair(None), _pair(_resolver, joint="refuse")):
+        r0 = P.apply(_in_step(P2, z1, t1))
+        assert not r0.ok and r0.status == "simultaneous"
+    with pytest.raises(ValueError, match="joint"):
+        _pair(_resolver, joint="maybe")
 
 
 @pytest.mark.slow

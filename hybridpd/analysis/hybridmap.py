@@ -207,6 +207,13 @@ class SectionMap(PoincareMap):
         applies jumps one at a time, so where that happens :meth:`apply` reports status
         ``"simultaneous"`` (no image) instead of a sequential answer. ``None`` skips the check.
         The compiled iterations of basins do not check.
+    joint : {"refuse", "resolve"}
+        With a section that carries a resolver (a mechanical model's): ``"resolve"`` makes
+        an application whose sequential run crosses a joint jump again by the simulator with
+        the resolver, as a simulation takes it (tens to hundreds of times slower on long
+        chains of contacts); ``"refuse"`` (default) reports ``"simultaneous"``. A run that
+        stops at contacts refiring at one instant (status ``"zeno"``: the compiled loop has
+        no answer at all) always goes to the resolver.
     max_table_bytes : float
         Bound on the automaton's packed tables (:attr:`HybridAutomaton.table_bytes`, bytes)
         up to which the map builds the modes its runs enter (default 256 MB). A run that
@@ -229,7 +236,8 @@ class SectionMap(PoincareMap):
 
     def __init__(self, section: Section, *, t_max: float | None = None, max_jumps: int = 10_000,
                  max_steps: int = 10_000_000, zeno: ZenoOptions | None = None,
-                 simtol: float | None = 1e-12, max_table_bytes: float = 256e6):
+                 simtol: float | None = 1e-12, max_table_bytes: float = 256e6,
+                 joint: str = "refuse"):
         if not isinstance(section, Section):
             raise ValueError(f"section must be a Section, got {type(section).__name__}")
         if not (math.isfinite(float(max_table_bytes)) and float(max_table_bytes) > 0):
@@ -255,6 +263,9 @@ class SectionMap(PoincareMap):
         if simtol is not None and not (math.isfinite(float(simtol)) and float(simtol) >= 0):
             raise ValueError(f"simtol must be >= 0 or None, got {simtol!r}")
         self.simtol = None if simtol is None else float(simtol)
+        if joint not in ("refuse", "resolve"):
+            raise ValueError(f"joint must be 'refuse' or 'resolve', got {joint!r}")
+        self.joint = joint
         self._zf = np.array([zeno.ratio_max, zeno.ratio_rtol,
                              -1.0 if zeno.tail_tol is None else float(zeno.tail_tol), -1.0],
                             float)
@@ -514,7 +525,8 @@ class SectionMap(PoincareMap):
         t_hit = float(fc[FC_T])
         if self._joint_jump(bufs, nb):     # the sequential answer is not the model's
             st = ST_SIMULTANEOUS
-        if st in (ST_ZENO, ST_SIMULTANEOUS) and sec.resolver is not None:
+        if sec.resolver is not None and (st == ST_ZENO or (st == ST_SIMULTANEOUS
+                                                           and self.joint == "resolve")):
             return self._resolved(k, z0, t0)
         mode_final = ha._name_of(int(ic[IC_MODE])) if st != ST_RETURNED else sec.mode
         if st != ST_RETURNED:

@@ -6,12 +6,7 @@ compliant Kelvin-Voigt) are closed by any python-control controller
 :class:`ControlChannel`) and compiled into the project's hybrid
 automaton (:func:`build_automaton`); :func:`simulate` runs it.
 """
-from hybridpd.mechanics.automaton import (
-    GuardInfo,
-    MechanicalAutomaton,
-    ModeInfo,
-    build_automaton,
-)
+from hybridpd.mechanics.automaton import MechanicalAutomaton, build_automaton
 from hybridpd.mechanics.contacts import Contact
 from hybridpd.mechanics.loop import (
     ControlChannel,
@@ -23,6 +18,7 @@ from hybridpd.mechanics.loop import (
 from hybridpd.mechanics.modelfile import MechanicalModel, load_model, model_from_dict
 from hybridpd.mechanics.simulate import MechanicalTrajectory, simulate, simulate_state
 from hybridpd.mechanics.system import MechanicalSystem
+from hybridpd.mechanics.tables import GuardInfo, ModeInfo
 
 __all__ = [
     "Contact",

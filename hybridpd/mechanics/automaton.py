@@ -76,7 +76,6 @@ from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -86,12 +85,16 @@ from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode, ZenoOptions
 from hybridpd.mechanics.contacts import Contact
 from hybridpd.mechanics.impact import impact_cascade, multi_impact, solve_lcp
 from hybridpd.mechanics.loop import MechanicalLoop
+from hybridpd.mechanics.tables import (
+    _GUARD_RE,
+    _GuardTable,
+    _ModeTable,
+    _ResetTable,
+)
 
-__all__ = ["GuardInfo", "MechanicalAutomaton", "ModeInfo", "build_automaton"]
+__all__ = ["MechanicalAutomaton", "build_automaton"]
 
 _STICK_RE = re.compile(r"(\d+)([+-])")
-_GUARD_RE = re.compile(r"\A(contact|release|enter|leave)(\d+)([+-])\Z")
-_GUARD_KIND = {"contact": "impact", "release": "release", "enter": "enter", "leave": "leave"}
 #: relative margin by which a held contact's force must pull before it is released
 RELEASE_MARGIN = 1e-9
 #: resolve an accumulation until its extrapolated tail is this short (relative to 1 + |t|)
@@ -100,37 +103,6 @@ _EPS = float(np.finfo(float).eps)
 #: contacts within this (relative) of their bounds take part in an accumulation's limit
 _TOUCH_RTOL = 1e-12
 _CACHE_SIZE = 512              # impact laws and projections kept for the next modes built
-
-
-@dataclass(frozen=True)
-class ModeInfo:
-    """What a mode means: ``config[j]`` in ``{-1, 0, +1}`` per contact (compliant ones only
-    non-zero), ``stick``: tuple of the held ``(k, wall)`` (empty: free)."""
-
-    name: str
-    config: tuple
-    stick: tuple
-
-
-@dataclass(frozen=True)
-class GuardInfo:
-    """What a guard means.
-
-    ``kind`` is ``'impact'``, ``'release'``, ``'enter'``, ``'leave'`` or ``'sample'``;
-    ``contact`` the 0-based contact index (``-1`` for ``'sample'``); ``wall`` ``+1`` at ``hi``,
-    ``-1`` at ``lo`` (0 for ``'sample'``); ``controller`` the index of the controller a
-    ``'sample'`` guard samples (``-1`` for the other kinds).
-    """
-
-    kind: str
-    contact: int
-    wall: int
-    controller: int = -1
-
-    def __repr__(self):
-        extra = f", controller={self.controller}" if self.kind == "sample" else ""
-        return (f"GuardInfo(kind={self.kind!r}, contact={self.contact}, wall={self.wall}"
-                f"{extra})")
 
 
 @dataclass(frozen=True, eq=False)  # array fields: identity semantics
@@ -598,7 +570,8 @@ def build_automaton(loop: MechanicalLoop, contacts, max_modes: int = 4096
     ha = HybridAutomaton([builder(free)], state_names=loop.state_names, mode_builder=builder,
                          max_modes=max_modes, zeno=ZenoOptions(tail_tol=ZENO_TAIL_TOL))
     return MechanicalAutomaton(automaton=ha, loop=loop, contacts=contacts,
-                               modes=_ModeTable(ha, contacts, geo),
+                               modes=_ModeTable(ha, functools.partial(
+                                   _parse_mode, contacts=contacts, geo=geo)),
                                guards=_GuardTable(ha, geo.loop.sample_guards),
                                gap_rows=geo.gap, impact_resets=_ResetTable(geo, "impact"),
                                plastic_resets=_ResetTable(geo, "plastic"), free_mode=free,
@@ -672,102 +645,6 @@ def _parse_mode(name, contacts, geo):
     if _mode_name(tuple(config), stick) != name:
         raise ValueError(f"unknown mode {name!r}")
     return tuple(config), stick
-
-
-class _ModeTable(Mapping):
-    """Mode name -> :class:`ModeInfo`, parsed from the name (no mode is built)."""
-
-    def __init__(self, ha, contacts, geo):
-        self._ha, self._contacts, self._geo = ha, contacts, geo
-        self._cache = {}
-
-    def __getitem__(self, name):
-        info = self._cache.get(name) if isinstance(name, str) else None
-        if info is None:
-            try:
-                config, stick = _parse_mode(name, self._contacts, self._geo)
-            except ValueError:
-                raise KeyError(name) from None
-            info = self._cache[name] = ModeInfo(name, config, stick)
-        return info
-
-    def __iter__(self):
-        return iter(list(self._ha._names))
-
-    def __len__(self):
-        return len(self._ha._names)
-
-    def __contains__(self, name):
-        try:
-            self[name]
-        except KeyError:
-            return False
-        return True
-
-
-class _GuardTable(Mapping):
-    """``(mode, guard)`` -> :class:`GuardInfo`, parsed from the guard name."""
-
-    def __init__(self, ha, sample_guards):
-        self._ha = ha
-        self._samples = dict(sample_guards)    # sampling guard name -> controller index
-        self._cache = {}   # guard name -> GuardInfo: a trajectory asks once per jump
-
-    def __getitem__(self, key):
-        try:
-            _, gname = key
-        except (TypeError, ValueError):
-            raise KeyError(key) from None
-        info = self._cache.get(gname)
-        if info is not None:
-            return info
-        if gname in self._samples:
-            info = GuardInfo("sample", -1, 0, self._samples[gname])
-        else:
-            m = _GUARD_RE.match(str(gname))
-            if m is None:
-                raise KeyError(key)
-            info = GuardInfo(_GUARD_KIND[m.group(1)], int(m.group(2)),
-                             1 if m.group(3) == "+" else -1)
-        self._cache[gname] = info
-        return info
-
-    def _items(self):
-        out = []
-        for i, name in enumerate(self._ha._names):
-            mode = self._ha._built[i]
-            if mode is not None:
-                out.extend((name, g.name) for g in mode.guards)
-        return out
-
-    def __iter__(self):
-        return iter(self._items())
-
-    def __len__(self):
-        return len(self._items())
-
-
-class _ResetTable(Mapping):
-    """``(k, wall)`` -> ``(R, r)`` of a rigid contact, computed on demand."""
-
-    def __init__(self, geo, which):
-        self._geo, self._which = geo, which
-        self._keys = [(k, w) for k, c in enumerate(geo.contacts) if c.rigid
-                      for w, _ in c.bounds]
-
-    def __getitem__(self, key):
-        if key not in self._keys:
-            raise KeyError(key)
-        k, w = key
-        if self._which == "impact":
-            return self._geo.impact(k, ())
-        return self._geo.projection(((k, w),))
-
-    def __iter__(self):
-        return iter(self._keys)
-
-    def __len__(self):
-        return len(self._keys)
 
 
 def _guards(geo, config, stick, lam_rows, lam_b):
