@@ -330,15 +330,23 @@ def load_branch(path) -> Branch:
 
     Examples
     --------
-    >>> import tempfile
-    >>> from pathlib import Path
-    >>> from hybridpd import ImpactPair, PDGains
-    >>> from hybridpd.pair.continuation import continue_symmetric
-    >>> br = continue_symmetric(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv", 23.0)
-    >>> p = br.save(Path(tempfile.mkdtemp()) / "kv.nc")
-    >>> back = load_branch(p)
-    >>> bool((back.spectral_radius == br.spectral_radius).all()), len(back.events)
-    (True, 1)
+    The logistic map's fixed point ``1 - 1/r`` doubles its period at ``r = 3``:
+
+    >>> import os, tempfile
+    >>> import hybridpd as hp
+    >>> class Logistic(hp.PoincareMap):
+    ...     names = ("x",)
+    ...     def __init__(self, r):
+    ...         self.r = r
+    ...     def apply(self, s, k=1, jacobian=False):
+    ...         x, J = s[0], 1.0
+    ...         for _ in range(k):
+    ...             J, x = self.r * (1 - 2 * x) * J, self.r * x * (1 - x)
+    ...         return hp.MapResult(np.array([x]), DP=np.array([[J]]) if jacobian else None)
+    >>> br = hp.continue_orbit(Logistic, 2.5, 3.2, [0.6])
+    >>> back = load_branch(br.save(os.path.join(tempfile.mkdtemp(), "b.nc")))
+    >>> [(e.kind, round(e.parameter, 6)) for e in back.events]
+    [('period_doubling', 3.0), ('stability_change', 3.0)]
     """
     if check_suffix(path, "path") != ".npz":
         return Branch.load(path)
