@@ -168,7 +168,11 @@ def test_orbit_of_a_thirty_clearance_chain_answers(tmp_path):
                        capture_output=True, text=True, check=False)
     wall = time.perf_counter() - t0
     rss_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-    assert r.returncode == 0, r.stderr
+    # exit status 0 with an orbit, 3 with one line saying why there is none
+    assert r.returncode in (0, 3), r.stderr
     assert "orbit on contact 0" in r.stdout and "Traceback" not in r.stderr
-    assert ("no orbit:" in r.stdout) or ("multipliers" in r.stdout)
+    if r.returncode == 3:
+        assert "no orbit:" in r.stdout and r.stderr.count("\n") == 1
+    else:
+        assert "multipliers" in r.stdout
     assert wall < 150 and rss_mb < 1200
