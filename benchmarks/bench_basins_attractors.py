@@ -19,8 +19,7 @@ from _common import best_of
 def main(quick=False):
     from hybridpd import ImpactPair, PDGains
     from hybridpd.analysis.basins import basin_of_attraction
-    from hybridpd.pair.basins import attractor_basin
-    from hybridpd.pair.basins import ImpactMapper
+    from hybridpd.pair.basins import ImpactMapper, attractor_basin
     from hybridpd.pair.orbits import symmetric_orbit
 
     def paper(m, x1, y1):

@@ -14,8 +14,7 @@ import sys
 from pathlib import Path
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.pair.basins import attractor_basin
-from hybridpd.pair.basins import ImpactMapper
+from hybridpd.pair.basins import ImpactMapper, attractor_basin
 from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.plotting import plot_basin
 
