@@ -155,8 +155,7 @@ def boundary_distance(basin, *, x10, omega) -> dict:
     --------
     >>> from hybridpd import ImpactPair, PDGains
     >>> from hybridpd.pair.orbits import symmetric_orbit
-    >>> from hybridpd.pair.basins import attractor_basin
-    >>> from hybridpd.pair.basins import ImpactMapper
+    >>> from hybridpd.pair.basins import ImpactMapper, attractor_basin
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     >>> b = attractor_basin(ImpactMapper.from_orbit(orb, n_iter=200), (-3, 5, 9), (-2, 10, 9))
     >>> d = boundary_distance(b, x10=1.0, omega=5.0)
