@@ -32,6 +32,7 @@ import numpy as np
 
 from hybridpd._format import format_percent
 from hybridpd._results import Result, check_suffix, compact_repr, decode_attrs, jsonable
+from hybridpd.analysis import _basin_files
 from hybridpd.analysis.labels import LABELS
 from hybridpd.analysis.maps import PoincareMap, check_returns, detect_period
 from hybridpd.analysis.periodic import find_orbit
@@ -425,38 +426,19 @@ class BasinResult(Result):
         """Write to ``.nc`` or ``.zarr`` (:meth:`to_dataset`), or ``.npz``, by suffix."""
         if check_suffix(path) != ".npz":
             return super().save(path)
-        return _save_npz(self, Path(path))
+        return _basin_files.write_basin_npz(self, Path(path))
 
     @classmethod
     def load(cls, path) -> BasinResult:
         """Read a basin written by :meth:`save` (or by earlier versions)."""
         if check_suffix(path) != ".npz":
             return super().load(path)
-        with np.load(Path(path), allow_pickle=False) as z:
-            arrays = {k: z[k] for k in z.files if k != _META}
-            meta = json.loads(str(z[_META][()])) if _META in z.files else {}
-        kind = meta.pop("kind", None)
-        if kind == "basin" and "attractors" in meta:
-            return cls(**{k: v for k, v in arrays.items()}, **meta)
-        if kind not in ("basin", "attractor_basin"):
-            raise ValueError(f"{path} does not hold a basin (it holds a {kind!r})")
-        return _from_old(kind, meta, arrays)
+        kind, meta, arrays = _basin_files.read_basin_npz(Path(path))
+        new = kind == "basin" and "attractors" in meta
+        return cls(**arrays, **meta) if new else _from_old(kind, meta, arrays)
 
 
-_META = "__metadata__"
 _PAIR_COORDS = ("phi", "z1", "z2", "z4")
-
-
-def _save_npz(b: BasinResult, path: Path) -> Path:
-    arrays = {f.name: getattr(b, f.name) for f in fields(b)
-              if ("dims" in f.metadata or "coord" in f.metadata) and getattr(b, f.name) is not None}
-    meta = {f.name: jsonable(getattr(b, f.name)) for f in fields(b) if f.name not in arrays}
-    meta["attractors"] = [a.to_dict() for a in b.attractors]
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp.npz")
-    np.savez(tmp, **arrays, **{_META: np.array(json.dumps(dict(meta, kind=b.kind)))})
-    tmp.replace(path)
-    return path
 
 
 def _from_old(kind: str, a: dict, v: dict) -> BasinResult:
@@ -473,9 +455,8 @@ def _from_old(kind: str, a: dict, v: dict) -> BasinResult:
     if kind == "basin":
         crit = np.asarray(v["labels"], np.int64)
         lab = from_criterion(crit)
-        meta = {k: w for k, w in a.items() if k not in ("fixed_point", "converged_fraction",
-                                                        "fixed_point_coordinates",
-                                                        "label_names")}
+        drop = ("fixed_point", "converged_fraction", "fixed_point_coordinates", "label_names")
+        meta = {k: w for k, w in a.items() if k not in drop}
         sym = Attractor(0, "converged to the symmetric orbit", 1,
                         np.asarray(fp, float).reshape(1, -1), kind="symmetric")
         atts = (sym,) + tuple(outcome(k, meta.get("n_iter")) for k in sorted(OUTCOMES)[::-1]
