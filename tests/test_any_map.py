@@ -130,6 +130,55 @@ def test_continue_orbit_with_a_phase():
     np.testing.assert_allclose(pd[0].parameter, 2 * (1 + 0.5), rtol=1e-5)
 
 
+class Fold(hp.PoincareMap):
+    """``x' = x + (p - x^2) / 2``: fixed points ``x = +-sqrt(p)`` with multiplier ``1 - x``,
+    so the branch turns back at ``p = 0`` (a fold, where it also loses stability); a return
+    whose image exceeds 1/2 counts one jump, so the jump sequence of the fixed point changes
+    at ``x = 1/2``, ``p = 1/4``."""
+
+    names = ("x",)
+
+    def __init__(self, p):
+        self.p = p
+
+    def apply(self, s, k=1, jacobian=False):
+        x, J, jumps = s[0], 1.0, ()
+        for _ in range(k):
+            J *= 1 - x
+            x = x + 0.5 * (self.p - x * x)
+            jumps += ((0, 0.0, "wall", 0, "impact"),) if x > 0.5 else ()
+        return hp.MapResult(np.array([x]), jumps=jumps,
+                            DP=np.array([[J]]) if jacobian else None)
+
+
+@pytest.mark.parametrize("method", ["arclength", "natural"])
+def test_continue_orbit_locates_a_turning_point_and_a_sequence_change(method):
+    branch = hp.continue_orbit(Fold, 1.0, -1.0, [1.0], method=method)
+    for p, s in zip(branch.parameter, branch.points):     # on the closed-form branch
+        assert abs(s[0] ** 2 - p) < 1e-9
+    seq = branch.events_of("sequence_change")
+    assert len(seq) == 1 and seq[0].located
+    assert abs(seq[0].parameter - 0.25) < 1e-8 and abs(seq[0].point[0] - 0.5) < 1e-8
+    if method == "natural":
+        # natural steps in p cannot pass the fold: the corrector fails at p < 0
+        assert branch.termination == "min_step" and not branch.events_of("fold")
+        assert branch.parameter[-1] < 1e-3
+        return
+    stab = branch.events_of("stability_change")
+    assert len(stab) == 1 and abs(stab[0].parameter) < 1e-7 and stab[0].located
+    fold = branch.events_of("fold")
+    assert len(fold) == 1 and fold[0].located and "turns back" in fold[0].detail
+    assert abs(fold[0].parameter) < 1e-8 and abs(fold[0].point[0]) < 1e-4
+    np.testing.assert_allclose(fold[0].multipliers, [1.0], atol=1e-4)
+    assert branch.termination.startswith("turned back") and branch.points[-1][0] < 0
+    assert not branch.stable[-1] and branch.stable[0]
+    # without location the same events are reported between their points, uncertain
+    rough = hp.continue_orbit(Fold, 1.0, -1.0, [1.0], locate=False)
+    assert [e.kind for e in rough.events] == [e.kind for e in branch.events]
+    assert all(not e.located and e.detail.startswith("uncertain") for e in rough.events
+               if e.kind != "sequence_change")
+
+
 def test_bifurcation_diagram_periods():
     values = np.linspace(0.2, 1.0, 81)
     d = hp.bifurcation_diagram(Henon, values, s0=[0.1, 0.1])

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
+from hybridpd.analysis.bifevents import EventTracker
 from hybridpd.cli import main
-from hybridpd.pair.continuation.events import _Tracker
 
 
 @pytest.mark.parametrize("typo, guess", [("regoins", "regions"), ("plto", "plot"),
@@ -56,7 +56,7 @@ def test_bifurcation_plot_draws_the_continued_branch_and_explains_the_period(
 
 
 def test_an_event_whose_location_failed_is_uncertain():
-    tracker = _Tracker(kinds=("fold",), evaluate=lambda pa, pb, th: None,
+    tracker = EventTracker(kinds=("fold",), evaluate=lambda pa, pb, th: None,
                        size=lambda pa, pb: 1.0, tol=1e-10, max_iter=50, locate=True,
                        to_event=lambda *a: a)
     _, pt, _, detail, _, ok = tracker._root(
@@ -64,7 +64,7 @@ def test_an_event_whose_location_failed_is_uncertain():
     assert not ok and detail.startswith("uncertain") and "corrector failed" in detail
     assert "between branch points 7 and 8" in detail
     # a converged location is reported as it is
-    tracker = _Tracker(kinds=("fold",), evaluate=lambda pa, pb, th: pa + th * (pb - pa),
+    tracker = EventTracker(kinds=("fold",), evaluate=lambda pa, pb, th: pa + th * (pb - pa),
                        size=lambda pa, pb: 1.0, tol=1e-10, max_iter=200, locate=True,
                        to_event=lambda *a: a)
     _, pt, _, detail, _, ok = tracker._root(

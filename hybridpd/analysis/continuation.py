@@ -15,19 +15,15 @@ path-following engine (:func:`hybridpd.analysis.pathfollow.follow_path`): ``meth
 ``dF/dp`` by central differences of the map in ``p``; passes folds). Step sizes halve on a
 failed correction (bounded number of halvings) and grow after easy
 ones. At every accepted point the Floquet multipliers (eigenvalues of ``DP^k``), spectral
-radius and impact sequence are recorded; between consecutive points the events below are
-detected by sign changes of test functions, and located by Illinois (safeguarded regula
-falsi) iterations on the test function along the branch (points on hyperplanes normal to the
-chord, corrected like arclength steps); ``locate=False`` keeps a linear interpolation:
-
-=====================  =====================================================================
-``fold``               ``det(DP - I)`` changes sign (a real multiplier crosses +1; a fold
-                       when ``p`` turns back, else a branch point)
-``period_doubling``    ``det(DP + I)`` changes sign (a real multiplier crosses -1)
-``neimark_sacker``     the number of non-real multipliers outside the unit circle changes
-``stability_change``   the spectral radius crosses 1
-``sequence_change``    the impact sequence of one period changes (grazing, sticking, ...)
-=====================  =====================================================================
+radius and impact sequence are recorded; between consecutive points the one detector of
+:mod:`hybridpd.analysis.bifevents` finds folds (turning points, or branch points where a
+real multiplier crosses +1 while the branch goes on), period doublings, Neimark-Sacker
+points and stability changes by sign changes of test functions, and locates them by Illinois
+(safeguarded regula falsi) iterations along the branch (points on hyperplanes normal to the
+chord, corrected like arclength steps); a ``sequence_change`` (the jump sequence of one
+period changes: grazing, sticking, ...) is located by bisection on the sequence. The
+engine (:func:`follow_branch`) is the impact pair's too: its map continuation gives it its
+own map, points and grazing events as hooks.
 
 A map knows its named parameters through its hook ``family``: e.g. the impact pair's
 ``ImpactMap.family("kv")`` is a builder of the map at other damping gains, so
@@ -62,10 +58,11 @@ from hybridpd._results import (
     encode_attrs,
     jsonable,
 )
+from hybridpd.analysis.bifevents import EventTracker, turn_test
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import Section, SectionMap
 from hybridpd.analysis.maps import PoincareMap, minimal_period
-from hybridpd.analysis.pathfollow import corrector, follow_path, illinois
+from hybridpd.analysis.pathfollow import bisect_predicate, corrector, follow_path
 from hybridpd.analysis.periodic import find_orbit
 
 __all__ = ["EVENT_KINDS", "BifurcationEvent", "Branch", "BranchPoint", "continue_orbit",
@@ -397,54 +394,65 @@ def _point(r, DP, s, p, zeros=0) -> BranchPoint:
                        bool(st.stable), r.signature, r.t_hit - r.t_start)
 
 
-def _ns_count(pt: BranchPoint) -> int:
-    """Non-real multipliers outside the unit circle."""
-    m = pt.multipliers
-    return int(np.sum((np.abs(m.imag) > _NONREAL * np.maximum(1, np.abs(m))) & (np.abs(m) > 1)))
+def follow_branch(path, first, p_end, *, method, step, min_step, max_step, max_steps, tol,
+                  max_iter, scale, to_event, kinds=EVENT_KINDS, locate=True, event_tol=1e-9,
+                  extra_events=None, nonsmooth=None, out_of_range=None, k=1, grow=1.5,
+                  name="p"):
+    """The one continuation engine: follow a branch from ``first`` towards ``p = p_end`` and
+    detect its events.
+
+    ``path`` gives ``F(u)`` (``P^k(s) - s``, phase wrapped; None where undefined), ``Fs``,
+    ``Fp``, ``point(u, iterations)`` (an accepted point with ``u``, ``DP``, ``Fp``, ``mult``,
+    ``rho``, ``formal``, ``signature``; None to refuse it), ``unwrap(cur, new)``,
+    ``lower_period(u)`` and ``explain()`` (None-able). The path follower is
+    :func:`~hybridpd.analysis.pathfollow.follow_path`, the detector
+    :class:`~hybridpd.analysis.bifevents.EventTracker` (with turning points); a family's own
+    events come from ``extra_events(pa, pb, index, evaluate)`` (``evaluate(pa, pb, theta)``
+    the corrected point between two points). Returns ``follow_path``'s
+    ``(points, events, termination, rejected, why)``.
+    """
+    correct = corrector(path.F, path.Fs, path.Fp, tol=tol, max_iter=max_iter, scale=scale,
+                        explain=path.explain)
+
+    def evaluate(pa, pb, theta):
+        chord = pb.u - pa.u
+        u, res = correct(pa.u + theta * chord, chord / np.linalg.norm(chord))
+        return path.point(u, res.iterations) if res.converged else None
+
+    tracker = EventTracker(kinds, evaluate, lambda a, b: float(np.linalg.norm(b.u - a.u)),
+                           event_tol, 60, locate, to_event, turn_test=turn_test,
+                           nonsmooth=nonsmooth)
+
+    def detect(a, b, i):
+        return tracker.detect(a, b, i, () if extra_events is None
+                              else extra_events(a, b, i, evaluate))
+
+    return follow_path(first, p_end, F=path.F, Fs=path.Fs, Fp=path.Fp,
+                       make_point=path.point, correct=correct, method=method, step=step,
+                       min_step=min_step, max_step=max_step, max_steps=max_steps, k=k,
+                       lower_period=path.lower_period, unwrap=path.unwrap, detect=detect,
+                       out_of_range=out_of_range, tol=tol, name=name, grow=grow,
+                       explain=path.explain)
 
 
-def _ns_test(pt: BranchPoint) -> float:
-    """``|lambda| - 1`` of the non-real multiplier nearest the circle (NaN if none)."""
-    m = pt.multipliers[np.abs(pt.multipliers.imag) > _NONREAL]
-    return float(np.min(np.abs(m)) - 1.0) if m.size else math.nan
-
-
-#: Test functions of the located kinds (their roots are the events).
-_TESTS = {"fold": lambda pt: float(np.linalg.det(pt.DP - np.eye(pt.DP.shape[0]))),
-          "period_doubling": lambda pt: float(np.linalg.det(pt.DP + np.eye(pt.DP.shape[0]))),
-          "stability_change": lambda pt: pt.spectral_radius - 1.0,
-          "neimark_sacker": _ns_test}
-
-
-def _events(a: BranchPoint, b: BranchPoint, index: int) -> list:
-    """Sign changes of the test functions between two points, linearly interpolated."""
-    out = []
-
-    def lin(fa, fb):
-        th = fa / (fa - fb) if fa != fb else 0.5
-        return a.p + th * (b.p - a.p)
-
-    for kind in ("fold", "period_doubling", "stability_change"):
-        fa, fb = _TESTS[kind](a), _TESTS[kind](b)
-        if np.isfinite(fa) and np.isfinite(fb) and fa * fb < 0:
-            out.append(BifurcationEvent(kind, index, lin(fa, fb)))
-    na, nb = _ns_count(a), _ns_count(b)
-    if na != nb:
-        fa, fb = _ns_test(a), _ns_test(b)
-        pe = lin(fa, fb) if np.isfinite(fa) and np.isfinite(fb) else 0.5 * (a.p + b.p)
-        out.append(BifurcationEvent("neimark_sacker", index, pe,
-                               f"complex multipliers outside: {na} -> {nb}"))
-    if a.signature != b.signature:
-        out.append(BifurcationEvent("sequence_change", index, 0.5 * (a.p + b.p),
-                               f"{len(a.signature)} -> {len(b.signature)} jumps per period"))
-    return out
+def sequence_change(pa, pb, evaluate, *, locate, tol, max_iter=60):
+    """Where the jump sequence of one period changes between two branch points: the last
+    point on each side (bisection on the sequence, when ``locate``) and whether it converged.
+    """
+    if not locate:
+        return pa, pb, False
+    return bisect_predicate(lambda th: evaluate(pa, pb, th),
+                            lambda pt: pt.signature == pa.signature, pa, pb,
+                            size=float(np.linalg.norm(pb.u - pa.u)), tol=tol,
+                            max_iter=max_iter)
 
 
 def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None = None,
                    section=None, method: str = "arclength", step: float | None = None,
                    max_step: float | None = None, min_step: float | None = None,
                    max_steps: int = 200, tol: float = 1e-10, fd_step: float = 1e-6,
-                   locate: bool = True, map_options: dict | None = None,
+                   locate: bool = True, event_tol: float = 1e-9,
+                   events: tuple = EVENT_KINDS, map_options: dict | None = None,
                    **options) -> Branch:
     """Follow a periodic orbit (a fixed point of ``P^k``) in a parameter, on any map.
 
@@ -476,8 +484,13 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
     fd_step : float
         Relative step of the parameter derivative (arclength).
     locate : bool
-        Refine fold, period-doubling, Neimark-Sacker and stability-change events by Illinois
-        iterations on their test function along the branch (otherwise: linear interpolation).
+        Locate the events (Illinois iterations on the test function along the branch,
+        bisection on the jump sequence); otherwise each is reported at the nearer bracketing
+        point, ``located=False``.
+    event_tol : float
+        Location tolerance: length of the final bracket in ``(s, p)``.
+    events : tuple of str
+        Kinds to detect (a subset of :data:`EVENT_KINDS`).
     map_options : dict, optional
         Keyword arguments of :class:`SectionMap` (``t_max``, ``max_jumps``, ...).
     **options
@@ -520,7 +533,8 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
                       DeprecationWarning, stacklevel=2)
         named = dict(period=period, section=section, method=method, step=step,
                      max_step=max_step, min_step=min_step, max_steps=max_steps, tol=tol,
-                     fd_step=fd_step, locate=locate, map_options=map_options)
+                     fd_step=fd_step, locate=locate, event_tol=event_tol, events=events,
+                     map_options=map_options)
         given = {k: v for k, v in named.items() if v is not continue_orbit.__kwdefaults__[k]}
         pair = importlib.import_module("hybridpd.pair.continuation")
         return pair.continue_pair_orbit(builder, p0, p_end, s0, **given, **options)
@@ -542,6 +556,11 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
         raise ValueError("steps must satisfy 0 < min_step <= step <= max_step")
     if int(max_steps) < 1:
         raise ValueError(f"max_steps must be >= 1, got {max_steps!r}")
+    if not event_tol > 0:
+        raise ValueError(f"event_tol must be > 0, got {event_tol!r}")
+    bad = [kind for kind in events if kind not in EVENT_KINDS]
+    if bad:
+        raise ValueError(f"events must be a subset of {EVENT_KINDS}, got {bad}")
     if period is None:
         period = getattr(s0, "period", 1)
     s0 = getattr(s0, "s", s0)
@@ -555,28 +574,33 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
                                   f"no fixed point of P^{k} at p = {p0:.10g} to start from: "
                                   f"{first.reason}{detail}", dim=P.dim)
     path = _Path(make, k, fd_step * max(1.0, abs(p0)), P.dim)
-    correct = corrector(path.F, path.Fs, path.Fp, tol=tol, max_iter=15,
-                        scale=lambda x: max(1.0, float(np.max(np.abs(x[:path.dim])))),
-                        explain=path.explain)
     lo, hi = sorted((p0, p_end))
-    pts, _evs, termination, _rej, _why = follow_path(
-        path.point(np.append(first.s, p0)), p_end, F=path.F, Fs=path.Fs, Fp=path.Fp,
-        make_point=path.point, correct=correct, method=method, step=step, min_step=min_step,
-        max_step=max_step, max_steps=int(max_steps) - 1, k=k, lower_period=lambda u: minimal_period(make(u[-1]), u[:-1], k) < k,
-        unwrap=path.unwrap, tol=tol, grow=1.3, explain=path.explain,
+
+    def to_event(kind, pt, index, detail, fv, ok):
+        return BifurcationEvent(kind, index, float(pt.u[-1]), detail, pt.fam.s.copy(),
+                                pt.mult.copy(), float(fv), bool(ok))
+
+    def sequence_events(pa, pb, index, evaluate):
+        if "sequence_change" not in events or pa.signature == pb.signature:
+            return []
+        _la, lb, ok = sequence_change(pa, pb, evaluate, locate=locate, tol=event_tol)
+        return [to_event("sequence_change", lb, index,
+                         f"{len(pa.signature)} -> {len(pb.signature)} jumps per period",
+                         math.nan, ok)]
+
+    pts, evs, termination, _rej, _why = follow_branch(
+        path, path.point(np.append(first.s, p0)), p_end, method=method, step=step,
+        min_step=min_step, max_step=max_step, max_steps=int(max_steps) - 1, tol=tol,
+        max_iter=15, scale=lambda x: max(1.0, float(np.max(np.abs(x[:path.dim])))),
+        to_event=to_event, kinds=events, locate=locate, event_tol=event_tol,
+        extra_events=sequence_events, k=k, grow=1.3,
         out_of_range=lambda p: None if lo - 1e-9 * span <= p <= hi + 1e-9 * span
         else "turned back: left the parameter range")
-    events = []
-    for i in range(len(pts) - 1):
-        for ev in _events(pts[i].fam, pts[i + 1].fam, i):
-            if locate and ev.kind in _TESTS:
-                ev = _locate(path, correct, pts[i], pts[i + 1], ev)
-            events.append(ev)
     reason = _reason(termination, pts[-1].u[-1], p_end, lo, hi, int(max_steps))
     for key, short in (("reached", "reached"), ("max_steps", "max_steps"),
                        ("step below", "min_step")):
         termination = short if termination.startswith(key) else termination
-    return Branch.from_points([q.fam for q in pts], events, termination, method, k, reason,
+    return Branch.from_points([q.fam for q in pts], evs, termination, method, k, reason,
                               dim=P.dim)
 
 
@@ -601,6 +625,11 @@ class _PathPoint:
     DP: np.ndarray
     Fp: np.ndarray | None
     fam: BranchPoint
+    formal = True         # the multipliers mean what they say at every point
+
+    mult = property(lambda self: self.fam.multipliers)
+    rho = property(lambda self: self.fam.spectral_radius)
+    signature = property(lambda self: self.fam.signature)
 
 
 class _Path:
@@ -673,34 +702,14 @@ class _Path:
             fp = None
         return _PathPoint(u.copy(), DP, fp, _point(r, DP, s, u[-1], P.structural_zeros))
 
+    def lower_period(self, u) -> bool:
+        """The point is a fixed point of a lower power of the map (another branch)."""
+        return minimal_period(self.make(u[-1]), u[:-1], self.k) < self.k
+
     def unwrap(self, cur, new):
         P = self.make(new.u[-1])
         if P.period is not None:
             new.u[0] = cur.u[0] + P.wrap(new.u[:-1] - cur.u[:-1])[0]
-
-
-def _locate(path, correct, a, b, ev, max_iter=40) -> BifurcationEvent:
-    """Illinois on the test function along the branch between ``a`` and ``b``.
-
-    A point at chord fraction ``theta`` is the branch point on the hyperplane through
-    ``ua + theta (ub - ua)`` normal to the chord (the arclength corrector).
-    """
-    f = lambda q: _TESTS[ev.kind](q.fam)
-    fa, fb = f(a), f(b)
-    if not (np.isfinite(fa) and np.isfinite(fb) and fa * fb < 0):
-        return ev
-    chord = b.u - a.u
-
-    def evaluate(th):
-        u, res = correct(a.u + th * chord, chord / np.linalg.norm(chord))
-        return path.point(u) if res.converged else None
-
-    best, fv, _ok = illinois(evaluate, f, fa, fb, a, b, size=1.0, tol=1e-12,
-                             max_iter=max_iter)
-    if best is a or best is b:
-        return ev
-    return BifurcationEvent(ev.kind, ev.index, best.fam.p, (ev.detail + "; " if ev.detail else "")
-                       + f"located: test {fv:.3g}")
 
 
 def _continue_family(builder, s0, p0: float, p_end: float, **options) -> Branch:

@@ -27,9 +27,7 @@ SYMMETRIC_PARAMETERS = ("kp", "kv", "e", "mu", "omega", "L", "x10", "m2", "gamma
 EVENT_KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing", "stability_change",
                "existence")
 
-_NONREAL_TOL = 1e-9        # |Im lambda| above this (relative) counts as a complex pair
 _END_GRAZE = 1e-4          # a branch whose corrector fails this close to grazing ends there
-_JUMP_TOL = 1e-3           # a located crossing this far from the critical value is a jump
 _NEAR_BRANCH = 5e-2        # a stuck continuation this close to a +1 multiplier: branch point
 
 

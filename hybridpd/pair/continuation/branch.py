@@ -1,4 +1,8 @@
-"""Continuation of fixed points of ``P^k`` in one parameter (:func:`continue_pair_orbit`)."""
+"""Continuation of the impact pair's fixed points of ``P^k`` in one named parameter
+(:func:`continue_pair_orbit`) on the one engine,
+:func:`~hybridpd.analysis.continuation.follow_branch`: the pair gives it its map along the
+parameter (its exact Jacobian and design path), its points (rejected where a flight
+penetrates a wall) and its grazing events."""
 from __future__ import annotations
 
 import math
@@ -6,10 +10,15 @@ from dataclasses import replace
 
 import numpy as np
 
-from hybridpd.analysis.continuation import BifurcationEvent, Branch
+from hybridpd.analysis.bifevents import fold_test
+from hybridpd.analysis.continuation import (
+    BifurcationEvent,
+    Branch,
+    follow_branch,
+    sequence_change,
+)
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.maps import minimal_period
-from hybridpd.analysis.pathfollow import bisect_predicate, corrector, follow_path
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
 from hybridpd.model import check_finite
 from hybridpd.pair.continuation._common import (
@@ -34,11 +43,10 @@ from hybridpd.pair.continuation._common import (
 from hybridpd.pair.continuation.events import (
     _branch_from_points,
     _empty_branch,
+    _near_grazing,
     _Point,
     _rel_speed,
     _sig_str,
-    _test_fold,
-    _Tracker,
 )
 from hybridpd.pair.continuation.newton import _param_derivative, _residual, map_power_jacobian
 from hybridpd.pair.continuation.trace import trace_orbit
@@ -164,101 +172,20 @@ def continue_pair_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float,
     if bad:
         raise ValueError(f"events must be a subset of {EVENT_KINDS}, got {bad}")
     lo_p, hi_p = min(p0, stop), max(p0, stop)
-
-    cache = {}
-
-    def map_at(p):
-        # the corrector evaluates the same few parameter values repeatedly
-        key = float(p)
-        if key not in cache:
-            if len(cache) > 64:
-                cache.clear()
-            cache[key] = _map_with(P0, name, key, design)
-        return cache[key]
-
-    def F(u):
-        p = u[4]
-        if not _in_domain(name, p) or map_at(p) is None:
-            return None
-        return _residual(map_at(p), u[:4], k)
-
-    def Fs(u):
-        if map_at(u[4]) is None:
-            raise RuntimeError(f"no design amplitude at {name} = {u[4]:g}")
-        return map_power_jacobian(map_at(u[4]), u[:4], k, method=jacobian,
-                                  fd_step=fd_step)[0] - np.eye(4)
-
-    def Fp(u):
-        if map_at(u[4]) is None:
-            raise RuntimeError(f"no design amplitude at {name} = {u[4]:g}")
-        return _param_derivative(map_at(u[4]), name, u[:4], k, fd_step, design)
-
-    correct = corrector(F, Fs, Fp, tol=tol, max_iter=max_newton, scale=_scale)
-
-    def make_point(u, its):
-        P = map_at(u[4])
-        if P is None:
-            return None
-        s = u[:4].copy()
-        traces = trace_orbit(P, s, k, margin_samples)
-        if not all(tr.ok for tr in traces):
-            return None
-        try:
-            DP = map_power_jacobian(P, s, k, method=jacobian, fd_step=fd_step)[0]
-        except (RuntimeError, ValueError):
-            return None
-        if not np.all(np.isfinite(DP)):
-            return None
-        margin = _min([tr.margin for tr in traces])
-        vmin = _min([st.speed for tr in traces for st in tr.steps if st.kind != "stick"])
-        st = stability(DP)
-        sig = tuple(tr.signature for tr in traces)
-        try:
-            fp = Fp(u)
-        except RuntimeError:
-            fp = None
-        return _Point(u=u.copy(), DP=DP, mult=st.multipliers, rho=st.spectral_radius,
-                      signature=sig, margin=margin, min_speed=vmin,
-                      xm=P.reference.xm, newton_its=its, traces=traces, Fp=fp)
-
-    def turn_test(pt, chord):
-        # parameter component of the unit tangent (kernel of [DP^k - I, dF/dp]) oriented
-        # along the chord: it changes sign at a turning point of the branch
-        if pt.Fp is None:
-            return np.nan
-        v = np.linalg.svd(np.column_stack([pt.DP - np.eye(4), pt.Fp]))[2][-1]
-        return float(v[4] if v @ chord >= 0 else -v[4])
-
-    def evaluate_between(pa, pb, theta):
-        chord = pb.u - pa.u
-        nrm = np.linalg.norm(chord)
-        u, res = correct(pa.u + theta * chord, chord / nrm)
-        if not res.converged:
-            return None
-        return make_point(u, res.iterations)
+    path = _PairPath(P0, name, k, design, jacobian, fd_step, margin_samples)
 
     def to_event(kind, pt, index, detail, fv, ok):
-        T = 2 * math.pi / (pt.u[4] if name == "omega" else P0.reference.omega)
         s = pt.u[:4].copy()
-        s[0] %= T
+        s[0] %= path.period(pt.u)
         return BifurcationEvent(kind=kind, parameter=float(pt.u[4]), point=s,
                                 multipliers=pt.mult.copy(), index=index, detail=detail,
                                 test_value=float(fv), located=bool(ok), viable=True,
                                 variables={"xm": float(pt.xm)})
 
-    tracker = _Tracker(events, evaluate_between, lambda a, b: float(np.linalg.norm(b.u - a.u)),
-                       event_tol, 60, locate, to_event, turn_test=turn_test)
-
-    def grazing_events(pa, pb, index):
+    def grazing_events(pa, pb, index, evaluate):
         if "grazing" not in events or pa.signature == pb.signature:
             return []
-        if locate:
-            la, lb, ok = bisect_predicate(lambda th: evaluate_between(pa, pb, th),
-                                           lambda pt: pt.signature == pa.signature, pa, pb,
-                                           size=float(np.linalg.norm(pb.u - pa.u)),
-                                           tol=event_tol, max_iter=60)
-        else:
-            la, lb, ok = pa, pb, False
+        la, lb, ok = sequence_change(pa, pb, evaluate, locate=locate, tol=event_tol)
         # report the side where the changing contact is slow / the margin is small
         ga = min(la.margin, _rel_speed(la))
         gb = min(lb.margin, _rel_speed(lb))
@@ -274,55 +201,137 @@ def continue_pair_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float,
     if not start.converged:
         return _empty_branch(name, P0, k, method,
                              f"initial Newton failed: {start.reason}")
-    u0 = np.append(start.s, p0)
-    first = make_point(u0, start.iterations)
+    first = path.point(np.append(start.s, p0), start.iterations)
     if first is None:
         return _empty_branch(name, P0, k, method, "Jacobian undefined at the initial point")
-    def unwrap(cur, new):
-        # keep the phase continuous along the branch
-        T = 2 * math.pi / (cur.u[4] if name == "omega" else P0.reference.omega)
-        new.u[0] = cur.u[0] + _wrap_diff(new.u[0] - cur.u[0], T)
 
     def out_of_range(p):
         if lo_p - 1e-12 * span <= p <= hi_p + 1e-12 * span:
             return None
         return f"parameter left [{lo_p:g}, {hi_p:g}] at {name} = {p:.10g} (the branch turned back)"
 
-    pts, evs, termination, rejected, why = follow_path(
-        first, stop, F=F, Fs=Fs, Fp=Fp, make_point=make_point, correct=correct, method=method,
-        step=step, min_step=min_step, max_step=max_step, max_steps=max_steps, k=k,
-        lower_period=lambda u: minimal_period(map_at(u[4]), u[:4], k) < k, unwrap=unwrap,
-        detect=lambda a, b, i: tracker.detect(a, b, i, grazing_events(a, b, i)),
-        out_of_range=out_of_range, tol=tol, name=name)
+    pts, evs, termination, rejected, why = follow_branch(
+        path, first, stop, method=method, step=step, min_step=min_step, max_step=max_step,
+        max_steps=max_steps, tol=tol, max_iter=max_newton, scale=_scale, to_event=to_event,
+        kinds=events, locate=locate, event_tol=event_tol, extra_events=grazing_events,
+        nonsmooth=_near_grazing, out_of_range=out_of_range, k=k, name=name)
     if why:
-        cur = pts[-1]
-        g = min(cur.margin, _rel_speed(cur))
-        m1 = float(np.min(np.abs(cur.mult - 1.0)))
-        if m1 < _NEAR_BRANCH and not (np.isfinite(g) and g < _END_GRAZE):
-            # Next to a branch point another family crosses this one; the corrector lands on
-            # it (rejected as a sharp turn) whatever the step. Passing needs branch
-            # switching, which is not attempted: say so.
-            termination += (f"; stopped next to a branch point (a multiplier within "
-                            f"{m1:.2g} of +1): another family of fixed points crosses here")
-            if "fold" in events:
-                evs.append(to_event(
-                    "fold", cur, len(pts) - 1,
-                    f"branch point not passed (closest |lambda - 1| = {m1:.2g}); restart "
-                    "from the other family to continue", float(_test_fold(cur)), False))
-        if np.isfinite(g) and g < _END_GRAZE:
-            # The fixed point runs into grazing and no fixed point continues it: at a grazing
-            # contact P has a square-root singularity (the branch ends, as in a nonsmooth
-            # fold). The last point is within the margin of the grazing point.
-            termination += "; the branch ends at grazing"
-            if "grazing" in events:
-                evs.append(to_event(
-                    "grazing", cur, len(pts) - 1,
-                    f"the branch ends at grazing (margin {cur.margin:.3g}, relative approach "
-                    f"speed {_rel_speed(cur):.3g}): no fixed point of P^{k} continues beyond it",
-                    g, g < graze_tol))
+        termination += _stuck(pts, len(pts) - 1, events, evs, to_event, graze_tol, k)
     br = _branch_from_points(pts, evs, name, P0, k, method, termination, rejected)
     if design is not None:
         fixed = {kk: v for kk, v in br.fixed.items() if kk not in ("xm", name)}
         fixed.update({"x10": design.x10, "n": design.n})
         br = replace(br, metadata={**br.metadata, "fixed": fixed})
     return br
+
+
+def _stuck(pts, index, events, evs, to_event, graze_tol, k) -> str:
+    """Why a branch whose step fell below ``min_step`` could not go on, where the pair knows
+    (a branch point, or the end of the family at grazing); appends the event it implies."""
+    cur = pts[-1]
+    g = min(cur.margin, _rel_speed(cur))
+    m1 = float(np.min(np.abs(cur.mult - 1.0)))
+    out = ""
+    if m1 < _NEAR_BRANCH and not (np.isfinite(g) and g < _END_GRAZE):
+        # Next to a branch point another family crosses this one; the corrector lands on it
+        # (rejected as a sharp turn) whatever the step. Passing needs branch switching, which
+        # is not attempted: say so.
+        out += (f"; stopped next to a branch point (a multiplier within {m1:.2g} of +1): "
+                "another family of fixed points crosses here")
+        if "fold" in events:
+            evs.append(to_event(
+                "fold", cur, index,
+                f"branch point not passed (closest |lambda - 1| = {m1:.2g}); restart from the "
+                "other family to continue", float(fold_test(cur)), False))
+    if np.isfinite(g) and g < _END_GRAZE:
+        # The fixed point runs into grazing and no fixed point continues it: at a grazing
+        # contact P has a square-root singularity (the branch ends, as in a nonsmooth fold).
+        # The last point is within the margin of the grazing point.
+        out += "; the branch ends at grazing"
+        if "grazing" in events:
+            evs.append(to_event(
+                "grazing", cur, index,
+                f"the branch ends at grazing (margin {cur.margin:.3g}, relative approach "
+                f"speed {_rel_speed(cur):.3g}): no fixed point of P^{k} continues beyond it",
+                g, g < graze_tol))
+    return out
+
+
+class _PairPath:
+    """``F(u) = P^k(s) - s`` of the pair's map along one named parameter (``u = (s, p)``),
+    its Jacobians and its points (with their traces), for the one engine."""
+
+    explain = None       # the pair's maps say nothing more than "undefined"
+
+    def __init__(self, P0, name, k, design, jacobian, fd_step, margin_samples):
+        self.P0, self.name, self.k, self.design = P0, name, k, design
+        self.jacobian, self.fd_step, self.margin_samples = jacobian, fd_step, margin_samples
+        self._cache = {}
+
+    def map_at(self, p):
+        """The map at parameter value ``p`` (None off the design path)."""
+        # the corrector evaluates the same few parameter values repeatedly
+        key = float(p)
+        if key not in self._cache:
+            if len(self._cache) > 64:
+                self._cache.clear()
+            self._cache[key] = _map_with(self.P0, self.name, key, self.design)
+        return self._cache[key]
+
+    def period(self, u) -> float:
+        """The reference period at ``u`` (the phase's range)."""
+        return 2 * math.pi / (u[4] if self.name == "omega" else self.P0.reference.omega)
+
+    def _map(self, u):
+        P = self.map_at(u[4])
+        if P is None:
+            raise RuntimeError(f"no design amplitude at {self.name} = {u[4]:g}")
+        return P
+
+    def F(self, u):
+        if not _in_domain(self.name, u[4]) or self.map_at(u[4]) is None:
+            return None
+        return _residual(self.map_at(u[4]), u[:4], self.k)
+
+    def Fs(self, u):
+        return map_power_jacobian(self._map(u), u[:4], self.k, method=self.jacobian,
+                                  fd_step=self.fd_step)[0] - np.eye(4)
+
+    def Fp(self, u):
+        return _param_derivative(self._map(u), self.name, u[:4], self.k, self.fd_step,
+                                 self.design)
+
+    def lower_period(self, u) -> bool:
+        return minimal_period(self.map_at(u[4]), u[:4], self.k) < self.k
+
+    def unwrap(self, cur, new):
+        # keep the phase continuous along the branch
+        T = self.period(cur.u)
+        new.u[0] = cur.u[0] + _wrap_diff(new.u[0] - cur.u[0], T)
+
+    def point(self, u, its):
+        """The accepted point at ``u`` (None where a flight penetrates or DP is undefined)."""
+        P, k = self.map_at(u[4]), self.k
+        if P is None:
+            return None
+        s = u[:4].copy()
+        traces = trace_orbit(P, s, k, self.margin_samples)
+        if not all(tr.ok for tr in traces):
+            return None
+        try:
+            DP = map_power_jacobian(P, s, k, method=self.jacobian, fd_step=self.fd_step)[0]
+        except (RuntimeError, ValueError):
+            return None
+        if not np.all(np.isfinite(DP)):
+            return None
+        st = stability(DP)
+        try:
+            fp = self.Fp(u)
+        except RuntimeError:
+            fp = None
+        return _Point(u=u.copy(), DP=DP, mult=st.multipliers, rho=st.spectral_radius,
+                      signature=tuple(tr.signature for tr in traces),
+                      margin=_min([tr.margin for tr in traces]),
+                      min_speed=_min([st.speed for tr in traces for st in tr.steps
+                                      if st.kind != "stick"]),
+                      xm=P.reference.xm, newton_its=its, traces=traces, Fp=fp)

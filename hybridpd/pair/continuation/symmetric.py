@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 
+from hybridpd.analysis.bifevents import EventTracker, changes
 from hybridpd.analysis.continuation import BifurcationEvent, Branch
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.pathfollow import _MAX_HALVINGS, bisect_predicate
@@ -20,12 +21,7 @@ from hybridpd.pair.continuation._common import (
     _positive_int,
     _wrap_diff,
 )
-from hybridpd.pair.continuation.events import (
-    _branch_from_points,
-    _changes,
-    _Point,
-    _Tracker,
-)
+from hybridpd.pair.continuation.events import _branch_from_points, _Point
 from hybridpd.pair.orbits import REASONS, symmetric_orbits
 from hybridpd.pair.params import PairParams
 
@@ -171,12 +167,12 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
     def size(pa, pb):
         return abs(pb.u[-1] - pa.u[-1]) / max(1.0, abs(pa.u[-1]))
 
-    tracker = _Tracker(events, evaluate_between, size, event_tol, 80, locate, to_event)
+    tracker = EventTracker(events, evaluate_between, size, event_tol, 80, locate, to_event)
 
     def extra_events(pa, pb, index):
         out = []
         ma, mb = pa.margin, pb.margin
-        grazed = _changes(ma, mb)
+        grazed = changes(ma, mb)
         if "grazing" in events and grazed:
             out.append(tracker._root(
                 "grazing", lambda pt: pt.margin, pa, pb, index,
