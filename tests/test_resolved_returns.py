@@ -12,8 +12,10 @@ import numpy as np
 import pytest
 
 from hybridpd.analysis.hybridmap import Section, SectionMap
-from hybridpd.analysis.periodic import find_orbit
+from hybridpd.analysis.labels import LABELS
+from hybridpd.analysis.periodic import SectionMapper, find_orbit
 from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode
+from hybridpd.hybrid.modes import ZenoOptions
 from hybridpd.hybrid.samples import impact_oscillator, oscillator_initial_state
 
 W, E, STOP = 0.8, 0.8, 1.0
@@ -127,3 +129,39 @@ def test_the_stiff_lightly_damped_arm_has_its_orbit():
         s, lin = P(s), J @ lin
         err = np.abs(P.wrap(s - orb.s) - lin).max()
         assert err <= 0.05 * np.abs(lin).max()
+
+
+def test_basins_hand_runs_the_compiled_loop_cannot_finish_to_the_resolver():
+    """With at most one jump per instant the twins' impacts in step stop the compiled run
+    (contacts refiring at one instant); the map takes such an application to the resolver,
+    and the basin labeller must too: started in step, the twins converge exactly when the
+    single oscillator does."""
+    P1 = _single()
+    orb = find_orbit(P1, [7.7, 1.66])
+    calls = []
+
+    def counting(*a, **kw):
+        calls.append(a[2])
+        return _resolver(*a, **kw)
+
+    def twins(resolver):
+        z = oscillator_initial_state(0, 0, omega=W)
+        ref = (np.array([z[0], z[1], z[0], z[1], z[2], z[3]]), 0.0)
+        return SectionMap(Section(_twins(), "free", "impact1", reference=ref,
+                                  resolver=resolver), joint="resolve",
+                          zeno=ZenoOptions(max_instant_jumps=1))
+
+    P2 = twins(counting)
+    fp2 = _in_step(P2, *P1.section.to_state(orb.s))
+    rng = np.random.default_rng(3)
+    starts = orb.s + rng.uniform(-1, 1, (10, 2)) * [2.0, 1.0]
+    starts = starts[[P1.section.fires(P1.section.to_state(s)[0]) > 0 for s in starts]]
+    lab1, _ = SectionMapper(P1, orb.s, n_iter=200).labels(starts)
+    in_step = np.array([_in_step(P2, *P1.section.to_state(s)) for s in starts])
+    lab2, its2 = SectionMapper(P2, fp2, n_iter=200).labels(in_step)
+    assert len(starts) >= 5 and np.any(lab1 == LABELS.index("converged"))
+    np.testing.assert_array_equal(lab2, lab1)
+    assert len(calls) >= np.sum(its2)       # every application went to the resolver
+    # without a resolver the compiled run's answer stays: an accumulation at one instant
+    lab0, _ = SectionMapper(twins(None), fp2, n_iter=200, early_exit=False).labels(in_step)
+    assert np.all(lab0 == LABELS.index("zeno_sticking"))

@@ -439,6 +439,7 @@ def measured_contraction(P: SectionMap, s, period: int = 1, *, n_iter: int = 40,
 # basins: a compiled mapper
 # ----------------------------------------------------------------------------------------
 _CONVERGED, _NOT_CONVERGED, _DIVERGED, _ZENO_STICKING, _UNRESOLVED = 0, 1, 2, 3, 4
+_TO_RESOLVER = 1 << 60      # the labeller's code of a run handed to the resolver
 
 
 def _n_finite(rows) -> int:
@@ -481,17 +482,18 @@ def _dist(s, fp, T, Q):
 
 @njit(cache=True)
 def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, k, t_max, J_max, max_steps, C, T,
-                  FP, n_iter, criterion, QS, R2, escape, S_out, lab, its, p0, rb):
+                  FP, n_iter, criterion, QS, R2, escape, S_out, lab, its, p0, resolve, rb):
     """Label the points ``p0, p0 + 1, ...`` (rows of ``W0``, ``T0``) into ``lab``, ``its``.
 
     ``pk``, ``dt_min``, ``zf``, ``zi``: the map's tables and options
     (``SectionMap._kernel_args``); ``rb``: the run's buffers (:mod:`hybridpd.hybrid._kernel`).
 
     Returns ``(p, code)``: ``p = N`` when every point is labelled; otherwise the run of
-    point ``p`` handed back (``ST_NEED_MODE``: a mode not built yet, code ``code``, or a Zeno
-    reset not packed): its current iterate is left in ``W0[p]``, ``T0[p]`` and its
-    iterations so far in ``its[p]``, so that a call from ``p`` (the tables completed)
-    resumes it there.
+    point ``p`` handed back: ``ST_NEED_MODE`` (a mode not built yet, code ``code``, or a Zeno
+    reset not packed), or, with ``resolve``, an application that stopped at contacts
+    refiring at one instant (code ``_TO_RESOLVER``: the map's own ``apply`` takes it to the
+    section's resolver). Its current iterate is left in ``W0[p]``, ``T0[p]`` and its
+    iterations so far in ``its[p]``, so that a call from ``p`` resumes it there.
     """
     w, fc, ic = rb.w, rb.fc, rb.ic
     N = W0.shape[0]
@@ -514,6 +516,12 @@ def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, k, t_max, J_max, max_steps
                 T0[p] = t0
                 its[p] = it
                 return p, ic[IC_MODE]
+            if st == 2 and resolve:
+                for i in range(N1):
+                    W0[p, i] = w0[i]
+                T0[p] = t0
+                its[p] = it
+                return p, _TO_RESOLVER
             its[p] = it + 1
             if st != ST_RETURNED:
                 if st == 6:
@@ -654,16 +662,51 @@ class SectionMapper(BasinMapper):
         bufs = P._buffers()
         p = 0
         while p < N:
-            p, _code = _label_kernel(*P._kernel_args, W0, T0, sec.mode_index, sec.guard_index,
+            p, code = _label_kernel(*P._kernel_args, W0, T0, sec.mode_index, sec.guard_index,
                                     self.period, P._t_max(self.period), P.max_jumps,
                                     P.max_steps, np.ascontiguousarray(sec.C),
                                     sec.period or 0.0, targets, int(n_iter), self.criterion,
-                                    Qs, r2s, self.escape, sub, lab, its, p, bufs)
-            if p < N and not P._complete(bufs.ic):
+                                    Qs, r2s, self.escape, sub, lab, its, p,
+                                    sec.resolver is not None, bufs)
+            if p < N and code == _TO_RESOLVER:
+                if self._resolved_step(p, W0, T0, its, lab, sub, n_iter, Qs, r2s, targets):
+                    p += 1
+            elif p < N and not P._complete(bufs.ic):
                 lab[p] = _UNRESOLVED        # its run needs a mode beyond the tables' bound
                 its[p] += 1
                 p += 1
         return lab, its, sub
+
+    def _resolved_step(self, p, W0, T0, its, lab, sub, n_iter, Qs, r2s, targets) -> bool:
+        """One application of ``P^k`` to point ``p``'s iterate by the map's own ``apply``
+        (the compiled run stopped at contacts refiring at one instant: ``apply`` hands it to
+        the section's resolver, as a simulation does). Labels ``p`` and returns True where
+        this ends its run (the same rules as the compiled labeller); otherwise leaves the
+        image as its iterate for the compiled labeller to resume."""
+        P = self.map
+        sec = P.section
+        n = sec.automaton.n_states
+        r = P.apply(sec.from_state(W0[p, :n], float(T0[p])), self.period)
+        its[p] += 1
+        if not r.ok:
+            lab[p] = {"zeno": _ZENO_STICKING, "nonfinite": _DIVERGED}.get(r.status,
+                                                                          _UNRESOLVED)
+            if r.status == "end_time":
+                lab[p] = _ZENO_STICKING if r.mode_final != sec.mode else _DIVERGED
+            return True
+        sub[p] = r.s
+        T = sec.period or 0.0
+        dist = [_dist(r.s, targets[c], T, Qs[c]) for c in range(len(targets))]
+        if not np.all(np.abs(r.s) <= self.escape):
+            lab[p] = _DIVERGED
+        elif any(q < r2s[c] for c, (q, _e) in enumerate(dist)):
+            lab[p] = _CONVERGED
+        elif its[p] >= n_iter:
+            lab[p] = _CONVERGED if min(e for _q, e in dist) < self.criterion else _NOT_CONVERGED
+        else:
+            W0[p, :n], W0[p, n], T0[p] = r.z_hit, 1.0, r.t_hit
+            return False
+        return True
 
     def labels(self, S) -> tuple:
         """Labels and iterations used for section points ``S`` of shape ``(N, dim)``."""
