@@ -136,6 +136,8 @@ def test_the_pair_on_the_one_engine_through_its_family_hook():
         np.testing.assert_allclose(Q(pt.s), pt.s, rtol=0, atol=1e-9)
     last = br[-1].p
     assert 21.5 < last < 21.95, br.reason     # the orbit ends at grazing (kv = 21.938)
+    # next to grazing the tangent bends without a multiplier at +1: not a fold
+    assert not br.events_of("fold"), br.events
     with pytest.raises(ValueError, match="parameter"):
         P.family("kd")
 

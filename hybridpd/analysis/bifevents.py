@@ -10,8 +10,8 @@ between the two), with one rule for every family:
 
 =====================  =====================================================================
 ``fold``               the parameter component of the branch tangent changes sign (a turning
-                       point), or ``det(DP - I)`` does while the branch goes on (a branch
-                       point: pitchfork or transcritical)
+                       point, with a multiplier at +1 where located), or ``det(DP - I)`` does
+                       while the branch goes on (a branch point: pitchfork or transcritical)
 ``period_doubling``    ``det(DP + I)`` changes sign
 ``neimark_sacker``     the number of non-real multipliers outside the unit circle changes and
                        ``|lambda| - 1`` of the nearest non-real pair changes sign
@@ -19,9 +19,9 @@ between the two), with one rule for every family:
 =====================  =====================================================================
 
 A smooth kind whose located point still has its critical multiplier further than
-``1e-3`` from the critical value is a *jump* of the multipliers across it (a nonsmooth
-point such as grazing), not that bifurcation: it is dropped (a stability change is kept and
-says so). A location that does not converge is reported with ``located=False`` and a detail
+``1e-3`` from the critical value is a *jump* of the multipliers across it, or the bend of
+the branch at a nonsmooth point such as grazing, not that bifurcation: it is dropped (a
+stability change is kept and says so). A location that does not converge is reported with ``located=False`` and a detail
 starting ``"uncertain"``. What only one family has (the impact pair's grazing, a change of
 the jump sequence) comes in as extra events.
 """
@@ -174,8 +174,10 @@ class EventTracker:
                 return ("turning point without a multiplier crossing +1 (closest "
                         f"|lambda - 1| = {m1:.2g}): the branch passes through a branch point, "
                         "e.g. a pitchfork, onto the symmetric partner of the family")
+            # a smooth turning point has a multiplier +1 (the tangent (v, 0) solves
+            # (DP - I) v = 0); a turn without one is the bend of a nonsmooth point (grazing)
             return self._root("fold", lambda pt: self.turn_test(pt, chord), pa, pb, index,
-                              detail)
+                              detail, critical=lambda pt: float(np.min(np.abs(pt.mult - 1.0))))
         if cross:
             return self._root(
                 "fold", fold_test, pa, pb, index,
