@@ -27,6 +27,9 @@ the jump sequence) comes in as extra events.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
+
 import numpy as np
 
 from hybridpd.analysis.pathfollow import _tangent, illinois
@@ -89,6 +92,7 @@ def turn_test(pt, chord):
     return float(v[-1] if v @ chord >= 0 else -v[-1])
 
 
+@dataclass
 class EventTracker:
     """Detection and location of events between consecutive branch points.
 
@@ -116,17 +120,15 @@ class EventTracker:
         means nothing (no turning-point test there).
     """
 
-    def __init__(self, kinds, evaluate, size, tol, max_iter, locate, to_event,
-                 turn_test=None, nonsmooth=None):
-        self.kinds = kinds
-        self.evaluate = evaluate
-        self.size = size
-        self.tol = tol
-        self.max_iter = max_iter
-        self.locate = locate
-        self.to_event = to_event
-        self.turn_test = turn_test
-        self.nonsmooth = nonsmooth
+    kinds: tuple
+    evaluate: Callable
+    size: Callable
+    tol: float
+    max_iter: int
+    locate: bool
+    to_event: Callable
+    turn_test: Callable | None = None
+    nonsmooth: Callable | None = None
 
     def _root(self, kind, ftest, pa, pb, index, detail_fn, critical=None):
         """Locate a sign change of ``ftest``; ``critical(pt)`` is the distance of the critical
