@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridpd._results import compact_repr
+from hybridpd.model import wrap_phase
 
 __all__ = ["MapResult", "PoincareMap", "check_returns", "detect_period", "minimal_period"]
 
@@ -208,7 +209,7 @@ class PoincareMap(abc.ABC):
         ds = np.array(ds, float, copy=True)
         T = self.period
         if T is not None:
-            ds[..., 0] = (ds[..., 0] + 0.5 * T) % T - 0.5 * T
+            ds[..., 0] = wrap_phase(ds[..., 0], T)
         return ds
 
     def __call__(self, s, k: int = 1) -> np.ndarray:

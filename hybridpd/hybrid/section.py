@@ -35,7 +35,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from hybridpd.hybrid.automaton import HybridAutomaton
-from hybridpd.model import check_finite
+from hybridpd.model import check_finite, wrap_phase
 
 __all__ = ["Section", "common_multiple", "exosystem"]
 
@@ -472,7 +472,7 @@ class Section:
         ds = np.array(ds, float, copy=True)
         if self.has_phase:
             T = self.period
-            ds[..., 0] = (ds[..., 0] + 0.5 * T) % T - 0.5 * T
+            ds[..., 0] = wrap_phase(ds[..., 0], T)
         return ds
 
     def violations(self, z, rtol: float = 1e-9) -> tuple:

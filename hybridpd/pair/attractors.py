@@ -29,6 +29,7 @@ import numpy as np
 from hybridpd._deprecated import moved_names
 from hybridpd.analysis import basins as _basins
 from hybridpd.analysis.periodic import find_orbit
+from hybridpd.model import wrap_phase
 from hybridpd.pair.impactmap import ImpactMap
 
 __all__ = ["CycleCatalog", "paper_distance2", "slice_points"]
@@ -39,10 +40,6 @@ _NC = _basins.NO_CONVERGENCE
 _C = np.array([[0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 1, 0], [1, 0, 0, 0]], float)
 
 
-def _wrap(d, T):
-    return (d + 0.5 * T) % T - 0.5 * T
-
-
 def paper_distance2(a, b, T: float) -> np.ndarray:
     """Squared distance of the paper's criterion between section points ``a`` and ``b``.
 
@@ -51,7 +48,7 @@ def paper_distance2(a, b, T: float) -> np.ndarray:
     representative). ``a`` and ``b`` broadcast over leading axes, last axis 4.
     """
     d = np.asarray(a, float) - np.asarray(b, float)
-    d[..., 0] = _wrap(d[..., 0], T)
+    d[..., 0] = wrap_phase(d[..., 0], T)
     cd = d @ _C.T
     return np.einsum("...i,...i->...", cd, cd)
 
@@ -181,7 +178,7 @@ class CycleCatalog:
         scale = np.maximum(1.0, np.nanmax(np.abs(tails[:, :, 1:]), axis=(1, 2)))
         for k in range(min(self.max_period, K1 - 2), 0, -1):
             d = tails[:, k:] - tails[:, :-k]
-            d[..., 0] = _wrap(d[..., 0], self.T)
+            d[..., 0] = wrap_phase(d[..., 0], self.T)
             e = np.max(np.abs(d), axis=(1, 2)) / scale
             hit = e <= self.detect_tol
             # descending k: a smaller period overwrites a multiple of it

@@ -48,11 +48,6 @@ def _positive_float(name, value) -> float:
     return v
 
 
-def _wrap_diff(d, T):
-    """Nearest representative of a phase difference modulo ``T`` (in ``[-T/2, T/2)``)."""
-    return (d + 0.5 * T) % T - 0.5 * T
-
-
 def _domain(name):
     """``(lo, hi, lo_closed)`` of a parameter's admissible values."""
     if name == "e":

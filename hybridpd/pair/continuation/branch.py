@@ -20,7 +20,7 @@ from hybridpd.analysis.continuation import (
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.maps import minimal_period
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
-from hybridpd.model import check_finite
+from hybridpd.model import check_finite, wrap_phase
 from hybridpd.pair.continuation._common import (
     _END_GRAZE,
     _NEAR_BRANCH,
@@ -38,7 +38,6 @@ from hybridpd.pair.continuation._common import (
     _positive_int,
     _scale,
     _section_point,
-    _wrap_diff,
 )
 from hybridpd.pair.continuation.events import (
     _branch_from_points,
@@ -307,7 +306,7 @@ class _PairPath:
     def unwrap(self, cur, new):
         # keep the phase continuous along the branch
         T = self.period(cur.u)
-        new.u[0] = cur.u[0] + _wrap_diff(new.u[0] - cur.u[0], T)
+        new.u[0] = cur.u[0] + wrap_phase(new.u[0] - cur.u[0], T)
 
     def point(self, u, its):
         """The accepted point at ``u`` (None where a flight penetrates or DP is undefined)."""

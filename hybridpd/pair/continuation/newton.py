@@ -6,6 +6,7 @@ import numpy as np
 
 from hybridpd.analysis.pathfollow import NewtonResult as _NewtonOut  # noqa: F401
 from hybridpd.analysis.pathfollow import newton as _newton  # noqa: F401
+from hybridpd.model import wrap_phase
 from hybridpd.pair.continuation._common import (
     _impact_map,
     _in_domain,
@@ -14,7 +15,6 @@ from hybridpd.pair.continuation._common import (
     _positive_float,
     _positive_int,
     _section_point,
-    _wrap_diff,
 )
 from hybridpd.pair.continuation.trace import trace_map
 from hybridpd.pair.impactmap import ImpactMap
@@ -28,7 +28,7 @@ def _residual(P: ImpactMap, s: np.ndarray, k: int):
     if not ok[0]:
         return None
     r = img[0] - s
-    r[0] = _wrap_diff(r[0], P.period)
+    r[0] = wrap_phase(r[0], P.period)
     return r
 
 
@@ -118,5 +118,5 @@ def _param_derivative(P: ImpactMap, name: str, s: np.ndarray, k: int, fd_step: f
             d, hh = r0 - vals[1], h
         else:
             raise RuntimeError(f"P^k undefined on both sides of {name} = {p:g}")
-    d[0] = _wrap_diff(d[0], P.period)
+    d[0] = wrap_phase(d[0], P.period)
     return d / hh

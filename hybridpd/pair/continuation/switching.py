@@ -43,7 +43,7 @@ import numpy as np
 from hybridpd._results import compact_repr
 from hybridpd.analysis.continuation import BifurcationEvent, Branch
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
-from hybridpd.model import Case, ImpactPair, PDGains, Reference
+from hybridpd.model import Case, ImpactPair, PDGains, Reference, wrap_phase
 from hybridpd.pair.continuation._common import (
     _Design,
     _in_domain,
@@ -51,7 +51,6 @@ from hybridpd.pair.continuation._common import (
     _positive_float,
     _positive_int,
     _scale,
-    _wrap_diff,
 )
 from hybridpd.pair.continuation.branch import continue_pair_orbit
 from hybridpd.pair.continuation.newton import (
@@ -207,7 +206,7 @@ def _augmented_start(branch, Pc, sc, pc, v, K, a, tol, max_iter, fd_step):
         if r is None:
             return None
         d = u[:4] - sc
-        d[0] = _wrap_diff(d[0], Pc.period)
+        d[0] = wrap_phase(d[0], Pc.period)
         return np.append(r, v @ d - a)
 
     def JG(u):
@@ -227,7 +226,7 @@ def _fixed_of_power(P, s, k, scale_tol=1e-7):
     if not ok[0]:
         return False
     r = img[0] - s
-    r[0] = _wrap_diff(r[0], P.period)
+    r[0] = wrap_phase(r[0], P.period)
     return bool(np.max(np.abs(r)) <= scale_tol * _scale(s))
 
 
@@ -284,7 +283,7 @@ def _smooth_switch(branch, event, kind, amplitudes, tol, max_iter, fd_step):
 
 def _dphase(d, T):
     d = np.array(d, float)
-    d[0] = _wrap_diff(d[0], T)
+    d[0] = wrap_phase(d[0], T)
     return d
 
 

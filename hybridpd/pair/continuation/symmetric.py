@@ -9,7 +9,15 @@ from hybridpd.analysis.bifevents import EventTracker, changes
 from hybridpd.analysis.continuation import BifurcationEvent, Branch
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.pathfollow import _MAX_HALVINGS, bisect_predicate
-from hybridpd.model import Case, ImpactPair, PDGains, as_gains, check_finite, check_odd_order
+from hybridpd.model import (
+    Case,
+    ImpactPair,
+    PDGains,
+    as_gains,
+    check_finite,
+    check_odd_order,
+    wrap_phase,
+)
 from hybridpd.pair import symbolic
 from hybridpd.pair.continuation._common import (
     EVENT_KINDS,
@@ -19,7 +27,6 @@ from hybridpd.pair.continuation._common import (
     _path_steps,
     _positive_float,
     _positive_int,
-    _wrap_diff,
 )
 from hybridpd.pair.continuation.events import _branch_from_points, _Point
 from hybridpd.pair.orbits import REASONS, symmetric_orbits
@@ -242,7 +249,7 @@ def _change(a, b):
         return 0.0
     ch = float(np.max(np.abs(sb[1:] - sa[1:]))) / (1.0 + float(np.max(np.abs(sa[1:]))))
     # the phase lives on a circle of length T: a wrap from T to 0 is no change
-    ch = max(ch, abs(_wrap_diff(sb[0] - sa[0], a.T)) / (1.0 + abs(sa[0])))
+    ch = max(ch, abs(wrap_phase(sb[0] - sa[0], a.T)) / (1.0 + abs(sa[0])))
     if np.isfinite(a.rho) and np.isfinite(b.rho):
         # only the neighbourhood of the unit circle matters for the step: far outside it the
         # radius may grow by orders of magnitude without any event
