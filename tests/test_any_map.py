@@ -179,6 +179,14 @@ def test_continue_orbit_locates_a_turning_point_and_a_sequence_change(method):
                if e.kind != "sequence_change")
 
 
+def test_continue_orbit_event_options():
+    only = hp.continue_orbit(Fold, 1.0, -1.0, [1.0], events=("fold",))
+    assert [e.kind for e in only.events] == ["fold"]
+    for bad, match in ((dict(events=("grazing",)), "events"), (dict(event_tol=0.0), "event_tol")):
+        with pytest.raises(ValueError, match=match):
+            hp.continue_orbit(Fold, 1.0, -1.0, [1.0], **bad)
+
+
 def test_bifurcation_diagram_periods():
     values = np.linspace(0.2, 1.0, 81)
     d = hp.bifurcation_diagram(Henon, values, s0=[0.1, 0.1])
