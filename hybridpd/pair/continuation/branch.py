@@ -173,27 +173,6 @@ def continue_pair_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float,
     lo_p, hi_p = min(p0, stop), max(p0, stop)
     path = _PairPath(P0, name, k, design, jacobian, fd_step, margin_samples)
 
-    def to_event(kind, pt, index, detail, fv, ok):
-        s = pt.u[:4].copy()
-        s[0] %= path.period(pt.u)
-        return BifurcationEvent(kind=kind, parameter=float(pt.u[4]), point=s,
-                                multipliers=pt.mult.copy(), index=index, detail=detail,
-                                test_value=float(fv), located=bool(ok), viable=True,
-                                variables={"xm": float(pt.xm)})
-
-    def grazing_events(pa, pb, index, evaluate):
-        if "grazing" not in events or pa.signature == pb.signature:
-            return []
-        la, lb, ok = sequence_change(pa, pb, evaluate, locate=locate, tol=event_tol)
-        # report the side where the changing contact is slow / the margin is small
-        ga = min(la.margin, _rel_speed(la))
-        gb = min(lb.margin, _rel_speed(lb))
-        pt, g = (la, ga) if ga <= gb else (lb, gb)
-        detail = (f"impact pattern {_sig_str(pa.signature)} -> {_sig_str(pb.signature)} "
-                  f"(margin {la.margin:.3g} / {lb.margin:.3g}, smallest approach speed "
-                  f"{la.min_speed:.3g} / {lb.min_speed:.3g})")
-        return [to_event("grazing", pt, index, detail, g, ok)]
-
     # ---- initial point
     start = find_orbit(P0, s0, k, tol=tol, max_iter=max(max_newton, 30),
                        jacobian="fd" if jacobian == "fd" else "exact")
@@ -211,11 +190,13 @@ def continue_pair_orbit(impact_map_: ImpactMap, s0, parameter: str, stop: float,
 
     pts, evs, termination, rejected, why = follow_branch(
         path, first, stop, method=method, step=step, min_step=min_step, max_step=max_step,
-        max_steps=max_steps, tol=tol, max_iter=max_newton, scale=_scale, to_event=to_event,
-        kinds=events, locate=locate, event_tol=event_tol, extra_events=grazing_events,
+        max_steps=max_steps, tol=tol, max_iter=max_newton, scale=_scale,
+        to_event=path.to_event, kinds=events, locate=locate, event_tol=event_tol,
+        extra_events=lambda pa, pb, i, evaluate: path.grazing_events(
+            pa, pb, i, evaluate, events=events, locate=locate, tol=event_tol),
         nonsmooth=_near_grazing, out_of_range=out_of_range, k=k, name=name)
     if why:
-        termination += _stuck(pts, len(pts) - 1, events, evs, to_event, graze_tol, k)
+        termination += _stuck(pts, len(pts) - 1, events, evs, path.to_event, graze_tol, k)
     br = _branch_from_points(pts, evs, name, P0, k, method, termination, rejected)
     if design is not None:
         fixed = {kk: v for kk, v in br.fixed.items() if kk not in ("xm", name)}
@@ -280,6 +261,30 @@ class _PairPath:
     def period(self, u) -> float:
         """The reference period at ``u`` (the phase's range)."""
         return 2 * math.pi / (u[4] if self.name == "omega" else self.P0.reference.omega)
+
+    def to_event(self, kind, pt, index, detail, fv, ok) -> BifurcationEvent:
+        """The event of ``kind`` at the point ``pt`` (its phase in ``[0, T)``)."""
+        s = pt.u[:4].copy()
+        s[0] %= self.period(pt.u)
+        return BifurcationEvent(kind=kind, parameter=float(pt.u[4]), point=s,
+                                multipliers=pt.mult.copy(), index=index, detail=detail,
+                                test_value=float(fv), located=bool(ok), viable=True,
+                                variables={"xm": float(pt.xm)})
+
+    def grazing_events(self, pa, pb, index, evaluate, *, events, locate, tol) -> list:
+        """A change of the impact pattern between two points: grazing, located by bisection
+        on the pattern and reported on the side where the changing contact is slow or the
+        flight margin small."""
+        if "grazing" not in events or pa.signature == pb.signature:
+            return []
+        la, lb, ok = sequence_change(pa, pb, evaluate, locate=locate, tol=tol)
+        ga = min(la.margin, _rel_speed(la))
+        gb = min(lb.margin, _rel_speed(lb))
+        pt, g = (la, ga) if ga <= gb else (lb, gb)
+        detail = (f"impact pattern {_sig_str(pa.signature)} -> {_sig_str(pb.signature)} "
+                  f"(margin {la.margin:.3g} / {lb.margin:.3g}, smallest approach speed "
+                  f"{la.min_speed:.3g} / {lb.min_speed:.3g})")
+        return [self.to_event("grazing", pt, index, detail, g, ok)]
 
     def _map(self, u):
         P = self.map_at(u[4])

@@ -128,107 +128,11 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
     if bad:
         raise ValueError(f"events must be a subset of {EVENT_KINDS}, got {bad}")
     n = check_odd_order(n)
-    direction = 1.0 if stop > p0 else -1.0
-
-    def point(p):
-        # gamma = L / x10: x10 moves at a fixed clearance, gamma moves the clearance
-        v = base.replace(**{name: float(p)}, **({"L": pair.L} if name == "x10" else {}))
-        # the clearance exactly as swept or fixed (gamma x10 may round it)
-        L = {"L": float(p), "x10": pair.L}.get(name, v.L)
-        r = symmetric_orbits(v.kp, v.kv, mu=v.mu, e=v.e, L=L,
-                             omega=v.omega, m2=v.m2, x10=v.x10, n=n, case=case,
-                             margin=True, jacobian=False, margin_samples=margin_samples)
-        code = int(r.reason)
-        formal = code not in (1, 2)
-        s = np.asarray(r.fixed_point, float).reshape(4)
-        mult = np.full(4, np.nan + 0j)
-        rho = np.nan
-        DP = None
-        if formal:
-            DP = np.asarray(symbolic.orbit_jacobian(r.candidate).DP, float).reshape(4, 4)
-            if np.all(np.isfinite(DP)):
-                st = stability(DP)
-                mult, rho = st.multipliers, st.spectral_radius
-            else:
-                formal = False
-        viable = bool(r.exists)
-        return _Point(u=np.append(s, p), DP=DP, mult=mult, rho=rho,
-                      signature=_SIMPLE_SIG if viable else (), margin=float(r.viability_margin),
-                      min_speed=float(s[3]), viable=viable, formal=formal, xm=float(r.xm),
-                      reason=code, T=v.period)
-
-    def evaluate_between(pa, pb, theta):
-        return point(pa.u[-1] + theta * (pb.u[-1] - pa.u[-1]))
-
-    def to_event(kind, pt, index, detail, fv, ok):
-        T = 2 * math.pi / (pt.u[-1] if name == "omega" else omega)
-        s = pt.u[:4].copy()
-        s[0] %= T
-        if not pt.viable and kind not in ("grazing", "existence"):
-            detail += " [formal orbit, not viable]"
-        return BifurcationEvent(kind=kind, parameter=float(pt.u[-1]), point=s,
-                                multipliers=pt.mult.copy(), index=index, detail=detail,
-                                test_value=float(fv), located=bool(ok), viable=pt.viable,
-                                variables={"xm": float(pt.xm)})
-
-    def size(pa, pb):
-        return abs(pb.u[-1] - pa.u[-1]) / max(1.0, abs(pa.u[-1]))
-
-    tracker = EventTracker(events, evaluate_between, size, event_tol, 80, locate, to_event)
-
-    def extra_events(pa, pb, index):
-        out = []
-        ma, mb = pa.margin, pb.margin
-        grazed = changes(ma, mb)
-        if "grazing" in events and grazed:
-            out.append(tracker._root(
-                "grazing", lambda pt: pt.margin, pa, pb, index,
-                lambda pt: ("viability margin crosses 0: the orbit "
-                            f"{'stops' if mb < ma else 'starts'} existing by grazing (19)")))
-        if "existence" in events and (pa.formal != pb.formal
-                                      or (pa.viable != pb.viable and not grazed)):
-            def same(pt):
-                return (pt.formal, pt.viable) == (pa.formal, pa.viable)
-            if locate:
-                la, lb, ok = bisect_predicate(lambda th: evaluate_between(pa, pb, th), same,
-                                               pa, pb, size=size(pa, pb), tol=event_tol,
-                                               max_iter=80)
-            else:
-                la, lb, ok = pa, pb, False
-            pt = la if la.formal else lb
-            ev = to_event("existence", pt, index,
-                          f"{REASONS[pa.reason]} -> {REASONS[pb.reason]}", np.nan, ok)
-            out.append(ev)
-        return out
-
-    pts = [point(p0)]
-    evs = []
-    rejected = 0
-    termination = f"max_steps = {max_steps} reached"
-    h = min(step, max_step)
-    for _ in range(max_steps):
-        cur = pts[-1]
-        pc = cur.u[-1]
-        for _h in range(_MAX_HALVINGS):
-            pn = pc + direction * h
-            if (pn - stop) * direction > 0:
-                pn = stop
-            if not _in_domain(name, pn):
-                pn = stop
-            new = point(pn)
-            ch = _change(cur, new)
-            if ch <= max_change or h <= min_step:
-                break
-            rejected += 1
-            h = max(0.5 * h, min_step)
-        idx = len(pts) - 1
-        evs.extend(tracker.detect(cur, new, idx, extra_events(cur, new, idx)))
-        pts.append(new)
-        if ch <= max_change / 3:
-            h = min(1.5 * h, max_step)
-        if pn == stop:
-            termination = "reached stop"
-            break
+    fam = _SymmetricFamily(pair, base, name, n, case, margin_samples, omega, events)
+    tracker = EventTracker(events, fam.evaluate, fam.size, event_tol, 80, locate, fam.to_event)
+    pts, evs, rejected, termination = _graph_steps(
+        fam, tracker, p0, stop, step=step, min_step=min_step, max_step=max_step,
+        max_steps=max_steps, max_change=max_change, locate=locate, event_tol=event_tol)
     # the clearance recorded as it was given: gamma when it is swept, else L
     given = {("L" if k == "gamma" and name != "gamma" else k):
              (pair.L if k == "gamma" and name != "gamma" else v)
@@ -257,3 +161,125 @@ def _change(a, b):
     if np.isfinite(a.margin) and np.isfinite(b.margin):
         ch = max(ch, abs(b.margin - a.margin))
     return ch
+
+
+class _SymmetricFamily:
+    """The closed-form symmetric orbits along one named parameter: their points, the point
+    between two, their events (internal)."""
+
+    def __init__(self, pair, base, name, n, case, margin_samples, omega, events):
+        self.pair, self.base, self.name, self.n, self.case = pair, base, name, n, case
+        self.margin_samples, self.omega, self.events = margin_samples, omega, events
+
+    def point(self, p) -> _Point:
+        """The family's point at parameter value ``p`` (closed form, symbolic ``DP``)."""
+        name = self.name
+        # gamma = L / x10: x10 moves at a fixed clearance, gamma moves the clearance
+        v = self.base.replace(**{name: float(p)}, **({"L": self.pair.L} if name == "x10"
+                                                     else {}))
+        # the clearance exactly as swept or fixed (gamma x10 may round it)
+        L = {"L": float(p), "x10": self.pair.L}.get(name, v.L)
+        r = symmetric_orbits(v.kp, v.kv, mu=v.mu, e=v.e, L=L,
+                             omega=v.omega, m2=v.m2, x10=v.x10, n=self.n, case=self.case,
+                             margin=True, jacobian=False, margin_samples=self.margin_samples)
+        code = int(r.reason)
+        formal = code not in (1, 2)
+        s = np.asarray(r.fixed_point, float).reshape(4)
+        mult = np.full(4, np.nan + 0j)
+        rho = np.nan
+        DP = None
+        if formal:
+            DP = np.asarray(symbolic.orbit_jacobian(r.candidate).DP, float).reshape(4, 4)
+            if np.all(np.isfinite(DP)):
+                st = stability(DP)
+                mult, rho = st.multipliers, st.spectral_radius
+            else:
+                formal = False
+        viable = bool(r.exists)
+        return _Point(u=np.append(s, p), DP=DP, mult=mult, rho=rho,
+                      signature=_SIMPLE_SIG if viable else (), margin=float(r.viability_margin),
+                      min_speed=float(s[3]), viable=viable, formal=formal, xm=float(r.xm),
+                      reason=code, T=v.period)
+
+    def evaluate(self, pa, pb, theta) -> _Point:
+        return self.point(pa.u[-1] + theta * (pb.u[-1] - pa.u[-1]))
+
+    def to_event(self, kind, pt, index, detail, fv, ok) -> BifurcationEvent:
+        T = 2 * math.pi / (pt.u[-1] if self.name == "omega" else self.omega)
+        s = pt.u[:4].copy()
+        s[0] %= T
+        if not pt.viable and kind not in ("grazing", "existence"):
+            detail += " [formal orbit, not viable]"
+        return BifurcationEvent(kind=kind, parameter=float(pt.u[-1]), point=s,
+                                multipliers=pt.mult.copy(), index=index, detail=detail,
+                                test_value=float(fv), located=bool(ok), viable=pt.viable,
+                                variables={"xm": float(pt.xm)})
+
+    @staticmethod
+    def size(pa, pb) -> float:
+        return abs(pb.u[-1] - pa.u[-1]) / max(1.0, abs(pa.u[-1]))
+
+    def extra_events(self, pa, pb, index, tracker, locate, event_tol) -> list:
+        """Grazing (the viability margin crosses 0) and changes of existence."""
+        out = []
+        ma, mb = pa.margin, pb.margin
+        grazed = changes(ma, mb)
+        if "grazing" in self.events and grazed:
+            out.append(tracker._root(
+                "grazing", lambda pt: pt.margin, pa, pb, index,
+                lambda pt: ("viability margin crosses 0: the orbit "
+                            f"{'stops' if mb < ma else 'starts'} existing by grazing (19)")))
+        if "existence" in self.events and (pa.formal != pb.formal
+                                           or (pa.viable != pb.viable and not grazed)):
+            def same(pt):
+                return (pt.formal, pt.viable) == (pa.formal, pa.viable)
+            if locate:
+                la, lb, ok = bisect_predicate(lambda th: self.evaluate(pa, pb, th), same,
+                                              pa, pb, size=self.size(pa, pb), tol=event_tol,
+                                              max_iter=80)
+            else:
+                la, lb, ok = pa, pb, False
+            pt = la if la.formal else lb
+            out.append(self.to_event("existence", pt, index,
+                                     f"{REASONS[pa.reason]} -> {REASONS[pb.reason]}", np.nan,
+                                     ok))
+        return out
+
+
+def _graph_steps(fam, tracker, p0, stop, *, step, min_step, max_step, max_steps, max_change,
+                 locate, event_tol) -> tuple:
+    """Step the family as a graph over the parameter from ``p0`` to ``stop`` (no corrector:
+    every point is exact), halving where a step changes the point by more than
+    ``max_change`` (see :func:`_change`), and detect the events between consecutive points.
+    Returns ``(points, events, rejected, termination)``."""
+    direction = 1.0 if stop > p0 else -1.0
+    pts = [fam.point(p0)]
+    evs = []
+    rejected = 0
+    termination = f"max_steps = {max_steps} reached"
+    h = min(step, max_step)
+    for _ in range(max_steps):
+        cur = pts[-1]
+        pc = cur.u[-1]
+        for _h in range(_MAX_HALVINGS):
+            pn = pc + direction * h
+            if (pn - stop) * direction > 0:
+                pn = stop
+            if not _in_domain(fam.name, pn):
+                pn = stop
+            new = fam.point(pn)
+            ch = _change(cur, new)
+            if ch <= max_change or h <= min_step:
+                break
+            rejected += 1
+            h = max(0.5 * h, min_step)
+        idx = len(pts) - 1
+        evs.extend(tracker.detect(cur, new, idx, fam.extra_events(cur, new, idx, tracker,
+                                                                  locate, event_tol)))
+        pts.append(new)
+        if ch <= max_change / 3:
+            h = min(1.5 * h, max_step)
+        if pn == stop:
+            termination = "reached stop"
+            break
+    return pts, evs, rejected, termination
