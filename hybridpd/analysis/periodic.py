@@ -686,8 +686,12 @@ class SectionMapper(BasinMapper):
         P = self.map
         sec = P.section
         n = sec.automaton.n_states
-        r = P.apply(sec.from_state(W0[p, :n], float(T0[p])), self.period)
         its[p] += 1
+        try:
+            r = P.apply(sec.from_state(W0[p, :n], float(T0[p])), self.period)
+        except ValueError:            # the iterate is no longer a point of the section
+            lab[p] = _UNRESOLVED
+            return True
         if not r.ok:
             lab[p] = {"zeno": _ZENO_STICKING, "nonfinite": _DIVERGED}.get(r.status,
                                                                           _UNRESOLVED)
