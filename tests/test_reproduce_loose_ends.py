@@ -59,7 +59,7 @@ def test_an_event_whose_location_failed_is_uncertain():
     tracker = EventTracker(kinds=("fold",), evaluate=lambda pa, pb, th: None,
                        size=lambda pa, pb: 1.0, tol=1e-10, max_iter=50, locate=True,
                        to_event=lambda *a: a)
-    _, pt, _, detail, _, ok = tracker._root(
+    _, pt, _, detail, _, ok = tracker.root(
         "fold", lambda p: p, -1.0, 2.0, 7, lambda pt: "fold: the branch turns back")
     assert not ok and detail.startswith("uncertain") and "corrector failed" in detail
     assert "between branch points 7 and 8" in detail
@@ -67,6 +67,6 @@ def test_an_event_whose_location_failed_is_uncertain():
     tracker = EventTracker(kinds=("fold",), evaluate=lambda pa, pb, th: pa + th * (pb - pa),
                        size=lambda pa, pb: 1.0, tol=1e-10, max_iter=200, locate=True,
                        to_event=lambda *a: a)
-    _, pt, _, detail, _, ok = tracker._root(
+    _, pt, _, detail, _, ok = tracker.root(
         "fold", lambda p: p, -1.0, 2.0, 7, lambda pt: "fold: the branch turns back")
     assert ok and detail == "fold: the branch turns back" and abs(pt) < 1e-9

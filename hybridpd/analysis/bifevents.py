@@ -130,11 +130,15 @@ class EventTracker:
     turn_test: Callable | None = None
     nonsmooth: Callable | None = None
 
-    def _root(self, kind, ftest, pa, pb, index, detail_fn, critical=None):
-        """Locate a sign change of ``ftest``; ``critical(pt)`` is the distance of the critical
-        multiplier(s) from the critical value: when it stays large at the located point the
-        multipliers *jumped* across (a nonsmooth point such as grazing), and the event of a
-        smooth bifurcation kind is dropped (returns None)."""
+    def root(self, kind, ftest, pa, pb, index, detail_fn, critical=None):
+        """The event of ``kind`` where the test function ``ftest`` (of a point) changes sign
+        between points ``pa`` and ``pb`` (``index``, ``index + 1``), its detail
+        ``detail_fn(point)``; a family's own kinds (the pair's grazing) use it too.
+
+        ``critical(pt)`` is the distance of the critical multiplier(s) from the critical
+        value: when it stays large at the located point the multipliers *jumped* across (a
+        nonsmooth point such as grazing), and the event of a smooth bifurcation kind is
+        dropped (returns None)."""
         fa, fb = ftest(pa), ftest(pb)
         if self.locate:
             pt, fv, ok = illinois(lambda th: self.evaluate(pa, pb, th), ftest, fa, fb, pa, pb,
@@ -178,10 +182,10 @@ class EventTracker:
                         "e.g. a pitchfork, onto the symmetric partner of the family")
             # a smooth turning point has a multiplier +1 (the tangent (v, 0) solves
             # (DP - I) v = 0); a turn without one is the bend of a nonsmooth point (grazing)
-            return self._root("fold", lambda pt: self.turn_test(pt, chord), pa, pb, index,
+            return self.root("fold", lambda pt: self.turn_test(pt, chord), pa, pb, index,
                               detail, critical=lambda pt: float(np.min(np.abs(pt.mult - 1.0))))
         if cross:
-            return self._root(
+            return self.root(
                 "fold", fold_test, pa, pb, index,
                 lambda pt: ("branch point: a real multiplier crosses +1 while the branch goes "
                             "on (pitchfork or transcritical; on a symmetric orbit typically the "
@@ -193,7 +197,7 @@ class EventTracker:
         if not (pa.formal and pb.formal and ns_count(pa) != ns_count(pb)
                 and changes(ns_test(pa), ns_test(pb))):
             return None
-        ev = self._root(
+        ev = self.root(
             "neimark_sacker", ns_test, pa, pb, index,
             lambda pt: ("complex pair crosses the unit circle "
                         f"({'outwards' if ns_count(pb) > ns_count(pa) else 'inwards'}"
@@ -221,7 +225,7 @@ class EventTracker:
                         ("real multiplier at +1" if c.real > 0 else "real multiplier at -1"))
                 d += f" ({kind})"
             return d
-        return self._root("stability_change", stability_test, pa, pb, index, detail,
+        return self.root("stability_change", stability_test, pa, pb, index, detail,
                           critical=lambda pt: abs(pt.rho - 1.0))
 
     def detect(self, pa, pb, index, extra=()):
@@ -230,7 +234,7 @@ class EventTracker:
         if "fold" in self.kinds:
             out.append(self._fold(pa, pb, index))
         if "period_doubling" in self.kinds and changes(pd_test(pa), pd_test(pb)):
-            out.append(self._root(
+            out.append(self.root(
                 "period_doubling", pd_test, pa, pb, index,
                 lambda pt: ("real multiplier crosses -1 "
                             f"({'outwards' if _outside(pb) > _outside(pa) else 'inwards'})"),

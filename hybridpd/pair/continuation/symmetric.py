@@ -225,7 +225,7 @@ class _SymmetricFamily:
         ma, mb = pa.margin, pb.margin
         grazed = changes(ma, mb)
         if "grazing" in self.events and grazed:
-            out.append(tracker._root(
+            out.append(tracker.root(
                 "grazing", lambda pt: pt.margin, pa, pb, index,
                 lambda pt: ("viability margin crosses 0: the orbit "
                             f"{'stops' if mb < ma else 'starts'} existing by grazing (19)")))
