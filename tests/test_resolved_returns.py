@@ -129,6 +129,13 @@ def test_the_stiff_lightly_damped_arm_has_its_orbit():
         s, lin = P(s), J @ lin
         err = np.abs(P.wrap(s - orb.s) - lin).max()
         assert err <= 0.05 * np.abs(lin).max()
+    # the basin labeller takes the same resolved applications (it labelled every point
+    # zeno_sticking where its compiled run stopped): three iterations bring perturbations of
+    # 1e-4 within the criterion, as the spectral radius 0.53 says
+    ds = np.zeros((2, P.dim))
+    ds[0, 1], ds[1, 2] = 1e-4, -1e-4
+    lab, its = SectionMapper(P, orb.s, n_iter=3, early_exit=False).labels(orb.s + ds)
+    assert [LABELS[i] for i in lab] == ["converged"] * 2 and list(its) == [3, 3]
 
 
 def test_basins_hand_runs_the_compiled_loop_cannot_finish_to_the_resolver():
