@@ -688,6 +688,8 @@ class SectionMapper(BasinMapper):
         n = sec.automaton.n_states
         its[p] += 1
         try:
+            # apply repeats the compiled run that stopped (a tenth of the resolver's cost on
+            # the arm), so that the labeller follows the map's one rule for joint jumps
             r = P.apply(sec.from_state(W0[p, :n], float(T0[p])), self.period)
         except ValueError:            # the iterate is no longer a point of the section
             lab[p] = _UNRESOLVED
