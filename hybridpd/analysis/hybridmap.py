@@ -596,31 +596,9 @@ class SectionMap(PoincareMap):
     def _jacobian(self, s, bufs, nb, z_hit) -> np.ndarray:
         sec = self.section
         ha = sec.automaton
-        n = ha.n_states
-        jt = bufs.jt
-        st0, st1, smode, sj = bufs.st0, bufs.st1, bufs.smode, bufs.sj
-        nseg = int(bufs.ic[IC_NS])
-        Z = np.eye(n)
-        q = 0
-        tangent = False
-        tgrad = []        # d t_jump / d z0 of every jump so far
-        burst = _accumulating(bufs, nb)
         modes, pk = ha._slim(), ha.packed     # the modes of the run are all built
-        for m in range(nb + 1):
-            # flows of the segments at jump count m, then jump m + 1 (table index m)
-            while q < nseg and sj[q] == m:
-                tau = st1[q] - st0[q]
-                if tau > 0.0:
-                    Z = _flow_sensitivity(modes[smode[q]].A, tau, Z)
-                q += 1
-            if m == nb:
-                break
-            Z, tg, tan = self._jump(m, bufs, Z, tgrad, jt, modes, pk)
-            tgrad.append(tg)
-            # the closing speed of a burst ending in an accumulation shrinks to zero by design
-            # (the more so the shorter the unresolved tail, ZenoOptions.tail_tol): its
-            # impacts are no tangential touch of the orbit
-            tangent = tangent or (tan and not burst[m])
+        Z, tangent = sensitivity_chain(bufs, int(bufs.ic[IC_NS]), nb, modes, pk,
+                                       np.eye(ha.n_states))[:2]
         mode = modes[sec.mode_index]
         f = mode.A @ z_hit + mode.b
         cf = sec.c @ f
@@ -634,49 +612,130 @@ class SectionMap(PoincareMap):
         row[0] += 1.0
         return np.vstack([row, Dy]), tangent
 
-    def _jump(self, q, bufs, Z, tgrad, jt, modes, pk):
-        """Sensitivity after jump ``q``: ``(Z+, d t_q / d z0, tangential)``.
 
-        A guard crossing gets its saltation matrix. A Zeno switch at the estimated
-        accumulation time ``t_inf = t_k + D r / (1 - r)`` (``D = t_k - t_{k-1}``,
-        ``r = D / (t_{k-1} - t_{k-2})``, the last resolved impacts of the guard; ``t_k`` for
-        an immediate accumulation) gets ``Z+ = R_z Z + (R_z f- - f+) dt_inf``, with ``dt_inf``
-        from the impact-time sensitivities: the derivative of the simulated map.
-        """
-        n = self.section.automaton.n_states
-        jg, jsrc, jdst, jkind, jpre, jpost = (bufs.jg, bufs.jsrc, bufs.jdst, bufs.jkind,
-                                              bufs.jpre, bufs.jpost)
-        src, dst, g = int(jsrc[q]), int(jdst[q]), int(jg[q])
-        ms, md = modes[src], modes[dst]
-        zm, zp = jpre[q, :n], jpost[q, :n]
-        fm = ms.A @ zm + ms.b
-        fp = md.A @ zp + md.b
-        if jkind[q] == 3:
-            Rz = pk.Rz[src, g, :n, :n]
-            tg = self._zeno_time_gradient(q, jt, jg, jsrc, jkind, tgrad, n)
-            return Rz @ Z + np.outer(Rz @ fm - fp, tg), tg, False
-        R = pk.Rh[src, g, :n, :n]
-        c = ms.guards[g].c
-        cf = c @ fm
-        tangent = abs(cf) <= 1e-9 * (np.abs(c) @ np.abs(fm)) or jkind[q] == 2
-        tg = -(c @ Z) / cf
-        return R @ Z + np.outer(fp - R @ fm, c @ Z) / cf, tg, tangent
+# ----------------------------------------------------------------------------------------
+# the sensitivity of a recorded run (saltation matrices)
+# ----------------------------------------------------------------------------------------
+#: A factor's singular value below this (relative to the factor's norm) is a direction the
+#: factor removes by construction (a projection onto a contact, a held input overwritten)
+_NULL_RTOL = 1e-9
 
-    @staticmethod
-    def _zeno_time_gradient(q, jt, jg, jsrc, jkind, tgrad, n):
-        same = [i for i in range(q - 1, max(q - 4, -1), -1)
-                if jg[i] == jg[q] and jsrc[i] == jsrc[q] and jkind[i] != 3]
-        if len(same) < 3 or same != list(range(q - 1, q - 4, -1)) or jt[q] == jt[q - 1]:
-            return tgrad[q - 1].copy() if q >= 1 and jt[q] == jt[q - 1] else np.zeros(n)
-        k, k1, k2 = same
-        D, D1 = jt[k] - jt[k1], jt[k1] - jt[k2]
-        r = D / D1
-        if not (0.0 < r < 1.0) or abs(jt[k] + D * r / (1 - r) - jt[q]) > \
-                1e-9 * max(1.0, abs(jt[q])):
-            return np.zeros(n)      # another rule (dt_min, end time) set t_inf: no gradient
-        dD = tgrad[k] - tgrad[k1]
-        dr = (dD - r * (tgrad[k1] - tgrad[k2])) / D1
-        return tgrad[k] + (dD * r + D * dr / (1 - r)) / (1 - r)
+
+def sensitivity_chain(rec, nseg, nb, modes, pk, Z0, track: bool = False) -> tuple:
+    """``(Z, tangent, rank)``: the sensitivity ``dz/dz0 @ Z0`` of a recorded run after its
+    first ``nb`` jumps and the flows around them.
+
+    ``rec`` holds the run's records by name (:class:`~hybridpd.hybrid._kernel.RunBuffers`
+    or the same names in any object): segments ``st0, st1, smode, sj`` (``nseg`` of them)
+    and jumps ``jt, jg, jsrc, jdst, jkind, jpre, jpost``. Flows enter as ``expm(A tau)``,
+    jumps as their saltation matrices (:func:`_jump`). ``tangent``: a jump of the chain is
+    tangential (no saltation matrix), outside the bursts that end in an accumulation.
+    ``rank`` (with ``track``, else None): the dimension of the image of ``Z0`` through the
+    chain counted structurally, i.e. dropping at each jump only the directions its linear
+    part removes (singular values below ``1e-9`` of its norm; a flow is invertible and
+    removes none, however much it contracts).
+    """
+    n = Z0.shape[0]
+    st0, st1, smode, sj = rec.st0, rec.st1, rec.smode, rec.sj
+    Z = Z0
+    Q = np.linalg.qr(Z0)[0] if track else None
+    q = 0
+    tangent = False
+    tgrad = []        # d t_jump / d z0 of every jump so far
+    burst = _accumulating(rec, nb)
+    for m in range(nb + 1):
+        # flows of the segments at jump count m, then jump m + 1 (table index m)
+        while q < nseg and sj[q] == m:
+            tau = st1[q] - st0[q]
+            if tau > 0.0:
+                Z = _flow_sensitivity(modes[smode[q]].A, tau, Z)
+                if track and Q.shape[1]:
+                    Q = np.linalg.qr(_flow_sensitivity(modes[smode[q]].A, tau, Q))[0]
+            q += 1
+        if m == nb:
+            break
+        Z, tg, tan, L, R = _jump(m, rec, Z, tgrad, modes, pk, n)
+        tgrad.append(tg)
+        if track and Q.shape[1]:
+            Q = _image(L, R, Q)
+        # the closing speed of a burst ending in an accumulation shrinks to zero by design
+        # (the more so the shorter the unresolved tail, ZenoOptions.tail_tol): its
+        # impacts are no tangential touch of the orbit
+        tangent = tangent or (tan and not burst[m])
+    return Z, tangent, (Q.shape[1] if track else None)
+
+
+def _image(L, R, Q):
+    """An orthonormal basis of the image of ``span(Q)`` through jump ``q`` (linear part
+    ``L``, reset ``R``), counted structurally: a jump whose reset is invertible keeps every
+    direction (a burst's saltation matrices are ill-conditioned, not singular); a singular
+    reset drops the directions it removes (a held input overwritten at a sample, a
+    contact's normal velocity projected at the start of a sticking phase)."""
+    M = L @ Q
+    if _invertible(R):
+        return np.linalg.qr(M)[0]
+    U, sv, _ = np.linalg.svd(M, full_matrices=False)
+    keep = sv > _NULL_RTOL * max(float(np.linalg.norm(L, 2)), 1e-300)
+    return U[:, keep]
+
+
+def _invertible(L) -> bool:
+    sv = np.linalg.svd(L, compute_uv=False)
+    return bool(sv[-1] > _NULL_RTOL * sv[0])
+
+
+def _jump(q, rec, Z, tgrad, modes, pk, n):
+    """Sensitivity after jump ``q``: ``(Z+, d t_q / d z0, tangential, linear part, reset)``.
+
+    A guard crossing gets its saltation matrix. A crossing at the instant of the jump
+    before it whose guard that jump's reset has already passed (a release forced by a
+    sample of a held input, a contact force changing sign at a reset) happens at that
+    jump's time whatever the perturbation: ``Z+ = R Z + (f+ - R f-) dt_{q-1}``. A Zeno
+    switch at the estimated accumulation time ``t_inf = t_k + D r / (1 - r)`` (``D = t_k -
+    t_{k-1}``, ``r = D / (t_{k-1} - t_{k-2})``, the last resolved impacts of the guard;
+    ``t_k`` for an immediate accumulation) gets ``Z+ = R_z Z + (R_z f- - f+) dt_inf``, with
+    ``dt_inf`` from the impact-time sensitivities: the derivative of the simulated map.
+    """
+    jg, jsrc, jdst, jkind, jpre, jpost, jt = (rec.jg, rec.jsrc, rec.jdst, rec.jkind, rec.jpre,
+                                              rec.jpost, rec.jt)
+    src, dst, g = int(jsrc[q]), int(jdst[q]), int(jg[q])
+    ms, md = modes[src], modes[dst]
+    zm, zp = jpre[q, :n], jpost[q, :n]
+    fm = ms.A @ zm + ms.b
+    fp = md.A @ zp + md.b
+    if jkind[q] == 3:
+        Rz = pk.Rz[src, g, :n, :n]
+        tg = _zeno_time_gradient(q, jt, jg, jsrc, jkind, tgrad, Z.shape[1])
+        return Rz @ Z + np.outer(Rz @ fm - fp, tg), tg, False, Rz, Rz
+    R = pk.Rh[src, g, :n, :n]
+    guard = ms.guards[g]
+    c = guard.c
+    if q >= 1 and jt[q] == jt[q - 1] and jkind[q] == 1:
+        past = guard.direction * (c @ zm + guard.d)
+        if past > 1e-9 * (np.abs(c) @ np.abs(zm) + abs(guard.d)):
+            tg = tgrad[q - 1]
+            return R @ Z + np.outer(fp - R @ fm, tg), tg, False, R, R
+    cf = c @ fm
+    tangent = abs(cf) <= 1e-9 * (np.abs(c) @ np.abs(fm)) or jkind[q] == 2
+    tg = -(c @ Z) / cf
+    S = R + np.outer(fp - R @ fm, c) / cf
+    return R @ Z + np.outer(fp - R @ fm, c @ Z) / cf, tg, tangent, S, R
+
+
+def _zeno_time_gradient(q, jt, jg, jsrc, jkind, tgrad, m):
+    same = [i for i in range(q - 1, max(q - 4, -1), -1)
+            if jg[i] == jg[q] and jsrc[i] == jsrc[q] and jkind[i] != 3]
+    if len(same) < 3 or same != list(range(q - 1, q - 4, -1)) or jt[q] == jt[q - 1]:
+        return tgrad[q - 1].copy() if q >= 1 and jt[q] == jt[q - 1] else np.zeros(m)
+    k, k1, k2 = same
+    D, D1 = jt[k] - jt[k1], jt[k1] - jt[k2]
+    r = D / D1
+    if not (0.0 < r < 1.0) or abs(jt[k] + D * r / (1 - r) - jt[q]) > \
+            1e-9 * max(1.0, abs(jt[q])):
+        return np.zeros(m)      # another rule (dt_min, end time) set t_inf: no gradient
+    dD = tgrad[k] - tgrad[k1]
+    dr = (dD - r * (tgrad[k1] - tgrad[k2])) / D1
+    return tgrad[k] + (dD * r + D * dr / (1 - r)) / (1 - r)
 
 
 def _flow_sensitivity(A, tau, Z) -> np.ndarray:

@@ -61,6 +61,11 @@ class MapResult:
         A grazing jump occurred, or the return is tangential.
     DP : ndarray, shape (dim, dim) or None
         Jacobian, when requested and ``ok`` (phase unwrapped).
+    structural_zeros : int or None
+        Multipliers of ``DP`` that vanish by construction on this run (directions its jumps
+        remove: a held input overwritten at a sample, a contact's gap and normal velocity
+        projected at the start of a sticking phase); None: the map's own
+        :attr:`PoincareMap.structural_zeros`.
 
     Examples
     --------
@@ -79,6 +84,7 @@ class MapResult:
     jumps: tuple = ()
     grazing: bool = False
     DP: np.ndarray | None = field(default=None, repr=False)
+    structural_zeros: int | None = None
     __repr__ = compact_repr
 
     @property

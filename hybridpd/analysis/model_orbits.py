@@ -21,10 +21,20 @@ import numpy as np
 from hybridpd._results import compact_repr
 from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.maps import minimal_period
+from hybridpd.analysis.model_sections import (
+    EVENTS,
+    SectionSpec,
+    SimulatedReturns,
+    _crossings,
+    _default_transient,
+    _event_section,
+    simulated_returns,
+)
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
-from hybridpd.mechanics.sections import mechanical_section
+from hybridpd.analysis.strobe import StroboscopicMap
 
 __all__ = [
+    "EVENTS",
     "FAMILY_DISTANCE",
     "STATUS",
     "OrbitSearch",
@@ -46,103 +56,6 @@ STATUS = {0: "stable", 1: "unstable", 2: "not_converged", 3: "degenerate_return"
           8: "sampling_incommensurate", 9: "no_section_crossing", 10: "invalid_parameters"}
 _CODE = {v: k for k, v in STATUS.items()}
 _KINDS = ("crossing", "grazing", "zeno")
-
-
-@dataclass(frozen=True)
-class SectionSpec:
-    """Which section and which orbits.
-
-    ``contact`` (0-based) and its bound ``wall`` (``+1`` hi, ``-1`` lo, None: hi if it has
-    one); ``event`` (``"impact"`` or ``"release"``); ``mode``, the mode in which the
-    section's guard fires (None: the one a simulation of the model shows, e.g.
-    ``"stick0+1+"`` when contact 0 releases while contact 1 is held); ``period``, the returns
-    per orbit (``k`` of ``P^k``), or ``"auto"``: the neighbours' ``k``, then ``k = 1`` and
-    every ``k <= max_period`` after which the simulated motion returns with whole reference
-    periods; ``periods`` reference periods per orbit (None: any); Newton's ``tol`` and
-    ``max_iter``; the seeding simulation's ``transient`` (reference periods); the bound
-    ``t_max`` on one map application (reference periods per return); the ``jacobian`` of
-    Newton and of the multipliers (``"fd"``: central differences of the simulated map,
-    ``"exact"``: the saltation chain).
-    """
-
-    contact: int = 0
-    wall: int | None = None
-    event: str = "impact"
-    period: int | str = "auto"
-    periods: int | None = None
-    tol: float = 1e-10
-    max_iter: int = 25
-    transient: float = 30.0
-    t_max: float = 20.0
-    jacobian: str = "exact"
-    mode: str | None = None
-    max_period: int = 4
-
-    def __post_init__(self):
-        if self.event not in ("impact", "release"):
-            raise ValueError(f"event must be 'impact' or 'release', got {self.event!r}")
-        if self.period != "auto" and (isinstance(self.period, (bool, str))
-                                      or int(self.period) != self.period or self.period < 1):
-            raise ValueError(f"period must be an int >= 1 or 'auto', got {self.period!r}")
-        if isinstance(self.max_period, bool) or int(self.max_period) != self.max_period or \
-                not 1 <= self.max_period <= 64:
-            raise ValueError(f"max_period must be an int in [1, 64], got {self.max_period!r}")
-        if self.periods is not None and (int(self.periods) != self.periods or self.periods < 1):
-            raise ValueError(f"periods must be None or an int >= 1, got {self.periods!r}")
-        if self.jacobian not in ("exact", "fd"):
-            raise ValueError(f"jacobian must be 'exact' or 'fd', got {self.jacobian!r}")
-        if self.wall not in (None, 1, -1):
-            raise ValueError(f"wall must be +1, -1 or None, got {self.wall!r}")
-        if self.mode is not None and not isinstance(self.mode, str):
-            raise ValueError(f"mode must be a mode name or None, got {self.mode!r}")
-        for name in ("tol", "transient", "t_max"):
-            v = getattr(self, name)
-            if not (math.isfinite(float(v)) and float(v) > 0):
-                raise ValueError(f"{name} must be finite and > 0, got {v!r}")
-
-    def _where(self, model) -> tuple:
-        """``(contact, wall)`` checked against the model."""
-        ma = model.automaton
-        n = len(ma.contacts)
-        if isinstance(self.contact, bool) or int(self.contact) != self.contact or \
-                not 0 <= int(self.contact) < n:
-            raise ValueError(f"contact must be an index in [0, {n}), got {self.contact!r}")
-        walls = [w for w, _ in ma.contacts[int(self.contact)].bounds]
-        wall = self.wall if self.wall is not None else (1 if 1 in walls else -1)
-        if wall not in walls:
-            raise ValueError(f"wall must be one of {walls} for contact {self.contact}, got "
-                             f"{wall!r}")
-        return int(self.contact), wall
-
-    def guard(self, model) -> str:
-        """Name of the section's guard (``contact0+``, ``release1-``, ``enter2+``)."""
-        k, wall = self._where(model)
-        c = model.automaton.contacts[k]
-        if self.event == "release":
-            if not c.rigid:
-                raise ValueError(f"event 'release': contact {k} is compliant (no sticking)")
-            return model.automaton.guard_name(k, wall, "release")
-        return model.automaton.guard_name(k, wall, "impact" if c.rigid else "enter")
-
-    def section_map(self, model, mode: str | None = None) -> SectionMap:
-        """The map ``P`` of this section of `model` in `mode` (default ``self.mode``, else
-        the free mode for impacts and the mode holding the contact alone for releases);
-        ValueError for a bad contact, wall or mode."""
-        k, wall = self._where(model)
-        sec = mechanical_section(model.automaton, k, wall, event=self.event,
-                                 mode=mode or self.mode, sample_time=model.t0)
-        T = sec.reference_period if sec.has_phase else 1.0
-        kmax = self.max_period if self.period == "auto" else int(self.period)
-        t_max = self.t_max * kmax * T
-        if sec.has_phase:
-            t_max = max(t_max, 2.0 * kmax * sec.period)
-        return SectionMap(sec, t_max=t_max, max_jumps=5000)
-
-    def sampling_period(self, model):
-        dt = float(getattr(model.automaton.loop, "dt", 0.0) or 0.0)
-        return dt if dt > 0 else None
-
-
 def orbit_status(po: PeriodicOrbit) -> int:
     """Status code (:data:`STATUS`) of a :func:`find_orbit` result."""
     if po.converged:
@@ -242,7 +155,7 @@ class Seed:
     @classmethod
     def of(cls, po: PeriodicOrbit, P) -> Seed:
         """The seed of an orbit found on the map `P`."""
-        t = float(po.s[0]) if P.section.has_phase else 0.0
+        t = P.section.to_state(po.s)[1]
         return cls(np.asarray(po.z, float).copy(), t, tuple(po.signature), int(po.period),
                    P.section.mode)
 
@@ -269,98 +182,6 @@ class Seed:
                 (ref.mode, ref.period, tuple(ref.signature[:n])):
             return True
         return self.distance(ref, period) > FAMILY_DISTANCE
-
-
-@dataclass(frozen=True)
-class SimulatedReturns:
-    """What a simulation shows of a section: where to start Newton, and with which ``k``.
-
-    Attributes
-    ----------
-    mode : str
-        The mode of the last crossing of the section's guard that starts a burst.
-    candidates : tuple of (int, ndarray)
-        ``(k, section point)`` to try, in order.
-    text : str
-        What the simulation showed, in words (for messages).
-    """
-
-    mode: str
-    candidates: tuple
-    text: str
-
-
-def _crossings(tr, guard):
-    """Indices of the jumps of `guard` (any mode) that start a burst: a crossing after a jump
-    of another guard (rebounds of one burst return within it)."""
-    J = tr.jumps
-    return [i for i in range(len(J)) if J.guard[i] == guard and J.kind[i] == "crossing"
-            and (i == 0 or J.guard[i - 1] != guard)]
-
-
-def simulated_returns(model, spec: SectionSpec, transient: float | None = None
-                      ) -> SimulatedReturns:
-    """Simulate `model` from its initial state and read the section's crossings.
-
-    The section's mode is ``spec.mode`` or the mode of the last crossing; with
-    ``spec.period = "auto"`` the candidates are every ``k <= spec.max_period`` after which the
-    last crossing comes a whole number of reference periods after an earlier one (within
-    ``1e-3 T``), the ones that also return close to the same state (``1e-3`` relative) first,
-    then ``k = 1``; otherwise ``spec.period`` alone.
-
-    Raises
-    ------
-    ValueError
-        No crossing of the guard within the transient (the message says what the simulation
-        did cross).
-    """
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.mechanics.simulate import simulate
-
-    guard = spec.guard(model)
-    P0 = spec.section_map(model)
-    T = P0.section.reference_period if P0.section.has_phase else 1.0
-    span = float(spec.transient * T if transient is None else transient)
-    if not (span > 0 and math.isfinite(span)):
-        raise ValueError(f"transient must be finite and > 0, got {transient!r}")
-    tr = simulate(model.automaton, model.x0, (model.t0, model.t0 + span)).hybrid
-    J = tr.jumps
-    hits = _crossings(tr, guard)
-    hits = [i for i in hits if spec.mode is None or J.source[i] == spec.mode]
-    if not hits:
-        seen = {}
-        for i in range(len(J)):
-            if J.kind[i] == "crossing":
-                seen[(J.guard[i], J.source[i])] = seen.get((J.guard[i], J.source[i]), 0) + 1
-        top = ", ".join(f"{g} in {m} x {c}" for (g, m), c in
-                        sorted(seen.items(), key=lambda t: -t[1])[:6]) or "no jump"
-        where = f" in mode {spec.mode}" if spec.mode else ""
-        raise ValueError(f"guess: the motion does not cross the section ({guard}{where}) within "
-                         f"the transient of {span:g} (simulated from the file's initial state; "
-                         f"its crossings: {top}); choose another contact or event, a longer "
-                         "--transient, or give --guess")
-    mode = J.source[hits[-1]]
-    hits = [i for i in hits if J.source[i] == mode]
-    P = spec.section_map(model, mode)
-    pts = [P.section.from_state(J.pre[i], J.t[i]) for i in hits]
-    text = (f"the simulation ({span:g} time units from the file's initial state) crosses "
-            f"{guard} in mode {mode} {len(hits)} times")
-    if spec.period != "auto":
-        return SimulatedReturns(mode, ((int(spec.period), pts[-1]),), text)
-    scale = max(1.0, float(np.max(np.abs(pts[-1]))))
-    close, whole, notes = [], [], []
-    for k in range(1, min(spec.max_period, len(hits) - 1) + 1):
-        gap = J.t[hits[-1]] - J.t[hits[-1 - k]]
-        m = round(gap / T)
-        dist = float(np.max(np.abs(P.section.wrap(pts[-1] - pts[-1 - k])))) / scale
-        notes.append(f"after {k}: {gap / T:.4g} T, distance {dist:.2g}")
-        if m >= 1 and abs(gap - m * T) <= 1e-3 * T:
-            (close if dist <= 1e-3 else whole).append((dist, k))
-    order = sorted(k for _, k in close) + [1] + [k for _, k in sorted(whole)]
-    ks = list(dict.fromkeys(order))[:3]
-    if notes:
-        text += "; returns " + "; ".join(notes)
-    return SimulatedReturns(mode, tuple((k, pts[-1]) for k in ks), text)
 
 
 def _guess_from_simulation(model, sec, transient):
@@ -507,17 +328,18 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
 
 def orbit_from_model(model, contact: int = 0, wall: int | None = None, period="auto", *,
                      guess=None, transient: float | None = None, tol: float = 1e-11,
-                     event: str = "impact", map_options: dict | None = None,
+                     event: str = "auto", map_options: dict | None = None,
                      periods: int | None = None, min_return: float | None = None,
-                     mode: str | None = None, max_period: int = 4) -> tuple:
-    """A periodic orbit of a mechanical model on the section of one of its contacts.
+                     mode: str | None = None, max_period: int = 4,
+                     phase: float | None = None) -> tuple:
+    """A periodic orbit of a mechanical model, by default on its stroboscopic section.
 
     Parameters
     ----------
     model : MechanicalModel
         A loaded model file (:func:`hybridpd.mechanics.modelfile.load_model`).
     contact : int
-        0-based contact index (file order).
+        0-based contact index (file order) of an event section.
     wall : {+1, -1}, optional
         Bound of the contact (default ``hi`` if the contact has one, else ``lo``).
     period : int or "auto"
@@ -532,9 +354,13 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period="a
         Time of that simulation (default 50 reference periods, or 200 time units).
     tol : float
         Newton tolerance.
-    event : {"impact", "release"}
-        Section on the impacts, or on the ends of sticking phases (one crossing per phase
-        however many impacts precede the sticking).
+    event : {"auto", "stroboscopic", "impact", "release"}
+        ``"auto"`` (default): the stroboscopic section (the state at the phase ``phase`` of
+        the reference, one common period of the reference and the sampling later) for a
+        model with a periodic reference, else the event section that the simulated motion
+        crosses (reported in the orbit's ``detail``); ``"impact"``: the contact's impacts;
+        ``"release"``: the ends of its sticking phases (one crossing per phase however many
+        impacts precede the sticking).
     map_options : dict, optional
         Keyword arguments of :class:`~hybridpd.analysis.hybridmap.SectionMap`.
     periods, min_return : optional
@@ -546,6 +372,10 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period="a
         for releases).
     max_period : int
         Largest ``k`` that ``period="auto"`` tries.
+    phase : float, optional
+        ``phi0`` of the stroboscopic section (default: chosen from the simulation where no
+        jump other than a sample happens near it, in the free mode where the motion has one;
+        :func:`choose_phase`).
 
     Returns
     -------
@@ -561,19 +391,28 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period="a
     >>> po, P = orbit_from_model(hybridpd.load_model(f), 0, event="release")
     >>> po.converged, po.mode, po.period
     (True, 'stick0+1+', 1)
+    >>> po, P = orbit_from_model(hybridpd.load_model(f))     # the stroboscopic section
+    >>> po.converged, po.n_periods, round(po.spectral_radius, 4)
+    (True, 1, 0.5283)
     """
     spec = SectionSpec(contact=contact, wall=wall, event=event, period=period,
-                       periods=periods, tol=tol, mode=mode, max_period=max_period)
+                       periods=periods, tol=tol, mode=mode, max_period=max_period, phase=phase)
+    chosen = ""
+    if not spec.stroboscopic(model) and spec.event == "auto":
+        spec, chosen = _event_section(model, spec, transient)
     if guess is None:
         sim = simulated_returns(model, spec, transient if transient is not None else
                                 _default_transient(model, spec))
         cands, sec_mode, text = sim.candidates, sim.mode, sim.text
+        spec = replace(spec, phase=sim.phase)
     else:
         ks = (1, *range(2, spec.max_period + 1)) if period == "auto" else (int(period),)
         cands, sec_mode, text = tuple((k, guess) for k in ks[:3]), mode, ""
+    text = "; ".join(t for t in (chosen, text) if t)
     s0 = cands[0][1]
     sec = spec.section_map(model, sec_mode).section
-    P = SectionMap(sec, **dict(map_options or {}))
+    P = (StroboscopicMap if spec.stroboscopic(model) else SectionMap)(
+        sec, **dict(map_options or {}))
     s0 = np.asarray(s0, float)
     if s0.shape != (sec.dim,):
         raise ValueError(f"guess must have {sec.dim} numbers {sec.names}, got {s0.size}")
@@ -594,6 +433,3 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period="a
     return po, P
 
 
-def _default_transient(model, spec):
-    sec = spec.section_map(model).section
-    return 50.0 * sec.reference_period if sec.has_phase else 200.0

@@ -391,7 +391,9 @@ def _make_orbit(P, s, k, reason, it, F, jacobian, checks) -> PeriodicOrbit:
     if not rr.ok:
         return _no_orbit(P, s, k, f"map undefined: {rr.status}", it, F)
     if np.all(np.isfinite(DP)):
-        st = stability(DP, structural_zeros=P.structural_zeros)
+        zeros = P.structural_zeros if rr.structural_zeros is None or rr.DP is None \
+            else rr.structural_zeros
+        st = stability(DP, structural_zeros=min(zeros, dim - 1))
         mult, rho, stab, hyp = st.multipliers, st.spectral_radius, st.stable, st.hyperbolic
     else:
         mult, rho, stab, hyp = np.full(dim, np.nan + 0j), math.nan, False, False

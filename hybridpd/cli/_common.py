@@ -190,7 +190,7 @@ def add_pair(p, *, names=("case", "mu", "m2", "omega", "L", "gamma", "x10", "e",
 def add_model(p, *, set_option: bool = True, section: bool = True):
     """The model-file options: ``--model FILE.toml``, ``--list-params``, ``--set KEY VALUE``
     (with `set_option`) and the options choosing a model file's section and orbits (with
-    `section`: ``--contact``, ``--wall``, ``--event``, ``--period``, ``--mode``,
+    `section`: ``--contact``, ``--wall``, ``--event``, ``--phase``, ``--period``, ``--mode``,
     ``--periods``), declared here once for every command.
 
     Examples
@@ -221,13 +221,22 @@ def add_model(p, *, set_option: bool = True, section: bool = True):
 
 def _add_section(p):
     p.add_argument("--contact", type=int, default=0,
-                   help="--model: 0-based contact whose impacts (or releases) define the "
-                        "section")
+                   help="--model: 0-based contact whose impacts (or releases) define an "
+                        "event section")
     p.add_argument("--wall", type=int, choices=[-1, 1], default=None,
                    help="--model: +1 (hi) or -1 (lo) bound of the contact (default hi)")
-    p.add_argument("--event", default="impact", choices=["impact", "release"],
-                   help="--model: section on the contact's impacts, or on the ends of its "
+    p.add_argument("--event", default="auto",
+                   choices=["auto", "stroboscopic", "impact", "release"],
+                   help="--model: the section. 'auto' (default): the stroboscopic one (the "
+                        "state at one phase of the reference, one common period of the "
+                        "reference and the sampling later) when the reference is periodic, "
+                        "else the event section the simulated motion crosses (reported); "
+                        "'impact': the contact's impacts; 'release': the ends of its "
                         "sticking phases (once per burst of impacts)")
+    p.add_argument("--phase", type=float, default=None, metavar="PHI0",
+                   help="--model: the phase phi0 of the stroboscopic section (time units; "
+                        "default: chosen where the simulated motion has no jump other than "
+                        "a sample nearby, in the free mode if it has one)")
     p.add_argument("--period", type=period_arg, default="auto", metavar="{auto,K}",
                    help="--model: returns to the section per orbit, the k of the map P^k "
                         "the command works with; 'auto' (default): the neighbours' or 1, "

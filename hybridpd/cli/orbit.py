@@ -168,7 +168,8 @@ def _run_model(args) -> int:
     try:
         orb, P = orbit_from_model(model, args.contact, args.wall, args.period,
                                   guess=args.guess, transient=args.transient,
-                                  event=args.event, periods=args.periods, mode=args.mode)
+                                  event=args.event, periods=args.periods, mode=args.mode,
+                                  phase=args.phase)
     except ValueError as exc:
         why = _transient_diverged(model, args) if args.guess is None else None
         if why is None:
@@ -182,8 +183,7 @@ def _run_model(args) -> int:
         return _report(status, orb.reason)
     k = (f"{orb.period} return{'s' if orb.period != 1 else ''} to the section per period"
          if orb.converged else f"period {orb.period}")
-    print(f"{model.source}: orbit on contact {args.contact} (wall {d['wall']:+d}, "
-          f"{args.event} in mode {P.section.mode}, {k}): {orb.reason} after "
+    print(f"{model.source}: orbit on {_section_words(d)}, {k}): {orb.reason} after "
           f"{orb.iterations} Newton iterations (residual {orb.residual:.3g})")
     print("  section point: " + ", ".join(f"{k} = {v:.10g}" for k, v in zip(orb.names, orb.s)))
     sig = orb.signature
@@ -196,11 +196,28 @@ def _run_model(args) -> int:
         print(f"  no orbit: {orb.detail}")
     if orb.converged:
         mods = ", ".join(f"{abs(m):.6g}" for m in orb.multipliers)
-        print(f"  multipliers |lambda| = {mods}")
+        zeros = d.get("structural_zeros") or 0
+        print(f"  multipliers |lambda| = {mods}"
+              + (f" (and {zeros} structural zero{'s' if zeros != 1 else ''}: directions the "
+                 "period's jumps remove)" if zeros else ""))
         print(f"  spectral radius = {orb.spectral_radius:.10g} -> "
               f"{'stable' if orb.stable else 'unstable'}"
               f"{'' if orb.hyperbolic else ' (not hyperbolic)'}")
+        if orb.quantities.get("jacobian") == "central differences":
+            print(f"  DP by central differences (relative step "
+                  f"{orb.quantities['jacobian_step']:g}, estimated error "
+                  f"{orb.quantities['jacobian_error']:.2g}): a jump of the period has no "
+                  "saltation matrix")
     return _report(status, orb.reason)
+
+
+def _section_words(d) -> str:
+    """The section of a model's orbit record in words (up to the mode)."""
+    if d["event"] == "stroboscopic":
+        return (f"the stroboscopic section (phase phi0 = {d['phi0']:.6g} of the common "
+                f"period {d['T']:.6g}, mode {d['section_mode']}")
+    return (f"contact {d['contact']} (wall {d['wall']:+d}, {d['event']} in mode "
+            f"{d['section_mode']}")
 
 
 def _model_record(model, orb, P, args) -> dict:
@@ -211,37 +228,42 @@ def _model_record(model, orb, P, args) -> dict:
     n = model.system.n
     lay = model.automaton.layout
     z = orb.z
-    reset = sec.automaton.mode(sec.mode).guards[sec.guard_index].reset
+    strobe = sec.guard is None
+    reset = None if strobe else sec.automaton.mode(sec.mode).guards[sec.guard_index].reset
     zp = z if reset is None else reset[0] @ z + reset[1]
 
     def mech(x):      # [q_1, v_1, ..., q_n, v_n]
         return [float(x[lay["q"][i]]) if j == 0 else float(x[lay["v"][i]])
                 for i in range(n) for j in (0, 1)]
 
-    d.update({"model": model.source, "contact": args.contact,
-              "wall": 1 if sec.guard.endswith("+") else -1, "event": args.event,
-              "section_mode": sec.mode, "T": sec.period,
-              "phi0": float(orb.s[0]) if sec.has_phase else None,
-              "t0": float(orb.s[0]) if sec.has_phase else 0.0, "n": orb.period,
+    t0 = sec.to_state(orb.s)[1] if np.all(np.isfinite(orb.s)) else None
+    zeros = None
+    if orb.converged:
+        zeros = len(orb.s) - len(orb.multipliers)
+    event = "stroboscopic" if strobe else ("release" if sec.guard.startswith("release")
+                                           else "impact")
+    d.update({"model": model.source, "contact": None if strobe else _contact_of(sec.guard),
+              "wall": None if strobe else (1 if sec.guard.endswith("+") else -1),
+              "event": event, "section_mode": sec.mode, "T": sec.period,
+              "phi0": sec.phase if strobe else (float(orb.s[0]) if sec.has_phase else None),
+              "t0": t0, "n": orb.period, "structural_zeros": zeros,
+              "jacobian": orb.quantities.get("jacobian"),
+              "jacobian_error": orb.quantities.get("jacobian_error"),
               "pre": mech(z), "post": mech(zp)})
     return d
 
 
+def _contact_of(guard: str) -> int:
+    """The contact index in a section guard's name (``contact0+``, ``release12-``)."""
+    return int(re.sub(r"\D", "", guard))
+
+
 def _transient_diverged(model, args) -> str | None:
     """Why the transient simulation that seeds Newton stopped, if it diverged (else None)."""
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.mechanics.sections import mechanical_section
-
-    ma = model.automaton
-    try:
-        walls = [w for w, _ in ma.contacts[int(args.contact)].bounds]
-        wall = args.wall if args.wall is not None else (1 if 1 in walls else -1)
-        sec = mechanical_section(ma, int(args.contact), wall, event=args.event)
-    except (ValueError, IndexError):
-        return None
+    T = model.automaton.loop.reference_period
     transient = args.transient
     if transient is None:   # orbit_from_model's default
-        transient = 50.0 * sec.reference_period if sec.has_phase else 200.0
+        transient = 50.0 * T if T else 200.0
     tr = model.simulate(model.t0 + float(transient))
     if tr.termination in ("diverged", "nonfinite"):
         return (f"the transient simulation from the file's initial state stopped at "

@@ -37,7 +37,7 @@ from scipy.linalg import expm
 from hybridpd.hybrid.automaton import HybridAutomaton
 from hybridpd.model import check_finite, wrap_phase
 
-__all__ = ["Section", "common_multiple", "exosystem"]
+__all__ = ["Section", "StroboscopicSection", "common_multiple", "exosystem"]
 
 
 # ----------------------------------------------------------------------------------------
@@ -211,14 +211,8 @@ class Section:
         self.automaton = automaton
         self.mode = str(mode)
         self.mode_index = automaton.mode_index(self.mode)
-        gnames = [g.name for g in automaton.mode(self.mode).guards]
-        if guard not in gnames:
-            raise ValueError(f"guard must be one of {gnames} (mode {mode!r}), got {guard!r}")
-        self.guard = guard
-        self.guard_index = gnames.index(guard)
-        g = automaton.mode(self.mode).guards[self.guard_index]
         n = automaton.n_states
-        self.c, self.d, self.direction = g.c.copy(), float(g.d), int(g.direction)
+        self._set_guard(guard)
         if exo is None:
             exo, E = exosystem(automaton)
         else:
@@ -249,8 +243,10 @@ class Section:
             raise ValueError(f"resolver must be callable or None, got {resolver!r}")
         self.resolver = resolver
         # the guard and the constraints: rows that every section point satisfies
-        self._rows = np.vstack([self.c[None, :]] + [r[None, :] for r, _, _ in self.constraints])
-        self._values = np.array([-self.d] + [v for _, v, _ in self.constraints])
+        head = [self.c[None, :]] if self.guard is not None else []
+        self._rows = np.vstack(head + [r[None, :] for r, _, _ in self.constraints]
+                               + [np.zeros((0, n))])
+        self._values = np.array([-self.d] * len(head) + [v for _, v, _ in self.constraints])
         self.C, self.names = self._coords(coords, names)
         M = np.vstack([self.C[:, self.free], self._rows[:, self.free]])
         if not np.linalg.cond(M) < 1e12:
@@ -258,6 +254,17 @@ class Section:
                              "determine the non-exosystem state (the matrix [C; c] is "
                              "singular)")
         self._Minv = np.linalg.inv(M)
+
+    def _set_guard(self, guard):
+        """The guard's row ``c``, offset ``d``, direction and index in the section's mode."""
+        gnames = [g.name for g in self.automaton.mode(self.mode).guards]
+        if guard not in gnames:
+            raise ValueError(f"guard must be one of {gnames} (mode {self.mode!r}), got "
+                             f"{guard!r}")
+        self.guard = guard
+        self.guard_index = gnames.index(guard)
+        g = self.automaton.mode(self.mode).guards[self.guard_index]
+        self.c, self.d, self.direction = g.c.copy(), float(g.d), int(g.direction)
 
     def _clocks(self, clocks) -> tuple:
         """``(clocks set from the phase, commensurate)`` (class docstring)."""
@@ -361,7 +368,8 @@ class Section:
             cand = [j for j in range(len(fr)) if j not in piv]
             a = np.abs(R[r, cand])
             if not cand or not a.max() > 1e-12 * max(1.0, np.abs(self._rows[r]).max()):
-                what = "the guard" if r == 0 else f"constraint {self.constraints[r - 1][2]!r}"
+                off = int(self.guard is not None)
+                what = "the guard" if r < off else f"constraint {self.constraints[r - off][2]!r}"
                 raise ValueError(f"{what} involves only exosystem states or states that the "
                                  "other rows fix: no section")
             j = cand[int(np.argmax(a))]
@@ -395,7 +403,7 @@ class Section:
         names = default if names is None else tuple(str(v) for v in names)
         if len(names) != C.shape[0]:
             raise ValueError(f"names must have {C.shape[0]} entries, got {len(names)}")
-        return C, (("phi",) if self.period else ()) + names
+        return C, (("phi",) if self.has_phase else ()) + names
 
     @property
     def has_phase(self) -> bool:
@@ -431,7 +439,7 @@ class Section:
     def to_state(self, s) -> tuple:
         """Full state ``z`` and start time ``t`` of the section point ``s``."""
         s = self.check_point(s)
-        t = float(s[0]) if self.has_phase else 0.0
+        t = self._start_time(s)
         y = s[1:] if self.has_phase else s
         z = np.zeros(self.automaton.n_states)
         ex = list(self.exo)
@@ -441,6 +449,10 @@ class Section:
         rhs = np.append(y, self._values - self._rows[:, ex] @ z[ex])
         z[list(self.free)] = self._Minv @ rhs
         return z, t
+
+    def _start_time(self, s) -> float:
+        """The time of the section point ``s``: its phase, or 0 without one."""
+        return float(s[0]) if self.has_phase else 0.0
 
     def from_state(self, z, t=0.0) -> np.ndarray:
         """Section coordinates of a full state ``z`` at time ``t`` (``phi = t mod T``; the
@@ -503,3 +515,77 @@ class Section:
         """``direction * c . f(z)``: positive where the flow fires the guard."""
         m = self.automaton.mode(self.mode)
         return float(self.direction * (self.c @ (m.A @ z + m.b)))
+
+
+# ----------------------------------------------------------------------------------------
+# the stroboscopic section
+# ----------------------------------------------------------------------------------------
+class StroboscopicSection(Section):
+    """The states of an automaton at one phase ``phi0`` of its periodic reference.
+
+    The section of the stroboscopic (period) map: every state at the times ``t = phi0 + j
+    Tc`` (``Tc`` the common period :attr:`period` of the reference and every sampling
+    period, as for :class:`Section`), in the mode ``mode``. No guard is crossed, so the
+    section exists for every motion of a periodically forced system, however many impacts,
+    sticking phases, releases and samples a period holds.
+
+    Coordinates ``s``: the non-exosystem states (positions, velocities, controller states,
+    the held inputs of sampled controllers) except the sampling clocks, which the phase
+    sets, and except the pivots of the ``constraints`` (the gap and normal velocity of a
+    contact held in ``mode``). There is no phase coordinate: ``phi0`` is a property of the
+    section (:attr:`phase`), so :attr:`has_phase` is False.
+
+    Parameters
+    ----------
+    automaton : HybridAutomaton
+    mode : str
+        The mode of the section's states.
+    phase : float
+        ``phi0`` in ``[0, period)`` (time units).
+    **options
+        As for :class:`Section` (``exo_state``/``reference``, ``exo``, ``period``,
+        ``coords``, ``names``, ``clocks``, ``sample_time``, ``constraints``, ``bounds``,
+        ``resolver``). A periodic exosystem (or ``period``) is required.
+
+    Examples
+    --------
+    >>> from hybridpd.hybrid.samples import impact_oscillator, oscillator_initial_state
+    >>> ha = impact_oscillator(stop=0.5)
+    >>> sec = StroboscopicSection(ha, "free", 1.0, reference=(oscillator_initial_state(0, 0),
+    ...                                                         0.0))
+    >>> sec.names, sec.phase, sec.has_phase
+    (('x', 'v'), 1.0, False)
+    """
+
+    def __init__(self, automaton: HybridAutomaton, mode: str, phase: float, **options):
+        self.phase = check_finite("phase", phase)
+        super().__init__(automaton, mode, None, **options)
+        if self.reference_period is None:
+            raise ValueError("a stroboscopic section needs a periodic reference (an "
+                             "exosystem with one frequency, or period=)")
+        if not 0.0 <= self.phase < self.period:
+            raise ValueError(f"phase must be in [0, {self.period:.10g}) (the common period), "
+                             f"got {phase!r}")
+
+    def _set_guard(self, guard):
+        del guard
+        n = self.automaton.n_states
+        self.guard, self.guard_index = None, -1
+        self.c, self.d, self.direction = np.zeros(n), 0.0, 0
+
+    @property
+    def has_phase(self) -> bool:
+        """False: the phase ``phi0`` is fixed, no coordinate."""
+        return False
+
+    def _start_time(self, s) -> float:
+        return self.phase
+
+    def from_state(self, z, t=None) -> np.ndarray:
+        """Section coordinates of a full state ``z`` (at a time ``phi0 + j Tc``; not read)."""
+        return self.C @ np.asarray(z, float)
+
+    def fires(self, z) -> float:
+        """Always 1: every state in the section's mode is a section point."""
+        del z
+        return 1.0

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from hybridpd.hybrid.section import Section
+from hybridpd.hybrid.section import Section, StroboscopicSection
 
 __all__ = ["contact_bounds", "held_constraints", "mechanical_section",
-           "mode_code", "mode_name"]
+           "mode_code", "mode_name", "stroboscopic_section"]
 
 
 def mechanical_section(model, contact: int = 0, wall: int = 1, *, period=None,
@@ -72,6 +72,47 @@ def mechanical_section(model, contact: int = 0, wall: int = 1, *, period=None,
                    exo_state=loop.exo_state(0.0), clocks=clocks or None, sample_time=sample_time,
                    constraints=held_constraints(model, mode), bounds=contact_bounds(model),
                    resolver=model.resolver())
+
+
+def stroboscopic_section(model, phase: float, *, mode: str | None = None, period=None,
+                         sample_time: float = 0.0) -> StroboscopicSection:
+    """The stroboscopic section of a mechanical automaton: its states at the phase `phase`
+    of the common period of its reference and sampling periods.
+
+    Parameters
+    ----------
+    model : MechanicalAutomaton
+    phase : float
+        ``phi0`` in ``[0, Tc)`` (time units; ``t = phi0 + j Tc``).
+    mode : str, optional
+        The mode of the section's states (default the free mode); the gaps and normal
+        velocities of the contacts it holds are constraints, not coordinates.
+    period : float, optional
+        Period of the reference (default: the common period of every sine of every
+        controller's reference).
+    sample_time : float
+        A sampling instant (the run's start ``t0``), from which the clocks are set.
+
+    Raises
+    ------
+    ValueError
+        The model has no periodic reference (a constant set-point), or a bad mode or phase.
+    """
+    mode = model.free_mode if mode is None else mode
+    loop = model.loop
+    exo = tuple(int(i) for i in model.layout["exo"])
+    if period is None:
+        period = loop.reference_period
+    if period is None:
+        raise ValueError("the model has no periodic reference (a constant set-point): it "
+                         "has no stroboscopic section; use an event section (impact or "
+                         "release)")
+    clocks = getattr(loop, "clocks", ())
+    return StroboscopicSection(model.automaton, mode, phase, exo=exo, period=period,
+                               exo_state=loop.exo_state(0.0), clocks=clocks or None,
+                               sample_time=sample_time,
+                               constraints=held_constraints(model, mode),
+                               bounds=contact_bounds(model), resolver=model.resolver())
 
 
 def _contact_label(model, k) -> str:
