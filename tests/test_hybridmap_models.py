@@ -35,7 +35,7 @@ def test_pair_model_file_orbit_matches_symmetric_orbit(case):
     phi, z1, z2, z4 = orb.fixed_point
     guess = np.array([phi, z2 + z4, z1, z2])          # (phi, y1, x2, y2)
     eps = 1e-3 if orb.stable else 1e-7
-    po, _ = orbit_from_model(model, 0, 1, guess=guess + eps)
+    po, _ = orbit_from_model(model, 0, 1, guess=guess + eps, event="impact")
     assert po.converged, po.reason
     s = po.s
     assert np.max(np.abs(np.array([s[0], s[2], s[3], s[1] - s[3]]) - orb.fixed_point)) < 1e-9
@@ -58,7 +58,7 @@ def test_drivetrain_dp_through_chatter_and_sticking_matches_finite_differences()
     assert pr.converged
     k = _impacts_per_period(pr)
     assert k >= 4, pr.signature
-    po, P = orbit_from_model(model, 0, 1, k)
+    po, P = orbit_from_model(model, 0, 1, k, event="impact")
     assert po.converged and po.stable
     kinds = [kd for _, kd in po.signature]
     assert kinds.count("zeno") == 2 and len(po.signature) == len(pr.signature)
@@ -77,7 +77,7 @@ def test_orbit_cli_with_a_model_file(capsys):
     d2 = json.loads(capsys.readouterr().out)
     k = sum(1 for g, kind in d2["impact_sequence"] if g == "contact0+" and kind == "crossing")
     assert main(["orbit", "--model", str(f), "--contact", "0", "--period", str(k),
-                 "--json"]) == 0
+                 "--event", "impact", "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert d["exists"] and d["stable"] and d["contact"] == 0 and d["wall"] == 1
     assert len(d["multipliers"]) == len(d["fixed_point"]) == 6 and len(d["pre"]) == 6
@@ -86,7 +86,8 @@ def test_orbit_cli_with_a_model_file(capsys):
     assert np.array_equal(post[[0, 2, 4, 5]], pre[[0, 2, 4, 5]])  # Newton's law: load, gear
     assert post[1] != pre[1] and post[3] != pre[3] and d["phi0"] == d["fixed_point"][0]
     g = [str(v) for v in d["fixed_point"]]
-    assert main(["orbit", "--model", str(f), "--period", str(k), "--guess", *g]) == 0
+    assert main(["orbit", "--model", str(f), "--period", str(k), "--event", "impact",
+                 "--guess", *g]) == 0
     assert "converged" in capsys.readouterr().out
     assert abs(d2["spectral_radius"] - d["spectral_radius"]) < 1e-8
 

@@ -13,12 +13,13 @@ from hybridpd.sweeps.model_basins import model_basin
 
 
 def test_pair_file_basin_labels_confirmed_by_iterating_the_map(tmp_path, capsys):
-    b = model_basin(PAIR, ("x2", -1.0, 1.0, 5), ("x1_dot", -1.0, 3.0, 5), n_iter=150)
+    b = model_basin(PAIR, ("x2", -1.0, 1.0, 5), ("x1_dot", -1.0, 3.0, 5), n_iter=150,
+                    event="impact")
     assert b.labels.shape == (5, 5) and b.attractors[0].label == 0
     assert b.attractors[0].stable and b.axes == ("x2", "x1_dot")
     assert (b.labels == 0).sum() >= 1
     # independently: iterate the simulated map from every point labelled 0
-    P = SectionSpec().section_map(ModelTemplate(PAIR).model())
+    P = SectionSpec(event="impact").section_map(ModelTemplate(PAIR).model())
     names = P.section.names
     ix, iy = names.index("x2"), names.index("x1_dot")
     for r, c in np.argwhere(b.labels == 0):

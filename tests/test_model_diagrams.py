@@ -13,13 +13,13 @@ from hybridpd.sweeps.model_diagrams import model_diagram
 
 def test_pair_file_diagram_periods_confirmed(tmp_path, capsys):
     d = model_diagram(PAIR, ("controller.kv", 2.0, 30.0, 5), iterations=150, keep=30,
-                      progress=False)
+                      event="impact", progress=False)
     assert d.points.shape == (5, 30, 4) and d.names == ("phi", "x1_dot", "x2", "x2_dot")
     tpl = ModelTemplate(PAIR)
     for i, v in enumerate(d.values):
         if d.periods[i] == 0:
             continue
-        P = SectionSpec().section_map(tpl.model({"controller.kv": v}))
+        P = SectionSpec(event="impact").section_map(tpl.model({"controller.kv": v}))
         s = d.points[i, -1]
         img = P.iterate(s, int(d.periods[i]))[-1]
         np.testing.assert_allclose(P.section.wrap(img - s), 0.0, atol=1e-5,

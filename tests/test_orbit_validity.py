@@ -53,7 +53,7 @@ def test_degenerate_return_is_no_orbit():
 
 def test_cli_refuses_rebounds_with_the_release_hint(capsys):
     f = str(MODELS / "robot_joint_pd.toml")
-    assert main(["orbit", "--model", f, "--json"]) == 3     # no orbit
+    assert main(["orbit", "--model", f, "--event", "impact", "--json"]) == 3     # no orbit
     d = json.loads(capsys.readouterr().out)
     assert d["exists"] is False and d["reason"] == "fast_return"
     assert "--event release" in d["detail"]

@@ -147,7 +147,7 @@ PID = {"type": "pid", "kp": 10.0, "ki": 2.0, "kd": 20.0, "filter_time": 0.02}
 
 def _package_orbit(controller, n_samples, guess=None):
     po, P = orbit_from_model(_model(controller, T / n_samples), 0, 1, transient=40.0,
-                             guess=guess)
+                             guess=guess, event="impact")
     return po, P
 
 

@@ -28,6 +28,7 @@ from hybridpd.analysis.model_sections import (
     _crossings,
     _default_transient,
     _event_section,
+    fix_section,
     simulated_returns,
 )
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
@@ -143,21 +144,23 @@ def other_family(s, sig, s_ref, sig_ref, wrap=None) -> bool:
 @dataclass(frozen=True, eq=False)
 class Seed:
     """A starting point for Newton: an orbit's full pre-jump state ``z`` (shape ``(n,)``) at
-    time ``t`` on the section, its impact ``signature``, returns per period ``period`` and the
-    section's ``mode`` (empty: the spec's). Full states serve every section mode's chart."""
+    time ``t`` on the section, its impact ``signature``, returns per period ``period``, the
+    section's ``mode`` (empty: the spec's) and whether it was ``stable``. Full states serve
+    every section mode's chart."""
 
     z: np.ndarray
     t: float
     signature: tuple = ()
     period: int = 1
     mode: str = ""
+    stable: bool = True
 
     @classmethod
     def of(cls, po: PeriodicOrbit, P) -> Seed:
         """The seed of an orbit found on the map `P`."""
         t = P.section.to_state(po.s)[1]
         return cls(np.asarray(po.z, float).copy(), t, tuple(po.signature), int(po.period),
-                   P.section.mode)
+                   P.section.mode, bool(po.stable))
 
     def point(self, P) -> np.ndarray:
         """The seed in `P`'s section coordinates."""
@@ -271,8 +274,10 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
         reported.
     simulate : bool
         Also seed from a simulation of the model (``spec.transient`` reference periods from
-        its initial state) when the seeds give no orbit or only unstable ones: the section's
-        mode and the candidate ``k`` come from it (:func:`simulated_returns`).
+        its initial state) where the seeds give no orbit, or only unstable ones although a
+        seed was stable (a stable orbit may then exist elsewhere): the section's mode and
+        the candidate ``k`` come from it (:func:`simulated_returns`). A family continued
+        from unstable neighbours costs no simulation.
     known : sequence of Seed
         Orbits already known here: seeds of their families are skipped and only new orbits
         are returned.
@@ -283,9 +288,12 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
         Never raises for a valid model and section: failures are statuses, and ``detail``
         says what was tried and what the simulation showed.
     """
+    if spec.stroboscopic(model) and spec.phase is None:
+        spec = fix_section(model, spec)[0]      # one phase for the seeds and the maps
     run = _Search(model, spec)
     known = [_as_seed(k) for k in known]
-    for seed in map(_as_seed, seeds):
+    seeds = [_as_seed(sd) for sd in seeds]
+    for seed in seeds:
         P = run.map(seed.mode)
         T = P.section.period
         if run.found and not all(seed.other_family(sd, T) for _, sd in run.found):
@@ -298,7 +306,9 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
         k = seed.period if spec.period == "auto" else int(spec.period)
         run.attempt(P, s0, k, "a neighbour's orbit")
     detail = ""
-    if simulate and not any(po.stable for po, _ in run.found):
+    lost = not run.found or (not any(po.stable for po, _ in run.found)
+                             and any(sd.stable for sd in seeds))
+    if simulate and lost:
         try:
             sim = simulated_returns(model, spec)
         except ValueError as exc:
@@ -398,6 +408,8 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period="a
     spec = SectionSpec(contact=contact, wall=wall, event=event, period=period,
                        periods=periods, tol=tol, mode=mode, max_period=max_period, phase=phase)
     chosen = ""
+    if model.automaton.contacts:
+        spec._where(model)      # a contact or wall the model does not have is refused
     if not spec.stroboscopic(model) and spec.event == "auto":
         spec, chosen = _event_section(model, spec, transient)
     if guess is None:
@@ -424,6 +436,8 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period="a
                       dict(tol=tol, min_return=min_return, sampling_period=dt))
         tried.append(f"period {k}: {'orbit' if po.converged else po.reason}")
         if po.converged:
+            if chosen:      # the section chosen for a model without periodic reference
+                po = replace(po, quantities={**po.quantities, "section_choice": chosen})
             return po, P
         if po.reason in ("sampling_incommensurate",):
             break

@@ -431,6 +431,8 @@ def fix_section(model, spec: SectionSpec, transient: float | None = None) -> tup
         A model without periodic reference whose motion crosses no contact (``"auto"``).
     """
     text = ""
+    if model.automaton.contacts:
+        spec._where(model)      # a contact or wall the model does not have is refused
     if not spec.stroboscopic(model) and spec.event == "auto":
         spec, text = _event_section(model, spec, transient)
     strobe = spec.stroboscopic(model)

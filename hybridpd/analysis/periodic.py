@@ -42,6 +42,7 @@ from hybridpd.analysis.hybridmap import (
 from hybridpd.analysis.labels import OFF_SECTION
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
 from hybridpd.analysis.pathfollow import newton
+from hybridpd.analysis.strobe import StroboscopicMap
 from hybridpd.hybrid._kernel import FC_T, IC_MODE
 
 __all__ = [
@@ -606,8 +607,9 @@ class SectionMapper(BasinMapper):
 
     def __init__(self, P: SectionMap, fixed_point, *, period: int = 1, n_iter: int = 1500,
                  criterion: float = 1e-3, early_exit: bool = True, escape: float = 1e3):
-        if not isinstance(P, SectionMap):
-            raise ValueError(f"P must be a SectionMap, got {type(P).__name__}")
+        if not isinstance(P, (SectionMap, StroboscopicMap)):
+            raise ValueError(f"P must be a SectionMap or a StroboscopicMap, got "
+                             f"{type(P).__name__}")
         self.map = P
         self.fixed_point = P.section.check_point(fixed_point).copy()
         if isinstance(period, bool) or int(period) != period or period < 1:
@@ -661,6 +663,14 @@ class SectionMapper(BasinMapper):
         lab = np.empty(N, np.int64)
         its = np.zeros(N, np.int64)
         sub = np.full((N, P.dim), np.nan)
+        if not isinstance(P, SectionMap):
+            # a map without compiled labeller (the stroboscopic map): its own applications,
+            # under the same rules; each step counts an iteration, so n_iter bounds the loop
+            for p in range(N):
+                while not self._resolved_step(p, W0, T0, its, lab, sub, n_iter, Qs, r2s,
+                                              targets):
+                    pass
+            return lab, its, sub
         bufs = P._buffers()
         p = 0
         while p < N:
@@ -697,8 +707,8 @@ class SectionMapper(BasinMapper):
             lab[p] = _UNRESOLVED
             return True
         if not r.ok:
-            lab[p] = {"zeno": _ZENO_STICKING, "nonfinite": _DIVERGED}.get(r.status,
-                                                                          _UNRESOLVED)
+            lab[p] = {"zeno": _ZENO_STICKING, "nonfinite": _DIVERGED,
+                      "diverged": _DIVERGED}.get(r.status, _UNRESOLVED)
             if r.status == "end_time":
                 lab[p] = _ZENO_STICKING if r.mode_final != sec.mode else _DIVERGED
             return True

@@ -150,7 +150,7 @@ def _run_model(args) -> int:
     mb = model_basin(args.model, tuple(args.x), tuple(args.y), values=values,
                      contact=args.contact, wall=args.wall, event=args.event,
                      period=args.period, periods=args.periods, mode=args.mode,
-                     n_iter=300 if args.iterations is None else args.iterations,
+                     phase=args.phase, n_iter=300 if args.iterations is None else args.iterations,
                      max_period=args.max_period, executor=executor_of(args),
                      max_workers=args.workers, progress=progress_wanted(args))
     mb = stamp_controllers(mb, args)

@@ -222,7 +222,7 @@ def _run_model(args) -> int:
     check_image(args.plot)
     d = model_diagram(args.model, tuple(args.param), contact=args.contact, wall=args.wall,
                       event=args.event, period=args.period, iterations=args.iterations,
-                      mode=args.mode, keep=args.keep,
+                      mode=args.mode, phase=args.phase, keep=args.keep,
                       max_period=min(args.max_period, args.keep // 2),
                       executor=executor_of(args), max_workers=args.workers, progress=False)
     d = stamp_controllers(d, args)

@@ -185,6 +185,8 @@ def _run_model(args) -> int:
          if orb.converged else f"period {orb.period}")
     print(f"{model.source}: orbit on {_section_words(d)}, {k}): {orb.reason} after "
           f"{orb.iterations} Newton iterations (residual {orb.residual:.3g})")
+    if d.get("section_choice"):
+        print(f"  section: {d['section_choice']}")
     print("  section point: " + ", ".join(f"{k} = {v:.10g}" for k, v in zip(orb.names, orb.s)))
     sig = orb.signature
     if args.full_sequence:
@@ -248,6 +250,7 @@ def _model_record(model, orb, P, args) -> dict:
               "phi0": sec.phase if strobe else (float(orb.s[0]) if sec.has_phase else None),
               "t0": t0, "n": orb.period, "structural_zeros": zeros,
               "jacobian": orb.quantities.get("jacobian"),
+              "section_choice": orb.quantities.get("section_choice"),
               "jacobian_error": orb.quantities.get("jacobian_error"),
               "pre": mech(z), "post": mech(zp)})
     return d

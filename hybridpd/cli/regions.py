@@ -109,7 +109,8 @@ def _run_model(args) -> int:
     cli.check_model_command(args, _PAIR, "sweep the file's entries with --x KEY and --y KEY", "KEY")
     fam = ModelSearch(args.model, contact=args.contact, wall=args.wall, event=args.event,
                       period=args.period, periods=args.periods,
-                      options={"mode": args.mode} if args.mode else None)
+                      options={k: v for k, v in (("mode", args.mode), ("phase", args.phase))
+                               if v is not None} or None)
     rm = region_map(fam, tuple(args.x), tuple(args.y), tile=args.tile,
                     executor=cli.executor_of(args), max_workers=args.workers,
                     store=args.store, progress=cli.progress_wanted(args))

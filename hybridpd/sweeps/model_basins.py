@@ -19,6 +19,7 @@ import numpy as np
 from hybridpd._deprecated import moved_names
 from hybridpd.analysis.basins import OUTCOMES, Attractor, BasinResult, from_criterion, outcome
 from hybridpd.analysis.model_orbits import SectionSpec, solve_at
+from hybridpd.analysis.model_sections import fix_section
 from hybridpd.analysis.periodic import SectionMapper, find_orbit
 from hybridpd.sweeps.model_regions import _grid_spec, template_of
 from hybridpd.sweeps.section_basins import off_section_axis
@@ -63,8 +64,9 @@ def _find_attractor(P, s, max_period, known, n_transient=200):
 
 
 def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
-                wall: int | None = None, event: str = "impact", period="auto",
-                periods: int | None = None, mode: str | None = None, n_iter: int = 300,
+                wall: int | None = None, event: str = "auto", period="auto",
+                periods: int | None = None, mode: str | None = None,
+                phase: float | None = None, n_iter: int = 300,
                 criterion: float = 1e-3,
                 max_period: int = 4, max_attractors: int = 4, executor="serial",
                 max_workers=None, progress: bool = False) -> BasinResult:
@@ -78,7 +80,7 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
         ``"motor_dot"``; ``phi`` is the reference phase) and its grid.
     values : dict, optional
         ``{dotted path: value}`` set in the file first (e.g. ``{"controller.kp": 30}``).
-    contact, wall, event, period, periods, mode
+    contact, wall, event, period, periods, mode, phase
         The section and the orbit (as in :class:`~hybridpd.sweeps.model_regions.
         model_region_map`; ``mode`` as in :class:`~hybridpd.analysis.model_orbits.
         SectionSpec`).
@@ -108,7 +110,8 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
     template = template_of(model)
     m = template.model(values)
     spec = SectionSpec(contact=contact, wall=wall, event=event, period=period, periods=periods,
-                       mode=mode)
+                       mode=mode, phase=phase)
+    spec = fix_section(m, spec)[0]
     res = solve_at(m, spec)
     if not res.orbits:
         raise ValueError(f"no periodic orbit of this section to take the basin of "
@@ -149,7 +152,7 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
     atts += [outcome(code) for code in sorted(OUTCOMES, reverse=True) if np.any(lab == code)]
     meta = {"values": dict(values or {}), "spec": {f: getattr(spec, f) for f in
                                                     ("contact", "wall", "event", "period",
-                                                     "periods")},
+                                                     "periods", "phase")},
             "n_iter": int(n_iter), "criterion": float(criterion), "section_mode": po.mode,
             "inadmissible": int(b.metadata.get("inadmissible", 0))}
     return BasinResult(b.x, b.y, lab, tuple(atts), b.iterations, xn, yn, po.s.copy(),

@@ -22,7 +22,7 @@ import numpy as np
 
 from hybridpd._deprecated import REMOVAL
 from hybridpd.analysis.diagrams import BifurcationDiagram
-from hybridpd.analysis.model_orbits import SectionSpec, simulated_returns
+from hybridpd.analysis.model_sections import SectionSpec, fix_section, simulated_returns
 from hybridpd.mechanics.params import ModelTemplate
 from hybridpd.sweeps.model_regions import template_of
 
@@ -77,12 +77,9 @@ class ModelFamily:
         """The family of ``model`` (path, dict or template) in ``parameter``; the chart's
         mode is that of the motion of the file's own values."""
         template = template_of(model)
-        spec = spec or SectionSpec()
         base = template.model()
-        try:
-            P = spec.section_map(base, simulated_returns(base, spec).mode)
-        except ValueError:
-            P = spec.section_map(base)
+        spec, mode, _ = fix_section(base, spec or SectionSpec())
+        P = spec.section_map(base, mode or None)
         fields = {k: getattr(spec, k) for k in spec.__dataclass_fields__}
         return cls(template.data, template.source, parameter, fields, P.section.mode)
 
@@ -90,7 +87,14 @@ class ModelFamily:
         spec = SectionSpec(**self.spec)
         model = ModelTemplate(self.data, self.source).model({self.parameter: value})
         sim = simulated_returns(model, spec)
-        return spec.section_map(model, sim.mode), sim.candidates[0][1]
+        P = spec.section_map(model, sim.mode)
+        if spec.event == "stroboscopic" and self.main_mode and sim.mode != self.main_mode:
+            # one chart for the whole diagram: the state at the phase, in the chart of the
+            # main mode (an image in another mode is then undefined, and said so)
+            z = P.section.to_state(sim.candidates[0][1])[0]
+            P = spec.section_map(model, self.main_mode)
+            return P, P.section.from_state(z)
+        return P, sim.candidates[0][1]
 
     def project(self, P, points) -> np.ndarray:
         """``points`` of ``P`` in the chart of :attr:`main_mode`."""
@@ -108,7 +112,8 @@ class ModelFamily:
 
 
 def model_diagram(model, param, *, contact: int = 0, wall: int | None = None,
-                  event: str = "impact", period="auto", mode: str | None = None,
+                  event: str = "auto", period="auto", mode: str | None = None,
+                  phase: float | None = None,
                   iterations: int = 300, keep: int = 50, max_period: int = 16,
                   executor="serial", max_workers=None, store=None,
                   progress: bool = True) -> BifurcationDiagram:
@@ -119,7 +124,7 @@ def model_diagram(model, param, *, contact: int = 0, wall: int | None = None,
     model : str, Path, dict or ModelTemplate
     param : (str, float, float, int)
         ``(KEY, MIN, MAX, NUM)``: a dotted path and its values.
-    contact, wall, event, period, mode
+    contact, wall, event, period, mode, phase
         The section (:class:`~hybridpd.analysis.model_orbits.SectionSpec`; ``period``: the
         diagram iterates ``P^k``, ``"auto"`` iterates ``P``).
     iterations, keep, max_period
@@ -140,8 +145,9 @@ def model_diagram(model, param, *, contact: int = 0, wall: int | None = None,
 
     template = template_of(model)
     name, values = _axis("param", param, template)
-    spec = SectionSpec(contact=contact, wall=wall, event=event, period=period, mode=mode)
-    fam = ModelFamily.of(template, name, spec)
+    fam = ModelFamily.of(template, name, SectionSpec(contact=contact, wall=wall, event=event,
+                                                     period=period, mode=mode, phase=phase))
+    spec = SectionSpec(**fam.spec)
     k = 1 if spec.period == "auto" else int(spec.period)
     d = diagram_sweep(fam, values, period=k, iterations=iterations, keep=keep,
                       max_period=min(int(max_period), int(keep) // 2), period_tol=1e-6,
@@ -149,7 +155,7 @@ def model_diagram(model, param, *, contact: int = 0, wall: int | None = None,
                       progress=progress, label=f"diagram of {Path(template.source).name}",
                       parameter=name)
     P = spec.section_map(template.model(), fam.main_mode or None)
-    T = P.section.period if P.section.has_phase else math.nan
+    T = P.section.period if P.section.period else math.nan
     return BifurcationDiagram(d.parameter_name, d.values, d.points, d.code, d.periods,
                               d.status, d.spectrum, d.final, tuple(P.section.names), {},
                               dict(d.metadata, T=T))

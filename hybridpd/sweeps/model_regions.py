@@ -44,9 +44,9 @@ from hybridpd.analysis.model_orbits import (
     Seed,
     signature_codes,
     signature_table,
-    simulated_returns,
     solve_at,
 )
+from hybridpd.analysis.model_sections import fix_section
 from hybridpd.mechanics.params import ModelTemplate
 from hybridpd.mechanics.sections import mode_code, mode_name
 from hybridpd.sweeps.regions import RegionMap
@@ -180,7 +180,8 @@ class _Cells:
                 codes = self.a[sig][p]
                 out.append(Seed(self.a[z][p].copy(), float(self.a[t][p]),
                                 tuple(ctx.table[c] for c in codes if c >= 0),
-                                int(self.a[k][p]), mode_name(ctx.model.automaton, self.a[mode][p])))
+                                int(self.a[k][p]), mode_name(ctx.model.automaton, self.a[mode][p]),
+                                bool(self.a[names[0]][p] == 0)))
         return out
 
 
@@ -276,8 +277,10 @@ class ModelSearch:
         The model file (or its parsed tables).
     contact, wall, event, period, periods
         The section and the orbits sought (:class:`~hybridpd.analysis.model_orbits.
-        SectionSpec`): contact ``contact``'s impacts (``event="impact"``) or sticking
-        releases (``"release"``), in whichever mode the motion crosses them;
+        SectionSpec`): by default (``event="auto"``) the stroboscopic section (its phase
+        chosen once from a simulation at the file's values), else contact ``contact``'s
+        impacts (``event="impact"``) or sticking releases (``"release"``), in whichever
+        mode the motion crosses them;
         ``period`` returns per orbit (``"auto"``: the neighbours', then what a simulation
         shows, up to ``options["max_period"]``, default 4; each cell records its ``k``),
         ``periods`` reference periods per orbit (None: any whole number).
@@ -300,7 +303,7 @@ class ModelSearch:
     model: object
     contact: int = 0
     wall: int | None = None
-    event: str = "impact"
+    event: str = "auto"
     period: object = "auto"
     periods: int | None = None
     options: dict | None = None
@@ -365,10 +368,9 @@ def _search(template, spec, x_name, xs, y_name, ys, tile, repair_rounds, **sweep
     from hybridpd.sweeps.sweep import run_sweep
 
     base = template.model()
-    try:        # the map's chart: the mode where the motion crosses the section at the file's
-        main_mode = simulated_returns(base, spec).mode      # values (else the default one)
-    except ValueError:
-        main_mode = spec.mode or ""
+    # one section for every cell (its event, the stroboscopic phase) and the map's chart:
+    # the mode of the section point of the motion at the file's values (else the default)
+    spec, main_mode, _ = fix_section(base, spec)
     P = spec.section_map(base, main_mode or None)
     specd = {k: getattr(spec, k) for k in spec.__dataclass_fields__}
     nx, ny = len(xs), len(ys)
