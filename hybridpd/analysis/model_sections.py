@@ -286,12 +286,13 @@ def default_phase(model) -> float:
 
 def choose_phase(model, tr, t_end: float) -> tuple:
     """``(phase, margin)``: where to cut the motion of the trajectory `tr` over its last
-    common period before `t_end`: the candidate farthest (in time, modulo ``Tc``) from every
-    jump of that period other than a sample, preferring the free mode. The candidates are
+    common period before `t_end`: among the candidates at least half as far (in time, modulo
+    ``Tc``) from every jump of that period other than a sample as the farthest one, the
+    farthest in the free mode if there is one, else the farthest. The candidates are
     the midpoints between consecutive sampling instants of a sampled loop, else 256 phases
     across ``Tc``. ``margin``: the distance to the nearest such jump."""
     Tc = _common_period(model)
-    samples = set(getattr(model.automaton.loop, "sample_guards", {}) or ())
+    samples = {ch.guard for ch in model.automaton.loop.channels if ch.sampled}
     J = tr.jumps
     ev = np.array([J.t[i] % Tc for i in range(len(J)) if J.t[i] >= t_end - Tc
                    and J.guard[i] not in samples], float)
@@ -309,7 +310,11 @@ def choose_phase(model, tr, t_end: float) -> tuple:
     free = model.automaton.free_mode
     t_c = t_end - Tc + ((cand - (t_end - Tc)) % Tc)
     is_free = np.array([_mode_at(tr, t) == free for t in t_c])
-    best = int(np.lexsort((-margin, ~is_free))[0])
+    # the free mode (its chart holds every state) where its margin is at least half the
+    # largest: a phase half a sample after a release would put neighbouring parameter values
+    # on either side of it
+    wide = margin >= 0.5 * float(margin.max())
+    best = int(np.lexsort((-margin, ~(is_free & wide), ~wide))[0])
     return float(cand[best]), float(margin[best])
 
 

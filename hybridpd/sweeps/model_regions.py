@@ -8,8 +8,10 @@ one section (a contact's impacts or sticking releases, ``k`` returns per orbit) 
 
 * **Continuation across the grid.** The grid is cut into square tiles (one sweep chunk
   each, so tiles run in parallel on any executor); inside a tile the cells are visited in
-  snake order and each starts Newton from its solved neighbours' orbits, or from a
-  simulation of the model where no neighbour has one (or only unstable ones).
+  snake order and each starts Newton from the secant predictor of the two cells before it
+  in a line (their orbits of one family, extrapolated), then from its solved neighbours'
+  orbits, and from a simulation of the model only where they give no orbit (or only
+  unstable ones where a neighbour's was stable).
 * **No holes from solver trouble.** After the sweep, every cell without an orbit that has a
   neighbour with one, and every cell next to a neighbour whose orbit looks like another
   family (other impact signature, or more than 5 % away), is tried again from all its
@@ -31,7 +33,7 @@ from __future__ import annotations
 import importlib
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -219,7 +221,7 @@ def _tile_chunk(chunk, *, data, source, x_name, y_name, spec, dim, n, main_mode)
     cells = _Cells(m, dim, n)
     where = {(int(iy[p]), int(ix[p])): p for p in range(m)}
     for p in range(m):
-        seeds = []
+        seeds = _predicted(cells, where, p, int(iy[p]), int(ix[p]), ctx)
         for dy, dx in _NEIGH:
             q = where.get((iy[p] + dy, ix[p] + dx))
             if q is not None and q < p:
@@ -228,6 +230,27 @@ def _tile_chunk(chunk, *, data, source, x_name, y_name, spec, dim, n, main_mode)
                           seeds, True)
         cells.put(p, res, ctx)
     return cells.a
+
+
+def _predicted(cells, where, p, iy, ix, ctx) -> list:
+    """The secant predictor of cell `p`: ``2 a - b`` from the first orbits ``a`` and ``b`` of
+    the two cells before it in a line (solved earlier), when they are of one family (states
+    and times extrapolated, the phase difference wrapped); at most one seed."""
+    for dy, dx in ((0, -1), (0, 1), (-1, 0), (1, 0)):
+        q1, q2 = where.get((iy + dy, ix + dx)), where.get((iy + 2 * dy, ix + 2 * dx))
+        if q1 is None or q2 is None or q1 >= p or q2 >= p:
+            continue
+        a, b = cells.orbits.get(q1, []), cells.orbits.get(q2, [])
+        if not a or not b:
+            continue
+        period = ctx.maps(a[0].mode).section.period
+        if a[0].other_family(b[0], period):
+            continue
+        dt = a[0].t - b[0].t
+        if period:
+            dt = (dt + 0.5 * period) % period - 0.5 * period
+        return [replace(a[0], z=2.0 * a[0].z - b[0].z, t=a[0].t + dt)]
+    return []
 
 
 def _repair(out, order, nx, ny, template, x_name, y_name, xs, ys, ctx, rounds):
