@@ -70,9 +70,9 @@ def _solve_ivp_pair(x, t0, t1, kv, kp=10.0):
 
 def test_auto_period_finds_the_double_impact_orbit_that_period_one_misses():
     model = model_from_dict(_pair(22.0))
-    one, _ = orbit_from_model(model, 0, 1, period=1)
+    one, _ = orbit_from_model(model, 0, 1, period=1, event="impact")
     assert not one.converged
-    po, P = orbit_from_model(model, 0, 1)             # period="auto"
+    po, P = orbit_from_model(model, 0, 1, event="impact")     # period="auto"
     assert po.converged and po.period == 2 and po.n_periods == 1, (po.reason, po.detail)
     lay = P.section.automaton.state_names
     x0 = po.z[[lay.index(n) for n in ("x1", "x1_dot", "x2", "x2_dot")]]
@@ -91,7 +91,7 @@ def test_auto_period_finds_the_double_impact_orbit_that_period_one_misses():
 
 def test_region_map_labels_cells_by_the_returns_they_found():
     rm = model_region_map(_pair(22.0), ("controller.kp", 9.8, 10.2, 2),
-                          ("controller.kv", 21.5, 22.5, 2), progress=False)
+                          ("controller.kv", 21.5, 22.5, 2), progress=False, event="impact")
     assert rm.exists.all(), rm.summary()
     assert (rm.period == 2).any() and set(np.unique(rm.period)) <= {1, 2}
     assert "k = 2" in rm.summary()

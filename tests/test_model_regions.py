@@ -94,7 +94,7 @@ def _naive_return(model, kp, kv, z, t0, T, wall):
 
 def test_pair_file_region_map_orbits_confirmed_by_solve_ivp(tmp_path):
     rm = model_region_map(PAIR, ("controller.kp", 6.0, 14.0, 3), ("controller.kv", 15.0, 25.0, 3),
-                          progress=False, tile=2)
+                          progress=False, tile=2, event="impact")
     assert rm.status.shape == (1, 3, 3) and rm.exists.all(), rm.summary()
     assert set(np.unique(rm.status)) <= {0, 1}
     for kp, kv, model, sec, z, t0 in _cell_orbits(rm, ModelTemplate(PAIR)):

@@ -403,7 +403,7 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period="a
     (True, 'stick0+1+', 1)
     >>> po, P = orbit_from_model(hybridpd.load_model(f))     # the stroboscopic section
     >>> po.converged, po.n_periods, round(po.spectral_radius, 4)
-    (True, 1, 0.5283)
+    (True, 1, 0.5605)
     """
     spec = SectionSpec(contact=contact, wall=wall, event=event, period=period,
                        periods=periods, tol=tol, mode=mode, max_period=max_period, phase=phase)

@@ -120,6 +120,12 @@ class StroboscopicMap(PoincareMap):
         return self.section.mode
 
     @property
+    def structural_zeros(self) -> int:
+        """Where a run gives no count of its own (a Jacobian by differences): one per
+        sampled controller, whose held input the next sample overwrites."""
+        return len(self.section.clocks)
+
+    @property
     def phase(self) -> float:
         """``phi0``: the section's phase of the reference (time units)."""
         return self.section.phase

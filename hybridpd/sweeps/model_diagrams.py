@@ -60,10 +60,14 @@ class ModelFamily:
     ...         "reference": {"type": "sine", "amplitude": 0.4, "omega": 5.0,
     ...                       "feedforward_mass": 1.0},
     ...         "initial": {"q": [0.3, 0.0], "v": [0.5, 0.0]}}
-    >>> fam = ModelFamily.of(pair, "controller.kv")
+    >>> fam = ModelFamily.of(pair, "controller.kv")       # the stroboscopic section
     >>> P, start = fam(20.0)
     >>> P.names, bool(np.allclose(P(start), start, atol=1e-6))
-    (('phi', 'x1_dot', 'x2', 'x2_dot'), True)
+    (('x1', 'x1_dot', 'x2', 'x2_dot'), True)
+    >>> from hybridpd.analysis.model_sections import SectionSpec
+    >>> P, start = ModelFamily.of(pair, "controller.kv", SectionSpec(event="impact"))(20.0)
+    >>> P.names
+    ('phi', 'x1_dot', 'x2', 'x2_dot')
     """
 
     data: dict
