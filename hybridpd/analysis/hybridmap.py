@@ -179,7 +179,34 @@ def _to_return(pk, dt_min, zf, zi, w0, t0, gm, gi, k, t_max, J0, J_max, max_step
 # ----------------------------------------------------------------------------------------
 # the map
 # ----------------------------------------------------------------------------------------
-class SectionMap(PoincareMap):
+class OnSection:
+    """What a map whose points are those of its ``section`` reads from it: the coordinates'
+    names, the mode, the points and their full states, and one structural zero per sampling
+    clock set from the phase (the held force at a section point is overwritten at the next
+    sample)."""
+
+    section = None
+
+    @property
+    def names(self) -> tuple:
+        return self.section.names
+
+    @property
+    def mode(self) -> str:
+        return self.section.mode
+
+    @property
+    def structural_zeros(self) -> int:
+        return len(self.section.clocks)
+
+    def check_point(self, s) -> np.ndarray:
+        return self.section.check_point(s)
+
+    def state(self, s) -> np.ndarray:
+        return self.section.to_state(s)[0]
+
+
+class SectionMap(OnSection, PoincareMap):
     """The impact map ``P`` of a :class:`Section` (module docstring), its powers and ``DP``.
 
     The reference implementation of the map protocol (:class:`~hybridpd.analysis.maps.
@@ -330,28 +357,8 @@ class SectionMap(PoincareMap):
         return self.section.dim
 
     @property
-    def names(self) -> tuple:
-        return self.section.names
-
-    @property
     def period(self) -> float | None:
         return self.section.period
-
-    @property
-    def mode(self) -> str:
-        return self.section.mode
-
-    @property
-    def structural_zeros(self) -> int:
-        """One per sampling clock set from the phase (the held force at a section point is
-        overwritten at the next sample)."""
-        return len(self.section.clocks)
-
-    def check_point(self, s) -> np.ndarray:
-        return self.section.check_point(s)
-
-    def state(self, s) -> np.ndarray:
-        return self.section.to_state(s)[0]
 
     # ---- what an orbit of a section map must satisfy (hooks of find_orbit)
     def _min_return(self, min_return):

@@ -43,7 +43,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from hybridpd.analysis.hybridmap import sensitivity_chain
+from hybridpd.analysis.hybridmap import OnSection, sensitivity_chain
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
 from hybridpd.hybrid.automaton import TerminationCause, ZenoOptions
 from hybridpd.hybrid.section import StroboscopicSection
@@ -58,7 +58,7 @@ _ROUNDING = 1e-13
 DIVERGENCE_FACTOR = 1e9
 
 
-class StroboscopicMap(PoincareMap):
+class StroboscopicMap(OnSection, PoincareMap):
     """The period map of a :class:`~hybridpd.hybrid.section.StroboscopicSection` (module
     docstring).
 
@@ -112,20 +112,6 @@ class StroboscopicMap(PoincareMap):
         self.simtol = float(simtol)
 
     @property
-    def names(self) -> tuple:
-        return self.section.names
-
-    @property
-    def mode(self) -> str:
-        return self.section.mode
-
-    @property
-    def structural_zeros(self) -> int:
-        """Where a run gives no count of its own (a Jacobian by differences): one per
-        sampled controller, whose held input the next sample overwrites."""
-        return len(self.section.clocks)
-
-    @property
     def phase(self) -> float:
         """``phi0``: the section's phase of the reference (time units)."""
         return self.section.phase
@@ -134,12 +120,6 @@ class StroboscopicMap(PoincareMap):
     def common_period(self) -> float:
         """``Tc``: the time of one application of ``P``."""
         return self.section.period
-
-    def check_point(self, s) -> np.ndarray:
-        return self.section.check_point(s)
-
-    def state(self, s) -> np.ndarray:
-        return self.section.to_state(s)[0]
 
     def _simulate(self, z0, t0, t1):
         sec = self.section
