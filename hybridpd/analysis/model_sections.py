@@ -36,20 +36,20 @@ class SectionSpec:
 
     ``event`` (:data:`EVENTS`): ``"auto"`` (default) is the stroboscopic section for a model
     with a periodic reference and otherwise the event section its simulated motion crosses
-    (:meth:`resolved`); ``"stroboscopic"``: the state at the phase ``phase`` of the reference
-    (None: chosen from a simulation where no event happens near it, :func:`choose_phase`;
-    :func:`fix_section` fixes it for a sweep),
-    one common period later; ``"impact"``/``"release"``: contact ``contact`` (0-based) at its
-    bound ``wall`` (``+1`` hi, ``-1`` lo, None: hi if it has one). ``mode``, the mode of the
-    section's states or in which its guard fires (None: the one a simulation of the model
-    shows, e.g. ``"stick0+1+"`` when contact 0 releases while contact 1 is held); ``period``, the returns
-    per orbit (``k`` of ``P^k``), or ``"auto"``: the neighbours' ``k``, then ``k = 1`` and
-    every ``k <= max_period`` after which the simulated motion returns with whole reference
-    periods; ``periods`` reference periods per orbit (None: any); Newton's ``tol`` and
-    ``max_iter``; the seeding simulation's ``transient`` (reference periods); the bound
-    ``t_max`` on one map application (reference periods per return); the ``jacobian`` of
-    Newton and of the multipliers (``"fd"``: central differences of the simulated map,
-    ``"exact"``: the saltation chain).
+    (:func:`fix_section`); ``"stroboscopic"``: the state at the phase ``phase`` of the
+    reference, one common period later (``phase`` None: chosen from a simulation where no
+    jump other than a sample happens near it, :func:`choose_phase`; :func:`fix_section`
+    fixes it once for a sweep); ``"impact"``/``"release"``: contact ``contact`` (0-based) at
+    its bound ``wall`` (``+1`` hi, ``-1`` lo, None: hi if it has one). ``mode``: the mode of
+    the section's states, or in which its guard fires (None: the one a simulation of the
+    model shows, e.g. ``"stick0+1+"`` when contact 0 releases while contact 1 is held).
+    ``period``: the returns per orbit (``k`` of ``P^k``), or ``"auto"``: the neighbours'
+    ``k``, then ``k = 1`` and every ``k <= max_period`` after which the simulated motion
+    returns (whole reference periods for an event section); ``periods`` reference periods
+    per orbit (None: any); Newton's ``tol`` and ``max_iter``; the seeding simulation's
+    ``transient`` (reference periods); the bound ``t_max`` on one application of an event
+    map (reference periods per return); the ``jacobian`` of Newton and of the multipliers
+    (``"fd"``: central differences of the simulated map, ``"exact"``: the saltation chain).
     """
 
     contact: int = 0
@@ -127,7 +127,7 @@ class SectionSpec:
             return model.automaton.guard_name(k, wall, "release")
         return model.automaton.guard_name(k, wall, "impact" if c.rigid else "enter")
 
-    def section_map(self, model, mode: str | None = None) -> SectionMap:
+    def section_map(self, model, mode: str | None = None) -> SectionMap | StroboscopicMap:
         """The map ``P`` of this section of `model` in `mode` (default ``self.mode``, else
         the free mode for impacts and the mode holding the contact alone for releases);
         ValueError for a bad contact, wall or mode. The stroboscopic section is taken at
@@ -150,7 +150,6 @@ class SectionSpec:
     def sampling_period(self, model):
         dt = float(getattr(model.automaton.loop, "dt", 0.0) or 0.0)
         return dt if dt > 0 else None
-
 
 
 @dataclass(frozen=True)
@@ -246,7 +245,6 @@ def simulated_returns(model, spec: SectionSpec, transient: float | None = None
     if notes:
         text += "; returns " + "; ".join(notes)
     return SimulatedReturns(mode, tuple((k, pts[-1]) for k in ks), text)
-
 
 
 def _default_transient(model, spec):
@@ -418,7 +416,6 @@ def _event_section(model, spec, transient) -> tuple:
             f"at wall {wall:+d} ({n_hit} impacts, {n_rel} releases in the second half of a "
             f"{span:g}-long simulation)")
     return replace(spec, event=event, contact=k, wall=wall), text
-
 
 
 def fix_section(model, spec: SectionSpec, transient: float | None = None) -> tuple:
