@@ -638,9 +638,9 @@ def sensitivity_chain(rec, nseg, nb, modes, pk, Z0, track: bool = False) -> tupl
     jumps as their saltation matrices (:func:`_jump`). ``tangent``: a jump of the chain is
     tangential (no saltation matrix), outside the bursts that end in an accumulation.
     ``rank`` (with ``track``, else None): the dimension of the image of ``Z0`` through the
-    chain counted structurally, i.e. dropping at each jump only the directions its linear
-    part removes (singular values below ``1e-9`` of its norm; a flow is invertible and
-    removes none, however much it contracts).
+    chain counted structurally (:func:`_image`): only a jump whose reset is singular drops
+    directions, those its linear part removes (singular values below ``1e-9`` of its norm);
+    a flow is invertible and removes none, however much it contracts.
     """
     n = Z0.shape[0]
     st0, st1, smode, sj = rec.st0, rec.st1, rec.smode, rec.sj
@@ -661,7 +661,7 @@ def sensitivity_chain(rec, nseg, nb, modes, pk, Z0, track: bool = False) -> tupl
             q += 1
         if m == nb:
             break
-        Z, tg, tan, L, R = _jump(m, rec, Z, tgrad, modes, pk, n)
+        Z, tg, tan, L, R = _jump(m, rec, Z, tgrad, modes, pk, n, track)
         tgrad.append(tg)
         if track and Q.shape[1]:
             Q = _image(L, R, Q)
@@ -691,8 +691,9 @@ def _invertible(L) -> bool:
     return bool(sv[-1] > _NULL_RTOL * sv[0])
 
 
-def _jump(q, rec, Z, tgrad, modes, pk, n):
-    """Sensitivity after jump ``q``: ``(Z+, d t_q / d z0, tangential, linear part, reset)``.
+def _jump(q, rec, Z, tgrad, modes, pk, n, linear=False):
+    """Sensitivity after jump ``q``: ``(Z+, d t_q / d z0, tangential, linear part, reset)``
+    (the linear part ``dz+/dz-`` of a crossing only with `linear`, else None).
 
     A guard crossing gets its saltation matrix. A crossing at the instant of the jump
     before it whose guard that jump's reset has already passed (a release forced by a
@@ -725,7 +726,7 @@ def _jump(q, rec, Z, tgrad, modes, pk, n):
     cf = c @ fm
     tangent = abs(cf) <= 1e-9 * (np.abs(c) @ np.abs(fm)) or jkind[q] == 2
     tg = -(c @ Z) / cf
-    S = R + np.outer(fp - R @ fm, c) / cf
+    S = R + np.outer(fp - R @ fm, c) / cf if linear else None
     return R @ Z + np.outer(fp - R @ fm, c @ Z) / cf, tg, tangent, S, R
 
 
