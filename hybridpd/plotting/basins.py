@@ -30,6 +30,8 @@ _OUTCOME_COLORS = {NO_CONVERGENCE: "#999999", DIVERGED: "#D55E00", STICKING: "#5
                    UNRESOLVED: "#000000", OFF_SECTION_LABEL: "#FFFFFF",
                    INADMISSIBLE_LABEL: "#FFFFFF"}
 _MARKERS = ("D", "o", "s", "^", "v", "P")
+#: The fixed point's star is drawn above the section points of the other orbits.
+STAR_ZORDER = 6
 
 
 _PERIODIC_HATCHES = ("////", "\\\\\\\\", "||||", "----", "oo")
@@ -111,10 +113,11 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     Notes
     -----
     The legend lists every label present on the grid with its share of the on-section grid
-    (:func:`hybridpd._format.format_percent`), then the markers: the symmetric orbit's
-    fixed point and the section points of the other periodic orbits, projected on the slice
-    (they have their own ``phi`` and ``y2``). The slice's fixed coordinates ``phi*`` and
-    ``y2*`` are stated under the axes.
+    (:func:`hybridpd._format.format_percent`; the legend's title names that denominator),
+    then the markers: the symmetric orbit's fixed point (drawn above every other marker) and
+    the section points of the other periodic orbits, projected on the slice (they have their
+    own ``phi`` and ``y2``). The slice's fixed coordinates ``phi*`` and ``y2*`` are stated
+    under the axes.
     """
     from matplotlib.colors import BoundaryNorm, ListedColormap
     from matplotlib.patches import Rectangle
@@ -203,7 +206,8 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
         for h in handles:   # legends of a print figure wrap rather than widen it
             h.set_label("\n".join(textwrap.wrap(h.get_label(), 44)))
         leg = ax.legend(handles=handles, ncol=1, frameon=False,
-                        title=_note(fp, len(x), len(y), outside, edges), **where)
+                        title=_note(fp, len(x), len(y), outside, edges,
+                                    int((lab != OFF_SECTION_LABEL).sum())), **where)
         leg._legend_box.align = "left"
     return fig
 
@@ -219,23 +223,25 @@ def _mark(ax, a, xy, n_total: int, color):
     """Markers of an attractor's section points inside the window (projected on the slice)."""
     part = "" if len(xy) == n_total else f", {len(xy)} of {n_total} inside the window"
     if a.label == 0:
+        # on top of every other marker: the star is what the panel is about
         (ln,) = ax.plot(xy[:, 0], xy[:, 1], ls="none", marker="*", ms=11, mfc="white",
-                        mec="black", mew=1.2, zorder=3,
+                        mec="black", mew=1.2, zorder=STAR_ZORDER,
                         label=f"fixed point of the symmetric orbit{_stability_words(a)}")
         return ln
     k = (a.label - 1) % len(_MARKERS)
-    # drawn over the (larger) star, so both show where they overlap
-    (ln,) = ax.plot(xy[:, 0], xy[:, 1], ls="none", marker=_MARKERS[k], ms=5, mfc=color,
-                    mec="black", mew=1.2, zorder=4,
+    # under the star (a section point near the fixed point still shows around its arms)
+    (ln,) = ax.plot(xy[:, 0], xy[:, 1], ls="none", marker=_MARKERS[k], ms=6, mfc=color,
+                    mec="black", mew=1.2, zorder=STAR_ZORDER - 1,
                     label=f"section points of the {a.name} (projected{part}"
                           f"{_stability_words(a)})")
     return ln
 
 
-def _note(fp, nx: int, ny: int, outside, edges) -> str:
-    """Legend title: the slice's fixed coordinates, the grid, what lies outside the window."""
+def _note(fp, nx: int, ny: int, outside, edges, on_section: int) -> str:
+    """Legend title: the slice's fixed coordinates, the grid and the shares' one denominator
+    (the points on the section), what lies outside the window."""
     note = (f"slice: $\\phi = \\phi^* = {fp[0]:.4g}$, $y_2 = y_2^* = {fp[2]:.4g}$;\n"
-            f"{nx} x {ny} points")
+            f"{nx} x {ny} points; shares of the {on_section} points on the section")
     if outside:
         note += "\nsection points outside the window:\n" + ", ".join(outside)
     if edges:
@@ -302,7 +308,8 @@ def plot_model_basin(basin, ax=None, title=None):
             (ln,) = ax.plot(pts[:, ix], pts[:, iy], ls="none",
                             marker="*" if star else _MARKERS[(a.label - 1) % len(_MARKERS)],
                             ms=12 if star else 7, mfc="white" if star else colors[a.label],
-                            mec="black", mew=1.0, zorder=3,
+                            mec="black", mew=1.0,
+                            zorder=STAR_ZORDER if star else STAR_ZORDER - 1,
                             label=f"its section point ({'stable' if a.stable else 'unstable'}"
                                   f", spectral radius {a.spectral_radius:.3g})")
             handles.append(ln)

@@ -42,6 +42,10 @@ LAB_NONE = "no orbit (white)"
 LAB_EX = "existence boundary (ticks on the existing side)"
 LAB_ST = "stability boundary"
 LAB_ZOOM = "zoom window (second row)"
+LAB_OUTSIDE = "not computed (grey, dotted)"
+OUTSIDE_EDGE, OUTSIDE_HATCH = "0.55", "...."
+#: Drawing order of the paper's-gains star: above fills, boundaries and outlines.
+MARK_ZORDER = 8
 _CASE = {"collocated": "collocated", "noncollocated": "non-collocated"}
 
 #: Certified classes (CF flag value -> legend text and face colour); undecided is hatched.
@@ -131,12 +135,42 @@ def _fill(ax, X, Y, mask, label, proxy, **kw):
     return register(ax, cs, label, proxy)
 
 
+def _mark_limits(X, Y, mark, margin=0.06):
+    """``(limits, inside)``: the axes limits of a panel over the grid ``X, Y`` and whether
+    ``mark`` lies in the grid's box. A mark on or near the box's edge (the paper's gains
+    at the lower corner of a box scaled by ``m2 = 100``) gets a margin on that side, so the
+    whole star lies inside the axes."""
+    x0, x1, y0, y1 = float(X[0, 0]), float(X[0, -1]), float(Y[0, 0]), float(Y[-1, 0])
+    lims = [x0, x1, y0, y1]
+    if mark is None:
+        return lims, False
+    inside = x0 <= mark[0] <= x1 and y0 <= mark[1] <= y1
+    if inside:
+        dx, dy = margin * (x1 - x0), margin * (y1 - y0)
+        if mark[0] - x0 < dx:
+            lims[0] = x0 - dx
+        if x1 - mark[0] < dx:
+            lims[1] = x1 + dx
+        if mark[1] - y0 < dy:
+            lims[2] = y0 - dy
+        if y1 - mark[1] < dy:
+            lims[3] = y1 + dy
+    return lims, inside
+
+
 def _panel(ax, X, Y, ex, st, *, curves=None, mark=None, title=None, outline=None,
            side_ticks=True, returns=None):
     from matplotlib.patches import Rectangle
 
-    bg = Rectangle((0, 0), 1, 1, transform=ax.transAxes, facecolor="white", edgecolor="none",
-                   zorder=-10)
+    lims, mark_inside = _mark_limits(X, Y, mark)
+    x0, x1, y0, y1 = float(X[0, 0]), float(X[0, -1]), float(Y[0, 0]), float(Y[-1, 0])
+    margin = lims != [x0, x1, y0, y1]
+    if margin:
+        bg = Rectangle((x0, y0), x1 - x0, y1 - y0, facecolor="white", edgecolor="none",
+                       zorder=-10)
+    else:
+        bg = Rectangle((0, 0), 1, 1, transform=ax.transAxes, facecolor="white",
+                       edgecolor="none", zorder=-10)
     ax.add_patch(bg)
     if (~ex).any():
         register(ax, bg, LAB_NONE, patch_proxy(facecolor="white", edgecolor="0.3", lw=0.6))
@@ -178,16 +212,22 @@ def _panel(ax, X, Y, ex, st, *, curves=None, mark=None, title=None, outline=None
                       ls=":", zorder=4)
         ax.add_patch(r)
         register(ax, r, LAB_ZOOM, patch_proxy(facecolor="none", edgecolor="k", ls=":", lw=1.0))
-    if mark is not None:
-        xl, yl = (X[0, 0], X[0, -1]), (Y[0, 0], Y[-1, 0])
-        if xl[0] <= mark[0] <= xl[1] and yl[0] <= mark[1] <= yl[1]:
-            # not clipped: on the box's edge (m2 = 100: kp = 10 is its lower end) it shows whole
-            (ln,) = ax.plot(*mark, marker="*", ms=9, color="#D55E00", mec="k", ls="none",
-                            zorder=5, clip_on=False)
-            register(ax, ln, PAPER_GAINS, line_proxy(marker="*", ms=9, color="#D55E00",
-                                                     mec="k", ls="none"))
-    ax.set_xlim(X[0, 0], X[0, -1])
-    ax.set_ylim(Y[0, 0], Y[-1, 0])
+    if mark_inside:
+        # above everything drawn, never clipped; the limits keep it inside the axes
+        (ln,) = ax.plot(*mark, marker="*", ms=10, color="#D55E00", mec="k", mew=0.9,
+                        ls="none", zorder=MARK_ZORDER, clip_on=False)
+        register(ax, ln, PAPER_GAINS, line_proxy(marker="*", ms=10, color="#D55E00",
+                                                 mec="k", mew=0.9, ls="none"))
+    if margin:
+        # the margin that keeps the star inside the axes lies outside the computed box (added
+        # last: its legend entry comes last)
+        out = Rectangle((0, 0), 1, 1, transform=ax.transAxes, facecolor="0.9",
+                        edgecolor=OUTSIDE_EDGE, hatch=OUTSIDE_HATCH, lw=0.0, zorder=-11)
+        ax.add_patch(out)
+        register(ax, out, LAB_OUTSIDE, patch_proxy(facecolor="0.9", edgecolor=OUTSIDE_EDGE,
+                                                   hatch=OUTSIDE_HATCH, lw=0.6))
+    ax.set_xlim(lims[0], lims[1])
+    ax.set_ylim(lims[2], lims[3])
     if title:
         ax.set_title(title)
 

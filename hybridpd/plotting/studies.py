@@ -10,8 +10,10 @@
 * :func:`plot_rho_along_m2` — the spectral radius of one orbit along ``m2`` (what a basin panel
   with no stable orbit shows instead).
 
-Their texts carry no sub- or superscripts (mathtext draws them at 70 % of the font size,
-under the 7 pt minimum) and log axes are labelled with plain numbers.
+Their symbols carry no subscripts (``kp/m2``, ``m2``: spelled plainly), a unit's power is
+rendered as mathematics (``time$^{-2}$``), and log axes are labelled with plain numbers.
+Curves that coincide stay distinguishable (line widths, dash patterns and staggered markers
+differ) and the panel says where they coincide.
 """
 from __future__ import annotations
 
@@ -23,7 +25,7 @@ from hybridpd.plotting._common import (
     line_proxy,
     patch_proxy,
     register,
-    set_all,
+    tag,
 )
 from hybridpd.plotting.style import DOUBLE, house_figure, series, styled
 
@@ -38,7 +40,7 @@ VERDICT_STYLES = {"agrees": dict(color="#0072B2", marker="o", mfc="#0072B2"),
 #: Hatch of an exactly known verdict interval, per verdict.
 _EXACT_HATCH = {"agrees": "", "contradicted": "xxx", "unresolved": "...", "split": "///"}
 #: Axis labels with units, in plain text.
-LABELS = {"m2": "m2 (mass)", "kp/m2": "kp/m2 (1/time^2)", "kv/m2": "kv/m2 (1/time)",
+LABELS = {"m2": "m2 (mass)", "kp/m2": "kp/m2 (time$^{-2}$)", "kv/m2": "kv/m2 (time$^{-1}$)",
           "kv": "kv (force·time/length)", "mu": "μ = m1/m2 (1)", "gamma": "γ = L/x10 (1)",
           "rho": "spectral radius of DP (1)", "share": "share of the gain box (%)"}
 _CASE = {"collocated": "collocated", "noncollocated": "non-collocated"}
@@ -60,20 +62,60 @@ def _param_text(params: dict) -> str:
     return ", ".join(f"{sym} = {params[k]:g}" for k, sym in names if params.get(k) is not None)
 
 
-def _e_line(ax, x, y, k, label, **kw):
+def _e_line(ax, x, y, k, label, *, stagger=1, lw=None, **kw):
+    """Series ``k`` (colour, dash pattern, marker); with ``stagger = n`` the markers of the
+    ``n`` series sit at different points, so that coinciding curves still show each."""
     s = series(k)
     n = max(1, len(x) // 8)
-    (ln,) = ax.plot(x, y, color=s["color"], ls=s["ls"], marker=s["marker"], markevery=n,
-                    ms=3.5, **kw)
+    every = ((k % stagger) * n // stagger, n)
+    width = {} if lw is None else {"lw": lw}
+    (ln,) = ax.plot(x, y, color=s["color"], ls=s["ls"], marker=s["marker"], markevery=every,
+                    ms=3.5, **width, **kw)
     register(ax, ln, label, line_proxy(color=s["color"], ls=s["ls"], marker=s["marker"],
-                                       ms=3.5))
+                                       ms=3.5, **width))
     return ln
 
 
+#: Relative difference under which two curves are said to coincide (they are drawn within
+#: a line width of each other).
+COINCIDE_RTOL = 1e-2
+
+
+def coincide_from(grid, curves, rtol=COINCIDE_RTOL):
+    """The smallest grid value from which on every curve is defined and all agree within
+    ``rtol`` (relative) up to the grid's end; None if they differ at the end.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hybridpd.plotting.studies import coincide_from
+    >>> g = np.array([1.0, 2.0, 3.0, 4.0])
+    >>> float(coincide_from(g, [np.array([1, 2, 5, 5.0]), np.array([1, 3, 5, 5.0])]))
+    3.0
+    """
+    Y = np.asarray([np.asarray(c, float) for c in curves])
+    if len(Y) < 2:
+        return None
+    ok = np.all(np.isfinite(Y), axis=0)
+    Z = np.where(ok, Y, 0.0)
+    same = ok & (Z.max(axis=0) - Z.min(axis=0) <= rtol * np.abs(Z).max(axis=0))
+    if not same[-1]:
+        return None
+    k = len(same) - 1
+    while k > 0 and same[k - 1]:
+        k -= 1
+    return float(np.asarray(grid, float)[k])
+
+
 def _rho_panel(ax, study, case, runs):
-    for k, e in enumerate(sorted({key[1] for key in study.rho if key[0] == case})):
+    """Spectral radius against ``m2`` per ``e``; returns where the curves coincide, in words
+    (:func:`coincidence_note`), for the caller to state."""
+    es = sorted({key[1] for key in study.rho if key[0] == case})
+    for k, e in enumerate(es):
         rho = study.rho[(case, e)]
-        _e_line(ax, study.rho_grid, rho, k, f"e = {e:g}")
+        # widest first: where the curves coincide each still shows beneath the next
+        _e_line(ax, study.rho_grid, rho, k, f"e = {e:g}", stagger=len(es),
+                lw=1.0 + 0.6 * (len(es) - 1 - k))
         for iv in study.intervals[case][e]:
             for end in (iv.lo, iv.hi):
                 if end.kind == "window":
@@ -103,6 +145,43 @@ def _rho_panel(ax, study, case, runs):
         _plain_log(ax, "x")
     ax.set_xlabel(LABELS["m2"])
     ax.set_ylabel(LABELS["rho"])
+    return coincidence_note(study.rho_grid, {e: study.rho[(case, e)] for e in es})
+
+
+def _round(v: float) -> str:
+    return f"{v:.0f}" if v >= 10 else f"{v:.2g}"
+
+
+def coincidence_note(grid, curves: dict) -> str:
+    """Where the curves ``{e: values}`` coincide (within :data:`COINCIDE_RTOL`): all of
+    them from some grid value on, and a pair of them from well before; "" if nowhere.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hybridpd.plotting.studies import coincidence_note
+    >>> g = np.array([1.0, 10.0, 20.0, 50.0, 100.0])
+    >>> coincidence_note(g, {0.1: [1, 2, 3, 3, 3.0], 0.5: [2, 2, 3, 3, 3.0],
+    ...                      0.9: [3, 1, 2, 3, 3.0]})
+    'the curves coincide (within 1 %):\\ne = 0.1, 0.5 for m2 ≥ 10, all e for m2 ≥ 50'
+    """
+    import itertools
+
+    es = list(curves)
+    end = float(np.asarray(grid, float)[-1])
+    every = coincide_from(grid, [curves[e] for e in es])
+    parts = []
+    for a, b in itertools.combinations(es, 2):
+        c = coincide_from(grid, [curves[a], curves[b]])
+        if c is not None and c < end and (every is None or c < every / 1.5):
+            parts.append(f"e = {a:g}, {b:g} for m2 ≥ {_round(c)}")
+    if every is not None and every < end:
+        parts.append(("all e" if len(es) > 2 else f"e = {es[0]:g}, {es[1]:g}")
+                     + f" for m2 ≥ {_round(every)}")
+    if not parts:
+        return ""
+    return (f"the curves coincide (within {100 * COINCIDE_RTOL:g} %):\n"
+            + ", ".join(parts))
 
 
 def _reading_rows(readings) -> list:
@@ -170,16 +249,22 @@ def plot_m2_study(study, *, readings, m2_range=None, runs=()):
         The ``m2`` of the figures, marked.
     """
     rows = _reading_rows(readings)
-    fig = house_figure(DOUBLE, min(8.6, 5.2 + 0.2 * len(rows)))
+    fig = house_figure(DOUBLE, min(8.6, 5.4 + 0.2 * len(rows)))
     gs = fig.add_gridspec(3, 2, height_ratios=[2.0, 0.25 + 0.16 * len(rows), 0.5])
+    grid = np.asarray(study.rho_grid, float)
+    lo, hi = m2_range if m2_range is not None else (grid[0], grid[-1])
+    xlim = (float(lo) / 1.6, float(hi) * 1.6)     # one m2 range for every panel
     axes = []
     for col, case in enumerate(("noncollocated", "collocated")):
         ax = fig.add_subplot(gs[0, col])
-        _rho_panel(ax, study, case, runs)
-        ax.set_title(f"{_CASE[case]}, kp = 10, kv = 20\n(no line: no orbit)")
+        note = _rho_panel(ax, study, case, runs)
+        ax.set_xlim(*xlim)
+        ax.set_title(f"{_CASE[case]}, kp = 10, kv = 20 (no line: no orbit)"
+                     + (f"\n{note}" if note else ""))
         axes.append(ax)
     ax = fig.add_subplot(gs[1, :])
     _verdict_panel(ax, readings, m2_range)
+    ax.set_xlim(*xlim)
     ax.set_title("each claim's verdict on the gain box as printed, read at m2")
     legend_from_gids(fig, axes, ncol=3)
     # the verdicts' own key, under their panel: what a marker and a bar mean
@@ -192,15 +277,26 @@ def plot_m2_study(study, *, readings, m2_range=None, runs=()):
         key.legend(list(handles), list(labels), loc="upper center", ncol=2,
                    title="verdict key" + ("\n" + "; ".join(crit) if crit else ""),
                    frameon=False)
-    fig.suptitle("Convention study: μ = 0.1, γ = 0.75, ω = 5, n = 1, m2 varied")
+    fig.suptitle("Convention study: μ = 0.1, γ = 0.75, ω = 5, n = 1, m2 varied\n"
+                 "coinciding curves stay apart: the wider line drawn under the narrower, "
+                 "markers staggered")
     return fig
 
 
+#: A non-collocated region of the maps with at most this many grid points has them marked.
+FEW_POINTS = 3
+#: Legend words of the certified bars.
+CERT_LABEL = "certified interval (decides the remark)"
+
+
 def _cert_bars(ax, points, k, e_count):
-    """Certified intervals ``{p: [(lo, hi) per e]}`` of series ``k`` as vertical bars, the
-    series' markers at both ends (offset along the log axis so that the ``e`` stay apart)."""
+    """Certified intervals ``{p: [(lo, hi) per e]}`` of series ``k`` as vertical bars in the
+    series' colour, a cap at both ends (offset along the log axis so that the ``e`` stay
+    apart). The legend entry shows one bar per ``e``, in the colours drawn."""
     s = series(k)
     shift = 10 ** (0.06 * (k - (e_count - 1) / 2))
+    proxy = tuple(line_proxy(color=series(j)["color"], ls="none", marker="|", ms=9, mew=1.6)
+                  for j in range(e_count))
     for p, ivs in sorted(points.items()):
         iv = ivs[k]
         if iv is None:
@@ -208,8 +304,91 @@ def _cert_bars(ax, points, k, e_count):
         x = p * shift
         (ln,) = ax.plot([x, x], [100 * iv[0], 100 * iv[1]], color=s["color"], ls="-", lw=1.6,
                         marker="_", ms=7, mew=1.6, zorder=6)
-        register(ax, ln, "certified interval (decides the remark)",
-                 line_proxy(color="0.2", ls="-", lw=1.6, marker="_", ms=7, mew=1.6))
+        register(ax, ln, CERT_LABEL, proxy)
+
+
+def _gaps(values, extra, decades=1.0):
+    """``(far, near)``: the points of ``extra`` more than ``decades`` below the smallest of
+    ``values`` (drawn on an axis of their own, left of a break), and the rest with
+    ``values``."""
+    v0 = min(float(v) for v in values)
+    far = sorted({float(p) for p in extra if float(p) < v0 / 10 ** decades})
+    near = [float(v) for v in values] + [float(p) for p in extra if float(p) not in far]
+    return far, near
+
+
+def _break_marks(left, right):
+    """The ``//`` of a broken axis between ``left`` and ``right`` (their facing spines
+    hidden)."""
+    left.spines["right"].set_visible(False)
+    right.spines["left"].set_visible(False)
+    right.tick_params(axis="y", left=False, labelleft=False)
+    kw = dict(color="k", lw=0.8, clip_on=False, zorder=10)
+    d = 0.025
+    for ax, x in ((left, 1.0), (right, 0.0)):
+        tr = ax.transAxes
+        w = d * (6.0 if ax is left else 1.0)      # the left axes is about 6 times narrower
+        for y in (0.0, 1.0):
+            ax.plot([x - w, x + w], [y - d, y + d], transform=tr, **kw)
+
+
+def _cells(ax, xe, ye, mask, *, face, edge, hatch, label, lw, zorder):
+    """The grid cells where ``mask`` holds, filled with ``face`` (or hatched), their union
+    outlined in ``edge``: a region of a single grid point still shows as its cell."""
+    # deferred import: loaded only when this runs, for start-up time
+    from matplotlib.collections import LineCollection
+    from matplotlib.colors import ListedColormap
+
+    m = np.asarray(mask, bool)
+    pc = ax.pcolor(xe, ye, np.ma.masked_where(~m, np.ones(m.shape)),
+                   cmap=ListedColormap([face]), vmin=0, vmax=1, hatch=hatch or None,
+                   # a filled cell's edge in its face colour: no seams between the cells
+                   edgecolor=edge if face == "none" else face,
+                   linewidth=0.0 if face == "none" else 0.4, zorder=zorder)
+    register(ax, pc, label, patch_proxy(facecolor="white" if face == "none" else face,
+                                        edgecolor=edge, hatch=hatch or None, lw=lw))
+    pad = np.pad(m, 1)
+    segs = []
+    ny, nx = m.shape
+    for i in range(ny):
+        for j in range(nx):
+            if not m[i, j]:
+                continue
+            if not pad[i + 1, j]:          # left neighbour outside the region
+                segs.append([(xe[j], ye[i]), (xe[j], ye[i + 1])])
+            if not pad[i + 1, j + 2]:
+                segs.append([(xe[j + 1], ye[i]), (xe[j + 1], ye[i + 1])])
+            if not pad[i, j + 1]:
+                segs.append([(xe[j], ye[i]), (xe[j + 1], ye[i])])
+            if not pad[i + 2, j + 1]:
+                segs.append([(xe[j], ye[i + 1]), (xe[j + 1], ye[i + 1])])
+    if segs:
+        ax.add_collection(tag(LineCollection(segs, colors=[edge], linewidths=lw,
+                                             zorder=zorder + 0.1), label))
+    return pc
+
+
+def _share_axes(fig, spec, far, xlim):
+    """One share panel in ``spec``: a single log axis over ``xlim``, or (``far`` points
+    given) a narrow axis around them left of a break and the main one: ``(left, main)``."""
+    if not far:
+        ax = fig.add_subplot(spec)
+        ax.set_xscale("log")
+        _plain_log(ax, "x")
+        ax.set_xlim(*xlim)
+        return None, ax
+    sub = spec.subgridspec(1, 2, width_ratios=[1, 6], wspace=0.0)
+    left = fig.add_subplot(sub[0, 0])
+    main = fig.add_subplot(sub[0, 1], sharey=left)
+    for a in (left, main):
+        a.set_xscale("log")
+        _plain_log(a, "x")
+    left.set_xlim(min(far) / 2.2, max(far) * 2.2)
+    left.set_xticks(far, [f"{p:g}" for p in far])
+    left.minorticks_off()
+    main.set_xlim(*xlim)
+    _break_marks(left, main)
+    return left, main
 
 
 @styled
@@ -218,7 +397,11 @@ def plot_param_study(ps, *, certified=None):
     (7.2 in wide).
 
     Existence and existence with stability are drawn on separate axes per case, each scaled
-    to its own values, so that a share of a few percent is read on a few-percent axis.
+    to its own values, so that a share of a few percent is read on a few-percent axis. The
+    share axes span the sampled values; certified intervals more than a decade below them
+    (the limit ``mu -> 0``) are drawn on a narrow axis of their own, left of a break. The
+    maps draw each grid point as its cell (a region of one point still shows), the
+    non-collocated cells hatched and outlined over the collocated fill.
 
     Parameters
     ----------
@@ -227,6 +410,11 @@ def plot_param_study(ps, *, certified=None):
         ``{"exists" | "exists_stable": {case: {value: [(lo, hi) per e]}}}``: certified
         intervals drawn as bars at their parameter values.
     """
+    # deferred import: loaded only when this runs, for start-up time
+    from matplotlib.legend_handler import HandlerTuple
+
+    from hybridpd.pair.certified import cell_edges
+
     name = ps.name
     ne = len(ps.e)
     fig = house_figure(DOUBLE, 6.9)
@@ -235,14 +423,14 @@ def plot_param_study(ps, *, certified=None):
     gs = outer[1].subgridspec(1, ne)
     b = ps.box
     axes = []
-    xs = [float(v) for v in ps.values]
-    if certified:
-        xs += [float(p) for q in certified.values() for d in q.values() for p in d]
-    xlim = (min(xs) / 1.8, max(xs) * 1.8)
+    cert_x = ([float(p) for q in certified.values() for d in q.values() for p in d]
+              if certified else [])
+    far, near = _gaps(ps.values, cert_x)
+    xlim = (min(near) / 1.8, max(near) * 1.8)
     for i, (case, q) in enumerate(ps.fractions.items()):
         for j, (quantity, what) in enumerate((("exists", "exists"),
                                               ("both", "exists and stable"))):
-            ax = fig.add_subplot(top[j, i])
+            left, ax = _share_axes(fig, top[j, i], far, xlim)
             top_val = 0.0
             for k, e in enumerate(ps.e):
                 y = 100 * np.asarray(q[quantity][k], float)
@@ -251,41 +439,54 @@ def plot_param_study(ps, *, certified=None):
                 pts = (certified or {}).get("exists" if quantity == "exists"
                                             else "exists_stable", {}).get(case)
                 if pts:
-                    _cert_bars(ax, pts, k, ne)
+                    for a in (ax, left):
+                        if a is not None:
+                            _cert_bars(a, pts, k, ne)
                     top_val = max(top_val, max(100 * iv[k][1] for iv in pts.values()
                                                if iv[k] is not None))
-            ax.set_xscale("log")
-            _plain_log(ax, "x")
-            ax.set_xlim(*xlim)
             ax.set_ylim(0, max(1.0, 1.08 * top_val))
+            first = ax if left is None else left
             ax.set_xlabel(LABELS[name] if j else "")
-            ax.set_ylabel(f"{what} (%)")
+            first.set_ylabel(f"{what} (%)")
+            if left is not None:
+                sym = {"mu": "μ", "gamma": "γ"}.get(name, name)
+                left.set_xlabel(f"limit\n{sym} → 0 (1)" if j else "")
             if j == 0:
-                ax.set_title(f"{_CASE[case]}: share of kp/m2, kv/m2 in [{b['kp'][0]:g}, "
-                             f"{b['kp'][1]:g}]\n(lines: {b['kp'][2]} x {b['kv'][2]} grid "
-                             "points)")
-            axes.append(ax)
+                head = f"{_CASE[case]}: share of the gain box"
+                box = (f"kp/m2, kv/m2 in [{b['kp'][0]:g}, {b['kp'][1]:g}]\n(lines: "
+                       f"{b['kp'][2]} x {b['kv'][2]} grid points)")
+                ax.set_title(f"{head}\n{box}")
+            axes += [a for a in (left, ax) if a is not None]
+    xe = cell_edges(ps.values, "log")
+    ye = cell_edges(ps.map_kv)
     for k, e in enumerate(ps.e):
         a = fig.add_subplot(gs[0, k])
-        V, KV = np.meshgrid(ps.values, ps.map_kv)
         c, n = ps.maps["collocated"]["stable"][k], ps.maps["noncollocated"]["stable"][k]
-        if c.any():
-            cs = a.contourf(V, KV, c.astype(float), levels=[0.5, 1.5], colors=["#56B4E9"])
-            register(a, cs, "collocated: exists and stable",
-                     patch_proxy(facecolor="#56B4E9", edgecolor="#0072B2"))
-        if n.any():
-            cs = a.contourf(V, KV, n.astype(float), levels=[0.5, 1.5], colors="none",
-                            hatches=["////"])
-            set_all(cs, edgecolor="#D55E00")
-            register(a, cs, "non-collocated: exists and stable (hatched)",
-                     patch_proxy(facecolor="white", edgecolor="#D55E00", hatch="////"))
+        if np.any(c):
+            _cells(a, xe, ye, c, face="#56B4E9", edge="#0072B2", hatch="",
+                   label="collocated: exists and stable", lw=0.8, zorder=2)
+        if np.any(n):
+            _cells(a, xe, ye, n, face="none", edge="#D55E00", hatch="////",
+                   label="non-collocated: exists and stable (hatched)", lw=1.4,
+                   zorder=3)
+        if np.any(n) and np.sum(n) <= FEW_POINTS:
+            # a region of a few points (a half cell on the box's edge) has its points marked
+            V, KV = np.meshgrid(ps.values, ps.map_kv)
+            (pts,) = a.plot(V[n], KV[n], ls="none", marker="D", ms=4, mfc="white",
+                            mec="#D55E00", mew=1.2, zorder=4, clip_on=False)
+            register(a, pts, "grid points of a small non-collocated region",
+                     line_proxy(ls="none", marker="D", ms=4, mfc="white", mec="#D55E00",
+                                mew=1.2))
         a.set_xscale("log")
         _plain_log(a, "x")
+        a.set_xlim(xe[0], xe[-1])
+        a.set_ylim(ye[0], ye[-1])
         a.set_xlabel(LABELS[name])
         a.set_ylabel(LABELS["kv"] if k == 0 else "")
         a.set_title(f"e = {e:g}, kp = {ps.map_kp:g}")
         axes.append(a)
-    legend_from_gids(fig, axes, ncol=3)
+    # a tuple handle (the certified bars' colours) draws its bars side by side
+    legend_from_gids(fig, axes, ncol=3, handler_map={tuple: HandlerTuple(ndivide=None, pad=0.6)})
     sym = {"mu": "μ", "gamma": "γ"}[name]
     fig.suptitle(f"Regions against {sym}: {_param_text(dict(ps.fixed))}")
     return fig
@@ -302,6 +503,8 @@ def plot_rho_along_m2(ax, m2_grid, rho, *, m2, k=0, label="this orbit"):
     ax.set_xscale("log")
     ax.set_yscale("log")
     _plain_log(ax)
+    # the whole grid, where the orbit exists or not: side by side panels share the range
+    ax.set_xlim(float(m2_grid[0]) / 1.3, float(m2_grid[-1]) * 1.3)
     ax.set_xlabel(LABELS["m2"])
     ax.set_ylabel(LABELS["rho"])
     return ax

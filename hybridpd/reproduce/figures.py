@@ -18,7 +18,8 @@ import numpy as np
 
 from hybridpd.reproduce.settings import PAPER
 
-__all__ = ["ScaledMap", "convention_figures", "save", "scaled_map", "study_figures"]
+__all__ = ["ScaledMap", "basin_share", "convention_figures", "save", "scaled_map",
+           "study_figures"]
 
 CASES = ("collocated", "noncollocated")
 #: Scaled-gain window of the m2-free figure (log10 of kp/m2 and kv/m2): the paper's gains
@@ -33,7 +34,7 @@ class ScaledMap:
     Attributes
     ----------
     x, y : ndarray
-        ``kp/m2`` and ``kv/m2`` (1/time^2 and 1/time).
+        ``kp/m2`` and ``kv/m2`` (per time squared and per time).
     e : ndarray
     exists, stable : ndarray of bool, shape (len(e), len(y), len(x))
     case : str
@@ -68,26 +69,27 @@ _GREEK = {r"\mu": "μ", r"\gamma": "γ", r"\omega": "ω", r"\phi": "φ", r"\cdot
 
 
 def plain_text(text: str) -> str:
-    """``text`` without mathtext sub- and superscripts (drawn at 70 % of the font size,
-    under 7 pt in these figures): ``"$k_p/m_2$"`` becomes ``"kp/m2"``; a formula without scripts
-    (a Greek letter) stays, one with scripts gets its Greek letters as Unicode.
+    """``text`` with its subscripted formulas spelled out: ``"$k_p/m_2$"`` becomes ``"kp/m2"``
+    (the reproduction names its symbols plainly); a formula without scripts (a Greek letter)
+    stays, and so does one with a superscript (``"$y_2^*$"``, ``"time$^{-2}$"``): it is drawn
+    as mathematics, never as a raw caret.
 
     Examples
     --------
     >>> from hybridpd.reproduce.figures import plain_text
     >>> plain_text("$k_p$ (force/length), $x_{10}$ = 1, $m_1/m_2$ = 0.1, e = 0.5")
     'kp (force/length), x10 = 1, m1/m2 = 0.1, e = 0.5'
+    >>> plain_text("$k_p/m_2$ (time$^{-2}$), $y_2 = y_2^*$")
+    'kp/m2 (time$^{-2}$), $y_2 = y_2^*$'
     """
     def sub(m):
         body = m.group(1)
-        if "_" not in body and "^" not in body:
+        if "_" not in body or "^" in body:
             return m.group(0)
         body = re.sub(r"\\mathdefault\{([^}]*)\}", r"\1", body)
         for cmd, ch in _GREEK.items():
             body = re.sub(re.escape(cmd) + r"(?![A-Za-z])", ch, body)
         body = re.sub(r"_\{([^}]*)\}|_(.)", lambda k: k.group(1) or k.group(2), body)
-        body = re.sub(r"\^\{([^}]*)\}|\^(.)", lambda k: "^" + (k.group(1) or k.group(2)),
-                      body)
         body = body.replace("\\", "").replace("{", "").replace("}", "")
         return body
     return _MATH.sub(sub, text)
@@ -246,42 +248,82 @@ def convention_figures(run, settings, *, study=None, hook=None, cache=None) -> N
         save(_basin_figure(run, case, label, par, study), d / name, hook)
 
 
+def basin_share(b, label=0) -> float:
+    """Share of ``b``'s slice with ``label``: over *all* its points, the off-section ones
+    included (their own class), the one denominator of summary.md's basin table."""
+    labels = np.asarray(b.labels)
+    return float((labels == label).sum()) / int(labels.size)
+
+
+def _no_basin_words(o) -> tuple:
+    """``(title line, panel text)`` of a basin panel with no stable orbit to label from."""
+    import textwrap
+
+    if not o.exists:
+        why = o.reason.split("(")[0].split(":")[-1].strip()
+        return ("(no orbit)", "no orbit at these gains:\n" + "\n".join(textwrap.wrap(why, 24))
+                + ";\nno basin to draw")
+    rho = o.spectral_radius
+    return ("(unstable orbit)",
+            f"no stable orbit at these gains:\nspectral radius {rho:.4g} > 1;\nno basin to draw")
+
+
 def _basin_figure(run, case, label, par, study):
+    """Figs 6-7 of one convention: one panel per ``e``; the title's share of the symmetric
+    orbit is over all the slice's points (:func:`basin_share`, as in summary.md). A panel
+    with no stable orbit says so on its face (the orbit's spectral radius along ``m2`` drawn
+    when the study is given, an empty frame otherwise)."""
     # deferred import: loaded only when this runs, for start-up time
+    from hybridpd._format import pct
     from hybridpd.plotting._common import legend_from_gids, param_line
     from hybridpd.plotting.basins import plot_basin
     from hybridpd.plotting.studies import plot_rho_along_m2
     from hybridpd.plotting.style import DOUBLE, house_figure, house_style
 
     es = PAPER["e"]
+    points = set()
     with house_style():
-        fig = house_figure(DOUBLE, 4.3)
+        fig = house_figure(DOUBLE, 4.4)
         axes = []
         for k, e in enumerate(es):
             ax = fig.add_subplot(1, len(es), k + 1)
             b, o = run.basins[(case, e)], run.orbits[(case, e)]
             if b is None:
-                why = (f"no orbit ({o.reason.split('(')[0].split(':')[-1].strip()})"
-                       if not o.exists else f"unstable, spectral radius {o.spectral_radius:.4g}")
+                head, text = _no_basin_words(o)
                 if study is not None:
                     plot_rho_along_m2(ax, study.rho_grid, study.rho[(case, e)], m2=run.m2, k=k,
                                       label=f"e = {e:g}: spectral radius along $m_2$")
+                    where = dict(x=0.97, y=0.97, ha="right", va="top")
                 else:
-                    ax.set_axis_off()
-                import textwrap
-
-                ax.set_title(f"e = {e:g} at $m_2$ = {run.m2:g}: no basin,\n"
-                             + "\n".join(textwrap.wrap(why, 30)))
+                    ax.set_xticks([])
+                    ax.set_yticks([])
+                    where = dict(x=0.5, y=0.5, ha="center", va="center")
+                ax.text(s=text, transform=ax.transAxes, fontsize=7, zorder=10,
+                        multialignment="left",
+                        bbox=dict(boxstyle="round,pad=0.3", fc="white", ec="0.3", lw=0.6),
+                        **where)
+                ax.set_title(f"e = {e:g} at $m_2$ = {run.m2:g}: no basin\n{head}")
             else:
+                labels = np.asarray(b.labels)
+                points.add((int(labels.size), len(b.x1), len(b.y1)))
                 plot_basin(b, ax=ax, legend=False,
-                           title=f"e = {e:g}: symmetric orbit {b.measure(0).percent}"
+                           title=f"e = {e:g}: symmetric orbit {pct(basin_share(b))}"
                                  + ("\n(touches the window's edge)" if b.reaches_edge else ""))
                 if k:
                     ax.set_ylabel("")
             axes.append(ax)
         legend_from_gids(fig, axes, ncol=3)
-        fig.suptitle(f"{label}, {case.replace('non', 'non-')} PD at $k_p$ = {PAPER['kp']:g}, "
-                     f"$k_v$ = {PAPER['kv']:g}; {param_line(par)}")
+        head = (f"{label}, {case.replace('non', 'non-')} PD at $k_p$ = {PAPER['kp']:g}, "
+                f"$k_v$ = {PAPER['kv']:g}; {param_line(par)}")
+        if len(points) == 1:
+            n, nx, ny = points.pop()
+            head += (f"\nshares of all {n} points of each slice ({nx} x {ny}), the off-section "
+                     "ones included")
+        elif points:
+            head += "\nshares of all the points of each slice, the off-section ones included"
+        else:
+            head += "\nno basins: no stable orbit at these gains for any e"
+        fig.suptitle(head)
     return fig
 
 
