@@ -11,7 +11,8 @@ Everything a workflow needs is one attribute away, ``import hybridpd as hp``:
 ====================  =====================================================================
 the impact pair       :class:`ImpactPair`, :class:`PDGains`, :class:`Reference`,
                       :class:`ControlledImpactPair`, :func:`symmetric_orbit`,
-                      :func:`symmetric_orbits`, :class:`ImpactMap`
+                      :func:`symmetric_orbits`, :class:`ImpactMap`,
+                      :func:`certified_map`, :func:`verify_certificate`
 any hybrid automaton  :class:`HybridAutomaton`, :class:`Section`, :class:`SectionMap`,
                       :func:`find_orbit`, :class:`PeriodicOrbit`, :func:`stability`
 mechanical systems    :class:`MechanicalSystem`, :class:`Contact`, :func:`load_model`,
@@ -66,6 +67,9 @@ _NAMES = {
     "symmetric_orbit": "hybridpd.pair.orbits",
     "symmetric_orbits": "hybridpd.pair.orbits",
     "certify_orbit": "hybridpd.pair.certified",
+    "certified_map": "hybridpd.pair.certified",
+    "verify_certificate": "hybridpd.pair.certificate",
+    "load_certificate": "hybridpd.pair.certificate",
     "ImpactMap": "hybridpd.pair.impactmap",
     # the map protocol: any map a user writes
     "PoincareMap": "hybridpd.analysis.maps",
@@ -117,9 +121,9 @@ __all__ = ["Case", "Contact", "ControlledImpactPair", "HybridAutomaton", "Impact
            "PeriodicOrbit", "PoincareMap",
            "Reference", "Section", "SectionMap", "SectionMapper", "Stability", "__version__",
            "attractor_basin", "basin_of_attraction", "bifurcation_diagram", "boundary_curves",
-           "certify_orbit", "continue_orbit", "design", "find_orbit", "load_basin", "load_branch",
-           "load_model", "load_region_map", "plot_file", "region_map", "reproduce", "run_sweep", "section_basin", "simulate", "stability", "switch_branch",
-           "symmetric_orbit", "symmetric_orbits", "virtual_restitution"]
+           "certified_map", "certify_orbit", "continue_orbit", "design", "find_orbit", "load_basin", "load_branch",
+           "load_certificate", "load_model", "load_region_map", "plot_file", "region_map", "reproduce", "run_sweep", "section_basin", "simulate", "stability", "switch_branch",
+           "symmetric_orbit", "symmetric_orbits", "verify_certificate", "virtual_restitution"]
 
 
 def __getattr__(name):

@@ -17,8 +17,8 @@ from hybridpd._version import __version__
 from hybridpd.cli._common import EXIT_BAD_INPUT, Parser, UsageError, list_params
 
 #: Command modules, in the order the help lists them.
-COMMANDS = ("simulate", "orbit", "regions", "basin", "boundaries", "bifurcation", "design",
-            "plot", "reproduce")
+COMMANDS = ("simulate", "orbit", "regions", "certify", "basin", "boundaries", "bifurcation",
+            "design", "plot", "reproduce")
 
 
 DESCRIPTION = """\

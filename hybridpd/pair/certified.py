@@ -41,7 +41,8 @@ from hybridpd.model import (
 from hybridpd.pair import proofs
 from hybridpd.pair.intervals import widen_down, widen_up
 
-__all__ = ["FLAG_MEANINGS", "FLAG_VALUES", "MAP_AXES", "BoxCertificate", "CertifiedCells",
+__all__ = ["FLAG_MEANINGS", "FLAG_VALUES", "MAP_AXES", "REASONS", "BoxCertificate",
+           "CertifiedCells",
            "CertifiedMap", "OrbitCertificate", "cell_boxes", "cell_edges", "certified_map",
            "certify_box", "certify_cells", "certify_orbit", "class_shares"]
 
@@ -50,6 +51,11 @@ FLAG_VALUES = (0, 1, 2, 3)
 FLAG_MEANINGS = " ".join(proofs.CLASSES)
 #: Parameters a certified map can sweep (those of a region map).
 MAP_AXES = ("kp", "kv", "mu", "L", "omega", "m2", "x10")
+#: Reasons of a certified class: those of :data:`hybridpd.pair.proofs.REASONS` and, last, a
+#: cell the interval layer proved but arb did not confirm (written undecided).
+REASONS = tuple(proofs.REASONS) + (
+    "undecided: proved in float intervals but not confirmed in arb",)
+R_ARB = len(proofs.REASONS)
 
 _DOMAIN = {"e": (0.0, 1.0)}  # closed; every other parameter is > 0
 
@@ -92,12 +98,18 @@ class CertifiedCells:
         :data:`FLAG_VALUES` (``0`` undecided, ``1`` proved stable, ``2`` proved unstable,
         ``3`` proved no orbit), the broadcast shape of the parameters.
     reasons : ndarray of int8
-        Indices into :data:`hybridpd.pair.proofs.REASONS`.
+        Indices into :data:`REASONS`.
     boxes_evaluated : int
         Boxes classified, parts included.
     stop : str
-        Why the bisection stopped: ``"decided"`` (no undecided part left), ``"depth"`` or
-        ``"max_boxes"``.
+        Why the subdivision stopped: ``"decided"`` (no undecided part left), ``"depth"``,
+        ``"budget"`` (``max_parts``) or ``"max_boxes"``.
+    arb_unconfirmed : int
+        Boxes the interval layer proved but arb did not confirm (written undecided, reason
+        :data:`R_ARB`); 0 without confirmation.
+    tree : ProofTree or None
+        The proof (:class:`hybridpd.pair.prooftree.ProofTree`: the leaves and what decided
+        them).
     """
 
     __repr__ = compact_repr
@@ -106,11 +118,19 @@ class CertifiedCells:
     reasons: np.ndarray
     boxes_evaluated: int
     stop: str
+    arb_unconfirmed: int = 0
+    tree: object = field(default=None, repr=False)
 
 
 def certify_cells(case="collocated", *, kp, kv, mu, e, omega, m2=1.0, gamma=None, L=None,
-                  x10=1.0, n=1, depth=3):
+                  x10=1.0, n=1, depth=3, max_parts=None, confirm=True):
     """Classify many boxes at once (vectorised); every parameter a number or ``(lo, hi)``.
+
+    The interval layer proves (:func:`hybridpd.pair.prooftree.prove_cells`: undecided parts
+    halved along the parameter that makes the deciding enclosures widest, a box proved when
+    all its parts are); with ``confirm`` every proved box is proved again in arb
+    (:func:`hybridpd.pair.arbcheck.confirm_map`: existence and the deciding inequality) and
+    written undecided where arb cannot.
 
     Parameters
     ----------
@@ -123,8 +143,11 @@ def certify_cells(case="collocated", *, kp, kv, mu, e, omega, m2=1.0, gamma=None
     n : int
         Odd order.
     depth : int
-        Bisections of an undecided box (each halves its widest parameter, relative to the
-        box's own widths); ``0`` classifies the boxes as given.
+        Bisections of an undecided part at most; ``0`` classifies the boxes as given.
+    max_parts : int or None
+        Parts classified per box at most (``None``: ``depth`` alone bounds the work).
+    confirm : bool
+        Confirm every proved box in arb.
 
     Returns
     -------
@@ -142,7 +165,9 @@ def certify_cells(case="collocated", *, kp, kv, mu, e, omega, m2=1.0, gamma=None
     """
     case = Case.parse(case).value
     n = check_odd_order(n)
-    depth = check_int("depth", depth, 0, 12)
+    depth = check_int("depth", depth, 0, 16)
+    if max_parts is not None:
+        max_parts = check_int("max_parts", max_parts, 1)
     if (gamma is None) == (L is None):
         raise ValueError("give exactly one of gamma or L (gamma = L / x10)")
     gam = _interval_arg("gamma", gamma) if gamma is not None else \
@@ -151,9 +176,37 @@ def certify_cells(case="collocated", *, kp, kv, mu, e, omega, m2=1.0, gamma=None
         kp=_interval_arg("kp", kp), kv=_interval_arg("kv", kv), mu=_interval_arg("mu", mu),
         e=_interval_arg("e", e), gamma=gam, omega=_interval_arg("omega", omega),
         m2=_interval_arg("m2", m2))
-    cls, why, evaluated, stop = proofs.classify_bisect(case, n, boxes, depth=depth)
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.pair.prooftree import prove_cells
+
+    tree = prove_cells(case, n, boxes, depth=depth, max_parts=max_parts)
+    cls, why = tree.cls.copy(), tree.why.copy()
+    unconfirmed = 0
+    if confirm:
+        ok, _ = _arb_confirm(case, n, (1, boxes.size), boxes, tree, blocks=())
+        bad = (cls != proofs.UNDECIDED) & ~ok
+        cls[bad], why[bad] = proofs.UNDECIDED, R_ARB
+        unconfirmed = int(bad.sum())
     return CertifiedCells(cls.astype(np.int8).reshape(shape), why.astype(np.int8).reshape(shape),
-                          int(evaluated), stop)
+                          int(tree.evaluated), tree.stop, unconfirmed, tree)
+
+
+def _leaf_dict(tree, offset=0):
+    """What :func:`hybridpd.pair.arbcheck.confirm_map` reads of a proof tree."""
+    r = tree.record
+    return {"cell": np.asarray(tree.leaf_cell) + offset, "lo": tree.leaves.lo,
+            "hi": tree.leaves.hi, "cls": tree.leaf_cls, "witness_s": r["witness_s"],
+            "witness_wall": r["witness_wall"]}
+
+
+def _arb_confirm(case, n, shape, cells, tree, blocks=(4, 2), leaves=None, flags=None):
+    """Confirm the proved cells in arb; returns ``(confirmed, stats)``."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.pair.arbcheck import confirm_map
+
+    return confirm_map(case, n, shape, cells.lo, cells.hi,
+                       tree.cls if flags is None else flags,
+                       _leaf_dict(tree) if leaves is None else leaves, blocks=blocks)
 
 
 def _pair(lo, hi):
@@ -239,7 +292,7 @@ def certify_box(case="collocated", *, kp, kv, mu, e, gamma, omega, m2=1.0, n=1,
         values[k] = _pair(lo, hi)
     r = certify_cells(case, n=n, depth=depth, **values)
     f = int(r.flags)
-    return BoxCertificate(proofs.CLASSES[f], f, proofs.REASONS[int(r.reasons)],
+    return BoxCertificate(proofs.CLASSES[f], f, REASONS[int(r.reasons)],
                           Case.parse(case).value, int(n), values, int(depth), r.boxes_evaluated,
                           r.stop)
 
@@ -520,11 +573,17 @@ class CertifiedMap:
     flags : ndarray of int8, shape (len(e), len(y), len(x))
         :data:`FLAG_VALUES`.
     reasons : ndarray of int8, same shape
-        Indices into :data:`hybridpd.pair.proofs.REASONS`.
+        Indices into :data:`REASONS`.
     depth : int
     seconds : float
-        Wall time.
+        Wall time (the arb confirmation included).
     boxes_evaluated : int
+    arb_unconfirmed : ndarray of int, shape (len(e),)
+        Cells the interval layer proved but arb did not confirm (written undecided).
+    arb_seconds : float
+        Wall time of the arb confirmation.
+    certificate : Certificate or None
+        The proof (:class:`hybridpd.pair.certificate.Certificate`) when asked for.
     """
 
     __repr__ = compact_repr
@@ -544,6 +603,17 @@ class CertifiedMap:
     depth: int
     seconds: float
     boxes_evaluated: int
+    arb_unconfirmed: np.ndarray = None
+    arb_seconds: float = 0.0
+    certificate: object = field(default=None, repr=False)
+
+    def save_certificate(self, path):
+        """Write the map's certificate (JSON, ``.gz`` compressed); re-check it with
+        :func:`hybridpd.pair.certificate.verify_certificate`. Returns the path."""
+        if self.certificate is None:
+            raise ValueError("certificate: this map kept none (certified_map(..., "
+                             "certificate=True or a file name))")
+        return self.certificate.save(path)
 
     def shares(self) -> list:
         """:func:`class_shares` of each ``e``'s map."""
@@ -572,8 +642,10 @@ class CertifiedMap:
                 "e": self.e.tolist(), "fixed": dict(self.fixed),
                 "flag_values": list(FLAG_VALUES), "flag_meanings": FLAG_MEANINGS,
                 "flags": self.flags.tolist(), "reasons": self.reasons.tolist(),
-                "reason_texts": list(proofs.REASONS), "depth": self.depth,
+                "reason_texts": list(REASONS), "depth": self.depth,
                 "seconds": self.seconds, "boxes_evaluated": self.boxes_evaluated,
+                "arb_unconfirmed": None if self.arb_unconfirmed is None else
+                [int(v) for v in self.arb_unconfirmed], "arb_seconds": self.arb_seconds,
                 "shares": [{k: {**v, "share": list(v["share"])} for k, v in sh.items()}
                            for sh in self.shares()]}
 
@@ -617,8 +689,15 @@ def cell_boxes(x_name, x_edges, y_name, y_edges):
 def certified_map(case="collocated", *, x=("kp", 0.1, 50.0, 101), y=("kv", 0.1, 50.0, 101),
                   e=(0.1, 0.5, 0.9), mu=None, omega=None, L=None, gamma=None, x10=1.0,
                   m2=1.0, n=1, kp=None, kv=None, spacing="linear", depth=3,
-                  chunk_size=4096) -> CertifiedMap:
+                  chunk_size=4096, max_parts=None, confirm=True,
+                  certificate=None) -> CertifiedMap:
     """Certified classification of every cell of a grid (see the module docstring).
+
+    Each cell is proved in float interval arithmetic (undecided parts halved adaptively,
+    :func:`hybridpd.pair.prooftree.prove_cells`), then, with ``confirm``, every proved cell
+    is proved again in arb (:func:`hybridpd.pair.arbcheck.confirm_map`: existence and the
+    inequality deciding its class) before it is written; a cell arb cannot confirm is
+    written undecided (reason :data:`R_ARB`) and counted in ``arb_unconfirmed``.
 
     Parameters
     ----------
@@ -633,9 +712,18 @@ def certified_map(case="collocated", *, x=("kp", 0.1, 50.0, 101), y=("kv", 0.1, 
     spacing : {"linear", "log"} or (x_spacing, y_spacing)
         The cells' convention of :func:`cell_edges`.
     depth : int
-        Bisections of undecided cells.
+        Bisections of an undecided part of a cell at most (coarse grids need 6 to 10).
     chunk_size : int
         Cells classified per vectorised batch.
+    max_parts : int or None
+        Parts classified per cell at most (``None``: ``depth`` alone bounds the work).
+    confirm : bool
+        Confirm every proved cell in arb.
+    certificate : None, True, str or Path
+        Keep the proof as the map's ``certificate``
+        (:class:`hybridpd.pair.certificate.Certificate`); a file name also writes it there
+        (JSON; ``.gz`` compressed). :func:`hybridpd.pair.certificate.verify_certificate`
+        re-proves it in arb alone.
 
     Returns
     -------
@@ -663,6 +751,9 @@ def certified_map(case="collocated", *, x=("kp", 0.1, 50.0, 101), y=("kv", 0.1, 
     if es.ndim != 1 or es.size == 0:
         raise ValueError("e must be a non-empty list of restitution coefficients")
     chunk_size = check_int("chunk_size", chunk_size, 1)
+    if certificate is not None and certificate is not True and \
+            not isinstance(certificate, (str, bytes)) and not hasattr(certificate, "__fspath__"):
+        raise ValueError(f"certificate must be None, True or a file name, got {certificate!r}")
     fixed = _fixed_params(xname, yname, mu=mu, omega=omega, L=L, gamma=gamma, x10=x10, m2=m2,
                           kp=kp, kv=kv)
     xe, ye = cell_edges(xs, sx), cell_edges(ys, sy)
@@ -670,17 +761,72 @@ def certified_map(case="collocated", *, x=("kp", 0.1, 50.0, 101), y=("kv", 0.1, 
     flags = np.zeros((es.size, ys.size, xs.size), np.int8)
     reasons = np.zeros_like(flags)
     evaluated = 0
+    unconfirmed = np.zeros(es.size, np.int64)
+    arb_seconds = 0.0
+    maps = []
     flat = {k: (lo.ravel(), hi.ravel()) for k, (lo, hi) in cells.items()}
     for i, ev in enumerate(es):
         f_out, r_out = flags[i].reshape(-1), reasons[i].reshape(-1)
+        trees = []
         for c in range(0, xs.size * ys.size, chunk_size):
             sl = slice(c, c + chunk_size)
             part = {k: (lo[sl], hi[sl]) for k, (lo, hi) in flat.items()}
-            r = certify_cells(case, n=n, depth=depth, e=ev, **fixed, **part)
+            r = certify_cells(case, n=n, depth=depth, e=ev, max_parts=max_parts, confirm=False,
+                              **fixed, **part)
             f_out[sl], r_out[sl] = r.flags, r.reasons
             evaluated += r.boxes_evaluated
+            trees.append((c, r.tree))
+        if confirm or certificate is not None:
+            grid, leaves, columns = _merge_trees(trees)
+        if confirm:
+            t1 = time.perf_counter()
+            ok, _ = _arb_confirm(case, n, (ys.size, xs.size), grid, None, leaves=leaves,
+                                 flags=f_out.astype(np.int64))
+            arb_seconds += time.perf_counter() - t1
+            bad = (f_out != 0) & ~ok
+            f_out[bad], r_out[bad] = 0, R_ARB
+            unconfirmed[i] = int(bad.sum())
+        if certificate is not None:
+            maps.append(_certificate_map(ev, f_out, grid, columns, (ys.size, xs.size)))
+    cert = None
+    if certificate is not None:
+        # deferred import: loaded only when this runs, for start-up time
+        from hybridpd.pair.certificate import Certificate
+
+        cert = Certificate(case, n, xname, yname, xe, ye, {**fixed, "n": n}, es, maps)
+        if certificate is not True:
+            cert.save(certificate)
     return CertifiedMap(case, n, xname, yname, xs, ys, xe, ye, es, {**fixed, "n": n}, flags,
-                        reasons, int(depth), time.perf_counter() - t0, evaluated)
+                        reasons, int(depth), time.perf_counter() - t0, evaluated, unconfirmed,
+                        arb_seconds, cert)
+
+
+def _merge_trees(trees):
+    """The cells (scaled boxes), the leaves for arb and the certificate's columns of one map
+    from the proof trees of its chunks (``(first cell, tree)`` pairs)."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.pair.certificate import concat_columns, leaves_columns
+
+    cells = proofs.Boxes({k: np.concatenate([t.cells.lo[k] for _, t in trees])
+                          for k in proofs.SCALED},
+                         {k: np.concatenate([t.cells.hi[k] for _, t in trees])
+                          for k in proofs.SCALED})
+    columns = concat_columns([leaves_columns(t, c) for c, t in trees])
+    lv = columns[0]
+    leaves = {"cell": lv["cell"], "lo": lv["lo"], "hi": lv["hi"], "cls": lv["cls"],
+              "witness_s": lv["witness_s"], "witness_wall": lv["witness_wall"]}
+    return cells, leaves, columns
+
+
+def _certificate_map(e, flags, cells, columns, shape):
+    """One ``e``'s part of a certificate: the cells, and the leaves of the proved ones."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.pair.certificate import restrict
+
+    flags = np.asarray(flags, np.int64)
+    lv, pc = restrict(*columns, flags != 0)
+    return {"e": float(e), "flags": flags.reshape(shape),
+            "cells": {"lo": dict(cells.lo), "hi": dict(cells.hi)}, "leaves": lv, "pieces": pc}
 
 
 def _fixed_params(xname, yname, *, mu, omega, L, gamma, x10, m2, kp, kv) -> dict:
