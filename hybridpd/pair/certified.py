@@ -13,8 +13,14 @@ gamma = L/x10, omega, m2)`` (any of them an interval), one of
 * ``undecided``: none of these could be proved (with the reason).
 
 The proofs evaluate the paper's closed forms in outward-rounded interval arithmetic (see
-:mod:`hybridpd.pair.proofs` for the three proofs and :mod:`hybridpd.pair.intervals` for
-the arithmetic and the assumption made of the platform's libm), and bisect undecided boxes.
+:mod:`hybridpd.pair.proofs` for the three proofs, :mod:`hybridpd.pair.prooftree` for the
+adaptive subdivision of undecided boxes and the record of what decided each part, and
+:mod:`hybridpd.pair.intervals` for the arithmetic and the assumption made of the platform's
+libm); every proved box is then confirmed in python-flint's ``arb``
+(:mod:`hybridpd.pair.arbcheck`: existence and the inequality deciding its class) or written
+undecided. A certified map can keep its proof as a certificate
+(:mod:`hybridpd.pair.certificate`), re-proved in arb alone by
+:func:`hybridpd.pair.certificate.verify_certificate`.
 Point certificates (:func:`certify_orbit`) add python-flint ``arb`` enclosures of the
 section point and of every multiplier's modulus. Region maps (:func:`certified_map`) give
 each grid point the box half-way to its neighbours (see :func:`cell_edges`).
