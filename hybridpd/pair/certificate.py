@@ -28,8 +28,8 @@ cell it decides. Its *certificate* is what the proof consists of, cell by cell:
    box fails arb may halve it (a parameter box up to twice, a piece up to twice): a box is
    proved when all its parts are.
 
-The recorded enclosures are not trusted; they are reported where arb's own do not meet them
-(one of the two would be wrong). The result is a :class:`CertificateCheck`.
+The recorded enclosures are not trusted; those of ``det M`` are compared with arb's own, and
+the leaves where the two do not meet are counted (one of them would be wrong). The result is a :class:`CertificateCheck`.
 """
 from __future__ import annotations
 
@@ -350,7 +350,8 @@ class CertificateCheck:
         Faults of the file's structure (cells that do not cover the map, leaves that do not
         tile their cell, pieces that do not cover the flight, ...).
     disagreements : int
-        Recorded enclosures that arb's do not meet (reported, not trusted either way).
+        Leaves whose recorded enclosure of ``det M`` arb's enclosure does not meet
+        (reported; neither is trusted for the verdict).
     leaves, pieces : int
         Leaves and pieces checked.
     viability : bool

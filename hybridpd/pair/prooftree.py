@@ -298,11 +298,7 @@ class _Viability:
 
     def _monotone(self, owner, a, b, z3, gam):
         """Re-test failing interior pieces on the face where the tested quantity is least."""
-        ok = np.zeros(owner.size, bool)
-        lo_z, hi_z = np.full(owner.size, np.nan), np.full(owner.size, np.nan)
-        sides = []
-        for q, sign in ((gam - z3, 1), (z3 + gam, -1)):
-            sides.append((q, q.r.lo > 0))
+        sides = [(q, q.r.lo > 0) for q in (gam - z3, z3 + gam)]
         proved = [s[1].copy() for s in sides]
         for side, (q, done) in enumerate(sides):
             need = np.flatnonzero(~done)
@@ -337,7 +333,6 @@ class _Viability:
             Cf, Sf, _ = interval_kernel("existence", self.case)(TIGHT_OPS, *proofs._args(P), nI)
             point = s_hi <= s_lo
             res = np.zeros(need.size, bool)
-            zlo, zhi = np.full(need.size, np.nan), np.full(need.size, np.nan)
             for pt in (True, False):
                 sel = np.flatnonzero(point == pt)
                 if sel.size == 0:
@@ -346,12 +341,8 @@ class _Viability:
                                            s_lo[sel], s_hi[sel], s_point=pt)
                 qf = gf - z3f if side == 0 else z3f + gf
                 res[sel] = qf.r.lo > 0
-                zlo[sel], zhi[sel] = _lohi(z3f)
             proved[side][need] = res
-            lo_z[need] = np.fmin(lo_z[need], zlo)
-            hi_z[need] = np.fmax(hi_z[need], zhi)
-        ok = proved[0] & proved[1]
-        return ok
+        return proved[0] & proved[1]
 
     def _round_chunk(self, owner, a, b):
         """Test one chunk of pieces (first- then second-order forms, then a face)."""
