@@ -3,7 +3,9 @@
 The full schema (every key, its type, default and unit, and the discretisation of each
 controller type) is the user guide's page "Model files" (``docs/guide/model_files.rst``).
 In short (every key is checked; a bad file raises ``ValueError`` naming the key by its dotted
-path, e.g. ``controller.1.actuate``)::
+path, e.g. ``controller.1.actuate``; every number, alone or in an array, is a TOML integer or
+float: a string such as ``"8"`` or a boolean is refused, naming the entry, e.g.
+``system.masses[1]``)::
 
     [system]
     dofs = ["load", "gear", "motor"]     # unique names, n = len(dofs)
@@ -59,6 +61,7 @@ none does (it would act nowhere). A single ``[controller]`` table without ``actu
 """
 from __future__ import annotations
 
+import json
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -177,7 +180,31 @@ def _check_keys(where, table, allowed):
         raise ValueError(f"{where}.{unknown[0]}: unknown key (allowed: {sorted(allowed)})")
 
 
+def _numbers(key, value):
+    """Refuse anything but numbers in `value` (a number, or nested lists of numbers): a TOML
+    string (``kp = "8"``) or boolean (``kp = true``) is no number, although NumPy would read
+    it as one. The message names the entry (``system.masses[1]``)."""
+    if isinstance(value, (list, tuple)):
+        for i, v in enumerate(value):
+            _numbers(f"{key}[{i}]", v)
+        return
+    if isinstance(value, np.ndarray) and value.dtype.kind in "iuf":
+        return
+    if isinstance(value, (int, float, np.integer, np.floating)) \
+            and not isinstance(value, (bool, np.bool_)):
+        return
+    if isinstance(value, str):
+        what = f"the string {json.dumps(value)}"
+    elif isinstance(value, (bool, np.bool_)):
+        what = f"the boolean {str(bool(value)).lower()}"
+    else:
+        what = f"{value!r} ({type(value).__name__})"
+    raise ValueError(f"{key}: must be a number (a TOML integer or float, without quotes), "
+                     f"got {what}")
+
+
 def _array(key, value, shape=None):
+    _numbers(key, value)
     try:
         a = np.array(value, dtype=float)
     except (TypeError, ValueError):
@@ -341,6 +368,7 @@ def _reference(t, where) -> Reference:
     for k in ("amplitudes", "omegas"):
         if k not in t:
             raise ValueError(f"{where}.{k}: required for type 'sum_of_sines'")
+    _array(f"{where}.feedforward_mass", ff, ())
     a = _array(f"{where}.amplitudes", t["amplitudes"])
     w = _array(f"{where}.omegas", t["omegas"], a.shape)
     if a.ndim != 1:
