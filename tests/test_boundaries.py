@@ -139,6 +139,7 @@ def _near(values, target, tol):
     return bool(values) and min(abs(v - target) for v in values) < tol
 
 
+@pytest.mark.stored_data
 def test_one_parameter_events_lie_on_the_traced_curves():
     # grazing of the collocated orbit, e = 0.1, kp = 10, at kv = 21.938
     br = continue_symmetric(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv", 23.0)

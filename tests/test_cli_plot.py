@@ -125,6 +125,7 @@ def test_every_kind_round_trips_through_plot(files, name, tmp_path, capsys):
     assert_image(img)
 
 
+@pytest.mark.stored_data
 @pytest.mark.parametrize(("name", "kind"), [("attractor_basin_v02.nc", "attractor_basin"),
                                            ("attractor_basin_v02.npz", "attractor_basin"),
                                            ("basin_v02.nc", "basin"), ("basin_v0.npz", "basin"),

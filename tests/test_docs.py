@@ -9,6 +9,9 @@
   relative tolerance (:data:`DOCTEST_RTOL`), not digit for digit: the last digits of a
   computed float differ between machines and library versions. New examples are collected
   automatically.
+
+Both compare with numbers written down from an earlier run, so both are marked
+``stored_data``: .ci/run runs them a second time on NumPy's narrower SIMD paths.
 """
 import doctest
 import importlib
@@ -76,6 +79,7 @@ def test_block_extraction():
     assert rst_blocks(rst) == ["\na = 1\n\nif a:\n    b = 2\n\n"]
 
 
+@pytest.mark.stored_data
 def test_readme_python_blocks_run(tmp_path):
     blocks = markdown_blocks((ROOT / "README.md").read_text(encoding="utf-8"))
     assert len(blocks) >= 2
@@ -97,6 +101,7 @@ def test_every_guide_page_with_code_is_collected():
         assert not re.search(r"^\.\. (ipython|plot)::", text, re.MULTILINE), p.name
 
 
+@pytest.mark.stored_data
 @pytest.mark.parametrize("page", [p for p in GUIDE_PAGES
                                   if rst_blocks(p.read_text(encoding="utf-8"))],
                          ids=lambda p: p.stem)
@@ -207,6 +212,7 @@ def test_tolerant_checker():
     assert c.check_output("x = ...\n", "x = anything\n", flags)
 
 
+@pytest.mark.stored_data
 @pytest.mark.parametrize("test", DOCTESTS, ids=lambda t: t.name)
 def test_docstring_examples(test, tmp_path, monkeypatch):
     import matplotlib

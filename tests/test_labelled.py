@@ -1,4 +1,5 @@
 """Labelled results: xarray Datasets, netCDF/Zarr by suffix, files of earlier versions."""
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -20,19 +21,64 @@ xr = pytest.importorskip("xarray")
 DATA = Path(__file__).parent / "data"
 REPO = Path(__file__).resolve().parents[1]
 PAPER = dict(mu=0.1, omega=5.0, gamma=0.75)
-# Files of earlier versions were computed on another machine with other library versions: their
-# floating-point values agree with a fresh computation to rounding (amplified by up to ~1e3 where
-# a spectral radius is large), not bit for bit. Booleans, labels and counts must agree exactly.
+RM_AXES = (("kp", 0.5, 30, 5), ("kv", 0.2, 20, 4))
+# Files of earlier versions were computed on another machine with other library versions (and
+# another CPU: NumPy's vectorised sin, cos and exp differ in the last bit between its SIMD
+# paths), so nothing in them is compared with a fresh computation for equality as such:
+# * floats to STORED_RTOL: one evaluation rounds at ~1e-16; the spectral radii (up to ~7e3)
+#   and the orbit amplitudes come out of an eigenvalue problem and a nonlinear solve whose
+#   condition numbers here are below ~1e5, so 1e-9 leaves a margin of ~1e2;
+# * counts of iterations to enter a criterion within ITER_ATOL;
+# * labels, booleans and reasons exactly, but only at the points where they cannot flip by
+#   rounding (see certain_points); elsewhere anything goes.
 STORED_RTOL = 1e-9
 STORED_ATOL = 1e-12
 #: Iterations to enter a criterion, against stored files: rounding moves a point's count by a few.
 ITER_ATOL = 5
+#: Relative move of the inputs (gains, start points) that finds the points near a boundary: the
+#: "uncertain" points of Grebogi, McDonald, Ott & Yorke (Phys. Lett. A 99, 1983), whose result
+#: changes when the input moves by this much either way. The move is ~1e7 times the rounding of
+#: one evaluation, so a point it leaves on its side of every boundary is not carried across one
+#: by the rounding of another machine.
+UNCERTAIN_SHIFT = 1e-9
+#: Share of each stored grid that must be certain (all of it today): the exact comparison keeps
+#: checking something.
+MIN_CERTAIN = 0.9
 
 
 @pytest.fixture(scope="module")
 def rm():
-    return pair_region_map("noncollocated", x=("kp", 0.5, 30, 5), y=("kv", 0.2, 20, 4),
-                           e=(0.1, 0.5), progress=False, **PAPER)
+    return _region_map(0.0)
+
+
+def _region_map(shift):
+    """The stored region map's computation, gains moved by the relative ``shift``."""
+    (xn, xlo, xhi, nx), (yn, ylo, yhi, ny) = RM_AXES
+    k = 1.0 + shift
+    return pair_region_map("noncollocated", x=(xn, xlo * k, xhi * k, nx),
+                           y=(yn, ylo * k, yhi * k, ny), e=(0.1, 0.5), progress=False, **PAPER)
+
+
+def _shifted(axis, shift):
+    """A start-point axis ``(..., lo, hi, n)`` moved by ``shift`` times its span."""
+    *name, lo, hi, n = axis
+    d = shift * (hi - lo)
+    return (*name, lo + d, hi + d, n)
+
+
+def certain_points(compute, fields):
+    """``(result, certain)``: ``compute(0.0)`` and the mask of its points whose ``fields``
+    (labels, booleans, reasons) stay the same when ``compute`` moves its inputs by
+    ±:data:`UNCERTAIN_SHIFT`; only there can a stored value be required to equal them."""
+    base = compute(0.0)
+    value = lambda r, f: np.asarray(r[f] if isinstance(r, dict) else getattr(r, f))
+    ok = np.ones(value(base, fields[0]).shape, bool)
+    for shift in (UNCERTAIN_SHIFT, -UNCERTAIN_SHIFT):
+        moved = compute(shift)
+        for f in fields:
+            ok &= value(moved, f) == value(base, f)
+    assert ok.mean() >= MIN_CERTAIN, f"only {ok.sum()} of {ok.size} points are certain"
+    return base, ok
 
 
 @pytest.fixture(scope="module")
@@ -42,9 +88,13 @@ def basin():
     return basin_of_attraction(m.map, (-3, 5, 6), (-2, 10, 5), criterion=m, max_period=0)
 
 
-def assert_close_or_equal(actual, desired, err_msg):
-    """Floats to the stored tolerance (NaN where NaN), everything else exactly."""
+def assert_close_or_equal(actual, desired, err_msg, where=None):
+    """Floats to the stored tolerance (NaN where NaN), everything else exactly; only at the
+    points ``where`` (the certain points) when given."""
     actual, desired = np.asarray(actual), np.asarray(desired)
+    assert actual.shape == desired.shape, err_msg
+    if where is not None:
+        actual, desired = actual[where], desired[where]
     if np.issubdtype(desired.dtype, np.floating):
         np.testing.assert_allclose(actual, desired, rtol=STORED_RTOL, atol=STORED_ATOL,
                                    equal_nan=True, err_msg=err_msg)
@@ -52,9 +102,9 @@ def assert_close_or_equal(actual, desired, err_msg):
         np.testing.assert_array_equal(actual, desired, err_msg=err_msg)
 
 
-def assert_same_map(a, b, exact=True):
+def assert_same_map(a, b, exact=True, where=None):
     """Same map; ``exact`` for a file round trip (the bits written are read back), else floats
-    to the stored tolerance."""
+    to the stored tolerance and labels at the certain points ``where``."""
     # files of earlier versions hold no table of reasons (the package's is REASONS)
     meta = lambda m: {k: v for k, v in m.metadata.items() if exact or k != "reasons"}
     assert (a.case, a.x_name, a.y_name, a.fixed, meta(a)) == (
@@ -65,7 +115,7 @@ def assert_same_map(a, b, exact=True):
         if exact:
             np.testing.assert_array_equal(va, vb, err_msg=f)
         else:
-            assert_close_or_equal(va, vb, err_msg=f)
+            assert_close_or_equal(va, vb, err_msg=f, where=None if f in ("x", "y", "e") else where)
 
 
 def assert_same_basin(a, b):
@@ -150,77 +200,119 @@ def test_unknown_suffix_is_refused(rm, basin, tmp_path):
         load_basin(tmp_path / "m.nc")
 
 
-def test_files_of_earlier_versions_stay_readable():
-    """``.npz`` files written by the previous version (tests/data) equal a fresh computation."""
+def _assert_stored_basin(old, fresh, certain, err_msg):
+    """A stored basin against a fresh one: labels exactly and iterations within
+    :data:`ITER_ATOL` at the certain points, the converged share up to the uncertain ones."""
+    for f in ("labels", "criterion_labels"):
+        assert_close_or_equal(getattr(old, f), getattr(fresh, f), f"{err_msg}: {f}", certain)
+    # how many iterations a point takes to enter the criterion depends on rounding (the
+    # vectorised sin/cos of another CPU move the last digits): a few either way
+    np.testing.assert_allclose(old.iterations[certain], fresh.iterations[certain], rtol=0,
+                               atol=ITER_ATOL, err_msg=f"{err_msg}: iterations")
+    assert abs(old.converged_fraction - fresh.converged_fraction) <= \
+        (~certain).mean() + 1e-12, err_msg
+
+
+_NUMBER = re.compile(r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")
+
+
+def assert_same_text(old, new, rtol, atol=0.0):
+    """Two printed texts: the words equal, the numbers within ``rtol`` and ``atol``."""
+    assert _NUMBER.split(old) == _NUMBER.split(new), (old, new)
+    np.testing.assert_allclose([float(x) for x in _NUMBER.findall(old)],
+                               [float(x) for x in _NUMBER.findall(new)], rtol=rtol, atol=atol,
+                               err_msg=f"{old!r} against {new!r}")
+
+
+@pytest.mark.stored_data
+def test_files_of_earlier_versions_stay_readable(rm):
+    """``.npz`` files written by the previous version (tests/data) agree with a fresh
+    computation (to the tolerances above)."""
     old = load_region_map(DATA / "regions_v0.npz")
-    new = pair_region_map("noncollocated", x=("kp", 0.5, 30, 5), y=("kv", 0.2, 20, 4),
-                          e=(0.1, 0.5), progress=False, **PAPER)
-    assert_same_map(old, new, exact=False)
+    new, certain = certain_points(lambda s: rm if s == 0 else _region_map(s),
+                                  ("exists", "stable", "reason"))
+    assert_same_map(old, new, exact=False, where=certain)
     orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     m = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
-    new_b = basin_of_attraction(m.map, (-3, 5, 5), (-2, 10, 4), criterion=m, max_period=0)
+    new_b, certain = certain_points(
+        lambda s: basin_of_attraction(m.map, _shifted((-3, 5, 5), s), _shifted((-2, 10, 4), s),
+                                      criterion=m, max_period=0),
+        ("labels", "criterion_labels"))
     old_b = load_basin(DATA / "basin_v0.npz")
-    np.testing.assert_array_equal(old_b.labels, new_b.labels)
-    np.testing.assert_array_equal(old_b.criterion_labels, new_b.criterion_labels)
-    np.testing.assert_array_equal(old_b.iterations, new_b.iterations)
+    _assert_stored_basin(old_b, new_b, certain, "basin_v0.npz")
     assert old_b.metadata["kp"] == 10.0
-    np.testing.assert_allclose(old_b.converged_fraction, new_b.converged_fraction,
-                               rtol=STORED_RTOL, atol=0.0)
     from hybridpd.pair.regions import _region_chunk
 
     s = load_sweep(DATA / "sweep_v0.npz")
-    pts = {"kp": np.linspace(1, 5, 6), "kv": np.linspace(1, 8, 6), "e": np.full(6, 0.5)}
     fixed = {"mu": 0.1, "omega": 5.0, "L": 0.75, "x10": 1.0, "m2": 1.0}
-    fresh = run_sweep(_region_chunk, pts, executor="serial", chunk_size=4, progress=False,
-                      func_kwargs={"case": "collocated", "n": 1, "fixed": fixed})
+
+    def sweep(shift):
+        pts = {"kp": np.linspace(1, 5, 6) * (1 + shift), "kv": np.linspace(1, 8, 6) * (1 + shift),
+               "e": np.full(6, 0.5)}
+        return run_sweep(_region_chunk, pts, executor="serial", chunk_size=4, progress=False,
+                         func_kwargs={"case": "collocated", "n": 1, "fixed": fixed}).outputs
+
+    fresh, certain = certain_points(sweep, ("exists", "stable", "reason"))
     assert s.metadata == {"kind": "region_sweep"} and s.n_chunks == 2
-    for k, v in fresh.outputs.items():
-        assert_close_or_equal(s.outputs[k], v, err_msg=k)
+    assert set(s.outputs) == set(fresh)
+    for k, v in fresh.items():
+        assert_close_or_equal(s.outputs[k], v, err_msg=k, where=certain)
 
 
+@pytest.mark.stored_data
 def test_basin_files_of_earlier_versions_read_as_the_one_basin_result():
     """The pair's basins, attractor basins and model basins written by the previous version
-    (tests/data) read back as one :class:`BasinResult` equal to a fresh computation."""
+    (tests/data) read back as one :class:`BasinResult` that agrees with a fresh computation
+    (to the tolerances above)."""
     from _pair_model import PAIR
 
     from hybridpd.pair.basins import attractor_basin
     from hybridpd.sweeps.model_basins import model_basin
 
     orb = symmetric_orbit(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0)
-    fresh = attractor_basin(ImpactMapper.from_orbit(orb, n_iter=300), (-3, 5, 6), (-2, 10, 5),
-                            extend=False)
+    mapper = ImpactMapper.from_orbit(orb, n_iter=300)
+    fresh, certain = certain_points(
+        lambda s: attractor_basin(mapper, _shifted((-3, 5, 6), s), _shifted((-2, 10, 5), s),
+                                  extend=False),
+        ("labels", "criterion_labels"))
     for name in ("attractor_basin_v02.nc", "attractor_basin_v02.npz"):
         old = load_basin(DATA / name)
         assert old.axes == ("x1", "y1") and old.names == ("phi", "z1", "z2", "z4")
-        for f in ("labels", "criterion_labels"):
-            np.testing.assert_array_equal(getattr(old, f), getattr(fresh, f), err_msg=f)
-        # how many iterations a point takes to enter the criterion depends on rounding (the
-        # vectorised sin/cos of another CPU move the last digits): a few either way
-        np.testing.assert_allclose(old.iterations, fresh.iterations, rtol=0, atol=ITER_ATOL,
-                                   err_msg="iterations")
+        _assert_stored_basin(old, fresh, certain, name)
         for f in ("x1", "y1", "fixed_point"):
             np.testing.assert_allclose(getattr(old, f), getattr(fresh, f), rtol=STORED_RTOL,
                                        atol=STORED_ATOL, err_msg=f)
         assert [a.name for a in old.attractors] == [a.name for a in fresh.attractors]
         for a, b in zip(old.attractors, fresh.attractors):
+            # points of a refined periodic orbit: Newton's tolerance, not rounding, limits them
             np.testing.assert_allclose(a.points, b.points, rtol=1e-7, atol=1e-9)
+            # stable is exact only far from |multiplier| = 1; the wall sequence changes only
+            # at a grazing, which moves the points by far more than the tolerance above
+            assert abs(b.spectral_radius - 1) > 1e-6
             assert a.walls == b.walls and a.stable == b.stable
         assert old.metadata["kp"] == 10.0 and old.metadata["gamma"] == 0.75
     orb5 = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
     m5 = ImpactMapper.from_orbit(orb5, n_iter=100)
-    pb = basin_of_attraction(m5.map, (-3, 5, 5), (-2, 10, 4), criterion=m5, max_period=0)
+    pb, certain = certain_points(
+        lambda s: basin_of_attraction(m5.map, _shifted((-3, 5, 5), s), _shifted((-2, 10, 4), s),
+                                      criterion=m5, max_period=0),
+        ("labels", "criterion_labels"))
     old = load_basin(DATA / "basin_v02.nc")
-    np.testing.assert_array_equal(old.labels, pb.labels)
-    np.testing.assert_array_equal(old.criterion_labels, pb.criterion_labels)
+    _assert_stored_basin(old, pb, certain, "basin_v02.nc")
     assert [a.label for a in old.attractors] == [a.label for a in pb.attractors]
-    mb = model_basin(PAIR, ("x2", -1.0, 1.0, 4), ("x1_dot", -1.0, 3.0, 3), n_iter=100,
-                     event="impact")
+    mb, certain = certain_points(
+        lambda s: model_basin(PAIR, _shifted(("x2", -1.0, 1.0, 4), s),
+                              _shifted(("x1_dot", -1.0, 3.0, 3), s), n_iter=100, event="impact"),
+        ("labels", "criterion_labels"))
     old = load_basin(DATA / "model_basin_v02.nc")
     assert old.axes == mb.axes and old.names == mb.names and old.source == mb.source
-    np.testing.assert_array_equal(old.labels, mb.labels)
-    np.testing.assert_array_equal(old.criterion_labels, mb.criterion_labels)
+    _assert_stored_basin(old, mb, certain, "model_basin_v02.nc")
+    # the section's base point: a fixed point found by Newton, to its tolerance
     np.testing.assert_allclose(old.base, mb.base, rtol=1e-7, atol=1e-9)
-    assert old.summary() == mb.summary()
+    # a spectral radius printed to 4 digits (its last digit moves by one when the value lies
+    # at a rounding point); percentages of the grid, which the uncertain points may move
+    for a, b in zip(old.summary(), mb.summary(), strict=True):
+        assert_same_text(a, b, rtol=1e-3, atol=100 * (~certain).mean())
 
 
 def test_sweep_store_and_result_as_datasets(tmp_path):

@@ -25,6 +25,7 @@ def test_a_negative_t_end_names_the_option(capsys):
     assert len(err) == 1 and "--t-end" in err[0] and "-1" in err[0], err
 
 
+@pytest.mark.stored_data
 def test_bifurcation_plot_draws_the_continued_branch_and_explains_the_period(
         tmp_path, monkeypatch, capsys):
     seen = []

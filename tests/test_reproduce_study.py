@@ -59,6 +59,7 @@ def _all(intervals):
     return {(c, e): iv for c, d in intervals.items() for e, iv in d.items()}
 
 
+@pytest.mark.stored_data
 def test_the_chosen_m2_follows_the_documented_rule(intervals):
     m2 = choose_m2(_all(intervals), (0.1, 1000.0))
     threshold = max(iv[0].lo.m2 for d in intervals.values() for iv in d.values())

@@ -120,6 +120,7 @@ def test_period_doubling_switch_starts_at_the_flip(flip):
     assert b.stable[-1]
 
 
+@pytest.mark.stored_data
 def test_grazing_switch_finds_the_e01_double_impact_cycle():
     """Collocated, e = 0.1, kp = 10: the symmetric orbit (x10 = 1) is stable up to grazing
     at kv = 21.938 and has no flip or branch point; past grazing the motion settles on a
