@@ -155,17 +155,21 @@ class PeriodicOrbit:
                                  f"map's quantities: {sorted(self.quantities)})") from None
 
     def to_dict(self) -> dict:
-        """JSON-ready summary (fields of ``hybridpd orbit --json`` where they apply)."""
+        """JSON-ready summary (fields of ``hybridpd orbit --json`` where they apply). Where no
+        orbit was accepted (``exists`` false) there are no multipliers to judge:
+        ``multipliers``, ``spectral_radius``, ``stable`` and ``hyperbolic`` are None."""
         f = lambda x: None if x is None or not np.isfinite(x) else float(x)
+        ok = bool(self.converged)
         return {
             "exists": bool(self.converged), "reason": self.reason, "period": self.period,
-            "fixed_point": [float(v) for v in self.s], "coordinates": list(self.names),
-            "state": [float(v) for v in self.z], "t_period": f(self.t_period),
+            "fixed_point": [f(v) for v in self.s], "coordinates": list(self.names),
+            "state": [f(v) for v in self.z], "t_period": f(self.t_period),
             "iterations": self.iterations, "residual": f(self.residual),
             "impact_sequence": [[g, k] for g, k in self.signature],
-            "multipliers": [[float(z.real), float(z.imag)] for z in self.multipliers],
-            "spectral_radius": f(self.spectral_radius), "stable": bool(self.stable),
-            "hyperbolic": bool(self.hyperbolic), "grazing": bool(self.grazing),
+            "multipliers": [[f(z.real), f(z.imag)] for z in self.multipliers] if ok else None,
+            "spectral_radius": f(self.spectral_radius) if ok else None,
+            "stable": bool(self.stable) if ok else None,
+            "hyperbolic": bool(self.hyperbolic) if ok else None, "grazing": bool(self.grazing),
             "n_periods": int(self.n_periods), "detail": self.detail,
             "return_error": f(self.return_error), "mode": self.mode,
         }
