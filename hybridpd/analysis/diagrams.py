@@ -56,14 +56,17 @@ from hybridpd._results import (
     encode_attrs,
     read_dataset,
 )
-from hybridpd.analysis.maps import PoincareMap, check_returns, detect_period
+from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns, detect_period
 
-__all__ = ["CLASSES", "BifurcationDiagram", "bifurcation_diagram", "load_diagram",
-           "lyapunov_exponents"]
+__all__ = ["ANSWERS", "CLASSES", "BifurcationDiagram", "StoppedMap", "bifurcation_diagram",
+           "load_diagram", "lyapunov_exponents"]
 
 #: Classes of a parameter value (index = the integer code in ``BifurcationDiagram.code``).
 CLASSES = ("periodic", "quasiperiodic", "chaotic", "diverged", "sticking", "no_impact",
            "unresolved", "undefined")
+#: The classes that say what the motion does at a value (the others say that the map could not
+#: tell: it diverged, stopped inside a flight or was undefined).
+ANSWERS = ("periodic", "quasiperiodic", "chaotic", "sticking", "no_impact")
 #: Classes of the model diagrams written by hybridpd 0.2.0, and their codes now.
 _MODEL_020 = {"periodic": 0, "not_periodic": 1, "undefined": 7}
 
@@ -333,6 +336,31 @@ def _qr_exponents(J, warm):
             for c in range(n):
                 Q[r, c] = Qn[r, c]
     return acc / max(N - warm, 1)
+
+
+class StoppedMap(PoincareMap):
+    """The map `P` at a value where no run can start (e.g. the simulation that would give
+    its start diverged): its coordinates and section are `P`'s, and its first application
+    stops with `status` (``"diverged"``: the value is classed ``diverged``), so that the
+    value has its row and class in a diagram like any other.
+
+    Examples
+    --------
+    >>> class Id(PoincareMap):
+    ...     names = ("x",)
+    ...     def apply(self, s, k=1, jacobian=False):
+    ...         return MapResult(np.asarray(s, float))
+    >>> StoppedMap(Id(), "diverged").iterate_status(np.full(1, np.nan), 3)[1]
+    'diverged'
+    """
+
+    def __init__(self, P: PoincareMap, status: str):
+        self.map, self.status = P, str(status)
+        self.names, self.period, self.mode = tuple(P.names), P.period, P.mode
+        self.section = getattr(P, "section", None)
+
+    def apply(self, s, k: int = 1, jacobian: bool = False) -> MapResult:
+        return MapResult(np.full(self.dim, np.nan), False, self.status)
 
 
 def _status_class(P, why: str) -> int:

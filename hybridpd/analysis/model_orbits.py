@@ -23,6 +23,7 @@ from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.maps import minimal_period
 from hybridpd.analysis.model_sections import (
     EVENTS,
+    DivergedRun,
     SectionSpec,
     SimulatedReturns,
     _crossings,
@@ -54,7 +55,8 @@ __all__ = [
 #: Status of a parameter point: an orbit found (stable / unstable) or why none was.
 STATUS = {0: "stable", 1: "unstable", 2: "not_converged", 3: "degenerate_return",
           4: "grazing", 5: "not_periodic", 6: "fast_return", 7: "map_undefined",
-          8: "sampling_incommensurate", 9: "no_section_crossing", 10: "invalid_parameters"}
+          8: "sampling_incommensurate", 9: "no_section_crossing", 10: "invalid_parameters",
+          11: "diverged"}
 _CODE = {v: k for k, v in STATUS.items()}
 _KINDS = ("crossing", "grazing", "zeno")
 def orbit_status(po: PeriodicOrbit) -> int:
@@ -314,7 +316,8 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
         except ValueError as exc:
             detail = str(exc)
             if not run.found and run.last is None:
-                return OrbitSearch(_CODE["no_section_crossing"], (), run.attempts, detail)
+                code = "diverged" if isinstance(exc, DivergedRun) else "no_section_crossing"
+                return OrbitSearch(_CODE[code], (), run.attempts, detail)
         else:
             P = run.map(sim.mode)
             for k, s0 in sim.candidates:

@@ -20,8 +20,8 @@ from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.strobe import StroboscopicMap
 from hybridpd.mechanics.sections import mechanical_section, stroboscopic_section
 
-__all__ = ["EVENTS", "SectionSpec", "SimulatedReturns", "choose_phase", "default_phase",
-           "fix_section", "simulated_returns"]
+__all__ = ["EVENTS", "DivergedRun", "SectionSpec", "SimulatedReturns", "choose_phase",
+           "default_phase", "fix_section", "simulated_returns"]
 
 #: The sections of a model: ``"auto"`` (the stroboscopic one for a periodic reference, else
 #: the event section the simulated motion crosses), ``"stroboscopic"`` (the state at one
@@ -172,6 +172,37 @@ class SimulatedReturns:
     phase: float | None = None
 
 
+class DivergedRun(ValueError):
+    """The simulation of a model that seeds its section (its phase, mode and orbit guesses)
+    diverged: it stopped as ``diverged`` or ``nonfinite``, or its positions and velocities
+    grew past :data:`~hybridpd.analysis.periodic.DIVERGENCE_BOUND` times the scale of its
+    start, ``max(1, |z0|, |bounds|)`` (the scale of the simulator's own bound)."""
+
+
+def _check_run(model, h, what: str) -> None:
+    """Raise :class:`DivergedRun` where the hybrid trajectory `h` of `model` (`what`, in
+    the message) diverged, whatever else stopped it there."""
+    # deferred import: periodic imports the maps this module builds
+    from hybridpd.analysis.periodic import DIVERGENCE_BOUND
+
+    ma = model.automaton
+    z0 = ma.initial_state(model.x0[0::2], model.x0[1::2], model.t0)
+    scale = max([1.0, float(np.max(np.abs(z0)))]
+                + [abs(b) for c in ma.contacts for _, b in c.bounds])
+    lay = ma.layout
+    z = np.asarray(h.x_final, float)
+    mech = z[np.concatenate([np.ravel(lay["q"]), np.ravel(lay["v"])]).astype(int)]
+    name = h.termination.name.lower()
+    if name in ("diverged", "nonfinite") or not np.all(np.isfinite(mech)):
+        raise DivergedRun(f"{what} diverged: it stopped at t = {h.t_final:.6g} "
+                          f"({getattr(h, 'reason', '') or name})")
+    big = float(np.max(np.abs(mech), initial=0.0))
+    if big > DIVERGENCE_BOUND * scale:
+        raise DivergedRun(f"{what} diverged: its positions and velocities reached {big:.3g} "
+                          f"at t = {h.t_final:.6g}, past {DIVERGENCE_BOUND:g} times the scale "
+                          f"of its start ({scale:.3g})")
+
+
 def _crossings(tr, guard):
     """Indices of the jumps of `guard` (any mode) that start a burst: a crossing after a jump
     of another guard (rebounds of one burst return within it)."""
@@ -208,6 +239,7 @@ def simulated_returns(model, spec: SectionSpec, transient: float | None = None
     if not (span > 0 and math.isfinite(span)):
         raise ValueError(f"transient must be finite and > 0, got {transient!r}")
     tr = simulate(model.automaton, model.x0, (model.t0, model.t0 + span)).hybrid
+    _check_run(model, tr, "the transient simulation from the file's initial state")
     J = tr.jumps
     hits = _crossings(tr, guard)
     hits = [i for i in hits if spec.mode is None or J.source[i] == spec.mode]
@@ -340,6 +372,7 @@ def _strobe_returns(model, spec, transient) -> SimulatedReturns:
     n = max(1, math.ceil(span / Tc - 1e-9))
     t1 = model.t0 + n * Tc
     tr = simulate(ma, model.x0, (model.t0, t1))
+    _check_run(model, tr.hybrid, "the transient simulation from the file's initial state")
     if tr.termination != "end_time":
         raise ValueError(f"guess: the transient simulation from the file's initial state "
                          f"stopped at t = {tr.t_final:.6g}: {tr.reason or tr.termination}")
@@ -355,6 +388,7 @@ def _strobe_returns(model, spec, transient) -> SimulatedReturns:
         t_next = ta + j * Tc
         if t_next > t:
             h = simulate_state(ma, z, (t, t_next), mode).hybrid
+            _check_run(model, h, "the simulation after the transient")
             if h.termination.name != "END_TIME":
                 raise ValueError(f"guess: the simulation stopped at t = {h.t_final:.6g}: "
                                  f"{h.reason or h.termination.name.lower()}")
@@ -395,6 +429,7 @@ def _event_section(model, spec, transient) -> tuple:
     ma = model.automaton
     span = float(200.0 if transient is None else transient)
     tr = simulate(ma, model.x0, (model.t0, model.t0 + span))
+    _check_run(model, tr.hybrid, "the simulation from the file's initial state")
     J = tr.hybrid.jumps
     half = model.t0 + 0.5 * (tr.t_final - model.t0)
     counts: dict = {}

@@ -68,7 +68,9 @@ class PeriodicOrbit:
         The wrapped residual ``|P^k(s) - s|_inf`` is below ``tol`` (relative to ``max(1, |s|)``).
     reason : str
         Why Newton stopped (``"converged"``, ``"max_iter"``, ``"map undefined: <status>"``,
-        ``"singular"``, ``"line search failed"``), or why its solution is no orbit (one of
+        ``"singular"``, ``"line search failed"``, ``"diverged"``: an iterate or its image
+        grew past :data:`DIVERGENCE_BOUND` times the scale of the start, or the map's run
+        diverged or went non-finite), or why its solution is no orbit (one of
         :data:`ORBIT_REFUSALS`: ``"degenerate_return"``, ``"grazing"``, ``"not_periodic"``,
         ``"fast_return"``, ``"sampling_incommensurate"``).
     iterations : int
@@ -179,6 +181,11 @@ def _scale(s):
     return max(1.0, float(np.max(np.abs(s))))
 
 
+#: Newton's iterates and their images diverge beyond this many times the scale
+#: ``max(1, |s0|_inf)`` of the start (or where they are not finite): reason ``"diverged"``.
+DIVERGENCE_BOUND = 1e6
+
+
 #: Reasons for which :func:`find_orbit` reports no orbit although Newton's residual vanished.
 ORBIT_REFUSALS = ("degenerate_return", "grazing", "not_periodic", "fast_return",
                   "sampling_incommensurate")
@@ -281,10 +288,10 @@ def find_orbit(P: PoincareMap, s0, period: int = 1, *, tol: float = 1e-11, max_i
     refused = P.refuse(s, k, **checks)
     if refused is not None:
         return _no_orbit(P, s, k, refused[0], 0, None, refused[1])
-    eq = _OrbitEquation(P, k, jacobian, checks)
+    eq = _OrbitEquation(P, k, jacobian, checks, DIVERGENCE_BOUND * _scale(s))
     F = eq.run(s, True)[0]
-    if F is None:
-        return _no_orbit(P, s, k, eq.undefined(), 1, F)
+    if F is None or eq.diverged(s, True):
+        return _no_orbit(P, s, k, eq.undefined() if F is None else "diverged", 1, None, eq.why)
     max_iter = int(max_iter)
     res = newton(eq.resid, eq.jac, s, tol=tol, max_iter=max_iter, norm=eq.norm, broyden=True,
                  difference=eq.difference, canonical=P.canonical, min_lambda=2.0 ** -29,
@@ -300,6 +307,8 @@ def find_orbit(P: PoincareMap, s0, period: int = 1, *, tol: float = 1e-11, max_i
         its = min(its, max_iter)
     elif res.converged and res.iterations == max_iter:
         reason = "max_iter"     # converged by the last step: this module's loop never saw it
+    if eq.diverged(res.x, reason != "converged"):
+        return _no_orbit(P, res.x, k, "diverged", its, None, eq.why)
     return _make_orbit(P, res.x, k, reason, its, F, jacobian, dict(checks, verify=verify))
 
 
@@ -313,9 +322,10 @@ class _OrbitEquation:
     like one where the map is undefined.
     """
 
-    def __init__(self, P, k, jacobian, checks):
+    def __init__(self, P, k, jacobian, checks, bound=math.inf):
         self.P, self.k, self.jacobian, self.checks = P, k, jacobian, checks
         self.last = (None, None, None, None)
+        self.bound, self.why = bound, ""
 
     def run(self, s, jac):
         """``(F, J, MapResult)``, ``J`` only with ``jac``; ``(None, None, r_or_status)``
@@ -331,7 +341,11 @@ class _OrbitEquation:
         try:
             r = P.apply(s, self.k, jacobian=jac == "exact")
             if not r.ok:
+                if r.status in ("nonfinite", "diverged"):
+                    return self._diverged(f"the map's run stopped: {r.status}")
                 return None, None, r
+            if not np.all(np.isfinite(r.s)):
+                return self._diverged("the image is not finite")
             F = P.wrap(r.s - s)
             J = None
             if jac == "exact" and r.DP is not None:
@@ -369,8 +383,33 @@ class _OrbitEquation:
     def difference(self, a, b):
         return self.P.wrap(a - b)
 
+    def _diverged(self, what, past_bound=False):
+        self.why = what + (f", past {DIVERGENCE_BOUND:g} times the scale of the start "
+                           f"({self.bound:.3g})" if past_bound else "")
+        return None, None, "diverged"
+
+    def diverged(self, s, image=True) -> bool:
+        """Whether the iterate `s` is not finite or grew past the bound
+        (:data:`DIVERGENCE_BOUND` times the scale of the start), or (with `image`) its image
+        did, or the map's run from it diverged."""
+        if not np.all(np.isfinite(s)):
+            self.why = "the iterate is not finite"
+            return True
+        if float(np.max(np.abs(s))) > self.bound:
+            self._diverged(f"the iterate reached |s| = {np.max(np.abs(s)):.3g}", True)
+            return True
+        if not image:
+            return False
+        r = self.run(s, False)[2]
+        if isinstance(r, MapResult) and float(np.max(np.abs(r.s))) > self.bound:
+            self._diverged(f"its image reached |P(s)| = {np.max(np.abs(r.s)):.3g}", True)
+            return True
+        return isinstance(r, str) and r == "diverged"
+
     def undefined(self) -> str:
         r = self.last[3]
+        if isinstance(r, str) and r == "diverged":
+            return "diverged"
         return f"map undefined: {r.status if isinstance(r, MapResult) else r}"
 
 

@@ -34,8 +34,8 @@ Conventions: CONVENTIONS.md in the source distribution."""
 EPILOG = """\
 Run "hybridpd COMMAND --help" for a command's options and an example. Bad input prints one
 line and exits with status 2; "hybridpd orbit" exits with 3 when there is no orbit and 4 when
-the run diverged, "hybridpd simulate" with 4 or 5 when the run stopped before its end time
-(see their help). With --model FILE.toml, --list-params lists the file's parameters."""
+the run diverged, "regions" and "bifurcation" with --model with 3 when no cell has an answer,
+"hybridpd simulate" with 4 or 5 when the run stopped before its end time (see their help). With --model FILE.toml, --list-params lists the file's parameters."""
 
 
 def build_parser() -> Parser:

@@ -1,7 +1,10 @@
 """``hybridpd basin``."""
 from __future__ import annotations
 
+import sys
+
 from hybridpd.cli._common import (
+    EXIT_DIVERGED,
     UsageError,
     add_executor,
     add_model,
@@ -34,7 +37,10 @@ def register(sub):
                          " --executor processes --out basin.npz --plot basin.png\n  hybridpd "
                          "basin --model examples/models/drivetrain.toml --event release --set "
                          "controller.kv 2 --x motor -1.5 1.5 31 --y motor_dot -6 6 31 --out "
-                         "basin.nc"))
+                         "basin.nc"),
+                notes="exit status:\n  0  done\n  2  bad input (one line on stderr)\n"
+                      "  4  --model: the run diverged (the simulation that seeds the orbit "
+                      "search)")
     add_pair(p)
     add_model(p)
     p.add_argument("--x", nargs=4, default=None, metavar=("COORD", "MIN", "MAX", "NUM"),
@@ -138,6 +144,7 @@ def run(args) -> int:
 
 def _run_model(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.analysis.model_sections import DivergedRun
     from hybridpd.sweeps.model_basins import model_basin
 
     check_model_command(args, _PAIR, "set the file's entries with --set KEY VALUE", "COORD")
@@ -147,12 +154,17 @@ def _run_model(args) -> int:
         from hybridpd.sweeps.model_regions import template_of
 
         template_of(args.model).check(*values)
-    mb = model_basin(args.model, tuple(args.x), tuple(args.y), values=values,
-                     contact=args.contact, wall=args.wall, event=args.event,
-                     period=args.period, periods=args.periods, mode=args.mode,
-                     phase=args.phase, n_iter=300 if args.iterations is None else args.iterations,
-                     max_period=args.max_period, executor=executor_of(args),
-                     max_workers=args.workers, progress=progress_wanted(args))
+    try:
+        mb = model_basin(args.model, tuple(args.x), tuple(args.y), values=values,
+                         contact=args.contact, wall=args.wall, event=args.event,
+                         period=args.period, periods=args.periods, mode=args.mode,
+                         phase=args.phase,
+                         n_iter=300 if args.iterations is None else args.iterations,
+                         max_period=args.max_period, executor=executor_of(args),
+                         max_workers=args.workers, progress=progress_wanted(args))
+    except DivergedRun as exc:
+        print(f"hybridpd basin: the run diverged: {exc}", file=sys.stderr)
+        return EXIT_DIVERGED
     mb = stamp_controllers(mb, args)
     if args.out:
         mb.save(args.out)

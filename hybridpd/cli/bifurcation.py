@@ -2,8 +2,10 @@
 from __future__ import annotations
 
 import math
+import sys
 
 from hybridpd.cli._common import (
+    EXIT_NO_ORBIT,
     UsageError,
     add_executor,
     add_model,
@@ -50,6 +52,12 @@ example (the paper's parameters, kv swept, following):
       --out kv.nc --plot kv.png
   hybridpd bifurcation --model examples/models/robot_joint_pd.toml --event release \\
       --param controller.kv 0.5 12 60 --out kv.nc --plot kv.png
+
+exit status:
+  0  done
+  2  bad input (one line on stderr)
+  3  --model: no value has an answer (no periodic, quasi-periodic or chaotic motion, no
+     sticking): one line on stderr counts the classes; the diagram is written all the same
 """
 
 
@@ -234,7 +242,23 @@ def _run_model(args) -> int:
         write_figure(plot_bifurcation(d), args.plot)
     if args.json:
         print_json(dict(d.to_dict(), out=str(args.out), plot=args.plot))
+    else:
+        print(d.summary())
+        print(f"  wrote {args.out}" + (f" and {args.plot}" if args.plot else ""))
+    return _no_answer(d)
+
+
+def _no_answer(d) -> int:
+    """:data:`~hybridpd.cli._common.EXIT_NO_ORBIT` with one line on stderr saying what every
+    value reported when no value of a model's diagram has an answer (periodic,
+    quasi-periodic or chaotic motion, sticking or no impact); else 0."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.analysis.diagrams import ANSWERS
+
+    counts = d.counts()
+    if any(counts.get(c) for c in ANSWERS):
         return 0
-    print(d.summary())
-    print(f"  wrote {args.out}" + (f" and {args.plot}" if args.plot else ""))
-    return 0
+    text = ", ".join(f"{n} {c}" for c, n in counts.items() if n)
+    print(f"hybridpd bifurcation: no value has an answer (no motion the map could follow): "
+          f"{text}", file=sys.stderr)
+    return EXIT_NO_ORBIT

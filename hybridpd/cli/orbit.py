@@ -119,7 +119,8 @@ def model_status(orb) -> int:
     """Exit status of a model's :class:`~hybridpd.analysis.periodic.PeriodicOrbit`."""
     if orb.converged:
         return EXIT_OK
-    if orb.reason.startswith("map undefined") and _DIVERGED.search(orb.reason):
+    if orb.reason == "diverged" or (orb.reason.startswith("map undefined")
+                                    and _DIVERGED.search(orb.reason)):
         return EXIT_DIVERGED
     return EXIT_NO_ORBIT
 
@@ -163,6 +164,7 @@ def sequence_summary(signature, max_runs: int = _MAX_RUNS) -> str:
 def _run_model(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.model_orbits import orbit_from_model
+    from hybridpd.analysis.model_sections import DivergedRun
 
     model = model_of(args)
     try:
@@ -170,6 +172,9 @@ def _run_model(args) -> int:
                                   guess=args.guess, transient=args.transient,
                                   event=args.event, periods=args.periods, mode=args.mode,
                                   phase=args.phase)
+    except DivergedRun as exc:
+        print(f"hybridpd orbit: the run diverged: {exc}", file=sys.stderr)
+        return EXIT_DIVERGED
     except ValueError as exc:
         why = _transient_diverged(model, args) if args.guess is None else None
         if why is None:

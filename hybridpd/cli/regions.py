@@ -1,6 +1,10 @@
 """``hybridpd regions``."""
 from __future__ import annotations
 
+import sys
+
+import numpy as np
+
 from hybridpd.cli import _common as cli
 
 DESCRIPTION = ("Maps, on a grid of PD gains (kp, kv) and for each restitution "
@@ -13,6 +17,13 @@ DESCRIPTION = ("Maps, on a grid of PD gains (kp, kv) and for each restitution "
 # the pair options: required without --model, not used with it
 _PAIR = ("case", "mu", "omega", "e", "kp", "kv")
 
+NOTES = """\
+exit status:
+  0  done
+  2  bad input (one line on stderr)
+  3  --model: no cell has an orbit (one line on stderr says what every cell reported,
+     e.g. 'no cell has an orbit: 16 diverged'; the output is written all the same)"""
+
 
 def register(sub):
     p = cli.command(sub, "regions", help="existence/stability regions over (kp, kv)",
@@ -21,7 +32,8 @@ def register(sub):
                          " --gamma 0.75 --omega 5 --kp 0.1 50 200 --kv 0.1 50 200 "
                          "--out regions.nc --plot regions.png\n  hybridpd regions --model "
                          "examples/models/drivetrain.toml --x controller.kp 5 60 40 --y "
-                         "controller.kv 1 20 40 --event release --out dt.nc --plot dt.png"))
+                         "controller.kv 1 20 40 --event release --out dt.nc --plot dt.png"),
+                notes=NOTES)
     cli.add_pair(p, grid=("kp", "kv"), many=("e",))
     cli.add_model(p, set_option=False)
     p.add_argument("--x", nargs=4, default=None, metavar=("KEY", "MIN", "MAX", "NUM"),
@@ -124,6 +136,16 @@ def _run_model(args) -> int:
         cli.write_figure(plot_region_panels(rm), args.plot)
     if args.json:
         cli.print_json(rm.to_dict())
+    else:
+        print(rm.summary())
+    return _no_answer(rm)
+
+
+def _no_answer(rm) -> int:
+    """:data:`~hybridpd.cli._common.EXIT_NO_ORBIT` with one line on stderr saying what every
+    cell reported when no cell of a model's map has an orbit; else 0."""
+    if np.any(rm.exists):
         return 0
-    print(rm.summary())
-    return 0
+    counts = ", ".join(f"{n} {what}" for what, n in rm.counts().items() if n)
+    print(f"hybridpd regions: no cell has an orbit: {counts}", file=sys.stderr)
+    return cli.EXIT_NO_ORBIT

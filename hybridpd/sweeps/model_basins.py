@@ -18,8 +18,8 @@ import numpy as np
 
 from hybridpd._deprecated import moved_names
 from hybridpd.analysis.basins import OUTCOMES, Attractor, BasinResult, from_criterion, outcome
-from hybridpd.analysis.model_orbits import SectionSpec, solve_at
-from hybridpd.analysis.model_sections import fix_section
+from hybridpd.analysis.model_orbits import STATUS, SectionSpec, solve_at
+from hybridpd.analysis.model_sections import DivergedRun, fix_section
 from hybridpd.analysis.periodic import SectionMapper, find_orbit
 from hybridpd.sweeps.model_regions import _grid_spec, template_of
 from hybridpd.sweeps.section_basins import off_section_axis
@@ -114,8 +114,9 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
     spec = fix_section(m, spec)[0]
     res = solve_at(m, spec)
     if not res.orbits:
-        raise ValueError(f"no periodic orbit of this section to take the basin of "
-                         f"({res.detail})")
+        # a motion that diverges is said to (DivergedRun), not only that no orbit was found
+        err = DivergedRun if STATUS[res.status] == "diverged" else ValueError
+        raise err(f"no periodic orbit of this section to take the basin of ({res.detail})")
     po = res.orbits[0]
     P = spec.section_map(m, po.mode)
     names = P.section.names

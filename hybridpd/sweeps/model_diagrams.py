@@ -7,8 +7,9 @@ the motion crosses it) from the last crossing. :func:`model_diagram` runs the on
 :func:`hybridpd.analysis.diagrams.bifurcation_diagram`, over that family as a sweep on any
 executor (:func:`hybridpd.sweeps.diagrams.diagram_sweep`; a scheduler address runs it on an
 existing Dask cluster). Without Lyapunov exponents every non-periodic value is
-``quasiperiodic`` (quasi-periodic or chaotic); a map that stops (no crossing, divergence,
-sticking for good) is ``undefined`` with its reason in ``status``.
+``quasiperiodic`` (quasi-periodic or chaotic); a value whose simulated motion or map
+diverges is ``diverged``; a map that stops otherwise (no crossing, sticking for good) is
+``undefined`` with its reason in ``status``.
 """
 from __future__ import annotations
 
@@ -21,8 +22,13 @@ from pathlib import Path
 import numpy as np
 
 from hybridpd._deprecated import REMOVAL
-from hybridpd.analysis.diagrams import BifurcationDiagram
-from hybridpd.analysis.model_sections import SectionSpec, fix_section, simulated_returns
+from hybridpd.analysis.diagrams import BifurcationDiagram, StoppedMap
+from hybridpd.analysis.model_sections import (
+    DivergedRun,
+    SectionSpec,
+    fix_section,
+    simulated_returns,
+)
 from hybridpd.mechanics.params import ModelTemplate
 from hybridpd.sweeps.model_regions import template_of
 
@@ -90,7 +96,12 @@ class ModelFamily:
     def __call__(self, value):
         spec = SectionSpec(**self.spec)
         model = ModelTemplate(self.data, self.source).model({self.parameter: value})
-        sim = simulated_returns(model, spec)
+        try:
+            sim = simulated_returns(model, spec)
+        except DivergedRun:
+            # no start: the motion diverges at this value, which is then classed diverged
+            P = spec.section_map(model, self.main_mode or None)
+            return StoppedMap(P, "diverged"), np.full(P.dim, np.nan)
         P = spec.section_map(model, sim.mode)
         if spec.event == "stroboscopic" and self.main_mode and sim.mode != self.main_mode:
             # one chart for the whole diagram: the state at the phase, in the chart of the
