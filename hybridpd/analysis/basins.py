@@ -174,8 +174,8 @@ class BasinMeasure:
     count : int
         Grid points with this label.
     fraction : float
-        ``count`` over the on-section, admissible grid points (for the off-section and
-        inadmissible labels: over all points).
+        ``count`` over all points of the grid (the slice), those off the section and the
+        inadmissible ones included: one denominator for every label.
     area : float
         ``count`` times the grid cell area (units of ``x`` times ``y``).
     percent : str
@@ -323,20 +323,27 @@ class BasinResult(Result):
                          f"got {label!r}")
 
     def _whole(self, label: int) -> int:
-        if label in _OUTSIDE:
-            return int(self.labels.size)
-        return int(np.isin(self.labels, _OUTSIDE, invert=True).sum())
+        # one denominator: every point of the slice (a point off the section or
+        # inadmissible is its own class, never part of a basin's share)
+        del label
+        return int(self.labels.size)
 
     def fraction(self, label: int) -> float:
-        """Share of the on-section, admissible grid with ``label`` (of the whole grid for
-        the off-section and inadmissible labels)."""
+        """Share of all points of the grid (the slice) with ``label``: points off the
+        section and inadmissible ones are counted in the denominator, in no basin."""
         whole = self._whole(int(label))
         return float((self.labels == label).sum() / whole) if whole else 0.0
 
     @property
     def converged_fraction(self) -> float:
-        """:meth:`fraction` of label 0."""
+        """:meth:`fraction` of label 0 (of all points of the slice)."""
         return self.fraction(0)
+
+    @property
+    def outside(self) -> int:
+        """Points off the section (at the start, or whose iterates left it) or inadmissible
+        (never iterated): in no basin."""
+        return int(np.isin(self.labels, _OUTSIDE).sum())
 
     def _cell(self) -> float:
         dx = (self.x[-1] - self.x[0]) / max(len(self.x) - 1, 1)
@@ -368,6 +375,11 @@ class BasinResult(Result):
         tried = f", {len(self.windows)} window(s) tried" if self.windows else ""
         lines = [(f"{head} {self.x_name} in [{x0:g}, {x1:g}], {self.y_name} in "
                   f"[{y0:g}, {y1:g}] ({len(self.x)} x {len(self.y)} points{tried})")]
+        N, out = int(self.labels.size), self.outside
+        if out:
+            lines.append(f"off the section or inadmissible: {out} of the {N} points "
+                         f"({format_percent(out, N)}), in no basin: every share below is of "
+                         f"all {N} points")
         if self.reaches_edge:
             lines.append("the basin of label 0 reaches the window edge ("
                          + ", ".join(self.edges) + "): its measure is a lower bound")
@@ -378,8 +390,7 @@ class BasinResult(Result):
                 extra = f"; {stab}, spectral radius {a.spectral_radius:.4g}"
             if a.label == INADMISSIBLE_LABEL:
                 extra = f" ({m.count} points, not iterated)"
-            where = "window" if a.label in _OUTSIDE else "on-section grid"
-            lines.append(f"{m.name}: {m.percent} of the {where}, area {m.area:.4g}{extra}")
+            lines.append(f"{m.name}: {m.percent} of the {N} points, area {m.area:.4g}{extra}")
         return lines
 
     # ---- files ------------------------------------------------------------------------
@@ -390,7 +401,8 @@ class BasinResult(Result):
                                 percent=m.percent)
                            for a, m in zip(self.attractors, self.measures())]
         d.update(window=list(self.window), reaches_edge=self.reaches_edge,
-                 converged_fraction=self.converged_fraction)
+                 converged_fraction=self.converged_fraction, points=int(self.labels.size),
+                 outside=self.outside)
         return d
 
     def to_dataset(self):

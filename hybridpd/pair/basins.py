@@ -41,7 +41,7 @@ early exits on grids, and ``early_exit=False`` runs every trajectory to the end.
 refined by Newton on ``P^k`` (:class:`hybridpd.pair.attractors.CycleCatalog`), negative
 codes for sticking, divergence, no convergence within the iterations, unresolved flights and
 points off the section. The result lists the attractors (section points, period, multipliers,
-stability) and measures each basin (grid count, share of the on-section grid, area). While the
+stability) and measures each basin (grid count, share of all points of the slice, area). While the
 symmetric orbit's basin touches the window's edge the window is extended (a bounded number of
 times); the result says whether it still does. :func:`format_percent` never rounds a share to
 ``100 %`` or ``0 %`` when some points differ.

@@ -112,8 +112,9 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
 
     Notes
     -----
-    The legend lists every label present on the grid with its share of the on-section grid
-    (:func:`hybridpd._format.format_percent`; the legend's title names that denominator),
+    The legend lists every label present on the grid with its share of all points of the
+    slice, the off-section ones included (:func:`hybridpd._format.format_percent`; the
+    legend's title names that denominator),
     then the markers: the symmetric orbit's fixed point (drawn above every other marker) and
     the section points of the other periodic orbits, projected on the slice (they have their
     own ``phi`` and ``y2``). The slice's fixed coordinates ``phi*`` and ``y2*`` are stated
@@ -165,7 +166,7 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
             cs = ax.contourf(X, Y, (lab == a.label).astype(float), levels=[0.5, 1.5],
                              colors="none", hatches=[h])
             set_all(cs, edgecolor="0.15", linewidth=0.0)
-        share = format_percent(int((lab == a.label).sum()), int((lab != OFF_SECTION_LABEL).sum()))
+        share = format_percent(int((lab == a.label).sum()), int(lab.size))
         proxy = patch_proxy(facecolor=colors[a.label], edgecolor="0.3", hatch=h)
         register(ax, ax.images[-1] if not h else cs, a.name, proxy)
         handles.append(patch_proxy(facecolor=colors[a.label], edgecolor="0.3", hatch=h,
@@ -206,8 +207,8 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
         for h in handles:   # legends of a print figure wrap rather than widen it
             h.set_label("\n".join(textwrap.wrap(h.get_label(), 44)))
         leg = ax.legend(handles=handles, ncol=1, frameon=False,
-                        title=_note(fp, len(x), len(y), outside, edges,
-                                    int((lab != OFF_SECTION_LABEL).sum())), **where)
+                        title=_note(fp, len(x), len(y), outside, edges, int(lab.size)),
+                        **where)
         leg._legend_box.align = "left"
     return fig
 
@@ -237,11 +238,12 @@ def _mark(ax, a, xy, n_total: int, color):
     return ln
 
 
-def _note(fp, nx: int, ny: int, outside, edges, on_section: int) -> str:
+def _note(fp, nx: int, ny: int, outside, edges, points: int) -> str:
     """Legend title: the slice's fixed coordinates, the grid and the shares' one denominator
-    (the points on the section), what lies outside the window."""
+    (all points of the slice, the off-section ones in no basin), what lies outside the
+    window."""
     note = (f"slice: $\\phi = \\phi^* = {fp[0]:.4g}$, $y_2 = y_2^* = {fp[2]:.4g}$;\n"
-            f"{nx} x {ny} points; shares of the {on_section} points on the section")
+            f"{nx} x {ny} points; shares of all {points} points")
     if outside:
         note += "\nsection points outside the window:\n" + ", ".join(outside)
     if edges:
@@ -298,7 +300,7 @@ def plot_model_basin(basin, ax=None, title=None):
         share = format_percent(basin.fraction(a.label))
         if a.label == -5:
             handles.append(Patch(facecolor="white", edgecolor="0.3", hatch="///",
-                                 label=f"{a.name}: {share} of the window"))
+                                 label=f"{a.name}: {share}"))
             continue
         handles.append(Patch(facecolor=colors[a.label], edgecolor="0.3",
                              hatch=hatches.get(a.label, ""), label=f"{a.name}: {share}"))
@@ -327,7 +329,8 @@ def plot_model_basin(basin, ax=None, title=None):
                        if n not in (basin.x_name, basin.y_name))
     others = "\n".join(", ".join(parts) for parts in _rows(others.split(", "), 3))
     fig.legend(handles=handles, loc="outside lower center", fontsize=7, frameon=False,
-               title=f"slice through the orbit:\n{others}", title_fontsize=7)
+               title=f"slice through the orbit:\n{others}\nshares of all {lab.size} points "
+                     "(off the section and inadmissible ones in no basin)", title_fontsize=7)
     return fig
 
 

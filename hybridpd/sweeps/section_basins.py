@@ -60,7 +60,8 @@ def section_basin(mapper: SectionMapper, axis_x, axis_y, x, y, *, executor="seri
         labels as ``criterion_labels``. Points whose state lies outside the section's
         admissible set (:meth:`~hybridpd.hybrid.section.Section.violations`: a contact's
         gap beyond its bounds) are labelled ``inadmissible`` and never iterated
-        (``metadata["inadmissible"]`` counts them); ``fraction`` is of the others.
+        (``metadata["inadmissible"]`` counts them); every ``fraction`` is of all points of
+        the slice, these included (they are in no basin).
 
     Raises
     ------
