@@ -75,6 +75,7 @@ def run(args) -> int:
     if args.m2_range is not None:
         kw["m2_range"] = tuple(args.m2_range)
     settings = Settings.full(**kw) if args.full else Settings.quick(**kw)
+    _check_out_dir(args.out)
     path = reproduce(args.out, mode="full" if args.full else "quick", executor=executor_of(args),
                      max_workers=args.workers, progress=not args.quiet,
                      log=_log(args.quiet),
@@ -90,6 +91,26 @@ def run(args) -> int:
         print(line)
     print(f"written to {path.parent} (summary.md, summary.json, figures)")
     return 0
+
+
+def _check_out_dir(out) -> None:
+    """Refuse (ValueError: one line, status 2), before anything is computed, an ``--out``
+    that is an existing file or a directory that cannot be created or written."""
+    # deferred import: loaded only when this runs, for start-up time
+    import tempfile
+    from pathlib import Path
+
+    p = Path(out)
+    if p.exists() and not p.is_dir():
+        raise ValueError(f"--out {str(out)!r} is an existing file: give a directory (reproduce "
+                         "writes figures, data, summary.md and summary.json into it)")
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=p):
+            pass
+    except OSError as exc:
+        raise ValueError(f"--out {str(out)!r}: cannot write there "
+                         f"({exc.strerror or type(exc).__name__})") from None
 
 
 def _log(quiet: bool):
