@@ -17,7 +17,14 @@ the derivative evaluated on the operand's range), so each component stays a rigo
 enclosure, and the centred form, whose excess width shrinks quadratically with the box,
 tightens every intermediate range. The enclosures are those of
 :class:`hybridpd.pair.intervals.Interval` (outward rounding; see its module for the libm
-bound assumed).
+bound assumed and the rule for NaN).
+
+The naive and the centred enclosures of one quantity always meet. Where they do not, one is
+wrong (a derivative enclosed wrongly, a libm beyond its assumed bound), and the empty
+intersection would enclose nothing, so that both ``lo > 0`` and ``hi < 0`` hold:
+:meth:`~hybridpd.pair.intervals.Interval.intersect` raises
+:class:`~hybridpd.pair.intervals.EmptyIntersectionError` instead, which the certifier
+(:func:`hybridpd.pair.proofs.classify`) turns into "undecided" for the boxes concerned.
 """
 from __future__ import annotations
 
@@ -251,7 +258,10 @@ class CForm:
         return self._unary(iv.cos, lambda r: -iv.sin(self.r))
 
     def pow(self, k):
-        """``self ** k`` for an integer ``k >= 2``."""
+        """``self ** k`` for an integer ``k >= 1`` (a real exponent raises ``ValueError``)."""
+        k = _exponent(k)
+        if k == 1:
+            return self
         return self._unary(lambda x: iv.ipow(x, k), lambda r: iv.ipow(self.r, k - 1) * k)
 
     def cu(self):
@@ -467,8 +477,10 @@ class CForm2:
         return self._unary("emq")
 
     def pow(self, k):
-        """``self ** k`` for an integer ``k >= 2``."""
-        k = int(k)
+        """``self ** k`` for an integer ``k >= 1`` (a real exponent raises ``ValueError``)."""
+        k = _exponent(k)
+        if k == 1:
+            return self
         d1c = iv.ipow(self.c, k - 1) * k
         d1 = iv.ipow(self.r, k - 1) * k
         d2 = (iv.ipow(self.r, k - 2) if k > 2 else Interval(1.0)) * (k * (k - 1))
@@ -480,6 +492,15 @@ class CForm2:
 
 def _as_iv(o):
     return o if isinstance(o, Interval) else Interval(o)
+
+
+def _exponent(k) -> int:
+    """An integer exponent ``>= 1`` (never a real one truncated), else ``ValueError``."""
+    k = iv._exponent(k)
+    if k < 1:
+        raise ValueError(f"the exponent k of a centred-form power must be an integer >= 1, "
+                         f"got {k}")
+    return k
 
 
 # ----------------------------------------------------------------------------------------

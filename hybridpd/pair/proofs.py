@@ -36,7 +36,8 @@ import numpy as np
 
 from hybridpd.pair.centred import INTERVAL_OPS, Box, CForm2
 from hybridpd.pair.interval_kernels import interval_kernel
-from hybridpd.pair.intervals import Interval, widen_down, widen_up
+from hybridpd.pair.intervals import EmptyIntersectionError, Interval, widen_down, widen_up
+from hybridpd.pair.selftest import require_libm
 
 __all__ = ["CLASSES", "REASONS", "SCALED", "Boxes", "classify", "classify_bisect", "viability"]
 
@@ -53,8 +54,11 @@ REASONS = (
     "undecided: viability (the gap's enclosure reaches a wall: grazing nearby)",
     "undecided: stability (a multiplier's modulus may equal 1)",
     "undecided: parts of the box proved in different classes",
+    "undecided: two enclosures of one quantity did not meet (an arithmetic fault; "
+    "nothing proved)",
 )
-R_STABLE, R_UNSTABLE, R_VIOLATED, R_EXIST, R_VIAB, R_STAB, R_MIXED = range(len(REASONS))
+R_STABLE, R_UNSTABLE, R_VIOLATED, R_EXIST, R_VIAB, R_STAB, R_MIXED, R_EMPTY = \
+    range(len(REASONS))
 
 #: The scaled parameters of a box, in the kernels' argument order.
 SCALED = ("kpt", "kvt", "mu", "e", "gam", "w")
@@ -412,7 +416,46 @@ def classify(case, n, boxes: Boxes, *, pieces=8, depth=10, details=False):
     >>> cls, why = classify("noncollocated", 1, boxes)
     >>> CLASSES[int(cls[0])]
     'proved_unstable'
+
+    Certification first runs the self-test of NumPy's elementary functions
+    (:func:`hybridpd.pair.selftest.require_libm`, once per process) and refuses to run
+    (:class:`~hybridpd.pair.selftest.LibmSelfTestError`) where it fails. Boxes whose
+    evaluation meets an empty intersection of two enclosures
+    (:class:`~hybridpd.pair.intervals.EmptyIntersectionError`) are undecided (reason
+    :data:`R_EMPTY`); the batch is halved until they are isolated.
     """
+    require_libm()
+    try:
+        cls, why, parts = _classify(case, n, boxes, pieces, depth)
+    except EmptyIntersectionError:
+        cls, why, parts = _classify_apart(case, n, boxes, pieces, depth)
+    if details:
+        return cls, why, parts
+    return cls, why
+
+
+def _classify_apart(case, n, boxes: Boxes, pieces, depth):
+    """:func:`_classify` on halves of the batch; a single failing box is undecided."""
+    N = boxes.size
+    if N == 1:
+        no = np.zeros(1, bool)
+        return (np.full(1, UNDECIDED, np.int64), np.full(1, R_EMPTY, np.int64),
+                {"exists": no, "viable": np.zeros(1, np.int64), "stable": no.copy(),
+                 "unstable": no.copy()})
+    out = []
+    for idx in (np.arange(N // 2), np.arange(N // 2, N)):
+        part = boxes.take(idx)
+        try:
+            out.append(_classify(case, n, part, pieces, depth))
+        except EmptyIntersectionError:
+            out.append(_classify_apart(case, n, part, pieces, depth))
+    (c1, w1, p1), (c2, w2, p2) = out
+    return (np.concatenate([c1, c2]), np.concatenate([w1, w2]),
+            {k: np.concatenate([p1[k], p2[k]]) for k in p1})
+
+
+def _classify(case, n, boxes: Boxes, pieces, depth):
+    """The classes, reasons and parts of :func:`classify` (may raise an empty intersection)."""
     dirs = boxes.directions()
     exists, stable, unstable, C, S, _ = _orbit_stage(case, n, boxes, dirs)
     cls = np.zeros(boxes.size, np.int64)
@@ -428,10 +471,8 @@ def classify(case, n, boxes: Boxes, *, pieces=8, depth=10, details=False):
                              UNDECIDED)
         why[idx] = np.select([v < 0, v == 0, st, un], [R_VIOLATED, R_VIAB, R_STABLE, R_UNSTABLE],
                              R_STAB)
-    if details:
-        return cls, why, {"exists": exists, "viable": viable, "stable": stable,
-                          "unstable": unstable}
-    return cls, why
+    return cls, why, {"exists": exists, "viable": viable, "stable": stable,
+                      "unstable": unstable}
 
 
 def classify_bisect(case, n, boxes: Boxes, *, depth=4, pieces=8, flight_depth=10,

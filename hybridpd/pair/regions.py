@@ -142,6 +142,11 @@ class SymmetricFamily:
             raise ValueError(f"x and y must sweep different parameters, got {xname!r} twice")
         es = _check_e(self.e)
         fixed = self._fixed((xname, yname))
+        if certify:
+            # deferred import: loaded only when this runs, for start-up time
+            from hybridpd.pair.selftest import require_libm
+
+            require_libm()  # refuse before any work where NumPy's libm misses its bound
         E, Y, X = np.meshgrid(es, ys, xs, indexing="ij")
         points = {"e": E.ravel(), yname: Y.ravel(), xname: X.ravel()}
         # deferred import: loaded only when this runs, for start-up time
