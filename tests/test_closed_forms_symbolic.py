@@ -24,8 +24,12 @@ import pytest
 
 sp = pytest.importorskip("sympy")
 
-from hybridpd.pair.symbolic import derivation, impact_block, impact_section_map  # noqa: E402
-from hybridpd.pair.symbolic import sympy_functions  # noqa: E402
+from hybridpd.pair.symbolic import (
+    derivation,
+    impact_block,
+    impact_section_map,
+    sympy_functions,
+)
 
 CASES = ("collocated", "noncollocated")
 
@@ -179,7 +183,6 @@ def test_impact_block_is_the_impact_law():
     d = derivation("collocated")
     s = d.symbols
     mu, e, y1, y2, Y1, Y2 = _impact_law()
-    mu, e = mu, e
     z1, z2, z4, phi = s["z1"], s["z2"], s["z4"], s["phi"]
     # the law in section coordinates: positions (phi, z1) unchanged, y2 and z4 = y1 - y2 jump
     law = sp.Matrix([phi, z1, Y2, Y1 - Y2]).subs({y1: z2 + z4, y2: z2})

@@ -68,10 +68,10 @@ KEYS = [
     r"cells with two or more orbits: (\d+)",
     rf"slice (\w+) in \[{_NUM}, {_NUM}\], (\w+) in \[{_NUM}, {_NUM}\] \((\d+) x (\d+) points\)",
     rf"off the section or inadmissible: (\d+) of the (\d+) points \({_NUM} %\)",
-    rf"the period-(\d+) orbit \((\d+) T\): {_NUM} % of the (\d+) points, area {_NUM}; "
-    rf"(\w+), spectral radius {_NUM}",
-    rf"inadmissible \(a gap beyond its bounds\): {_NUM} % of the (\d+) points, area {_NUM} "
-    r"\((\d+) points",
+    (rf"the period-(\d+) orbit \((\d+) T\): {_NUM} % of the (\d+) points, area {_NUM}; "
+    rf"(\w+), spectral radius {_NUM}"),
+    (rf"inadmissible \(a gap beyond its bounds\): {_NUM} % of the (\d+) points, area {_NUM} "
+    r"\((\d+) points"),
 ]
 
 

@@ -180,7 +180,7 @@ def test_an_empty_intersection_raises():
 
 def test_an_inconsistent_centred_form_raises():
     # a centre value that is not in the naive range: the tightening must not give an empty range
-    box, (c,) = Box.from_bounds([(1.0, 1.1)])
+    box, (_c,) = Box.from_bounds([(1.0, 1.1)])
     with pytest.raises(EmptyIntersectionError):
         centred.CForm(Interval(5.0), (Interval(1.0),), Interval(1.0, 1.1), box)
 

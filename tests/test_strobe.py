@@ -5,14 +5,13 @@ import math
 
 import numpy as np
 import pytest
+from test_sampled_orbits import PD, PID, T, _model, _StroboscopicMap
 
 from hybridpd.analysis.model_orbits import orbit_from_model
 from hybridpd.analysis.model_sections import SectionSpec, choose_phase, fix_section
 from hybridpd.cli import main
 from hybridpd.mechanics.modelfile import load_model, model_from_dict
 from hybridpd.mechanics.simulate import simulate_state
-
-from test_sampled_orbits import PD, PID, T, _model, _StroboscopicMap
 
 MODELS = __import__("pathlib").Path(__file__).parents[1] / "examples" / "models"
 

@@ -433,7 +433,7 @@ _LOOPS = {"add": _add, "add_s": _add_s, "sub": _sub, "sub_s": _sub_s, "mul": _mu
           "mul_s": _mul_s}
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _loop(name):
     """The numba dispatcher of the compiled loop ``name`` (compiled or loaded on first use)."""
     return _LOOPS[name].dispatcher

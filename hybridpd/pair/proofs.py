@@ -54,8 +54,8 @@ REASONS = (
     "undecided: viability (the gap's enclosure reaches a wall: grazing nearby)",
     "undecided: stability (a multiplier's modulus may equal 1)",
     "undecided: parts of the box proved in different classes",
-    "undecided: two enclosures of one quantity did not meet (an arithmetic fault; "
-    "nothing proved)",
+    ("undecided: two enclosures of one quantity did not meet (an arithmetic fault; "
+    "nothing proved)"),
 )
 R_STABLE, R_UNSTABLE, R_VIOLATED, R_EXIST, R_VIAB, R_STAB, R_MIXED, R_EMPTY = \
     range(len(REASONS))
