@@ -200,3 +200,21 @@ def _toml(d) -> str:
             out.append(f"[[{key}]]" if isinstance(table, list) else f"[{key}]")
             out += [f"{k} = {val(v)}" for k, v in row.items()]
     return "\n".join(out) + "\n"
+
+
+def test_a_release_at_a_sample_instant_is_named_as_the_reason():
+    # the sampled joint releases its backlash when the held input steps: the release section
+    # has no map there, and the answer says so (the stroboscopic orbit exists)
+    m = load_model(MODELS / "robot_joint_sampled.toml")
+    po, _ = orbit_from_model(m, 0, event="release")
+    assert not po.converged
+    assert "at a sample instant" in po.detail
+    assert orbit_from_model(m)[0].converged
+
+
+def test_sections_in_words():
+    from hybridpd.analysis.model_sections import section_words
+
+    assert section_words("stroboscopic", phase=0.25) == "stroboscopic section at phi0 = 0.25"
+    assert section_words("impact", 2, -1) == "impact section of contact 2 (lower bound)"
+    assert "contact" not in section_words("stroboscopic")

@@ -21,7 +21,7 @@ from hybridpd.analysis.strobe import StroboscopicMap
 from hybridpd.mechanics.sections import mechanical_section, stroboscopic_section
 
 __all__ = ["EVENTS", "DivergedRun", "SectionSpec", "SimulatedReturns", "choose_phase",
-           "default_phase", "fix_section", "simulated_returns"]
+           "default_phase", "fix_section", "section_words", "simulated_returns"]
 
 #: The sections of a model: ``"auto"`` (the stroboscopic one for a periodic reference, else
 #: the event section the simulated motion crosses), ``"stroboscopic"`` (the state at one
@@ -260,7 +260,7 @@ def simulated_returns(model, spec: SectionSpec, transient: float | None = None
     P = spec.section_map(model, mode)
     pts = [P.section.from_state(J.pre[i], J.t[i]) for i in hits]
     text = (f"the simulation ({span:g} time units from the file's initial state) crosses "
-            f"{guard} in mode {mode} {len(hits)} times")
+            f"{guard} in mode {mode} {len(hits)} times") + _at_samples(J, hits)
     if spec.period != "auto":
         return SimulatedReturns(mode, ((int(spec.period), pts[-1]),), text)
     scale = max(1.0, float(np.max(np.abs(pts[-1]))))
@@ -277,6 +277,22 @@ def simulated_returns(model, spec: SectionSpec, transient: float | None = None
     if notes:
         text += "; returns " + "; ".join(notes)
     return SimulatedReturns(mode, tuple((k, pts[-1]) for k in ks), text)
+
+
+def _at_samples(J, hits) -> str:
+    """What to say when crossings of an event section come at sample instants.
+
+    A sampled controller's held input steps there, and the step itself carries the state
+    across the guard (a contact released by the new input): the flow never crosses the
+    guard, so the event section's map is not defined at such points.
+    """
+    samples = {float(J.t[j]) for j in range(len(J)) if J.guard[j] == "sample"}
+    n = sum(float(J.t[i]) in samples for i in hits)
+    if not n:
+        return ""
+    return (f", {n} of them at a sample instant (the held input's step moves the state "
+            "across the guard, where this section's map is not defined; the stroboscopic "
+            "section is)")
 
 
 def _default_transient(model, spec):
@@ -451,6 +467,37 @@ def _event_section(model, spec, transient) -> tuple:
             f"at wall {wall:+d} ({n_hit} impacts, {n_rel} releases in the second half of a "
             f"{span:g}-long simulation)")
     return replace(spec, event=event, contact=k, wall=wall), text
+
+
+def section_words(event, contact=0, wall=None, phase=None) -> str:
+    """A section in words, for titles and reports.
+
+    Parameters
+    ----------
+    event : str
+        ``"stroboscopic"``, ``"impact"``, ``"release"`` (or ``"auto"``: a section not yet
+        fixed, see :func:`fix_section`).
+    contact : int
+        The contact of an event section (0-based).
+    wall : {+1, -1, None}
+        Its bound (``+1`` hi, ``-1`` lo; None: not stated).
+    phase : float or None
+        The phase ``phi0`` of the stroboscopic section (time units).
+
+    Examples
+    --------
+    >>> section_words("stroboscopic", phase=0.6525)
+    'stroboscopic section at phi0 = 0.6525'
+    >>> section_words("release", contact=1, wall=-1)
+    'release section of contact 1 (lower bound)'
+    """
+    if event == "stroboscopic":
+        return ("stroboscopic section" if phase is None else
+                f"stroboscopic section at phi0 = {float(phase):.4g}")
+    if event == "auto":
+        return "section chosen from a simulation"
+    side = {1: " (upper bound)", -1: " (lower bound)"}.get(wall, "")
+    return f"{event} section of contact {int(contact)}{side}"
 
 
 def fix_section(model, spec: SectionSpec, transient: float | None = None) -> tuple:

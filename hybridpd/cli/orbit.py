@@ -28,8 +28,10 @@ DESCRIPTION = ("Solves the paper's conditions (13)-(17) for the simple symmetric
                " viability (18) rigorously and its stability (27) from the Jacobian "
                "DP of the impact map: xm, phi0, the viability margin, the Floquet "
                "multipliers and the spectral radius. With --model FILE.toml it finds a "
-               "periodic orbit of a general mechanical model by Newton's method on the "
-               "impact map of one contact and reports its Floquet multipliers and its "
+               "periodic orbit of a general mechanical model by Newton's method on its "
+               "section map (by default the stroboscopic one: the state at one phase of the "
+               "reference, mapped over the common period; --event impact|release for a "
+               "contact's section) and reports its Floquet multipliers and its "
                "sequence of jumps over one period (summarised; --full-sequence lists it).")
 
 NOTES = """\
@@ -51,13 +53,13 @@ def register(sub):
                 description=DESCRIPTION,
                 example=("hybridpd orbit --case noncollocated --mu 0.1 --e 0.5 "
                          "--gamma 0.75 --omega 5 --kp 10 --kv 20\n  hybridpd orbit --model "
-                         "examples/models/drivetrain.toml --contact 0 --event release --json"),
+                         "examples/models/robot_joint_sampled.toml --json"),
                 notes=NOTES)
     add_pair(p)
     add_model(p)
     p.add_argument("--guess", type=float, nargs="+", default=None,
-                   help="--model: section point (default: the last impact of a transient "
-                   "simulation from the file's initial state)")
+                   help="--model: section point (default: where a transient simulation from "
+                   "the file's initial state last crosses the section)")
     p.add_argument("--transient", type=float, default=None,
                    help="--model: time of that simulation (default 50 periods)")
     p.add_argument("--full-sequence", action="store_true",
@@ -221,6 +223,9 @@ def _run_model(args) -> int:
 def _section_words(d) -> str:
     """The section of a model's orbit record in words (up to the mode)."""
     if d["event"] == "stroboscopic":
+        if d.get("reason") == "sampling_incommensurate":   # no common period exists
+            return (f"the stroboscopic section (phase phi0 = {d['phi0']:.6g}; the sampling "
+                    f"and the reference have no common period, mode {d['section_mode']}")
         return (f"the stroboscopic section (phase phi0 = {d['phi0']:.6g} of the common "
                 f"period {d['T']:.6g}, mode {d['section_mode']}")
     return (f"contact {d['contact']} (wall {d['wall']:+d}, {d['event']} in mode "

@@ -322,8 +322,12 @@ def plot_model_basin(basin, ax=None, title=None):
     ax.tick_params(labelsize=7)
     spec = basin.metadata.get("spec", {})
     vals = ", ".join(f"{k} = {v:g}" for k, v in basin.metadata.get("values", {}).items())
-    head = (f"{model_title(basin.source, basin.metadata)}:\ncontact {spec.get('contact', 0)} "
-            f"({spec.get('event', 'impact')})" + (f", {vals}" if vals else ""))
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.analysis.model_sections import section_words
+
+    where = section_words(spec.get("event", "impact"), spec.get("contact", 0),
+                          spec.get("wall"), spec.get("phase"))
+    head = f"{model_title(basin.source, basin.metadata)}:\n{where}" + (f", {vals}" if vals else "")
     ax.set_title(title if title is not None else head, fontsize=8)
     others = ", ".join(f"{n} = {v:.3g}" for n, v in zip(coords, basin.base)
                        if n not in (basin.x_name, basin.y_name))
