@@ -218,3 +218,55 @@ def test_sections_in_words():
     assert section_words("stroboscopic", phase=0.25) == "stroboscopic section at phi0 = 0.25"
     assert section_words("impact", 2, -1) == "impact section of contact 2 (lower bound)"
     assert "contact" not in section_words("stroboscopic")
+
+
+def test_a_state_inside_a_compliant_stop_starts_engaged():
+    # a mass on a PD loop starting 2 cm into a rubber stop: the stroboscopic map runs from
+    # the engaged mode (the state is admissible), checked against solve_ivp of the
+    # piecewise-linear equation m x'' = u - [x > hi] (k (x - hi) + c x') with the stop's
+    # entry and exit located as events
+    from scipy.integrate import solve_ivp
+
+    from hybridpd.analysis.strobe import StroboscopicMap
+    from hybridpd.mechanics.sections import stroboscopic_section
+
+    m_, k, c, hi, kp, kv, A, w = 2.0, 2.0e4, 20.0, 0.05, 60.0, 8.0, 0.08, 2 * math.pi
+    model = model_from_dict({
+        "system": {"dofs": ["x"], "masses": [m_], "input": [1.0]},
+        "contact": [{"dof": "x", "hi": hi, "stiffness": k, "damping": c}],
+        "controller": {"type": "pd", "kp": kp, "kv": kv, "measure": "x"},
+        "reference": {"type": "sine", "amplitude": A, "omega": w},
+        "initial": {"q": [0.0], "v": [0.0]}})
+    ha = model.automaton
+    phi0 = 0.3
+    sec = stroboscopic_section(ha, phi0)
+    assert not sec.bounds            # a compliant gap beyond its bound is admissible
+    P = StroboscopicMap(sec)
+    s0 = np.array([hi + 0.02, -0.1])
+    names = sec.names
+    assert names[:2] == ("x", "x_dot"), names
+    res = P.apply(s0)
+    assert res.ok, res.status
+
+    def rhs(t, y, engaged):
+        x, v = y
+        xd, vd = A * math.cos(w * t), -A * w * math.sin(w * t)
+        u = kp * (xd - x) + kv * (vd - v)
+        return [v, (u - (k * (x - hi) + c * v if engaged else 0.0)) / m_]
+
+    def gap(t, y, engaged):
+        return y[0] - hi
+
+    gap.terminal = True
+    t, y, engaged = phi0, s0.copy(), True
+    T = 2 * math.pi / w
+    for _ in range(100):           # each stretch ends where the stop is entered or left
+        gap.direction = -1.0 if engaged else 1.0
+        sol = solve_ivp(rhs, (t, phi0 + T), y, method="DOP853", rtol=1e-12, atol=1e-14,
+                        events=gap, args=(engaged,))
+        t, y = sol.t[-1], sol.y[:, -1]
+        if sol.status == 0:
+            break
+        engaged = not engaged
+    assert abs(t - (phi0 + T)) < 1e-12
+    assert np.allclose(res.s, y, rtol=1e-7, atol=1e-9), (res.s, y)

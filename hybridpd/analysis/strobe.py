@@ -124,10 +124,16 @@ class StroboscopicMap(OnSection, PoincareMap):
     def _simulate(self, z0, t0, t1):
         sec = self.section
         scale = max(1.0, float(np.max(np.abs(z0))))
-        return sec.automaton.simulate(z0, sec.mode, (t0, t1), max_jumps=self.max_jumps,
+        return sec.automaton.simulate(z0, sec.start_mode(z0), (t0, t1), max_jumps=self.max_jumps,
                                       max_steps=self.max_steps, zeno=self.zeno,
                                       resolver=sec.resolver, simtol=self.simtol,
                                       max_state=DIVERGENCE_FACTOR * scale)
+
+    def _on_section(self, tr, z1) -> bool:
+        """Whether a run ended in the section's mode (up to what the state decides of it,
+        e.g. a compliant contact engaged because its gap is beyond its bound)."""
+        sec = self.section
+        return tr.mode_final in (sec.mode, sec.start_mode(z1))
 
     def apply(self, s, k: int = 1, jacobian: bool = False) -> MapResult:
         """Apply ``P^k`` to the section point ``s`` (optionally with ``DP^k``).
@@ -158,7 +164,7 @@ class StroboscopicMap(OnSection, PoincareMap):
         if tr.termination is not TerminationCause.END_TIME:
             return MapResult(nan, False, tr.termination.name.lower(), t0, float(tr.t_final), z1,
                              tr.mode_final, jumps, grazing)
-        if tr.mode_final != sec.mode:
+        if not self._on_section(tr, z1):
             return MapResult(nan, False, "other_mode", t0, t1, z1, tr.mode_final, jumps, grazing)
         img = sec.from_state(z1)
         DP, zeros = None, None
@@ -225,12 +231,13 @@ class StroboscopicMap(OnSection, PoincareMap):
         sec = self.section
         z0, t0 = sec.to_state(s)
         try:
-            tr = sec.automaton.simulate(z0, sec.mode, (t0, t0 + k * sec.period),
+            tr = sec.automaton.simulate(z0, sec.start_mode(z0), (t0, t0 + k * sec.period),
                                         max_jumps=self.max_jumps, max_steps=self.max_steps,
                                         resolver=sec.resolver, simtol=self.simtol)
         except (ValueError, RuntimeError, FloatingPointError):
             return math.inf
-        if tr.termination is not TerminationCause.END_TIME or tr.mode_final != sec.mode:
+        d = np.asarray(tr.x_final, float)
+        if tr.termination is not TerminationCause.END_TIME or not self._on_section(tr, d):
             return math.inf
         d = np.asarray(tr.x_final, float) - z0
         return float(np.max(np.abs(d))) / max(1.0, float(np.max(np.abs(z0))))

@@ -178,6 +178,12 @@ class Section:
         :meth:`~hybridpd.mechanics.automaton.MechanicalAutomaton.resolver`): the section map
         hands it the runs that its compiled loop cannot finish alone (module
         :mod:`hybridpd.analysis.hybridmap`).
+    mode_of : callable, optional
+        ``mode_of(z, mode)``: the mode in which a state ``z`` of this section starts, where
+        the state decides part of it (a compliant contact is engaged exactly when its gap
+        is beyond its bound; a mechanical model's
+        :meth:`~hybridpd.mechanics.automaton.MechanicalAutomaton.mode_at`). None: every
+        section point starts in ``mode``.
 
     Attributes
     ----------
@@ -205,7 +211,8 @@ class Section:
 
     def __init__(self, automaton: HybridAutomaton, mode: str, guard: str, *, exo_state=None,
                  reference=None, exo=None, period=None, coords=None, names=None, clocks=None,
-                 sample_time: float = 0.0, constraints=None, bounds=None, resolver=None):
+                 sample_time: float = 0.0, constraints=None, bounds=None, resolver=None,
+                 mode_of=None):
         if not isinstance(automaton, HybridAutomaton):
             raise ValueError(f"automaton must be a HybridAutomaton, got {type(automaton).__name__}")
         self.automaton = automaton
@@ -242,6 +249,9 @@ class Section:
         if resolver is not None and not callable(resolver):
             raise ValueError(f"resolver must be callable or None, got {resolver!r}")
         self.resolver = resolver
+        if mode_of is not None and not callable(mode_of):
+            raise ValueError(f"mode_of must be callable or None, got {mode_of!r}")
+        self.mode_of = mode_of
         # the guard and the constraints: rows that every section point satisfies
         head = [self.c[None, :]] if self.guard is not None else []
         self._rows = np.vstack(head + [r[None, :] for r, _, _ in self.constraints]
@@ -254,6 +264,11 @@ class Section:
                              "determine the non-exosystem state (the matrix [C; c] is "
                              "singular)")
         self._Minv = np.linalg.inv(M)
+
+    def start_mode(self, z) -> str:
+        """The mode a run from the full state ``z`` of this section starts in (``mode``, with
+        what the state decides of it: ``mode_of``)."""
+        return self.mode if self.mode_of is None else self.mode_of(z, self.mode)
 
     def _set_guard(self, guard):
         """The guard's row ``c``, offset ``d``, direction and index in the section's mode."""

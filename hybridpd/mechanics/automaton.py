@@ -192,11 +192,14 @@ class MechanicalAutomaton:
     def initial_mode(self, z0, rtol: float = 1e-12) -> str:
         """Mode to start in from ``z0``; ``ValueError`` naming the violated contact.
 
-        Every gap must lie in its bounds (to ``rtol`` relative to ``1 + |bound|``); compliant
-        contacts start disengaged.
+        Every rigid contact's gap must lie in its bounds (to ``rtol`` relative to
+        ``1 + |bound|``); a compliant contact whose gap is beyond a bound starts engaged
+        there (its spring compressed), else disengaged (:meth:`mode_at`).
         """
         z0 = np.asarray(z0, dtype=float)
         for k, c in enumerate(self.contacts):
+            if not c.rigid:
+                continue
             s = float(self.gap_rows[k] @ z0)
             for wall, bound in c.bounds:
                 if wall * (s - bound) > rtol * (1.0 + abs(bound)):
@@ -204,7 +207,43 @@ class MechanicalAutomaton:
                     raise ValueError(
                         f"initial: the state is outside contact {k}{_label(c)}: gap {s:.12g} "
                         f"beyond {side} = {bound:g}")
-        return self.free_mode
+        return self.mode_at(z0, self.free_mode)
+
+    def mode_at(self, z, mode: str) -> str:
+        """``mode`` with its compliant configuration read from the state ``z``.
+
+        A compliant contact is engaged at a bound exactly when its gap is beyond it (its
+        spring acts while the gap is closed) and disengaged when the gap is strictly inside;
+        on the bound itself ``mode`` decides. The held (rigid) contacts are ``mode``'s.
+
+        Examples
+        --------
+        >>> from hybridpd.mechanics.modelfile import model_from_dict
+        >>> m = model_from_dict({"system": {"dofs": ["x"], "masses": [1.0], "input": [1.0]},
+        ...     "contact": [{"dof": "x", "hi": 0.1, "stiffness": 1e4}],
+        ...     "controller": {"type": "pd", "kp": 1.0, "kv": 1.0, "measure": "x"},
+        ...     "initial": {"q": [0.0], "v": [0.0]}})
+        >>> ha = m.automaton
+        >>> z = np.zeros(ha.automaton.n_states); z[ha.layout["q"][0]] = 0.12
+        >>> ha.mode_at(z, "free"), ha.mode_at(0 * z, "free/c0+")
+        ('free/c0+', 'free')
+        """
+        if all(c.rigid for c in self.contacts):
+            return mode
+        config, stick = _parse_mode(mode, self.contacts, self._geometry)
+        config = list(config)
+        z = np.asarray(z, dtype=float)
+        for k, c in enumerate(self.contacts):
+            if c.rigid:
+                continue
+            s = float(self.gap_rows[k] @ z)
+            beyond = [w for w, b in c.bounds if w * (s - b) > 0]
+            inside = all(w * (s - b) < 0 for w, b in c.bounds)
+            if beyond:
+                config[k] = beyond[0]
+            elif inside:
+                config[k] = 0
+        return _mode_name(tuple(config), stick)
 
 
 def _active(model, z, t, time_tol, stick, fired, touching=False):

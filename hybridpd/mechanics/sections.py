@@ -112,7 +112,8 @@ def stroboscopic_section(model, phase: float, *, mode: str | None = None, period
                                exo_state=loop.exo_state(0.0), clocks=clocks or None,
                                sample_time=sample_time,
                                constraints=held_constraints(model, mode),
-                               bounds=contact_bounds(model), resolver=model.resolver())
+                               bounds=contact_bounds(model), resolver=model.resolver(),
+                               mode_of=model.mode_at)
 
 
 def _contact_label(model, k) -> str:
@@ -142,10 +143,13 @@ def held_constraints(model, mode: str) -> tuple:
 
 
 def contact_bounds(model) -> tuple:
-    """``((row, lo, hi, name), ...)``: every contact's gap within its bounds (the admissible
-    states of a mechanical model)."""
+    """``((row, lo, hi, name), ...)``: every rigid contact's gap within its bounds (the
+    admissible states of a mechanical model; a compliant contact's gap beyond its bound is
+    a state of its engaged mode, :meth:`MechanicalAutomaton.mode_at`)."""
     out = []
     for k, c in enumerate(model.contacts):
+        if not c.rigid:
+            continue
         lo = "" if c.lo is None else f"{c.lo:g} <= "
         hi = "" if c.hi is None else f" <= {c.hi:g}"
         out.append((model.gap_rows[k].copy(), c.lo, c.hi,
