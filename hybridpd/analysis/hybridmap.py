@@ -650,39 +650,56 @@ def sensitivity_chain(rec, nseg, nb, modes, pk, Z0, track: bool = False) -> tupl
     tangent = False
     tgrad = []        # d t_jump / d z0 of every jump so far
     burst = _accumulating(rec, nb)
+    # a sampled loop's flows between samples repeat (one mode, one duration): each
+    # exponential is computed once per chain, and each reset's invertibility once
+    flows, regular = {}, {}
     for m in range(nb + 1):
         # flows of the segments at jump count m, then jump m + 1 (table index m)
         while q < nseg and sj[q] == m:
             tau = st1[q] - st0[q]
             if tau > 0.0:
-                Z = _flow_sensitivity(modes[smode[q]].A, tau, Z)
+                key = (int(smode[q]), float(tau))
+                E = flows.get(key)
+                if E is None:
+                    E = flows[key] = _flow_sensitivity(modes[smode[q]].A, tau, np.eye(n))
+                Z = E @ Z
                 if track and Q.shape[1]:
-                    Q = np.linalg.qr(_flow_sensitivity(modes[smode[q]].A, tau, Q))[0]
+                    # a flow is invertible: the basis is made orthonormal again at the
+                    # next jump (:func:`_image`), which is where directions can drop
+                    Q = E @ Q
             q += 1
         if m == nb:
             break
         Z, tg, tan, L, R = _jump(m, rec, Z, tgrad, modes, pk, n, track)
         tgrad.append(tg)
         if track and Q.shape[1]:
-            Q = _image(L, R, Q)
+            key = (int(rec.jsrc[m]), int(rec.jg[m]), int(rec.jkind[m]))
+            if key not in regular:
+                regular[key] = _invertible(R)
+            Q = _image(L, R, Q, regular[key])
         # the closing speed of a burst ending in an accumulation shrinks to zero by design
         # (the more so the shorter the unresolved tail, ZenoOptions.tail_tol): its
         # impacts are no tangential touch of the orbit
         tangent = tangent or (tan and not burst[m])
+    if track and Q.shape[1]:
+        Q = np.linalg.qr(Q)[0]     # the flows after the last jump (invertible: rank kept)
     return Z, tangent, (Q.shape[1] if track else None)
 
 
-def _image(L, R, Q):
+def _image(L, R, Q, regular=None):
     """An orthonormal basis of the image of ``span(Q)`` through jump ``q`` (linear part
-    ``L``, reset ``R``), counted structurally: a jump whose reset is invertible keeps every
+    ``L``, reset ``R``; ``regular``: whether ``R`` is invertible, if known), counted
+    structurally: a jump whose reset is invertible keeps every
     direction (a burst's saltation matrices are ill-conditioned, not singular); a singular
     reset drops the directions it removes (a held input overwritten at a sample, a
     contact's normal velocity projected at the start of a sticking phase)."""
-    M = L @ Q
-    if _invertible(R):
-        return np.linalg.qr(M)[0]
-    U, sv, _ = np.linalg.svd(M, full_matrices=False)
-    keep = sv > _NULL_RTOL * max(float(np.linalg.norm(L, 2)), 1e-300)
+    if _invertible(R) if regular is None else regular:
+        return np.linalg.qr(L @ Q)[0]
+    # ``Q`` may have left orthonormality through the flows since the last jump
+    U, sv, _ = np.linalg.svd(L @ np.linalg.qr(Q)[0], full_matrices=False)
+    # the Frobenius norm bounds the spectral one within sqrt(n): the cut lies far between
+    # a removed direction (rounding) and a kept one
+    keep = sv > _NULL_RTOL * max(float(np.linalg.norm(L)), 1e-300)
     return U[:, keep]
 
 

@@ -109,12 +109,24 @@ class OrbitSearch:
         Newton runs made.
     detail : str
         Why no orbit was found (empty if one was).
+    origins : tuple of (Seed or None)
+        Per orbit, the seed (one of the ``seeds`` given) whose Newton run found it, or None
+        (found from a simulation): a sweep's record of which neighbour's orbit it continues.
+    matched : tuple of (Seed or None, int)
+        Seeds whose Newton run landed on an orbit already ``known`` (its index): they
+        continue that orbit's family.
+    also : tuple of (Seed or None, int)
+        Further seeds whose Newton run landed on orbit ``orbits[i]`` (found from another
+        seed first): they continue its family too.
     """
 
     status: int
     orbits: tuple = field(repr=False)
     attempts: int
     detail: str = ""
+    origins: tuple = field(default=(), repr=False)
+    matched: tuple = field(default=(), repr=False)
+    also: tuple = field(default=(), repr=False)
     __repr__ = compact_repr
 
 
@@ -226,7 +238,7 @@ class _Search:
 
     def __init__(self, model, spec):
         self.model, self.spec = model, spec
-        self.maps, self.found, self.tried = {}, [], []
+        self.maps, self.found, self.tried, self.origins, self.again = {}, [], [], [], []
         self.attempts, self.last = 0, None
         self.dt = spec.sampling_period(model)
 
@@ -236,7 +248,7 @@ class _Search:
             self.maps[mode] = self.spec.section_map(self.model, mode or None)
         return self.maps[mode]
 
-    def attempt(self, P, s0, k, why):
+    def attempt(self, P, s0, k, why, seed=None):
         self.attempts += 1
         sp = self.spec
         po = _minimal(P, find_orbit(P, s0, k, tol=sp.tol, max_iter=sp.max_iter,
@@ -247,10 +259,15 @@ class _Search:
         self.last = po
         self.tried.append(f"{why}: period {k} in mode {P.section.mode}: "
                           f"{po.reason if not po.converged else 'orbit'}")
-        if po.converged and not any(o.mode == po.mode and o.period == po.period and
-                                    _same_orbit(self.maps[o.mode], o, po.s)
-                                    for o, _ in self.found):
+        if not po.converged:
+            return po
+        same = [j for j, (o, _) in enumerate(self.found) if o.mode == po.mode and
+                o.period == po.period and _same_orbit(self.maps[o.mode], o, po.s)]
+        if same:
+            self.again.append((seed, same[0]))     # the seed continues that orbit too
+        else:
             self.found.append((po, Seed.of(po, P)))
+            self.origins.append(seed)
         return po
 
 
@@ -261,7 +278,7 @@ def _as_seed(seed) -> Seed:
 
 
 def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
-             known=()) -> OrbitSearch:
+             known=(), families=None) -> OrbitSearch:
     """The periodic orbits of `spec`'s section of `model`, from `seeds` and a simulation.
 
     Parameters
@@ -283,6 +300,10 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
     known : sequence of Seed
         Orbits already known here: seeds of their families are skipped and only new orbits
         are returned.
+    families : sequence, optional
+        One label per seed: the family the caller knows it to be of (e.g. a sweep's orbits
+        joined by continuation). Once a seed gave an orbit, the other seeds of its family
+        are skipped, however far apart their states are.
 
     Returns
     -------
@@ -295,9 +316,16 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
     run = _Search(model, spec)
     known = [_as_seed(k) for k in known]
     seeds = [_as_seed(sd) for sd in seeds]
-    for seed in seeds:
+    if families is not None and len(families) != len(seeds):
+        raise ValueError(f"families must have one label per seed ({len(seeds)}), got "
+                         f"{len(families)}")
+    labels = list(families) if families is not None else [None] * len(seeds)
+    done = set()        # the families that gave an orbit
+    for seed, label in zip(seeds, labels):
         P = run.map(seed.mode)
         T = P.section.period
+        if label is not None and label in done:
+            continue
         if run.found and not all(seed.other_family(sd, T) for _, sd in run.found):
             continue
         if any(not seed.other_family(k, T) for k in known):
@@ -306,7 +334,8 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
         if not np.all(np.isfinite(s0)):
             continue
         k = seed.period if spec.period == "auto" else int(spec.period)
-        run.attempt(P, s0, k, "a neighbour's orbit")
+        if run.attempt(P, s0, k, "a neighbour's orbit", seed).converged and label is not None:
+            done.add(label)
     detail = ""
     lost = not run.found or (not any(po.stable for po, _ in run.found)
                              and any(sd.stable for sd in seeds))
@@ -325,18 +354,30 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
                 if po.converged and po.stable:
                     break
             detail = sim.text
-    found = [po for po, sd in run.found
-             if all(sd.distance(k, run.map(sd.mode).section.period) > 1e-6 for k in known)]
-    found.sort(key=lambda o: (not o.stable, o.spectral_radius))
+    found, matched = [], []
+    for j, ((po, sd), origin) in enumerate(zip(run.found, run.origins)):
+        T = run.map(sd.mode).section.period
+        same = [i for i, k in enumerate(known) if sd.distance(k, T) <= 1e-6]
+        seeds_of = [origin] + [sd2 for sd2, jj in run.again if jj == j]
+        if same:
+            matched += [(o, same[0]) for o in seeds_of]
+        else:
+            found.append((po, origin, seeds_of[1:]))
+    found.sort(key=lambda f: (not f[0].stable, f[0].spectral_radius))
     if found:
-        return OrbitSearch(orbit_status(found[0]), tuple(found), run.attempts)
+        return OrbitSearch(orbit_status(found[0][0]), tuple(f[0] for f in found),
+                           run.attempts, origins=tuple(f[1] for f in found),
+                           matched=tuple(matched),
+                           also=tuple((o, i) for i, f in enumerate(found) for o in f[2]))
     tried = "; ".join(run.tried) or "nothing (no seed)"
     if run.last is None:
         return OrbitSearch(_CODE["not_converged"], (), run.attempts,
-                           f"tried {tried}" + (f"; {detail}" if detail else ""))
+                           f"tried {tried}" + (f"; {detail}" if detail else ""),
+                           matched=tuple(matched))
     why = run.last.detail or run.last.reason
     return OrbitSearch(orbit_status(run.last), (), run.attempts,
-                       f"{why} (tried {tried}" + (f"; {detail})" if detail else ")"))
+                       f"{why} (tried {tried}" + (f"; {detail})" if detail else ")"),
+                       matched=tuple(matched))
 
 
 def orbit_from_model(model, contact: int = 0, wall: int | None = None, period="auto", *,

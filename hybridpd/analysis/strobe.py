@@ -34,7 +34,9 @@ Some directions are removed by construction, whatever the parameters: a sampled 
 held input is overwritten at its next sample, a sticking phase projects the held contact's gap
 and normal velocity onto the contact. The chain counts them from the linear parts of the jumps
 (:attr:`~hybridpd.analysis.maps.MapResult.structural_zeros`), so the multipliers of an orbit
-leave them out instead of reporting them as rounding noise.
+leave them out instead of reporting them as rounding noise. The count is made where it is
+needed, at (near) periodic points (``|P^k(s) - s| <= 1e-6 max(1, |s|)``); elsewhere (Newton's
+iterates) ``structural_zeros`` is None.
 """
 from __future__ import annotations
 
@@ -54,6 +56,9 @@ _KINDS = {"crossing": 1, "grazing": 2, "zeno": 3, "simultaneous": 4}
 #: Singular values of ``DP`` below this (relative to ``max(1, |DP|)``) are zeros up to
 #: rounding: no motion contracts a direction by 1e-13 in one period.
 _ROUNDING = 1e-13
+#: A point whose image is this close (relative to ``max(1, |s|)``) is (near) periodic: the
+#: structural zeros of ``DP`` are counted there
+_PERIODIC = 1e-6
 #: A state growing past this many times the start's scale is a diverging run.
 DIVERGENCE_FACTOR = 1e9
 
@@ -169,22 +174,30 @@ class StroboscopicMap(OnSection, PoincareMap):
         img = sec.from_state(z1)
         DP, zeros = None, None
         if jacobian and not any(j[4] == "simultaneous" for j in jumps):
+            # the structural count (a QR or SVD per jump) is what an orbit's multipliers
+            # need: it is made at periodic points, not at Newton's iterates on the way
+            x = np.asarray(s, float)
+            periodic = float(np.max(np.abs(img - x))) <= _PERIODIC * max(
+                1.0, float(np.max(np.abs(x))))
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-                DP, tangent, zeros = self._jacobian(s, tr)
+                DP, tangent, zeros = self._jacobian(s, tr, periodic)
             grazing = grazing or tangent
             if tangent or not np.all(np.isfinite(DP)):
                 DP, zeros = None, None    # no saltation matrix somewhere: differences
         return MapResult(img, True, "returned", t0, t1, z1, sec.mode, jumps, grazing, DP,
                          structural_zeros=(None if zeros is None else self.dim - zeros))
 
-    def _jacobian(self, s, tr) -> tuple:
-        """``(DP, tangent, structural rank)`` of a run (module docstring)."""
+    def _jacobian(self, s, tr, structural=True) -> tuple:
+        """``(DP, tangent, structural rank)`` of a run (module docstring; the rank None
+        without `structural`)."""
         sec = self.section
         ha = sec.automaton
         rec = _records(ha, tr)
         E = sec.embedding(s)
         Z, tangent, rank = sensitivity_chain(rec, len(rec.st0), len(rec.jt), ha._slim(),
-                                             ha.packed, E, track=True)
+                                             ha.packed, E, track=structural)
+        if not structural:
+            return sec.C @ Z, tangent, None
         C = sec.C
         rank = min(rank, int(np.linalg.matrix_rank(C @ _orth(Z, rank))) if rank else 0)
         DP = C @ Z

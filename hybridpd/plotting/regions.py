@@ -456,8 +456,12 @@ def _subject(rm) -> str:
     f = rm.fixed
     if f.get("model") is None:
         return param_line(_params_of(rm))
-    return (f"periodic orbits on the {f.get('section_event', 'impact')} section of contact "
-            f"{f.get('section_contact', 0)}")
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.analysis.model_sections import section_words
+
+    return "periodic orbits on the " + section_words(
+        f.get("section_event", "impact"), f.get("section_contact", 0), f.get("section_wall"),
+        f.get("section_phase"))
 
 
 def _axes_legend(ax):

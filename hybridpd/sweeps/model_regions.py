@@ -13,10 +13,14 @@ one section (a contact's impacts or sticking releases, ``k`` returns per orbit) 
   orbits, and from a simulation of the model only where they give no orbit (or only
   unstable ones where a neighbour's was stable).
 * **No holes from solver trouble.** After the sweep, every cell without an orbit that has a
-  neighbour with one, and every cell next to a neighbour whose orbit looks like another
-  family (other impact signature, or more than 5 % away), is tried again from all its
-  neighbours' orbits, in rounds until nothing changes. So a cell is reported without an
-  orbit only when Newton failed from every neighbour's solution and from a simulation.
+  neighbour with one, and every cell next to a neighbour with an orbit that looks like
+  another family than each of its own (other impact signature, or farther than
+  ``FAMILY_DISTANCE``), is tried again from those orbits, in rounds until nothing changes;
+  an orbit linked to one of the cell's own is not retried, since Newton from it lands on
+  that orbit again (each cell records which neighbour's orbit its orbits continue, or
+  landed on). Inside a tile the links join the orbits into families, and a seed of a
+  family that gave an orbit is not tried again. So a cell is reported without an orbit only when Newton
+  failed from every neighbour's solution and from a simulation.
 * **Both orbits.** Distinct orbits found in one cell are all counted (``n_orbits``); the
   first two are kept (stable first).
 
@@ -120,7 +124,9 @@ class _Cells:
               ("status2", "rho2", "s2", "sig2", "z2", "t2", "k2", "mode2"))
 
     def __init__(self, m, dim, n):
-        self.a = {"n_orbits": np.zeros(m, np.int64), "attempts": np.zeros(m, np.int64)}
+        # per stored orbit, the neighbour's orbit it continues: 2 * (flat grid index) + slot
+        self.a = {"n_orbits": np.zeros(m, np.int64), "attempts": np.zeros(m, np.int64),
+                  "from": np.full((m, 2), -1, np.int64)}
         for j, names in enumerate(self._SLOTS):
             st, rho, s, sig, z, t, k, mode = names
             self.a.update({st: np.full(m, 2 if j == 0 else -1, np.int64),
@@ -142,7 +148,9 @@ class _Cells:
     def _seeds(self, res, ctx):
         return [Seed.of(o, ctx.maps(o.mode)) for o in res.orbits]
 
-    def put(self, p, res, ctx):
+    def put(self, p, res, ctx, origin=None):
+        """Store the orbits of `res`; ``origin(seed)`` gives the code of the neighbour's orbit
+        a seed came from (-1: none)."""
         self.a["status"][p] = res.status
         self.a["attempts"][p] += res.attempts
         self.a["n_orbits"][p] = len(res.orbits)
@@ -150,24 +158,29 @@ class _Cells:
         self.orbits[p] = seeds
         for j, (o, sd) in enumerate(zip(res.orbits[:2], seeds)):
             self._store(p, j, o, sd, ctx)
+            self.a["from"][p, j] = _origin_code(res, j, origin)
 
-    def add(self, p, res, ctx) -> bool:
+    def add(self, p, res, ctx, origin=None) -> bool:
         """Merge the new orbits of `res` (searched with this cell's orbits as ``known``)."""
         if not res.orbits:
             self.a["attempts"][p] += res.attempts
             return False
         if self.a["n_orbits"][p] == 0:
-            self.put(p, res, ctx)
+            self.put(p, res, ctx, origin)
             return True
         self.a["attempts"][p] += res.attempts
         new = list(zip(res.orbits, self._seeds(res, ctx)))
+        fr = self.a["from"]
         if new[0][0].stable and self.a["status"][p] != 0:
             # a stable orbit comes first: the old first orbit moves to the second slot
             for a, b in zip(*self._SLOTS):
                 self.a[b][p] = self.a[a][p]
+            fr[p, 1] = fr[p, 0]
             self._store(p, 0, *new.pop(0), ctx)
+            fr[p, 0] = _origin_code(res, 0, origin)
         elif self.a["status2"][p] < 0:
             self._store(p, 1, *new[0], ctx)
+            fr[p, 1] = _origin_code(res, 0, origin)
         self.a["n_orbits"][p] += len(res.orbits)
         self.orbits[p] = self.orbits[p] + [sd for _, sd in zip(res.orbits, self._seeds(res,
                                                                                          ctx))]
@@ -204,15 +217,15 @@ class _Context:
         return self._maps[mode]
 
 
-def _solve_cell(template, values, spec, seeds, simulate, known=()):
+def _solve_cell(template, values, spec, seeds, simulate, known=(), families=None):
     try:
         model = template.model(values)
     except ValueError as exc:
         return OrbitSearch(10, (), 0, str(exc))
-    return solve_at(model, spec, seeds, simulate=simulate, known=known)
+    return solve_at(model, spec, seeds, simulate=simulate, known=known, families=families)
 
 
-def _tile_chunk(chunk, *, data, source, x_name, y_name, spec, dim, n, main_mode):
+def _tile_chunk(chunk, *, data, source, x_name, y_name, spec, dim, n, main_mode, nx):
     """One tile (module-level: runs in worker processes): continuation in visiting order."""
     template = ModelTemplate(data, source)
     ctx = _Context(template, spec, main_mode)
@@ -220,22 +233,48 @@ def _tile_chunk(chunk, *, data, source, x_name, y_name, spec, dim, n, main_mode)
     m = len(ix)
     cells = _Cells(m, dim, n)
     where = {(int(iy[p]), int(ix[p])): p for p in range(m)}
+    fam = _Families(np.zeros((0, 2), np.int64))
+
+    def code(q, j):
+        return 2 * int(iy[q] * nx + ix[q]) + j
+
     for p in range(m):
-        seeds = _predicted(cells, where, p, int(iy[p]), int(ix[p]), ctx)
+        codes = {}      # id(seed) -> the code of the neighbour's orbit it comes from
+        seeds = []
+        for sd, q1 in _predicted(cells, where, p, int(iy[p]), int(ix[p]), ctx):
+            codes[id(sd)] = code(q1, 0)
+            seeds.append(sd)
         for dy, dx in _NEIGH:
             q = where.get((iy[p] + dy, ix[p] + dx))
             if q is not None and q < p:
+                for j, sd in enumerate(cells.orbits.get(q, [])[:2]):
+                    codes[id(sd)] = code(q, j)
                 seeds += cells.orbits.get(q, [])
+        families = [fam.root(codes[id(sd)]) if id(sd) in codes else None for sd in seeds]
         res = _solve_cell(template, {x_name: chunk["x"][p], y_name: chunk["y"][p]}, ctx.spec,
-                          seeds, True)
-        cells.put(p, res, ctx)
+                          seeds, True, families=families)
+        cells.put(p, res, ctx, lambda sd, codes=codes: codes.get(id(sd), -1))
+        for j in range(2):
+            if cells.a["from"][p, j] >= 0:
+                fam.join(code(p, j), int(cells.a["from"][p, j]))
+        for sd, j in res.also:        # other neighbours' orbits that continue orbit j
+            if j < 2 and codes.get(id(sd), -1) >= 0:
+                fam.join(code(p, j), codes[id(sd)])
     return cells.a
+
+
+def _origin_code(res, j, origin) -> int:
+    """The code of the neighbour's orbit that orbit `j` of `res` continues (-1: none)."""
+    if origin is None or j >= len(res.origins) or res.origins[j] is None:
+        return -1
+    return int(origin(res.origins[j]))
 
 
 def _predicted(cells, where, p, iy, ix, ctx) -> list:
     """The secant predictor of cell `p`: ``2 a - b`` from the first orbits ``a`` and ``b`` of
     the two cells before it in a line (solved earlier), when they are of one family (states
-    and times extrapolated, the phase difference wrapped); at most one seed."""
+    and times extrapolated, the phase difference wrapped); at most one ``(seed, q)``, ``q``
+    the chunk index of the cell of ``a``."""
     for dy, dx in ((0, -1), (0, 1), (-1, 0), (1, 0)):
         q1, q2 = where.get((iy + dy, ix + dx)), where.get((iy + 2 * dy, ix + 2 * dx))
         if q1 is None or q2 is None or q1 >= p or q2 >= p:
@@ -249,8 +288,53 @@ def _predicted(cells, where, p, iy, ix, ctx) -> list:
         dt = a[0].t - b[0].t
         if period:
             dt = (dt + 0.5 * period) % period - 0.5 * period
-        return [replace(a[0], z=2.0 * a[0].z - b[0].z, t=a[0].t + dt)]
+        return [(replace(a[0], z=2.0 * a[0].z - b[0].z, t=a[0].t + dt), q1)]
     return []
+
+
+class _Families:
+    """The orbits of the grid joined into families by continuation (a union-find over the
+    codes ``2 * cell + slot``): an orbit found from a neighbour's orbit is of its family."""
+
+    def __init__(self, fr):
+        self.parent, self.edges = {}, set()
+        for p, row in enumerate(fr):
+            for j, code in enumerate(row):
+                if code >= 0:
+                    self.join(2 * p + j, int(code))
+
+    def root(self, c):
+        path = []
+        while self.parent.get(c, c) != c:
+            path.append(c)
+            c = self.parent[c]
+        for x in path:             # path compression: later look-ups are short
+            self.parent[x] = c
+        return c
+
+    def linked(self, a, b) -> bool:
+        """Whether orbit `a` was continued from `b`, or `b` from `a`, or one landed on the
+        other (a direct link, not through the family)."""
+        return (min(a, b), max(a, b)) in self.edges
+
+    def join(self, a, b):
+        self.edges.add((min(a, b), max(a, b)))
+        ra, rb = self.root(a), self.root(b)
+        if ra != rb:
+            self.parent[max(ra, rb)] = min(ra, rb)
+
+
+def _retry_seeds(cells, fam, p, q, ctx) -> list:
+    """The orbits of neighbour `q` that cell `p` retries: not linked directly to one of its
+    own (continued from or to it, or found to land on it: Newton from it would land there
+    again), and of another family than each own orbit by the seeds' test. Links through a
+    chain of cells are not enough: where the map is discontinuous (an impact crossing a
+    sample instant) two orbits close together each continue to the neighbours."""
+    own = cells.orbits[p]
+    return [o for i, o in enumerate(cells.orbits[q])
+            if not (i < 2 and any(fam.linked(2 * p + j, 2 * q + i)
+                                  for j in range(min(len(own), 2))))
+            and all(o.other_family(k, ctx.maps(k.mode).section.period) for k in own)]
 
 
 def _repair(out, order, nx, ny, template, x_name, y_name, xs, ys, ctx, rounds):
@@ -264,6 +348,7 @@ def _repair(out, order, nx, ny, template, x_name, y_name, xs, ys, ctx, rounds):
         cells.a[k] = out[k][inv].copy()
     for p in range(m):
         cells.orbits[p] = cells.seeds_of(p, ctx)
+    fam = _Families(cells.a["from"])
     changed_total = 0
     todo = range(m)
     for _ in range(int(rounds)):
@@ -271,16 +356,27 @@ def _repair(out, order, nx, ny, template, x_name, y_name, xs, ys, ctx, rounds):
         for p in sorted(todo):
             iy, ix = divmod(p, nx)
             own = cells.orbits[p]
-            seeds = [o for dy, dx in _NEIGH
-                     if 0 <= iy + dy < ny and 0 <= ix + dx < nx
-                     for o in cells.orbits[(iy + dy) * nx + ix + dx]
-                     if all(o.other_family(k, ctx.maps(k.mode).section.period) for k in own)]
+            codes, seeds = {}, []
+            for dy, dx in _NEIGH:
+                if 0 <= iy + dy < ny and 0 <= ix + dx < nx:
+                    q = (iy + dy) * nx + ix + dx
+                    for o in _retry_seeds(cells, fam, p, q, ctx):
+                        i = cells.orbits[q].index(o)
+                        codes[id(o)] = 2 * q + i if i < 2 else -1
+                        seeds.append(o)
             if not seeds:
                 continue
             res = _solve_cell(template, {x_name: xs[ix], y_name: ys[iy]}, ctx.spec, seeds,
-                              False, own)
-            if cells.add(p, res, ctx):
+                              False, own, [fam.root(codes[id(o)]) if codes[id(o)] >= 0
+                                           else None for o in seeds])
+            for sd, i in res.matched:     # a neighbour's orbit that continues an own one
+                if sd is not None and codes.get(id(sd), -1) >= 0 and i < 2:
+                    fam.join(2 * p + i, codes[id(sd)])
+            if cells.add(p, res, ctx, lambda sd, codes=codes: codes.get(id(sd), -1)):
                 changed.add(p)
+                for j in range(2):
+                    if cells.a["from"][p, j] >= 0:
+                        fam.join(2 * p + j, int(cells.a["from"][p, j]))
         changed_total += len(changed)
         if not changed:
             break
@@ -379,14 +475,16 @@ class ModelSearch:
                            **dict(self.options or {}))
         if isinstance(tile, bool) or int(tile) != tile or tile < 1:
             raise ValueError(f"tile must be an int >= 1, got {tile!r}")
-        a, meta, P = _search(template, spec, x_name, xs, y_name, ys, int(tile), repair_rounds,
-                             executor=executor, max_workers=max_workers, store=store,
-                             progress=progress)
+        # the section actually used (its event and phase fixed once) is what the map records
+        a, meta, P, spec = _search(template, spec, x_name, xs, y_name, ys, int(tile),
+                                   repair_rounds, executor=executor, max_workers=max_workers,
+                                   store=store, progress=progress)
         return _region_map_of(template, spec, x_name, xs, y_name, ys, a, meta, P)
 
 
 def _search(template, spec, x_name, xs, y_name, ys, tile, repair_rounds, **sweep):
-    """The tiles on the executor, then the repair rounds: per-cell arrays in grid order."""
+    """The tiles on the executor, then the repair rounds: per-cell arrays in grid order,
+    the metadata, the map of the chart and the section spec used (fixed)."""
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.sweep import run_sweep
 
@@ -405,13 +503,13 @@ def _search(template, spec, x_name, xs, y_name, ys, tile, repair_rounds, **sweep
                     func_kwargs={"data": template.data, "source": template.source,
                                  "x_name": x_name, "y_name": y_name, "spec": specd,
                                  "dim": P.dim, "n": base.automaton.automaton.n_states,
-                                 "main_mode": main_mode},
+                                 "main_mode": main_mode, "nx": nx},
                     metadata={"kind": "model_region_map", "version": 2}, **sweep)
     ctx = _Context(template, specd, main_mode)
     a, n_rep = _repair(res.outputs, order, nx, ny, template, x_name, y_name, xs, ys, ctx,
                        repair_rounds)
     return a, {"repaired_cells": int(n_rep), "executor": res.executor,
-               "sig_table": [list(p) for p in ctx.table]}, P
+               "sig_table": [list(p) for p in ctx.table]}, P, spec
 
 
 #: The variables of a model's region map and the arrays of the search they come from.

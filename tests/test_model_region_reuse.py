@@ -1,0 +1,77 @@
+"""Region maps of a model continue each cell's orbit from its neighbours: the cells agree with
+cold orbits on the map's own section, the section used is recorded, the example file's orbit
+is a fixed point of an independent period map, and seeds of one family are tried once."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+from _drivetrain_reference import naive_period_map
+
+from hybridpd.analysis.model_orbits import SectionSpec, Seed, orbit_from_model, solve_at
+from hybridpd.analysis.model_sections import fix_section
+from hybridpd.mechanics.modelfile import load_model
+from hybridpd.mechanics.params import ModelTemplate
+from hybridpd.sweeps.model_regions import ModelSearch
+from hybridpd.sweeps.regions import region_map
+
+FILE = Path(__file__).resolve().parents[1] / "examples" / "models" / "drivetrain_stops.toml"
+
+
+@pytest.fixture(scope="module")
+def small_map():
+    return region_map(ModelSearch(FILE), ("controller.kp", 30.0, 70.0, 3),
+                      ("controller.kv", 4.0, 10.0, 3), progress=False)
+
+
+def test_the_example_orbit_is_a_fixed_point_of_an_independent_period_map():
+    po, P = orbit_from_model(load_model(FILE))
+    assert po.converged and po.stable, po.reason
+    data = ModelTemplate.load(FILE).data
+    img = naive_period_map(data, data["controller"]["kp"], data["controller"]["kv"])(
+        np.asarray(po.s), P.phase)
+    np.testing.assert_allclose(img, po.s, rtol=0, atol=1e-8)
+    # the held torque is overwritten at every sample: one structural zero, not noise
+    assert len(po.s) - len(po.multipliers) == 1
+
+
+def test_every_cell_agrees_with_a_cold_orbit_on_the_maps_section(small_map):
+    rm = small_map
+    assert rm.fixed["section_event"] == "stroboscopic"
+    phase = rm.fixed["section_phase"]
+    assert phase is not None and 0.0 <= phase < 2.0
+    tpl = ModelTemplate.load(FILE)
+    same = 0
+    for iy, kv in enumerate(rm.y):
+        for ix, kp in enumerate(rm.x):
+            po, _ = orbit_from_model(tpl.model({"controller.kp": kp, "controller.kv": kv}),
+                                     phase=phase)
+            assert po.converged and rm.exists[0, iy, ix]
+            for k, rho in (("", rm.spectral_radius), ("2", rm.spectral_radius2)):
+                s = getattr(rm, f"section_point{k}")[0, iy, ix]
+                if np.all(np.isfinite(s)) and np.max(np.abs(s - po.s)) <= 1e-7:
+                    assert abs(rho[0, iy, ix] - po.spectral_radius) <= 1e-8
+                    same += 1
+                    break
+    assert same >= rm.x.size * rm.y.size - 1     # at most one cell with another orbit
+
+
+def test_the_map_records_and_titles_the_section_it_used(small_map):
+    from hybridpd.plotting.regions import _subject
+
+    text = _subject(small_map)
+    assert "stroboscopic section at phi0 = " in text and "contact" not in text
+
+
+def test_seeds_of_one_family_are_tried_once():
+    m = load_model(FILE)
+    spec, _, _ = fix_section(m, SectionSpec())
+    po, P = orbit_from_model(m, phase=spec.phase)
+    seed = Seed.of(po, P)
+    far = Seed(seed.z * 1.5, seed.t, seed.signature, seed.period, seed.mode, True)
+    both = solve_at(m, spec, [seed, far], simulate=False)
+    once = solve_at(m, spec, [seed, far], simulate=False, families=["a", "a"])
+    assert len(both.orbits) == len(once.orbits) == 1
+    assert once.attempts == 1 < both.attempts
+    assert both.also and both.also[0] == (far, 0)      # the far seed landed on the orbit
+    with pytest.raises(ValueError, match="families"):
+        solve_at(m, spec, [seed], families=["a", "b"])
