@@ -259,3 +259,29 @@ def test_settings_validate_every_convention():
         with pytest.raises(ValueError, match=name):
             Settings.quick(**kw)
     assert SMALL.L == pytest.approx(0.75)
+
+
+def test_summary_opens_with_the_bottom_line_of_the_papers_gains(run):
+    # the three lines after the title, checked against orbits computed here at m2 = 1
+    from hybridpd.pair.orbits import symmetric_orbits
+
+    path, data = run
+    lines = path.read_text().splitlines()
+    assert lines[0].startswith("# Reproduction")
+    head = [ln for ln in lines[1:6] if ln.strip()][:3]
+    assert head[0].startswith("**Bottom line** (the paper's gains kp = 10, kv = 20, at m2 = 1)")
+    assert head[1].startswith("Non-collocated:") and head[2].startswith("Of the ")
+    P, c = data["paper"], data["conventions"]
+    for case, line in (("collocated", head[0]), ("noncollocated", head[1])):
+        r = symmetric_orbits(P["kp"], P["kv"], mu=P["mu"], e=np.asarray(P["e"], float),
+                             L=c["L"], x10=c["x10"], omega=P["omega"], m2=1.0, n=P["n"],
+                             case=case)
+        for e, ex, st, rho in zip(P["e"], np.asarray(r.exists), np.asarray(r.stable),
+                                  np.asarray(r.spectral_radius)):
+            if not ex:
+                assert f"e = {e:g} no orbit" in line
+            else:
+                word = "stable" if st else "unstable"
+                assert f"e = {e:g} {word} (spectral radius {rho:.3g})" in line
+    verdicts = [row["verdict"] for row in data["table"]]
+    assert f"{verdicts.count('agrees')} agree" in head[2]

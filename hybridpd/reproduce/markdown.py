@@ -77,9 +77,54 @@ CAPTIONS = {
         "open).")}
 
 
+def bottom_line(d: dict) -> list:
+    """Three lines: what the paper's own gains do at ``m2 = 1`` (else the first ``m2``
+    computed), per case, and how the table's verdicts add up, from the summary's data.
+
+    Examples
+    --------
+    >>> d = {"paper": {"kp": 10.0, "kv": 20.0}, "table": [{"verdict": "agrees"}],
+    ...      "runs": [{"m2": 1.0, "orbits": [
+    ...          {"case": "collocated", "e": 0.5, "exists": True, "stable": True,
+    ...           "spectral_radius": 0.25, "reason": "exists"},
+    ...          {"case": "noncollocated", "e": 0.5, "exists": False, "stable": False,
+    ...           "spectral_radius": None, "reason": "the gap leaves the clearance"}]}]}
+    >>> for line in bottom_line(d):
+    ...     print(line)
+    **Bottom line** (the paper's gains kp = 10, kv = 20, at m2 = 1): collocated: e = 0.5 stable (spectral radius 0.25).
+    Non-collocated: e = 0.5 no orbit (the gap leaves the clearance).
+    Of the 1 statements checked below: 1 agree, 0 contradicted, 0 unresolved or split.
+    """
+    P = d["paper"]
+    runs = d["runs"]
+    run = next((r for r in runs if r["m2"] == 1.0), runs[0])
+
+    def case(name):
+        parts = []
+        for o in sorted((o for o in run["orbits"] if o["case"] == name), key=lambda o: o["e"]):
+            if not o["exists"]:
+                parts.append(f"e = {o['e']:g} no orbit ({o['reason']})")
+            else:
+                word = "stable" if o["stable"] else "unstable"
+                parts.append(f"e = {o['e']:g} {word} (spectral radius "
+                             f"{o['spectral_radius']:.3g})")
+        return "; ".join(parts) or "not computed"
+
+    verdicts = [row["verdict"] for row in d["table"]]
+    agree, contra = verdicts.count("agrees"), verdicts.count("contradicted")
+    return [f"**Bottom line** (the paper's gains kp = {P['kp']:g}, kv = {P['kv']:g}, at m2 = "
+            f"{run['m2']:g}): collocated: {case('collocated')}.",
+            f"Non-collocated: {case('noncollocated')}.",
+            f"Of the {len(verdicts)} statements checked below: {agree} agree, {contra} "
+            f"contradicted, {len(verdicts) - agree - contra} unresolved or split."]
+
+
 def _intro(d, w):
     c, P = d["conventions"], d["paper"]
     w("# Reproduction of Mata-Jimenez, Brogliato & Goswami, Figs 3-7\n")
+    for line in bottom_line(d):
+        w(line)
+    w("")
     w(f"Mode **{d['mode']}**. Fixed by the paper: mu = {P['mu']:g}, gamma = {P['gamma']:g}, "
       f"n = {P['n']}, omega = {P['omega']:g}, e = {_es(d)}, and kp = {P['kp']:g}, "
       f"kv = {P['kv']:g} for Figs 3, 6 and 7. Not given by the paper: the secondary mass m2 "
