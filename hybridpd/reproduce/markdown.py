@@ -112,11 +112,11 @@ def bottom_line(d: dict) -> list:
 
     verdicts = [row["verdict"] for row in d["table"]]
     agree, contra = verdicts.count("agrees"), verdicts.count("contradicted")
-    return [f"**Bottom line** (the paper's gains kp = {P['kp']:g}, kv = {P['kv']:g}, at m2 = "
-            f"{run['m2']:g}): collocated: {case('collocated')}.",
+    return [(f"**Bottom line** (the paper's gains kp = {P['kp']:g}, kv = {P['kv']:g}, at m2 = "
+            f"{run['m2']:g}): collocated: {case('collocated')}."),
             f"Non-collocated: {case('noncollocated')}.",
-            f"Of the {len(verdicts)} statements checked below: {agree} agree, {contra} "
-            f"contradicted, {len(verdicts) - agree - contra} unresolved or split."]
+            (f"Of the {len(verdicts)} statements checked below: {agree} agree, {contra} "
+            f"contradicted, {len(verdicts) - agree - contra} unresolved or split.")]
 
 
 def _intro(d, w):
