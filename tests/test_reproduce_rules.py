@@ -285,3 +285,29 @@ def test_boundary_distance_on_a_hand_made_basin():
     b.labels = np.zeros_like(labels)
     d = boundary_distance(b, x10=x10, omega=omega)
     assert d["lower_bound"] and math.isclose(d["distance"], 2.0, rel_tol=1e-12)
+
+
+@given(st.floats(0, 1), st.floats(0, 0.05), st.floats(1e-7, 0.02), st.floats(0, 0.05))
+@settings(max_examples=300, deadline=None)
+def test_disjoint_share_intervals_read_disjoint(lo, wa, gap, wb):
+    # two certified intervals that do not meet are printed so that they do not touch (up to
+    # four decimals of a percent), each enclosing its interval; a gap narrower than the
+    # printed 0.1 % is said
+    import re
+
+    from hybridpd.reproduce.table import pct_pair
+
+    a, b = (lo, lo + wa), (lo + wa + gap, lo + wa + gap + wb)
+    ta, tb, note = pct_pair(a, b)
+
+    def ends(t):
+        v = [float(x) / 100 for x in re.findall(r"[0-9.]+", t)]
+        return v[0], v[-1]
+
+    (a0, a1), (b0, b1) = ends(ta), ends(tb)
+    assert a0 <= a[0] + 1e-12 and a1 >= a[1] - 1e-12 and b0 <= b[0] + 1e-12
+    assert b1 >= b[1] - 1e-12
+    g = b[0] - a[1]             # the gap as the floats hold it
+    if g * 100 >= 2e-4:         # resolvable with four decimals of a percent
+        assert a1 < b0, (ta, tb)
+    assert bool(note) == (0 < g < 1e-3)

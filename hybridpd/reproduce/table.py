@@ -20,7 +20,7 @@ import math
 from hybridpd.reproduce import conclusions as C
 from hybridpd.reproduce import rules as R
 
-__all__ = ["build_table", "m2_text", "pct_interval"]
+__all__ = ["build_table", "m2_text", "pct_interval", "pct_pair"]
 
 
 def pct_interval(iv, nd=1) -> str:
@@ -38,6 +38,37 @@ def pct_interval(iv, nd=1) -> str:
     b = math.ceil(hi * k - 1e-9) / k
     f = lambda v: f"{v:.{nd}f}".rstrip("0").rstrip(".")
     return f"{f(a)} %" if a == b else f"{f(a)}–{f(b)} %"
+
+
+def pct_pair(a, b) -> tuple:
+    """Two share intervals printed so that disjoint ones read disjoint.
+
+    ``(text_a, text_b, note)``: both rounded outward (:func:`pct_interval`) with one decimal,
+    or as many more (up to four) as keep two disjoint intervals from touching once rounded;
+    ``note`` says so where the certified gap between them is narrower than the one-decimal
+    precision (``""`` otherwise), since a verdict then rests on that gap.
+
+    Examples
+    --------
+    >>> from hybridpd.reproduce.table import pct_pair
+    >>> pct_pair((0.0141, 0.0229), (0.0233, 0.027))
+    ('1.41–2.29 %', '2.33–2.7 %', '; a certified gap of 0.04 % between them, narrower than the printed 0.1 %')
+    >>> pct_pair((0.1, 0.2), (0.5, 0.6))
+    ('10–20 %', '50–60 %', '')
+    """
+    (a0, a1), (b0, b1) = (tuple(map(float, v)) for v in (a, b))
+    gap = max(b0 - a1, a0 - b1)
+    nd = 1
+    if gap > 0:
+        while nd < 4:
+            lo, hi = (a, b) if a1 < b0 else (b, a)
+            k = 10 ** nd
+            if math.ceil(100 * lo[1] * k - 1e-9) < math.floor(100 * hi[0] * k + 1e-9):
+                break
+            nd += 1
+    note = (f"; a certified gap of {100 * gap:.2g} % between them, narrower than the printed "
+            f"0.1 %" if 0 < gap < 1e-3 else "")
+    return pct_interval(a, nd), pct_interval(b, nd), note
 
 
 def _es(d):
@@ -105,7 +136,7 @@ def _row_1(c, readings, grid):
 
 
 def _trend_words(t, what, values, ivs, name="e"):
-    a, b = pct_interval(ivs[0]), pct_interval(ivs[-1])
+    a, b, note = pct_pair(ivs[0], ivs[-1])
     x0, x1 = f"{values[0]:g}", f"{values[-1]:g}"
     if t["verdict"] == R.AGREES:
         move = "falls" if t["direction"] == "decreasing" else "rises"
@@ -116,6 +147,7 @@ def _trend_words(t, what, values, ivs, name="e"):
     else:
         s = (f"the {what} share goes from {a} ({name} = {x0}) to {b} ({name} = {x1}): "
              f"{R.NO_CHANGE}")
+    s += note
     if t["against"] is not None:
         p, q = t["against"]["interval"]
         s += f" (it moves the other way between {name} = {p:g} and {q:g})"
@@ -178,8 +210,8 @@ def _row_mu_existence(c, grid):
     for key in c["trends"]:
         case, e = key.split(" ")
         ivs = [c["first"][case][_idx(c, case, e)], c["last"][case][_idx(c, case, e)]]
-        a, b = pct_interval(ivs[0]), pct_interval(ivs[1])
-        parts.append(f"{case.replace('non', 'non-')} {e.replace('=', ' = ')}: {a} → {b}")
+        a, b, note = pct_pair(ivs[0], ivs[1])
+        parts.append(f"{case.replace('non', 'non-')} {e.replace('=', ' = ')}: {a} → {b}{note}")
     mu0, mu1 = c["mu"]
     text = (f"existence share of the box at mu = {mu0:g} → mu = {mu1:g}: " + "; ".join(parts)
             + f" ({_cert(grid)}; the ends of the studied range decide a trend over it)")
@@ -197,9 +229,9 @@ def _row_mu_small(c, grid_limit, grid):
     for key, t in c["trends"].items():
         case, e = key.split(" ")
         k = _idx(c, case, e)
-        item = (f"{case.replace('non', 'non-')} {e.replace('=', ' = ')} "
-                f"{pct_interval(c['limit'][case][k])} at mu = {c['mu'][0]:g} against "
-                f"{pct_interval(c['paper'][case][k])} at mu = {c['mu'][1]:g}")
+        ta, tb, note = pct_pair(c["limit"][case][k], c["paper"][case][k])
+        item = (f"{case.replace('non', 'non-')} {e.replace('=', ' = ')} {ta} at mu = "
+                f"{c['mu'][0]:g} against {tb} at mu = {c['mu'][1]:g}{note}")
         {R.AGREES: easier, R.CONTRADICTED: harder}.get(t["verdict"], same).append(item)
     parts = []
     if easier:
