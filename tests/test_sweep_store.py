@@ -149,7 +149,9 @@ def test_resume_after_kill(tmp_path, executor, workers, sig):
     clear_calls(log)
 
     store = tmp_path / "run.zarr"
-    proc = _spawn(tmp_path, store, log, executor, workers, sleep=0.15)
+    # slow enough that the signal comes well before the run could end, even on a loaded
+    # machine where the start-up and the polling take long
+    proc = _spawn(tmp_path, store, log, executor, workers, sleep=0.5)
     try:
         wait_until(
             lambda: len(done_chunks(store)) >= 3 or proc.poll() is not None,

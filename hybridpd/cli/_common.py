@@ -323,6 +323,20 @@ def require(args, *names) -> None:
         raise UsageError(f"the following arguments are required: {', '.join(missing)}")
 
 
+def depth_arg(text: str):
+    """``--depth``: ``auto`` or a whole number in [0, 16] (argparse type)."""
+    if text == "auto":
+        return text
+    try:
+        k = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be 'auto' or an integer in [0, 16], got "
+                                         f"{text!r}") from None
+    if not 0 <= k <= 16:
+        raise argparse.ArgumentTypeError(f"must be 'auto' or an integer in [0, 16], got {k}")
+    return k
+
+
 def period_arg(text: str):
     """``--period``: ``auto`` or a whole number >= 1 (argparse type)."""
     if text == "auto":

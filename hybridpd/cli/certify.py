@@ -20,14 +20,14 @@ def register(sub):
     p = cli.command(sub, "certify", help="certified classes of a (kp, kv) grid, their certificate",
                     description=DESCRIPTION,
                     example=("hybridpd certify --case collocated --mu 0.1 --e 0.1 --gamma 0.75 "
-                             "--omega 5 --kp 0.1 20 9 --kv 0.1 50 9 --depth 8 --certificate "
+                             "--omega 5 --kp 0.1 20 9 --kv 0.1 50 9 --certificate "
                              "cert.json.gz\n  hybridpd certify --verify cert.json.gz"),
                     notes="exit status: 0 proved (or verified), 1 a certificate failed "
                           "verification, 2 bad input")
     cli.add_pair(p, grid=("kp", "kv"), many=("e",))
-    p.add_argument("--depth", type=int, default=3,
-                   help="bisections of an undecided part of a cell (coarse grids need 6 to 10; "
-                        "default 3)")
+    p.add_argument("--depth", type=cli.depth_arg, default="auto",
+                   help="bisections of an undecided part of a cell (default auto: 3 for a "
+                        "101 x 101 grid, one more for every factor 4 fewer cells, at most 10)")
     p.add_argument("--max-parts", type=int, default=None,
                    help="parts classified per cell at most (default: only --depth bounds them)")
     p.add_argument("--no-confirm", action="store_true",

@@ -50,8 +50,9 @@ def register(sub):
                         "to its neighbours) in interval arithmetic: proved stable, proved "
                         "unstable, proved no orbit or undecided (variable 'certified' of "
                         "--out; the figure draws the proved classes)")
-    p.add_argument("--certify-depth", type=int, default=3,
-                   help="--certify: bisections of an undecided cell (default 3)")
+    p.add_argument("--certify-depth", type=cli.depth_arg, default="auto",
+                   help="--certify: bisections of an undecided cell (default auto: 3 for a "
+                        "101 x 101 grid, one more for every factor 4 fewer cells)")
     cli.add_executor(p, default="serial")
     cli.add_output(p, out=(".nc", ".zarr", ".npz"), model_out=(".nc", ".zarr"), store=True,
                    plot="the region map (one panel per e)")

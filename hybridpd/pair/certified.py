@@ -48,7 +48,7 @@ from hybridpd.pair import proofs
 from hybridpd.pair.intervals import widen_down, widen_up
 
 __all__ = ["FLAG_MEANINGS", "FLAG_VALUES", "MAP_AXES", "REASONS", "BoxCertificate",
-           "CertifiedCells",
+           "CertifiedCells", "auto_depth",
            "CertifiedMap", "OrbitCertificate", "cell_boxes", "cell_edges", "certified_map",
            "certify_box", "certify_cells", "certify_orbit", "class_shares"]
 
@@ -692,9 +692,38 @@ def cell_boxes(x_name, x_edges, y_name, y_edges):
     return {x_name: (XL, XH), y_name: (YL, YH)}
 
 
+#: The grid whose cells ``depth = 3`` suits (the benchmark's 101 x 101)
+_DENSE_CELLS = 101 * 101
+
+
+def auto_depth(n_cells: int) -> int:
+    """Bisections per undecided cell for a grid of `n_cells` cells: 3 for a 101 x 101 grid,
+    one more for every factor 4 fewer cells (a coarse cell holds that many dense ones; its
+    boundaries are resolved as finely), at most 10.
+
+    Examples
+    --------
+    >>> from hybridpd.pair.certified import auto_depth
+    >>> auto_depth(101 * 101), auto_depth(51 * 51), auto_depth(81), auto_depth(1)
+    (3, 4, 7, 10)
+    """
+    n_cells = check_int("n_cells", n_cells, 1)
+    return int(min(10, 3 + max(0, math.ceil(math.log(_DENSE_CELLS / n_cells, 4) - 1e-9))))
+
+
+def resolve_depth(depth, n_cells: int) -> int:
+    """``depth`` as an int: ``"auto"`` is :func:`auto_depth` of the grid, else an int in
+    ``[0, 16]`` (``ValueError`` naming it)."""
+    if isinstance(depth, str):
+        if depth != "auto":
+            raise ValueError(f"depth must be 'auto' or an int in [0, 16], got {depth!r}")
+        return auto_depth(n_cells)
+    return check_int("depth", depth, 0, 16)
+
+
 def certified_map(case="collocated", *, x=("kp", 0.1, 50.0, 101), y=("kv", 0.1, 50.0, 101),
                   e=(0.1, 0.5, 0.9), mu=None, omega=None, L=None, gamma=None, x10=1.0,
-                  m2=1.0, n=1, kp=None, kv=None, spacing="linear", depth=3,
+                  m2=1.0, n=1, kp=None, kv=None, spacing="linear", depth="auto",
                   chunk_size=4096, max_parts=None, confirm=True,
                   certificate=None) -> CertifiedMap:
     """Certified classification of every cell of a grid (see the module docstring).
@@ -717,8 +746,10 @@ def certified_map(case="collocated", *, x=("kp", 0.1, 50.0, 101), y=("kv", 0.1, 
         The fixed parameters (as for :class:`hybridpd.pair.regions.SymmetricFamily`).
     spacing : {"linear", "log"} or (x_spacing, y_spacing)
         The cells' convention of :func:`cell_edges`.
-    depth : int
-        Bisections of an undecided part of a cell at most (coarse grids need 6 to 10).
+    depth : int or "auto"
+        Bisections of an undecided part of a cell at most; ``"auto"`` (default): 3 for a
+        101 x 101 grid and one more for every factor 4 fewer cells (:func:`auto_depth`),
+        so that coarse cells are subdivided as finely as a dense grid's.
     chunk_size : int
         Cells classified per vectorised batch.
     max_parts : int or None
@@ -762,6 +793,7 @@ def certified_map(case="collocated", *, x=("kp", 0.1, 50.0, 101), y=("kv", 0.1, 
         raise ValueError(f"certificate must be None, True or a file name, got {certificate!r}")
     fixed = _fixed_params(xname, yname, mu=mu, omega=omega, L=L, gamma=gamma, x10=x10, m2=m2,
                           kp=kp, kv=kv)
+    depth = resolve_depth(depth, xs.size * ys.size)
     xe, ye = cell_edges(xs, sx), cell_edges(ys, sy)
     cells = cell_boxes(xname, xe, yname, ye)
     flags = np.zeros((es.size, ys.size, xs.size), np.int8)

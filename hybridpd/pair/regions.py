@@ -103,7 +103,7 @@ class SymmetricFamily:
 
     def classify_grid(self, x=("kp", 0.1, 50.0, 200), y=("kv", 0.1, 50.0, 200), *,
                       executor="serial", max_workers=None, chunk_size=None, store=None,
-                      progress=True, certify=False, certify_depth=3) -> _RegionMap:
+                      progress=True, certify=False, certify_depth="auto") -> _RegionMap:
         """Existence and stability of the symmetric orbit over a grid of two parameters.
 
         Parameters
@@ -125,8 +125,9 @@ class SymmetricFamily:
             flags: 0 undecided, 1 proved stable, 2 proved unstable, 3 proved no orbit). About
             a second per thousand cells; with ``store`` it writes and resumes
             ``NAME.certified.zarr`` beside it.
-        certify_depth : int
-            Bisections of an undecided cell (0 to 12).
+        certify_depth : int or "auto"
+            Bisections of an undecided cell (0 to 12; ``"auto"``: 3 for a 101 x 101 grid, one
+            more for every factor 4 fewer cells, :func:`hybridpd.pair.certified.auto_depth`).
 
         Returns
         -------
@@ -164,10 +165,12 @@ class SymmetricFamily:
         meta = {"reasons": {str(k): v for k, v in REASONS.items()}}
         if certify:
             # deferred import: loaded only when this runs, for start-up time
-            from hybridpd.pair.certified import FLAG_MEANINGS, FLAG_VALUES
+            from hybridpd.pair.certified import FLAG_MEANINGS, FLAG_VALUES, auto_depth
 
+            depth = auto_depth(xs.size * ys.size) if certify_depth == "auto" else \
+                check_int("certify_depth", certify_depth, 0, 12)
             variables["certified"] = _certify(
-                case, n, fixed, check_int("certify_depth", certify_depth, 0, 12), xname, xs,
+                case, n, fixed, depth, xname, xs,
                 yname, ys, es, executor=executor, max_workers=max_workers, store=store,
                 progress=progress)
             meta["flags"] = {"certified": {"values": list(FLAG_VALUES),
