@@ -48,9 +48,9 @@ from hybridpd.pair import proofs
 from hybridpd.pair.intervals import widen_down, widen_up
 
 __all__ = ["FLAG_MEANINGS", "FLAG_VALUES", "MAP_AXES", "REASONS", "BoxCertificate",
-           "CertifiedCells", "auto_depth",
-           "CertifiedMap", "OrbitCertificate", "cell_boxes", "cell_edges", "certified_map",
-           "certify_box", "certify_cells", "certify_orbit", "class_shares"]
+           "CertifiedCells", "CertifiedMap", "OrbitCertificate", "auto_depth", "cell_boxes",
+           "cell_edges", "certified_map", "certify_box", "certify_cells", "certify_orbit",
+           "class_shares", "resolve_depth"]
 
 #: CF flag values of a certified map and their meanings (``flag_meanings`` is one string).
 FLAG_VALUES = (0, 1, 2, 3)
