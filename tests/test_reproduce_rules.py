@@ -311,3 +311,26 @@ def test_disjoint_share_intervals_read_disjoint(lo, wa, gap, wb):
     if g * 100 >= 2e-4:         # resolvable with four decimals of a percent
         assert a1 < b0, (ta, tb)
     assert bool(note) == (0 < g < 1e-3)
+
+
+def test_the_mu_remark_reports_a_certified_rise_inside_the_range():
+    # ends: 43-45 % -> 0-5 % (agrees: the share falls over the range); inside, certified
+    # 60-63 % at mu = 1.78: a proved rise of at least 15 % of the box from mu = 0.01, which is
+    # reported (and does not decide)
+    from hybridpd.reproduce.table import _row_mu_existence
+
+    first = {"noncollocated": [(0.43, 0.45)]}
+    last = {"noncollocated": [(0.0, 0.05)]}
+    inside = {("noncollocated", 0.5): [(1.78, (0.60, 0.63))]}
+    c = C.check_mu_existence((0.01, 10.0), first, last, [0.5], inside=inside)
+    t = c["trends"]["noncollocated e=0.5"]
+    assert t["verdict"] == R.AGREES
+    assert t["against"]["interval"] == [0.01, 1.78]
+    assert t["against"]["by"] == pytest.approx(0.60 - 0.45)
+    row = _row_mu_existence(c, (8, 8))
+    assert "rises from 43–45 % at mu = 0.01 to 60–63 % at mu = 1.78" in row["finding"]
+    assert "by at least 15 % of the box" in row["finding"]
+    # without the inside value there is nothing to report
+    c0 = C.check_mu_existence((0.01, 10.0), first, last, [0.5])
+    assert c0["trends"]["noncollocated e=0.5"]["against"] is None
+    assert "no rise inside the range is proved" in _row_mu_existence(c0, (8, 8))["finding"]

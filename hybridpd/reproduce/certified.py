@@ -55,7 +55,8 @@ from hybridpd._results import compact_repr
 from hybridpd.model import Case, check_in_range, check_int, check_odd_order, check_positive
 
 __all__ = ["CLASSES", "MU_LIMIT", "PROPERTIES", "CertifiedShare", "Leaves", "ShareTarget",
-           "certified_shares", "merge_shares", "reading_values", "reproduction_shares"]
+           "certified_shares", "merge_shares", "mu_move_values", "reading_values",
+           "reproduction_shares"]
 
 #: The properties whose shares are enclosed.
 PROPERTIES = ("exists_stable", "exists", "exists_unstable")
@@ -435,7 +436,10 @@ def reproduction_shares(settings, cases=("collocated", "noncollocated")) -> dict
     * ``"mu_ends"``: existence at both ends of :attr:`Settings.mu_range` (the remark on
       existence against ``mu``; :attr:`Settings.certified_ends`);
     * ``"readings"``: the printed box read at every other value of :func:`reading_values`
-      (:attr:`Settings.certified_readings`).
+      (:attr:`Settings.certified_readings`);
+    * ``"mu_moves"``: existence at the two values of ``mu`` between which the sampled share
+      rises most (:func:`mu_move_values`; the largest move against the remark's trend,
+      certified so that the remark can report it; :attr:`Settings.certified_readings`).
 
     Returns
     -------
@@ -462,7 +466,10 @@ def reproduction_shares(settings, cases=("collocated", "noncollocated")) -> dict
                      for e in es for m in settings.mu_range], ends),
         "readings": ([ShareTarget(c, e, mu0, m2, properties=es_only, key=(c, e, m2))
                       for c in cases for e in es for m2 in reading_values(settings)
-                      if m2 != 1.0], coarse)}
+                      if m2 != 1.0], coarse),
+        "mu_moves": ([ShareTarget(c, e, m, properties=ex_only, key=(c, e, m)) for c in cases
+                      for e in es for m in mu_move_values(settings, c, e)
+                      if m not in settings.mu_range], coarse)}
     out = {"seconds": {}, "cpu_seconds": {}}
     for name, (targets, cfg) in groups.items():
         t0, c0 = time.perf_counter(), time.process_time()
@@ -471,6 +478,42 @@ def reproduction_shares(settings, cases=("collocated", "noncollocated")) -> dict
         out["seconds"][name] = time.perf_counter() - t0
         out["cpu_seconds"][name] = time.process_time() - c0
     return out
+
+
+def mu_move_values(settings, case, e) -> tuple:
+    """The values ``(mu_i, mu_j)``, ``i < j``, of the studied range between which the
+    existence share of the scaled box rises most, sampled (:attr:`Settings.param_points`
+    values, a :attr:`Settings.param_grid` square grid of gains), or ``()`` where it never
+    rises: where the remark "the existence region tends to shrink as mu grows" would be
+    contradicted locally, to be certified.
+
+    Examples
+    --------
+    >>> from dataclasses import replace
+    >>> from hybridpd.reproduce import Settings
+    >>> from hybridpd.reproduce.certified import mu_move_values
+    >>> s = replace(Settings.quick(), param_points=9, param_grid=9)
+    >>> m = mu_move_values(s, "noncollocated", 0.5)
+    >>> len(m) in (0, 2) and all(s.mu_range[0] <= v <= s.mu_range[1] for v in m)
+    True
+    """
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.reproduce.params import param_shares
+    from hybridpd.reproduce.settings import PAPER
+
+    lo, hi = settings.mu_range
+    vals = np.logspace(np.log10(lo), np.log10(hi), settings.param_points)
+    g = settings.param_grid
+    fixed = dict(mu=PAPER["mu"], gamma=settings.gamma, x10=settings.x10, m2=1.0,
+                 omega=PAPER["omega"], n=PAPER["n"])
+    share = param_shares(case, "mu", vals, np.linspace(0.1, settings.gains[0], g),
+                         np.linspace(0.1, settings.gains[1], g), e=[e], fixed=fixed)["exists"][0]
+    best, pair = 0.0, ()
+    for i in range(vals.size):
+        j = i + int(np.argmax(share[i:]))
+        if share[j] - share[i] > best:
+            best, pair = share[j] - share[i], (float(vals[i]), float(vals[j]))
+    return pair
 
 
 def merge_shares(parts) -> dict:

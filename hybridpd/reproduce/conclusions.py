@@ -164,19 +164,29 @@ def _per_case(trends) -> dict:
     return {"verdict": R.all_of(per.values()), "per_case": per, "trends": trends}
 
 
-def check_mu_existence(mu_ends, first: dict, last: dict, e) -> dict:
+def check_mu_existence(mu_ends, first: dict, last: dict, e, inside=None) -> dict:
     """"The existence region tends to decrease with increasing mu": per case and ``e`` the
     certified existence share at the end of the studied range of ``mu`` is below the share
-    at its start (:func:`~hybridpd.reproduce.rules.trend` on the two ends), for every case
-    and ``e``. ``first``, ``last``: ``{case: [(lo, hi) per e]}``."""
-    out = {}
+    at its start (:func:`~hybridpd.reproduce.rules.trend`), for every case and ``e``; the
+    certified shares ``inside`` the range (``{(case, e): [(mu, (lo, hi)), ...]}``, e.g. where
+    a sampled share rises most) enter the trend's series, so the largest proved move the
+    other way is reported (it does not decide). ``first``, ``last``: ``{case: [(lo, hi) per
+    e]}``."""
+    out, series = {}, {}
     for case in first:
         for k, ev in enumerate(e):
-            out[f"{case} e={ev:g}"] = R.trend(mu_ends, [first[case][k], last[case][k]],
-                                              direction="decreasing")
+            pts = [(float(mu_ends[0]), first[case][k])]
+            pts += [(float(m), iv) for m, iv in (inside or {}).get((case, ev), ())
+                    if mu_ends[0] < m < mu_ends[1]]
+            pts += [(float(mu_ends[1]), last[case][k])]
+            pts.sort(key=lambda q: q[0])
+            key = f"{case} e={ev:g}"
+            out[key] = R.trend([m for m, _ in pts], [iv for _, iv in pts],
+                               direction="decreasing")
+            series[key] = [[m, list(map(float, iv))] for m, iv in pts]
     return {**_per_case(out), "mu": [float(v) for v in mu_ends], "e": [float(v) for v in e],
             "first": {c: _ivs(v) for c, v in first.items()},
-            "last": {c: _ivs(v) for c, v in last.items()}}
+            "last": {c: _ivs(v) for c, v in last.items()}, "series": series}
 
 
 def check_mu_small(mu_points, limit: dict, paper: dict, e) -> dict:

@@ -218,12 +218,17 @@ def _checks(shares, es, settings, check5) -> dict:
     lo_mu, hi_mu = settings.mu_range
     ends = {m: {c: _intervals(shares, "mu_ends", [(c, e, m) for e in es], "exists")
                 for c in CASES} for m in (lo_mu, hi_mu)}
+    # the values between which a sampled share rises most, certified too (per case and e)
+    moves = {(c, e): sorted((k[2], r.interval("exists"))
+                            for k, r in shares.get("mu_moves", {}).items()
+                            if k[0] == c and k[1] == e) for c in CASES for e in es}
     limit = {c: _intervals(shares, "limit", [(c, e) for e in es]) for c in CASES}
     return {1: C.check_1(main["collocated"], main["noncollocated"], es,
                          col_exists=exist["collocated"], non_exists=exist["noncollocated"]),
             2: C.check_2(main["collocated"], main["noncollocated"], es),
             3: C.check_3(main["collocated"], es), 5: check5,
-            "mu-existence": C.check_mu_existence((lo_mu, hi_mu), ends[lo_mu], ends[hi_mu], es),
+            "mu-existence": C.check_mu_existence((lo_mu, hi_mu), ends[lo_mu], ends[hi_mu], es,
+                                                 inside=moves),
             "mu-small": C.check_mu_small((MU_LIMIT, PAPER["mu"]), limit, main, es)}
 
 

@@ -206,15 +206,27 @@ def _row_5(c, readings_by):
 
 
 def _row_mu_existence(c, grid):
-    parts = []
-    for key in c["trends"]:
+    parts, moves = [], 0
+    for key, t in c["trends"].items():
         case, e = key.split(" ")
         ivs = [c["first"][case][_idx(c, case, e)], c["last"][case][_idx(c, case, e)]]
         a, b, note = pct_pair(ivs[0], ivs[1])
-        parts.append(f"{case.replace('non', 'non-')} {e.replace('=', ' = ')}: {a} → {b}{note}")
+        item = f"{case.replace('non', 'non-')} {e.replace('=', ' = ')}: {a} → {b}{note}"
+        if t.get("against") is not None:
+            # the largest proved rise inside the range, with its certified shares
+            p, q = t["against"]["interval"]
+            pts = dict(c.get("series", {}).get(key, ()))
+            ra, rb, _ = pct_pair(pts[p], pts[q]) if p in pts and q in pts else ("", "", "")
+            item += (f", but it rises from {ra} at mu = {p:.3g} to {rb} at mu = {q:.3g} "
+                     f"(by at least {100 * t['against']['by']:.2g} % of the box)")
+            moves += 1
+        parts.append(item)
     mu0, mu1 = c["mu"]
     text = (f"existence share of the box at mu = {mu0:g} → mu = {mu1:g}: " + "; ".join(parts)
-            + f" ({_cert(grid)}; the ends of the studied range decide a trend over it)")
+            + f" ({_cert(grid)}; the ends of the studied range decide a trend over it; "
+            + ("a proved rise inside the range is reported and does not decide" if moves else
+               "no rise inside the range is proved where the sampled shares rise most")
+            + ")")
     return _row("mu-existence", c["verdict"], text,
                 readings_text="read on the scaled box (m2 = 1)")
 
