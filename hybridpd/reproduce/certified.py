@@ -439,7 +439,7 @@ def reproduction_shares(settings, cases=("collocated", "noncollocated")) -> dict
       (:attr:`Settings.certified_readings`);
     * ``"mu_moves"``: existence at the two values of ``mu`` between which the sampled share
       rises most (:func:`mu_move_values`; the largest move against the remark's trend,
-      certified so that the remark can report it; :attr:`Settings.certified_readings`).
+      certified so that the remark can report it; :attr:`Settings.certified_ends`).
 
     Returns
     -------
@@ -469,7 +469,7 @@ def reproduction_shares(settings, cases=("collocated", "noncollocated")) -> dict
                       if m2 != 1.0], coarse),
         "mu_moves": ([ShareTarget(c, e, m, properties=ex_only, key=(c, e, m)) for c in cases
                       for e in es for m in mu_move_values(settings, c, e)
-                      if m not in settings.mu_range], coarse)}
+                      if m not in settings.mu_range], ends)}
     out = {"seconds": {}, "cpu_seconds": {}}
     for name, (targets, cfg) in groups.items():
         t0, c0 = time.perf_counter(), time.process_time()
