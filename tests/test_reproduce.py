@@ -285,3 +285,19 @@ def test_summary_opens_with_the_bottom_line_of_the_papers_gains(run):
                 assert f"e = {e:g} {word} (spectral radius {rho:.3g})" in line
     verdicts = [row["verdict"] for row in data["table"]]
     assert f"{verdicts.count('agrees')} agree" in head[2]
+
+
+def test_the_lead_table_states_each_rows_convention_and_box(run):
+    path, data = run
+    text = path.read_text()
+    head = "| # | the paper says | read on (convention, box) |"
+    assert head in text
+    rows = [ln for ln in text.splitlines() if ln.startswith("| ") and not ln.startswith(head)
+            and not ln.startswith("|---")]
+    by_id = {ln.split("|")[1].strip(): ln.split("|")[3] for ln in rows[:len(data["table"])]}
+    box = data["certified"]["box"]["kp/m2"]
+    for rid in ("1", "2", "3", "mu-existence", "mu-small"):
+        assert f"kp/m2 in [{box[0]:g}, {box[1]:g}]" in by_id[rid] and "certified" in by_id[rid]
+    assert f"basins at m2 = {data['conventions']['chosen_m2']:g}" in by_id["4"]
+    c5 = next(c for c in data["conclusions"] if c["id"] == 5)["evidence"]
+    assert f"kp/m2 in [{c5['gains']['kp'][0]:g}, {c5['gains']['kp'][1]:g}]" in by_id["5"]

@@ -133,18 +133,54 @@ def _intro(d, w):
       f"{', '.join(f'{v:g}' for v in c['m2'])}.\n")
 
 
+def row_boxes(d: dict) -> dict:
+    """Per row of the lead table, the convention and the box it is read on, from the data.
+
+    Rows 1-3 and the remarks on mu: the scaled gain box (``m2``-free, certified); row 4: the
+    basins at the chosen ``m2`` in its run's shared window; row 5: its own gain grid and
+    plant box (sampled).
+    """
+    cert, conv = d["certified"], d["conventions"]
+    (k0, k1), (v0, v1) = cert["box"]["kp/m2"], cert["box"]["kv/m2"]
+    def scaled(group):
+        g = cert[group]["grid"]
+        return (f"scaled gains kp/m2 in [{k0:g}, {k1:g}], kv/m2 in [{v0:g}, {v1:g}] (free of "
+                f"m2; certified, {g[0]} × {g[1]} cells)")
+
+    out = {i: scaled("main") for i in (1, 2, 3)}
+    mu = cert.get("mu_ends_values")
+    out["mu-existence"] = scaled("mu_ends") + (f", mu in [{mu[0]:g}, {mu[1]:g}]" if mu else "")
+    out["mu-small"] = scaled("limit") + f", mu = {cert['mu_limit']:g} and {d['paper']['mu']:g}"
+    m2 = conv.get("chosen_m2")
+    run = next((r for r in d["runs"] if r["m2"] == m2), None)
+    if run is not None:
+        x0, x1, y0, y1 = run["basin_window"]
+        out[4] = (f"basins at m2 = {m2:g} (all six orbits stable there), the window x1 in "
+                  f"[{x0:g}, {x1:g}], y1 in [{y0:.3g}, {y1:.3g}] shared by the panels (sampled)")
+    c5 = next((c for c in d["conclusions"] if c["id"] == 5), None)
+    if c5 is not None:
+        ev = c5["evidence"]
+        (a0, a1), (b0, b1) = ev["gains"]["kp"], ev["gains"]["kv"]
+        out[5] = (f"log grid kp/m2 in [{a0:g}, {a1:g}], kv/m2 in [{b0:g}, {b1:g}] "
+                  f"({ev['grid'][0]} × {ev['grid'][1]}), plants e in {ev['box']['e']}, mu in "
+                  f"{ev['box']['mu']} ({ev['uncertainty_grid'][0]} × "
+                  f"{ev['uncertainty_grid'][1]}; sampled)")
+    return out
+
+
 def _table(d, w):
     cert = d["certified"]
     g, base, lev = cert["main"]["grid"], cert["main"]["base_grid"], cert["main"]["levels"]
     rg = cert["readings"]["grid"] or g
     eg = cert["mu_ends"]["grid"]
     w("## What the paper says and what holds\n")
-    w("| # | the paper says | what holds in the scaled gains, free of m2 | for which readings "
-      "of the printed gain box (m2) |")
-    w("|---|---|---|---|")
+    w("| # | the paper says | read on (convention, box) | what holds in the scaled gains, "
+      "free of m2 | for which readings of the printed gain box (m2) |")
+    w("|---|---|---|---|---|")
+    boxes = row_boxes(d)
     for row in d["table"]:
-        w(f"| {row['id']} | {row['paper']} | **{row['verdict']}**: {row['finding']} | "
-          f"{row['m2_text']} |")
+        w(f"| {row['id']} | {row['paper']} | {boxes.get(row['id'], '-')} | "
+          f"**{row['verdict']}**: {row['finding']} | {row['m2_text']} |")
     w("")
     w("How to read it:\n")
     w("- *agrees* / *contradicted*: the numbers decide the statement; *unresolved*: they "
