@@ -323,32 +323,30 @@ def require(args, *names) -> None:
         raise UsageError(f"the following arguments are required: {', '.join(missing)}")
 
 
-def depth_arg(text: str):
-    """``--depth``: ``auto`` or a whole number in [0, 16] (argparse type)."""
+def _auto_or_int(text: str, lo: int, hi: int | None):
+    """``auto`` or a whole number in ``[lo, hi]`` (``hi`` None: no upper end), else the
+    argparse error naming the range."""
     if text == "auto":
         return text
+    rng = f"in [{lo}, {hi}]" if hi is not None else f">= {lo}"
     try:
         k = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"must be 'auto' or an integer in [0, 16], got "
+        raise argparse.ArgumentTypeError(f"must be 'auto' or an integer {rng}, got "
                                          f"{text!r}") from None
-    if not 0 <= k <= 16:
-        raise argparse.ArgumentTypeError(f"must be 'auto' or an integer in [0, 16], got {k}")
+    if k < lo or (hi is not None and k > hi):
+        raise argparse.ArgumentTypeError(f"must be 'auto' or an integer {rng}, got {k}")
     return k
+
+
+def depth_arg(text: str):
+    """``--depth``: ``auto`` or a whole number in [0, 16] (argparse type)."""
+    return _auto_or_int(text, 0, 16)
 
 
 def period_arg(text: str):
     """``--period``: ``auto`` or a whole number >= 1 (argparse type)."""
-    if text == "auto":
-        return text
-    try:
-        k = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be 'auto' or an integer >= 1, got {text!r}") \
-            from None
-    if k < 1:
-        raise argparse.ArgumentTypeError(f"must be 'auto' or an integer >= 1, got {k}")
-    return k
+    return _auto_or_int(text, 1, None)
 
 
 def clearance(args):
