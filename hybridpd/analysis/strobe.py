@@ -249,11 +249,10 @@ class StroboscopicMap(OnSection, PoincareMap):
                                         resolver=sec.resolver, simtol=self.simtol)
         except (ValueError, RuntimeError, FloatingPointError):
             return math.inf
-        d = np.asarray(tr.x_final, float)
-        if tr.termination is not TerminationCause.END_TIME or not self._on_section(tr, d):
+        z1 = np.asarray(tr.x_final, float)
+        if tr.termination is not TerminationCause.END_TIME or not self._on_section(tr, z1):
             return math.inf
-        d = np.asarray(tr.x_final, float) - z0
-        return float(np.max(np.abs(d))) / max(1.0, float(np.max(np.abs(z0))))
+        return float(np.max(np.abs(z1 - z0))) / max(1.0, float(np.max(np.abs(z0))))
 
     def point_quantities(self, s, k: int, result: MapResult, **options) -> dict:
         """How ``DP`` was taken at an orbit: ``jacobian`` (``"saltation"`` or ``"central
