@@ -22,12 +22,14 @@ continuation          :func:`continue_orbit`, :func:`switch_branch`,
 sweeps                :func:`region_map`, :func:`basin_of_attraction`,
                       :func:`attractor_basin`, :func:`section_basin`, :func:`run_sweep`
 design, figures       :func:`design`, :func:`reproduce`, :func:`plot_file`
+the page              :func:`explore` (the region map as a page you click; Panel, Bokeh)
 ====================  =====================================================================
 
 The names load lazily (PEP 562): ``import hybridpd`` imports NumPy only, and each name brings
 in just the modules it needs (SymPy, numba, python-control, matplotlib and xarray only where
-they are used). The subpackages (``hybridpd.hybrid``, ``pair``, ``mechanics``, ``analysis``,
-``sweeps``, ``plotting``, ``reproduce``) stay importable for everything else. Module paths of
+they are used; Panel and Bokeh only when :func:`explore` builds a page). The subpackages
+(``hybridpd.hybrid``, ``pair``, ``mechanics``, ``analysis``, ``sweeps``, ``plotting``,
+``reproduce``, ``explore``) stay importable for everything else. Module paths of
 earlier versions still import, with a ``DeprecationWarning`` naming the new place.
 
 Starting is cheap: the SymPy derivations of the closed forms run once per installation and
@@ -105,7 +107,9 @@ _NAMES = {
     "section_basin": "hybridpd.sweeps.section_basins",
     # design, figures, the paper
     "design": "hybridpd.pair.design",
-    "plot_file": "hybridpd.plotting.files"}
+    "plot_file": "hybridpd.plotting.files",
+    # the page (a callable package, as ``reproduce``: served from _SUBPACKAGES)
+    "explore": "hybridpd.explore"}
 
 # flat names replaced by others (served with a DeprecationWarning)
 _RENAMED = _deprecated.moved_names(__name__, {
@@ -113,7 +117,9 @@ _RENAMED = _deprecated.moved_names(__name__, {
 
 # ``reproduce`` is both a subpackage and its main function: the package is callable (it runs
 # :func:`hybridpd.reproduce.reproduce`), so ``hp.reproduce(...)`` works whichever Python binds.
-_SUBPACKAGES = ("analysis", "hybrid", "mechanics", "pair", "plotting", "reproduce", "sweeps")
+# ``explore`` likewise (:func:`hybridpd.explore.explore`).
+_SUBPACKAGES = ("analysis", "explore", "hybrid", "mechanics", "pair", "plotting", "reproduce",
+                "sweeps")
 
 # the flat namespace: every name of _NAMES, the version and ``reproduce``
 __all__ = ["Case", "Contact", "ControlledImpactPair", "HybridAutomaton", "ImpactMap",
@@ -121,19 +127,19 @@ __all__ = ["Case", "Contact", "ControlledImpactPair", "HybridAutomaton", "Impact
            "PeriodicOrbit", "PoincareMap",
            "Reference", "Section", "SectionMap", "SectionMapper", "Stability", "__version__",
            "attractor_basin", "basin_of_attraction", "bifurcation_diagram", "boundary_curves",
-           "certified_map", "certify_orbit", "continue_orbit", "design", "find_orbit", "load_basin", "load_branch",
+           "certified_map", "certify_orbit", "continue_orbit", "design", "explore", "find_orbit", "load_basin", "load_branch",
            "load_certificate", "load_model", "load_region_map", "plot_file", "region_map", "reproduce", "run_sweep", "section_basin", "simulate", "stability", "switch_branch",
            "symmetric_orbit", "symmetric_orbits", "verify_certificate", "virtual_restitution"]
 
 
 def __getattr__(name):
+    if name in _SUBPACKAGES:    # before _NAMES: ``explore`` is its callable package
+        return _importlib.import_module(f"hybridpd.{name}")
     module = _NAMES.get(name)
     if module is not None:
         value = getattr(_importlib.import_module(module), name)
         globals()[name] = value  # later look-ups skip __getattr__
         return value
-    if name in _SUBPACKAGES:
-        return _importlib.import_module(f"hybridpd.{name}")
     if name == "load_attractor_basin":
         return _RENAMED(name)
     if name == "continue_family":   # its argument order differs: the alias there warns

@@ -19,7 +19,7 @@ import pytest
 PKG = Path(__file__).resolve().parents[1] / "hybridpd"
 
 LAYER = {"model": 0, "loop": 1, "hybrid": 2, "mechanics": 3, "analysis": 4, "sweeps": 5,
-         "pair": 6, "plotting": 7, "reproduce": 8, "cli": 9, "__main__": 10}
+         "pair": 6, "plotting": 7, "reproduce": 8, "cli": 9, "explore": 9, "__main__": 10}
 
 # The general path: every module of these packages, found in the tree (none may import the
 # impact pair).

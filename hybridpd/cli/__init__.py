@@ -18,7 +18,7 @@ from hybridpd.cli._common import EXIT_BAD_INPUT, Parser, UsageError, list_params
 
 #: Command modules, in the order the help lists them.
 COMMANDS = ("simulate", "orbit", "regions", "certify", "basin", "boundaries", "bifurcation",
-            "design", "plot", "reproduce")
+            "design", "plot", "reproduce", "explore")
 
 
 DESCRIPTION = """\

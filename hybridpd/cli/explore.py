@@ -1,0 +1,80 @@
+"""``hybridpd explore``: the region map as a page you click, served on this machine."""
+from __future__ import annotations
+
+from hybridpd.cli._common import UsageError, case_type, command
+
+DESCRIPTION = ("Serves a page on 127.0.0.1 mapping where the impact pair's symmetric orbit "
+               "exists and is stable over the gains (kp, kv), with controls for the case, "
+               "e, mu, m2, gamma, omega, n and the box of gains. A click on the map selects "
+               "the gains and shows their orbit over one period (time series, phase "
+               "portrait, impacts), its multipliers on the unit circle with the spectral "
+               "radius and the viability margin; on demand the basin slice through the orbit "
+               "and the branch followed along kp or kv with its events. The page's state is "
+               "in its URL (share it to share the view); every panel saves its figure and "
+               "its data. The options give where the page starts. Needs the extra "
+               "hybridpd[explore] (Panel, Bokeh).")
+
+NOTES = """\
+exit status:
+  0  the server was stopped (Ctrl-C)
+  2  bad input (one line on stderr), or Panel/Bokeh not installed"""
+
+
+def register(sub):
+    p = command(sub, "explore", help="the region map as a page you click (a local web page)",
+                description=DESCRIPTION,
+                example=("hybridpd explore --case noncollocated --e 0.1 --kp 12 --kv 25\n"
+                         "  hybridpd explore --no-browser --port 5006"),
+                notes=NOTES)
+    p.add_argument("--port", type=int, default=0,
+                   help="TCP port on 127.0.0.1 (default 0: a free one, printed)")
+    p.add_argument("--no-browser", action="store_true",
+                   help="do not open the page in the web browser")
+    p.add_argument("--case", type=case_type, default=None, metavar="CASE",
+                   help="collocated or noncollocated (default collocated)")
+    for name, what in (("e", "restitution coefficient in [0, 1] (default 0.5)"),
+                       ("mu", "mass ratio m1/m2 > 0 (default 0.1)"),
+                       ("m2", "secondary mass > 0 (default 1)"),
+                       ("gamma", "L / x10 > 0, x10 = 1 (default 0.75)"),
+                       ("omega", "reference frequency > 0 (default 5)"),
+                       ("kp", "selected proportional gain > 0 (default 10)"),
+                       ("kv", "selected derivative gain > 0 (default 20)")):
+        p.add_argument(f"--{name}", type=float, default=None, help=what)
+    p.add_argument("--n", type=int, default=None, help="odd orbit order (default 1)")
+    p.add_argument("--box", type=float, nargs=4, default=None,
+                   metavar=("KP_MIN", "KP_MAX", "KV_MIN", "KV_MAX"),
+                   help="the box of gains mapped (default 0.1 50 0.1 50)")
+    p.add_argument("--num", type=int, default=None,
+                   help="grid points per axis of the map, 2 to 401 (default 201)")
+    p.set_defaults(func=run)
+
+
+def start_state(args):
+    """The page's starting state from the options (``ValueError`` naming a bad one)."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.explore.state import PairState
+
+    fields = {k: getattr(args, k) for k in ("case", "e", "mu", "m2", "gamma", "omega", "n",
+                                             "kp", "kv", "num")
+              if getattr(args, k) is not None}
+    if args.box is not None:
+        fields.update(zip(("kp_min", "kp_max", "kv_min", "kv_max"), args.box))
+    return PairState(**fields)
+
+
+def run(args) -> int:
+    base = start_state(args)
+    if not 0 <= args.port <= 65535:
+        raise ValueError(f"--port must be an integer in [0, 65535], got {args.port}")
+    try:
+        import bokeh  # noqa: F401
+        import panel  # noqa: F401
+    except ImportError as exc:
+        raise UsageError(f"the explorer needs Panel and Bokeh ({exc.name} is missing): "
+                         "pip install 'hybridpd[explore]'") from None
+    # deferred import: panel and the page load only when the server starts
+    from hybridpd.explore.app import pair_app
+    from hybridpd.explore.server import serve
+
+    serve(args.port, open_browser=not args.no_browser, app=lambda: pair_app(base))
+    return 0
