@@ -41,8 +41,12 @@ def test_reproduce_small(run):
         assert (out / name).stat().st_size > 0
     # the lead table comes first, one row per claim
     assert text.index("## What the paper says and what holds") < text.index("## The secondary")
+    rows = {ln.split(" | ")[0].lstrip("| "): ln for ln in text.splitlines()
+            if ln.startswith("| ") and " | **" in ln}
     for row in data["table"]:
-        assert f"| {row['id']} | {row['paper']} | **{row['verdict']}**" in text
+        line = rows[str(row["id"])]
+        assert line.startswith(f"| {row['id']} | {row['paper']} | ")
+        assert f" | **{row['verdict']}**: " in line
     for k in range(1, 6):
         assert f"### {k}. *" in text            # each of the paper's conclusions in detail
     assert not list(out.rglob("*.npz"))                # the labelled format only

@@ -129,6 +129,9 @@ def _spawn(tmp_path, store, log, executor, workers, sleep):
         env={**os.environ, "SWEEP_TEST_SLEEP": str(sleep)},
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
+        # Ctrl-C as a terminal delivers it: an ignored SIGINT (a disposition the test
+        # process may have inherited, or been left with by a library) would pass to the child
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
 
 
