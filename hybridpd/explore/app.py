@@ -124,11 +124,9 @@ class PairExplorer:
                            if msg else "")
 
     def _on_control(self, _event=None):
-        try:
-            self._apply_controls()
-        except Exception as exc:   # noqa: BLE001 - a request never stops the server
-            self._say(f"error: {exc}")
-            traceback.print_exc()
+        # Panel calls widget watchers without the document's lock, which the map's and the
+        # orbit's Bokeh sources need: the change is applied on the next tick, under it
+        self._on_doc(self._apply_controls)
 
     def _apply_controls(self):
         raw = {"case": self.case.value, **{k: w.value for k, w in self.inputs.items()}}
@@ -165,17 +163,18 @@ class PairExplorer:
     def _say(self, text: str):
         self.status.object = _tid("status", text)
 
-    def _schedule(self, coro_fn):
-        """Run the coroutine function on the server's event loop (or now, in a notebook)."""
-        if pn.state.curdoc is not None and pn.state.curdoc.session_context is not None:
-            pn.state.execute(coro_fn)
-        else:
+    def _schedule(self, start):
+        """Run ``start()`` under the document's lock; the coroutine it returns (None: nothing
+        to compute) then runs on the event loop, its work on a worker thread."""
+        def go():
+            coro = start()
+            if coro is None:
+                return
             try:
-                loop = asyncio.get_running_loop()
-            except RuntimeError:
-                asyncio.run(coro_fn())
-            else:
-                loop.create_task(coro_fn())
+                asyncio.get_running_loop().create_task(coro)
+            except RuntimeError:      # no event loop (a plain script): run it to the end
+                asyncio.run(coro)
+        self._on_doc(go)
 
     async def _off_loop(self, fn, *args):
         return await asyncio.get_running_loop().run_in_executor(_POOL, fn, *args)
@@ -218,11 +217,12 @@ class PairExplorer:
         self.map_info = pn.pane.HTML("", width=520)
         self.map_downloads = self._downloads("map", lambda: self.rm)
 
-    async def _refresh_map(self):
+    def _refresh_map(self):
         self._gen["map"] += 1
-        gen, st = self._gen["map"], self.state
         self._say("computing the region map")
-        t0 = time.perf_counter()
+        return self._run_map(self._gen["map"], self.state, time.perf_counter())
+
+    async def _run_map(self, gen, st, t0):
         try:
             rm = await self._off_loop(S.pair_map, st)
         except Exception as exc:   # noqa: BLE001 - the panel says why
@@ -402,32 +402,35 @@ class PairExplorer:
         self.basin_progress.visible = False
         self.basin_info.object = _tid("basin-status", "not computed")
 
-    async def _compute_basin(self):
+    def _compute_basin(self):
         try:
             num = S.check_field("basin_num", self.basin_num.value)
         except ValueError as exc:
             self._error("basin_num", str(exc))
-            return
+            return None
         self._error("basin_num", "")
         if self.orb is None or not self.orb.exists:
             self.basin_info.object = _tid("basin-status", "no orbit at the selected gains: "
                                           "no basin")
-            return
+            return None
         self._gen["basin"] += 1
-        gen, orb = self._gen["basin"], self.orb
         self.basin_progress.visible, self.basin_progress.active = True, True
         self.basin_progress.value = -1      # indeterminate: the run reports no fraction
-        self.basin_info.object = _tid("basin-status", f"computing {num} x {num} points")
-        t0 = time.perf_counter()
+        slow = "" if self.orb.stable else (" (the orbit is unstable: no point converges, "
+                                           "each runs all 1500 iterations)")
+        self.basin_info.object = _tid("basin-status", f"computing {num} x {num} points{slow}")
+        return self._run_basin(self._gen["basin"], self.orb, num, time.perf_counter())
+
+    async def _run_basin(self, gen, orb, num, t0):
         err = ""
         try:
             ab = await self._off_loop(S.pair_basin, orb, num)
         except Exception as exc:   # noqa: BLE001 - the panel says why
             ab, err = None, str(exc)
         if gen == self._gen["basin"]:
-            self._on_doc(self._show_basin, ab, err, 1000 * (time.perf_counter() - t0))
+            self._on_doc(self._show_basin, ab, orb, err, 1000 * (time.perf_counter() - t0))
 
-    def _show_basin(self, ab, err, ms: float):
+    def _show_basin(self, ab, orb, err, ms: float):
         self.basin_progress.active, self.basin_progress.visible = False, False
         if ab is None:
             self.basin_info.object = _tid("basin-status", f"basin failed: {err}")
@@ -439,7 +442,7 @@ class PairExplorer:
         dx, dy = ab.x[1] - ab.x[0], ab.y[1] - ab.y[0]
         self.basin_src.data = dict(image=[img], x=[ab.x[0] - dx / 2], y=[ab.y[0] - dy / 2],
                                    dw=[ab.x[-1] - ab.x[0] + dx], dh=[ab.y[-1] - ab.y[0] + dy])
-        fp = self.orb.pre_plus
+        fp = orb.pre_plus
         self.basin_fp.data = dict(x=[fp[0]], y=[fp[1]])
         keys = [f'<span style="background:{_BASIN_COLORS[index[int(a.label)] % 7]};'
                 f'padding:0 6px">&nbsp;</span> {html.escape(line)}'
@@ -474,7 +477,7 @@ class PairExplorer:
         self.event_src.data = dict(p=[], rho=[], kind=[])
         self.branch_info.object = _tid("branch-status", "not computed")
 
-    async def _compute_branch(self):
+    def _compute_branch(self):
         raw = {"branch": self.branch_param.value}
         if self.branch_stop.value.strip():
             raw["stop"] = self.branch_stop.value
@@ -482,12 +485,14 @@ class PairExplorer:
             st = self.state.replace(**{k: S.check_field(k, v) for k, v in raw.items()})
         except ValueError as exc:
             self._error("stop", str(exc))
-            return
+            return None
         self._error("stop", "")
         self._gen["branch"] += 1
-        gen = self._gen["branch"]
         self.branch_info.object = _tid("branch-status", f"following along {st.branch} to "
                                        f"{st.stop_value():.6g}")
+        return self._run_branch(self._gen["branch"], st)
+
+    async def _run_branch(self, gen, st):
         try:
             br = await self._off_loop(S.pair_branch, st)
         except Exception as exc:   # noqa: BLE001 - the panel says why
