@@ -54,6 +54,15 @@ def _num(x) -> str:
     return "none" if x is None else f"{x:.12g}"
 
 
+def _widget(cls, label: str, *, primary: bool = False, **kw):
+    """A Panel widget labelled ``label`` (``label``/``color`` where this Panel has them,
+    else the older ``name``/``button_type``)."""
+    kw["label" if "label" in cls.param else "name"] = label
+    if primary:
+        kw["color" if "color" in cls.param else "button_type"] = "primary"
+    return cls(**kw)
+
+
 def _tid(name: str, text) -> str:
     return f'<span data-testid="{name}">{html.escape(str(text))}</span>'
 
@@ -101,9 +110,9 @@ class PairExplorer:
     # ---- controls -----------------------------------------------------------------------
     def _build_controls(self):
         st = self.state
-        self.case = pn.widgets.Select(name="case", options=["collocated", "noncollocated"],
+        self.case = _widget(pn.widgets.Select, "case", options=["collocated", "noncollocated"],
                                       value=st.case, width=160)
-        self.inputs = {k: pn.widgets.TextInput(name=k, value=repr(getattr(st, k)), width=110)
+        self.inputs = {k: _widget(pn.widgets.TextInput, k, value=repr(getattr(st, k)), width=110)
                        for k in _TEXT_FIELDS}
         self.messages = {k: pn.pane.HTML("", width=220, margin=(0, 10),
                                          styles={"color": "#b00000", "font-size": "12px"})
@@ -387,8 +396,8 @@ class PairExplorer:
                 color_mapper=self.basin_cm)
         f.scatter("x", "y", source=self.basin_fp, marker="x", size=12, color="black")
         self.basin_fig = f
-        self.basin_num = pn.widgets.TextInput(name="points per axis", value="101", width=110)
-        self.basin_button = pn.widgets.Button(name="compute basin slice", button_type="primary")
+        self.basin_num = _widget(pn.widgets.TextInput, "points per axis", value="101", width=110)
+        self.basin_button = _widget(pn.widgets.Button, "compute basin slice", primary=True)
         self.basin_button.on_click(lambda _e: self._schedule(self._compute_basin))
         self.basin_progress = pn.indicators.Progress(active=False, value=0, max=100,
                                                       width=200, visible=False)
@@ -454,11 +463,11 @@ class PairExplorer:
 
     # ---- the branch -------------------------------------------------------------------
     def _build_branch(self):
-        self.branch_param = pn.widgets.Select(name="follow along", options=["kp", "kv"],
+        self.branch_param = _widget(pn.widgets.Select, "follow along", options=["kp", "kv"],
                                               value=self.state.branch, width=100)
-        self.branch_stop = pn.widgets.TextInput(name="up to", value="", width=110,
+        self.branch_stop = _widget(pn.widgets.TextInput, "up to", value="", width=110,
                                                 placeholder="the box's end")
-        self.branch_button = pn.widgets.Button(name="follow branch", button_type="primary")
+        self.branch_button = _widget(pn.widgets.Button, "follow branch", primary=True)
         self.branch_button.on_click(lambda _e: self._schedule(self._compute_branch))
         self.branch_src = ColumnDataSource(dict(p=[], rho=[], stable=[]))
         self.event_src = ColumnDataSource(dict(p=[], rho=[], kind=[]))
@@ -530,11 +539,9 @@ class PairExplorer:
 
         return pn.Row(
             pn.widgets.FileDownload(callback=fig, filename=f"{panel}.png",
-                                    label=f"save {panel} figure", button_type="light",
-                                    name=f"save-{panel}-figure"),
+                                    label=f"save {panel} figure"),
             pn.widgets.FileDownload(callback=data, filename=f"{panel}{F.PANELS[panel]}",
-                                    label=f"save {panel} data", button_type="light",
-                                    name=f"save-{panel}-data"))
+                                    label=f"save {panel} data"))
 
     @staticmethod
     def _need(get):
