@@ -396,7 +396,8 @@ class PairExplorer:
                 color_mapper=self.basin_cm)
         f.scatter("x", "y", source=self.basin_fp, marker="x", size=12, color="black")
         self.basin_fig = f
-        self.basin_num = _widget(pn.widgets.TextInput, "points per axis", value="101", width=110)
+        self.basin_num = _widget(pn.widgets.TextInput, "points per axis",
+                                 value=repr(self.state.basin_num), width=110)
         self.basin_button = _widget(pn.widgets.Button, "compute basin slice", primary=True)
         self.basin_button.on_click(lambda _e: self._schedule(self._compute_basin))
         self.basin_progress = pn.indicators.Progress(active=False, value=0, max=100,

@@ -1,0 +1,204 @@
+"""The explorer's page in a real browser: ``hybridpd explore`` served on a free local port,
+driven by Playwright in a headless Chromium (Debian's ``/usr/bin/chromium``).
+
+Skipped, with the reason, where Playwright, Panel or that Chromium is missing. The server is
+the command line's own (a subprocess), always stopped at the end.
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+import hybridpd as hp
+from hybridpd.explore import state as S
+
+CHROMIUM = os.environ.get("HYBRIDPD_CHROMIUM", "/usr/bin/chromium")
+pytest.importorskip("panel", reason="the page needs Panel (pip install 'hybridpd[explore]')")
+sync_api = pytest.importorskip("playwright.sync_api",
+                               reason="browser tests need Playwright (pip install playwright)")
+if not Path(CHROMIUM).exists():
+    pytest.skip(f"browser tests need Chromium at {CHROMIUM} (Debian: apt-get install chromium)",
+                allow_module_level=True)
+
+pytestmark = pytest.mark.browser
+
+ROOT = Path(__file__).resolve().parents[1]
+#: Flags of a headless Chromium on a closed network (without the background networking ones
+#: it waits on connections that never come).
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                 "--no-first-run", "--disable-background-networking",
+                 "--disable-component-update", "--disable-sync"]
+#: The map's frame inside its canvas (the page's fixed borders and frame size).
+FRAME_LEFT, FRAME_TOP, FRAME = 70, 40, 420
+WAIT_MS = 20_000
+
+
+@pytest.fixture(scope="module")
+def server():
+    from hybridpd.explore.server import free_port
+
+    port = free_port()
+    env = dict(os.environ, PYTHONPATH=str(ROOT), OPENBLAS_NUM_THREADS="1")
+    proc = subprocess.Popen([sys.executable, "-m", "hybridpd", "explore", "--no-browser",
+                             "--port", str(port)], stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True, env=env)
+    try:
+        line = proc.stdout.readline()       # the address, printed once listening
+        assert "serving" in line, line + (proc.stdout.read() if proc.poll() is not None else "")
+        yield f"http://127.0.0.1:{port}/"
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode is not None
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with sync_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        yield b
+        b.close()
+
+
+@pytest.fixture
+def page(browser, server):
+    ctx = browser.new_context(viewport={"width": 1500, "height": 1500}, accept_downloads=True)
+    pg = ctx.new_page()
+    pg.set_default_timeout(WAIT_MS)
+    yield pg
+    ctx.close()
+
+
+def _open(page, server, **query):
+    q = "&".join(f"{k}={v}" for k, v in query.items())
+    page.goto(f"{server}?{q}")
+    page.get_by_test_id("map-e").wait_for()
+    return page
+
+
+def _text(page, tid):
+    return page.get_by_test_id(tid).inner_text()
+
+
+def _until(page, tid, ok, what):
+    """Wait (at most WAIT_MS) until ``ok(text of tid)``; the text."""
+    deadline = time.monotonic() + WAIT_MS / 1000
+    while time.monotonic() < deadline:     # bounded by the deadline
+        loc = page.get_by_test_id(tid)
+        if loc.count() and ok(t := loc.first.inner_text()):
+            return t
+        page.wait_for_timeout(20)
+    pytest.fail(f"{what}: {tid} still {page.get_by_test_id(tid).first.inner_text()!r}")
+
+
+def _field(page, name):
+    return page.get_by_role("textbox", name=name, exact=True)
+
+
+def test_the_spectral_radius_is_hybridpd_orbits(page, server):
+    _open(page, server, case="noncollocated", e="0.1", kp="12.5", kv="25")
+    rho = float(_text(page, "spectral-radius"))
+    r = subprocess.run([sys.executable, "-m", "hybridpd", "orbit", "--json", "--case",
+                        "noncollocated", "--mu", "0.1", "--e", "0.1", "--gamma", "0.75",
+                        "--omega", "5", "--kp", "12.5", "--kv", "25"], capture_output=True,
+                       text=True, timeout=120, check=False, cwd=ROOT)
+    cli = json.loads(r.stdout)
+    assert abs(rho - cli["spectral_radius"]) <= 1e-6 * max(1.0, abs(cli["spectral_radius"]))
+    assert _text(page, "exists") == str(cli["exists"]).lower()
+    assert _text(page, "stable") == str(cli["stable"]).lower()
+    assert float(_text(page, "selected-kp")) == 12.5
+    # the URL states every field, so the view reopens as it is
+    assert "case=noncollocated" in page.url and "num=201" in page.url
+
+
+def test_a_click_on_the_map_selects_that_cell(page, server):
+    _open(page, server, case="collocated", e="0.5", num="51", kp="10", kv="20")
+    st = S.PairState(num=51)
+    xs, ys = st.kp_axis(), st.kv_axis()
+    dx, dy = xs[1] - xs[0], ys[1] - ys[0]
+    target = (xs[37], ys[12])
+    box = page.locator(".bk-Canvas").first.bounding_box()
+    px = box["x"] + FRAME_LEFT + FRAME * (target[0] - xs[0] + dx / 2) / (xs[-1] - xs[0] + dx)
+    py = box["y"] + FRAME_TOP + FRAME * (1 - (target[1] - ys[0] + dy / 2)
+                                         / (ys[-1] - ys[0] + dy))
+    page.mouse.click(px, py)
+    kp = float(_until(page, "selected-kp", lambda t: t != "10", "the click selected nothing"))
+    kv = float(_text(page, "selected-kv"))
+    assert abs(kp - target[0]) < 1e-9 and abs(kv - target[1]) < 1e-9
+    orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), (kp, kv), 5.0)
+    assert float(_text(page, "spectral-radius")) == pytest.approx(orb.spectral_radius,
+                                                                  rel=1e-10)
+    assert re.search(r"kp=3\d\.", page.url)
+
+
+def test_changing_e_redraws_the_map(page, server):
+    _open(page, server, case="noncollocated", e="0.5", num="101")
+    before = float(_text(page, "map-stable-share"))
+    _field(page, "e").fill("0.1")
+    _field(page, "e").press("Enter")
+    _until(page, "map-e", lambda t: t == "0.1", "the map was not redrawn")
+    share = float(_text(page, "map-stable-share"))
+    rm = S.pair_map(S.PairState(case="noncollocated", e=0.1, num=101))
+    assert share == pytest.approx(rm.fraction("stable")[0], abs=1e-11)
+    assert share != before
+    assert "e=0.1" in page.url
+
+
+def test_bad_input_is_refused_beside_its_control_and_the_server_lives(page, server):
+    _open(page, server, e="0.5", num="21")
+    _field(page, "mu").fill("-1")
+    _field(page, "mu").press("Enter")
+    msg = page.get_by_test_id("error-mu")
+    msg.wait_for()
+    with pytest.raises(ValueError) as want:
+        hp.ImpactPair(-1.0, 0.5, 0.75)
+    assert msg.inner_text() == str(want.value)
+    assert _text(page, "status").startswith("refused")
+    _field(page, "mu").fill("0.2")                  # the same page goes on working
+    _field(page, "mu").press("Enter")
+    page.get_by_test_id("error-mu").wait_for(state="detached")
+    rho = hp.symmetric_orbit(hp.ImpactPair(0.2, 0.5, 0.75), (10, 20), 5.0).spectral_radius
+    _until(page, "spectral-radius", lambda t: abs(float(t) - rho) < 1e-9, "no new orbit")
+
+
+def test_save_figure_and_data(page, server, tmp_path):
+    _open(page, server, e="0.5", kp="10", kv="20", num="21")
+    with page.expect_download() as dl:
+        page.get_by_role("button", name="save orbit figure").click()
+    png = tmp_path / dl.value.suggested_filename
+    dl.value.save_as(png)
+    data = png.read_bytes()
+    assert png.name == "orbit.png" and data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000
+    with page.expect_download() as dl:
+        page.get_by_role("button", name="save orbit data").click()
+    path = tmp_path / "orbit.json"
+    dl.value.save_as(path)
+    d = json.loads(path.read_text())
+    orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), (10, 20), 5.0)
+    assert d["spectral_radius"] == pytest.approx(orb.spectral_radius, rel=1e-12)
+
+
+def test_basin_and_branch_on_demand(page, server):
+    _open(page, server, e="0.1", kp="10", kv="20", num="21", basin_num="41")
+    page.get_by_role("button", name="compute basin slice").click()
+    _until(page, "basin-status", lambda t: t == "done", "the basin did not finish")
+    orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.1, 0.75), (10, 20), 5.0)
+    want = S.pair_basin(orb, 41).converged_fraction
+    assert float(_text(page, "basin-share")) == pytest.approx(want, abs=1e-11)
+    _field(page, "up to").fill("23")
+    page.get_by_role("button", name="follow branch").click()
+    _until(page, "branch-status", lambda t: t.startswith("done"), "the branch did not finish")
+    assert int(_text(page, "branch-events")) >= 1
+    graze = float(_text(page, "event-grazing"))
+    assert 21.9 < graze < 22.0
