@@ -35,8 +35,14 @@ ROOT = Path(__file__).resolve().parents[1]
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
                  "--no-first-run", "--disable-background-networking",
                  "--disable-component-update", "--disable-sync"]
-#: The map's frame inside its canvas (the page's fixed borders and frame size).
-FRAME_LEFT, FRAME_TOP, FRAME = 70, 40, 420
+#: Where Bokeh itself draws the point (kp, kv) of the map, in the page's pixels: its own
+#: scales and its canvas's box, read together (no assumption about the layout).
+_MAP_POINT_JS = """([x, y]) => {
+  const m = Bokeh.documents.map(d => d.get_model_by_name("region-map")).find(v => v);
+  const v = Bokeh.index.find_one(m);
+  const r = v.canvas_view.el.getBoundingClientRect();
+  return [r.left + v.frame.x_scale.compute(x), r.top + v.frame.y_scale.compute(y)];
+}"""
 WAIT_MS = 20_000
 
 
@@ -102,6 +108,7 @@ def _until(page, tid, ok, what):
     pytest.fail(f"{what}: {tid} still {page.get_by_test_id(tid).first.inner_text()!r}")
 
 
+
 def _field(page, name):
     return page.get_by_role("textbox", name=name, exact=True)
 
@@ -126,13 +133,8 @@ def test_a_click_on_the_map_selects_that_cell(page, server):
     _open(page, server, case="collocated", e="0.5", num="51", kp="10", kv="20")
     st = S.PairState(num=51)
     xs, ys = st.kp_axis(), st.kv_axis()
-    dx, dy = xs[1] - xs[0], ys[1] - ys[0]
     target = (xs[37], ys[12])
-    box = page.locator(".bk-Canvas").first.bounding_box()
-    px = box["x"] + FRAME_LEFT + FRAME * (target[0] - xs[0] + dx / 2) / (xs[-1] - xs[0] + dx)
-    py = box["y"] + FRAME_TOP + FRAME * (1 - (target[1] - ys[0] + dy / 2)
-                                         / (ys[-1] - ys[0] + dy))
-    page.mouse.click(px, py)
+    page.mouse.click(*page.evaluate(_MAP_POINT_JS, list(map(float, target))))
     kp = float(_until(page, "selected-kp", lambda t: t != "10", "the click selected nothing"))
     kv = float(_text(page, "selected-kv"))
     assert abs(kp - target[0]) < 1e-9 and abs(kv - target[1]) < 1e-9

@@ -1,7 +1,8 @@
 """``hybridpd explore``: the region map as a page you click, served on this machine."""
 from __future__ import annotations
 
-from hybridpd.cli._common import UsageError, case_type, command
+from hybridpd.cli import _common as cli
+from hybridpd.cli._common import UsageError, command
 
 DESCRIPTION = ("Serves a page on 127.0.0.1 mapping where the impact pair's symmetric orbit "
                "exists and is stable over the gains (kp, kv), with controls for the case, "
@@ -11,7 +12,8 @@ DESCRIPTION = ("Serves a page on 127.0.0.1 mapping where the impact pair's symme
                "radius and the viability margin; on demand the basin slice through the orbit "
                "and the branch followed along kp or kv with its events. The page's state is "
                "in its URL (share it to share the view); every panel saves its figure and "
-               "its data. The options give where the page starts. Needs the extra "
+               "its data. The options give where the page starts (default collocated, "
+               "e = 0.5, mu = 0.1, m2 = 1, gamma = 0.75, omega = 5, kp = 10, kv = 20, n = 1). Needs the extra "
                "hybridpd[explore] (Panel, Bokeh).")
 
 NOTES = """\
@@ -30,17 +32,10 @@ def register(sub):
                    help="TCP port on 127.0.0.1 (default 0: a free one, printed)")
     p.add_argument("--no-browser", action="store_true",
                    help="do not open the page in the web browser")
-    p.add_argument("--case", type=case_type, default=None, metavar="CASE",
-                   help="collocated or noncollocated (default collocated)")
-    for name, what in (("e", "restitution coefficient in [0, 1] (default 0.5)"),
-                       ("mu", "mass ratio m1/m2 > 0 (default 0.1)"),
-                       ("m2", "secondary mass > 0 (default 1)"),
-                       ("gamma", "L / x10 > 0, x10 = 1 (default 0.75)"),
-                       ("omega", "reference frequency > 0 (default 5)"),
-                       ("kp", "selected proportional gain > 0 (default 10)"),
-                       ("kv", "selected derivative gain > 0 (default 20)")):
-        p.add_argument(f"--{name}", type=float, default=None, help=what)
-    p.add_argument("--n", type=int, default=None, help="odd orbit order (default 1)")
+    # the pair's options as every command declares them; the page's own defaults (e = 0.5,
+    # mu = 0.1, gamma = 0.75, omega = 5, kp = 10, kv = 20, n = 1) fill in what is not given
+    cli.add_pair(p, names=("case", "mu", "m2", "omega", "gamma", "e", "kp", "kv", "n"),
+                 m2=None)
     p.add_argument("--box", type=float, nargs=4, default=None,
                    metavar=("KP_MIN", "KP_MAX", "KV_MIN", "KV_MAX"),
                    help="the box of gains mapped (default 0.1 50 0.1 50)")
@@ -73,8 +68,9 @@ def run(args) -> int:
         raise UsageError(f"the explorer needs Panel and Bokeh ({exc.name} is missing): "
                          "pip install 'hybridpd[explore]'") from None
     # deferred import: panel and the page load only when the server starts
-    from hybridpd.explore.app import pair_app
+    from hybridpd.explore.app import pair_app, warm_up
     from hybridpd.explore.server import serve
 
+    warm_up(base)       # while the server starts and the browser loads the page
     serve(args.port, open_browser=not args.no_browser, app=lambda: pair_app(base))
     return 0

@@ -33,7 +33,7 @@ from hybridpd.explore import figures as F
 from hybridpd.explore import state as S
 from hybridpd.plotting.style import OKABE_ITO
 
-__all__ = ["PairExplorer", "pair_app"]
+__all__ = ["PairExplorer", "pair_app", "warm_up"]
 
 #: Worker threads of every session together: the computations are NumPy-bound, and the
 #: machine's cores are what they share.
@@ -594,6 +594,14 @@ class PairExplorer:
 def _sorted(p, v):
     order = np.argsort(p)
     return np.asarray(p)[order], np.asarray(v)[order]
+
+
+def warm_up(state: S.PairState):
+    """Start computing ``state``'s map and orbit on a worker thread (numba's kernels and the
+    closed forms' cached code load on their first call): run when a server starts, so the
+    first page does not wait for them."""
+    return _POOL.submit(lambda: (S.pair_map(state), S.orbit_series(S.pair_orbit(state))
+                                 if S.pair_orbit(state).exists else None))
 
 
 def pair_app(base: S.PairState | None = None):

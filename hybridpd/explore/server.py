@@ -49,9 +49,40 @@ def serve(port: int = 0, *, address: str = "127.0.0.1", open_browser: bool = Tru
         # deferred import: panel and the page load only when a server starts
         from hybridpd.explore.app import pair_app as app
     origins = [f"{address}:{port}", f"localhost:{port}"]
+    kw = dict(port=port, address=address, show=open_browser, websocket_origin=origins,
+              verbose=False, title="hybridpd explore")
+    if threaded:
+        thread = pn.serve({"/": app}, threaded=True, **kw)
+        _wait_listening(address, port)
+        _say(verbose, address, port)
+        return thread
+    server = pn.serve({"/": app}, start=False, **kw)    # bound and listening from here
+    _say(verbose, address, port)
+    server.start()
+    try:
+        server.io_loop.start()
+    except KeyboardInterrupt:
+        pass
+    return server
+
+
+def _say(verbose: bool, address: str, port: int):
     if verbose:
         print(f"hybridpd explore: serving http://{address}:{port}/ (Ctrl-C stops)",
               flush=True)
-    return pn.serve({"/": app}, port=port, address=address, show=open_browser,
-                    websocket_origin=origins, threaded=threaded, verbose=False,
-                    title="hybridpd explore")
+
+
+def _wait_listening(address: str, port: int, timeout: float = 30.0):
+    """Return once ``address:port`` accepts connections (``TimeoutError`` after
+    ``timeout`` seconds)."""
+    import time
+
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:          # bounded by the deadline
+        try:
+            with socket.create_connection((address, port), timeout=1.0):
+                return
+        except OSError:
+            time.sleep(0.02)
+    raise TimeoutError(f"the explorer's server did not listen on {address}:{port} within "
+                       f"{timeout:g} s")
