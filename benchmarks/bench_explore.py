@@ -11,7 +11,7 @@ Run ``python benchmarks/bench_explore.py`` (needs Panel, Bokeh, Playwright and C
 * on the server side, in this process: the computation behind each (wall and CPU time).
 
 Wall time depends on what else runs on the machine: the CPU time (user + system) is given
-beside it.
+beside it. ``--screenshots DIR`` takes the user guide's pictures of the page instead.
 """
 from __future__ import annotations
 
@@ -144,7 +144,62 @@ def server_times() -> dict:
     }
 
 
+def screenshots(folder: Path) -> list:
+    """The user guide's pictures of the page (PNG), taken in the browser."""
+    from playwright.sync_api import sync_playwright
+
+    from hybridpd.explore.app import pair_app
+    from hybridpd.explore.server import free_port, serve
+
+    folder.mkdir(parents=True, exist_ok=True)
+    port = free_port()
+    thread = serve(port, open_browser=False, app=pair_app, threaded=True, verbose=False)
+    written = []
+    try:
+        with sync_playwright() as p:
+            b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+            page = b.new_page(viewport={"width": 1400, "height": 1000})
+            page.goto(f"http://127.0.0.1:{port}/?case=noncollocated&e=0.1&kp=12.5&kv=25")
+            _wait(page, "map-e", lambda t: t == "0.1")
+            page.wait_for_timeout(500)
+            _click_cell(page, 20.06, 15.0)
+            _wait(page, "selected-kp", lambda t: t != "12.5")
+            page.wait_for_timeout(500)
+            shot = folder / "explore_page.png"
+            page.screenshot(path=shot, clip={"x": 0, "y": 0, "width": 1340, "height": 980})
+            written.append(shot)
+            page.wait_for_timeout(400)
+            _click_cell(page, 5.09, 3.094)        # a stable orbit: its basin is worth a look
+            _wait(page, "selected-kp", lambda t: t == "5.09")
+            page.get_by_role("button", name="compute basin slice").click()
+            _wait(page, "basin-status", lambda t: t == "done" or "failed" in t)
+            page.get_by_role("button", name="follow branch").click()
+            _wait(page, "branch-status", lambda t: t.startswith("done") or "failed" in t)
+            page.wait_for_timeout(500)
+            for name in ("basin slice", "branch"):
+                shot = folder / f"explore_{name.split()[0]}.png"
+                page.locator(".card").filter(has_text=name).last.screenshot(path=shot)
+                written.append(shot)
+            page.evaluate("window.scrollTo(0, 0)")
+            field = page.get_by_role("textbox", name="e", exact=True)
+            field.fill("1.5")
+            field.press("Enter")
+            page.get_by_test_id("error-e").wait_for()
+            page.wait_for_timeout(300)
+            shot = folder / "explore_refused.png"
+            page.screenshot(path=shot, clip={"x": 0, "y": 0, "width": 260, "height": 200})
+            written.append(shot)
+            b.close()
+    finally:
+        thread.stop()
+    return written
+
+
 def main():
+    if "--screenshots" in sys.argv:
+        for path in screenshots(Path(sys.argv[sys.argv.index("--screenshots") + 1])):
+            print(f"wrote {path}")
+        return
     if "--browser-only" not in sys.argv:
         print("server side (this process; seconds wall, CPU):")
         for k, (w, c) in server_times().items():

@@ -472,8 +472,9 @@ class PairExplorer:
         self.branch_button.on_click(lambda _e: self._schedule(self._compute_branch))
         self.branch_src = ColumnDataSource(dict(p=[], rho=[], stable=[]))
         self.event_src = ColumnDataSource(dict(p=[], rho=[], kind=[]))
-        f = _fig("spectral radius along the branch", "parameter", "spectral radius",
-                 width=420, height=300)
+        # log scale: the crossings of 1 show however large the radius grows along the branch
+        f = _fig("spectral radius along the branch (log scale)", "parameter",
+                 "spectral radius", width=420, height=300, y_axis_type="log")
         f.line("p", "rho", source=self.branch_src, color="black")
         f.scatter("p", "rho", source=self.event_src, size=11, marker="diamond",
                   color=OKABE_ITO["vermillion"])
