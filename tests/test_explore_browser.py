@@ -204,3 +204,40 @@ def test_basin_and_branch_on_demand(page, server):
     assert int(_text(page, "branch-events")) >= 1
     graze = float(_text(page, "event-grazing"))
     assert 21.9 < graze < 22.0
+
+
+def test_a_model_files_cell_shows_hybridpd_orbits_multipliers(browser):
+    """``--model``: the map over two entries, a click, the cell's orbit on the stroboscopic
+    section against ``hybridpd orbit --model --set``."""
+    from hybridpd.explore.server import free_port
+
+    model = ROOT / "examples" / "models" / "robot_joint_pd.toml"
+    port = free_port()
+    proc = subprocess.Popen([sys.executable, "-m", "hybridpd", "explore", "--no-browser",
+                             "--port", str(port), "--model", str(model), "--x",
+                             "controller.kp,5,60,4", "--y", "controller.kv,1,20,4"],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    ctx = browser.new_context(viewport={"width": 1300, "height": 1200})
+    try:
+        assert "serving" in proc.stdout.readline()
+        page = ctx.new_page()
+        page.set_default_timeout(WAIT_MS)
+        page.goto(f"http://127.0.0.1:{port}/")
+        _until(page, "map-status", lambda t: t == "done", "the model's map did not finish")
+        page.mouse.click(*page.evaluate(_MAP_POINT_JS, [41.666666666666664, 7.333333333333333]))
+        _until(page, "orbit-status", lambda t: t == "done", "no orbit shown")
+        kp, kv = float(_text(page, "selected-x")), float(_text(page, "selected-y"))
+        assert kp == pytest.approx(125 / 3, rel=1e-11) and kv == pytest.approx(22 / 3, rel=1e-11)
+        r = subprocess.run([sys.executable, "-m", "hybridpd", "orbit", "--json", "--model",
+                            str(model), "--set", "controller.kp", repr(kp), "--set",
+                            "controller.kv", repr(kv)], capture_output=True, text=True,
+                           timeout=120, check=False, cwd=ROOT)
+        cli = json.loads(r.stdout)
+        rho = float(_text(page, "spectral-radius"))
+        assert abs(rho - cli["spectral_radius"]) <= 1e-6 * max(1.0, cli["spectral_radius"])
+        assert _text(page, "stable") == str(cli["stable"]).lower()
+    finally:
+        ctx.close()
+        proc.terminate()
+        proc.wait(timeout=10)

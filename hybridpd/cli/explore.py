@@ -26,7 +26,9 @@ def register(sub):
     p = command(sub, "explore", help="the region map as a page you click (a local web page)",
                 description=DESCRIPTION,
                 example=("hybridpd explore --case noncollocated --e 0.1 --kp 12 --kv 25\n"
-                         "  hybridpd explore --no-browser --port 5006"),
+                         "  hybridpd explore --no-browser --port 5006\n"
+                         "  hybridpd explore --model examples/models/robot_joint_pd.toml "
+                         "--x controller.kp,5,60,8 --y controller.kv,1,20,8"),
                 notes=NOTES)
     p.add_argument("--port", type=int, default=0,
                    help="TCP port on 127.0.0.1 (default 0: a free one, printed)")
@@ -41,7 +43,72 @@ def register(sub):
                    help="the box of gains mapped (default 0.1 50 0.1 50)")
     p.add_argument("--num", type=int, default=None,
                    help="grid points per axis of the map, 2 to 401 (default 201)")
+    cli.add_model(p, set_option=False)
+    for axis in ("x", "y"):
+        p.add_argument(f"--{axis}", nargs="+", default=None, metavar="KEY,MIN,MAX,NUM",
+                       help=f"--model: {'first' if axis == 'x' else 'second'} axis of the map, "
+                            "a numeric entry of the file (dotted path, as hybridpd regions "
+                            "--model takes it) on NUM points from MIN to MAX; written "
+                            "KEY,MIN,MAX,NUM or KEY MIN MAX NUM")
     p.set_defaults(func=run)
+
+
+def model_axis(name: str, tokens) -> tuple:
+    """``--x``/``--y``: ``(KEY, MIN, MAX, NUM)`` from ``KEY,MIN,MAX,NUM`` or four tokens.
+
+    Examples
+    --------
+    >>> model_axis("x", ["controller.kp,5,60,8"])
+    ('controller.kp', 5.0, 60.0, 8)
+    """
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.model import check_axis
+
+    parts = tokens[0].rsplit(",", 3) if len(tokens) == 1 else list(tokens)
+    if len(parts) != 4:
+        raise ValueError(f"--{name} must be KEY,MIN,MAX,NUM (or KEY MIN MAX NUM), got "
+                         f"{' '.join(tokens)!r}")
+    try:
+        lo, hi, num = float(parts[1]), float(parts[2]), float(parts[3])
+    except ValueError:
+        raise ValueError(f"--{name} MIN MAX NUM must be numbers, got {parts[1:]}") from None
+    xs = check_axis(f"--{name}", (lo, hi, num), min_num=2)
+    return (parts[0], float(xs[0]), float(xs[-1]), len(xs))
+
+
+def _run_model(args) -> int:
+    # (--n is left out: it defaults to 1, so it always reads as given)
+    pair = [f"--{k}" for k in ("case", "e", "mu", "m2", "gamma", "omega", "kp", "kv", "box",
+                               "num") if getattr(args, k) is not None]
+    if pair:
+        raise UsageError(f"{', '.join(pair)}: impact-pair options, not used with --model "
+                         "(map the file's entries with --x and --y)")
+    if args.x is None or args.y is None:
+        raise UsageError("--model needs --x KEY,MIN,MAX,NUM and --y KEY,MIN,MAX,NUM")
+    x, y = model_axis("x", args.x), model_axis("y", args.y)
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.sweeps.model_regions import template_of
+
+    template_of(args.model).check(x[0], y[0])    # the file loads and has both entries
+    section = {k: getattr(args, k) for k in ("contact", "wall", "event", "period", "periods",
+                                             "mode", "phase")}
+    _need_panel()
+    # deferred import: panel and the page load only when the server starts
+    from hybridpd.explore.model_app import model_app
+    from hybridpd.explore.server import serve
+
+    serve(args.port, open_browser=not args.no_browser,
+          app=lambda: model_app(args.model, x, y, section))
+    return 0
+
+
+def _need_panel():
+    try:
+        import bokeh  # noqa: F401
+        import panel  # noqa: F401
+    except ImportError as exc:
+        raise UsageError(f"the explorer needs Panel and Bokeh ({exc.name} is missing): "
+                         "pip install 'hybridpd[explore]'") from None
 
 
 def start_state(args):
@@ -58,15 +125,14 @@ def start_state(args):
 
 
 def run(args) -> int:
-    base = start_state(args)
     if not 0 <= args.port <= 65535:
         raise ValueError(f"--port must be an integer in [0, 65535], got {args.port}")
-    try:
-        import bokeh  # noqa: F401
-        import panel  # noqa: F401
-    except ImportError as exc:
-        raise UsageError(f"the explorer needs Panel and Bokeh ({exc.name} is missing): "
-                         "pip install 'hybridpd[explore]'") from None
+    if args.model is not None:
+        return _run_model(args)
+    if args.x is not None or args.y is not None:
+        raise UsageError("--x and --y need --model FILE.toml (the pair's map is over kp, kv)")
+    base = start_state(args)
+    _need_panel()
     # deferred import: panel and the page load only when the server starts
     from hybridpd.explore.app import pair_app, warm_up
     from hybridpd.explore.server import serve

@@ -7,8 +7,12 @@ and a branch followed along ``kp`` or ``kv``. The state is in the page's URL. Fr
 ``hybridpd explore`` (see ``hybridpd explore --help``); from Python this package is callable,
 ``hp.explore(e=0.1, kp=12)`` returns the page for a notebook, and :func:`serve` serves it.
 
+With ``--model FILE.toml`` the page maps two entries of a model file instead and shows a
+clicked cell's orbit, multipliers and basin slice (:mod:`.model_app`).
+
 Modules: :mod:`.state` (the state, its URL and the computations, no web library),
-:mod:`.figures` (the saved figures and data), :mod:`.app` (the page), :mod:`.server`.
+:mod:`.figures` (the saved figures and data), :mod:`.app` (the pair's page),
+:mod:`.model_app` (a model file's page), :mod:`.server`.
 Nothing of Panel or Bokeh loads before a page is built.
 
 Examples
