@@ -267,3 +267,24 @@ def test_a_model_file_that_fails_says_what_hybridpd_orbit_says(tmp_path, capsys)
                  "--y", "controller.kv,1,2,3"]) == 2
     got = capsys.readouterr().err
     assert got == want and got.count("\n") == 1 and got.startswith("hybridpd: error: ")
+
+
+def test_hp_explore_is_the_callable_package_and_loads_no_web_library_until_called():
+    import subprocess
+    import sys
+
+    code = ("import sys, hybridpd as hp; e = hp.explore; import hybridpd.explore.state; "
+            "print(callable(e), e is sys.modules['hybridpd.explore'], "
+            "[m for m in ('panel', 'bokeh') if m in sys.modules])")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=120, check=True)
+    assert r.stdout.split() == ["True", "True", "[]"]
+
+
+def test_hp_explore_builds_the_page_and_checks_its_fields():
+    page = hp.explore(case="noncollocated", e=0.1, kp=12.5, kv=25, num=11)
+    assert page is not None and len(page.objects) == 2
+    with pytest.raises(ValueError, match="unknown: gain"):
+        hp.explore(gain=3)
+    with pytest.raises(ValueError, match="e must lie in"):
+        hp.explore(e=3)
