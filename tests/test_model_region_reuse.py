@@ -71,7 +71,35 @@ def test_seeds_of_one_family_are_tried_once():
     both = solve_at(m, spec, [seed, far], simulate=False)
     once = solve_at(m, spec, [seed, far], simulate=False, families=["a", "a"])
     assert len(both.orbits) == len(once.orbits) == 1
-    assert once.attempts == 1 < both.attempts
-    assert both.also and both.also[0] == (far, 0)      # the far seed landed on the orbit
+    # the far seed costs no Newton run: chord steps land it on the orbit found first ...
+    assert once.attempts == both.attempts == 1
+    assert both.also and both.also[0] == (far, 0)
+    # ... and with a family label it is not even tested
+    assert once.also == ()
     with pytest.raises(ValueError, match="families"):
         solve_at(m, spec, [seed], families=["a", "b"])
+
+
+def test_chord_landing_agrees_with_newton():
+    from hybridpd.analysis.model_orbits import _lands_on
+    from hybridpd.analysis.periodic import find_orbit
+
+    m = load_model(FILE)
+    spec, _, _ = fix_section(m, SectionSpec())
+    po, P = orbit_from_model(m, phase=spec.phase)
+    seed = Seed.of(po, P)
+    assert seed.jacobian is not None and seed.jacobian.shape == (P.dim, P.dim)
+    far = Seed(seed.z * 1.5, seed.t, seed.signature, seed.period, seed.mode, True)
+    s0 = far.point(P)
+    # Newton from the far seed, independently, lands on the same orbit
+    newton = find_orbit(P, s0, 1)
+    assert newton.converged and np.max(np.abs(newton.s - po.s)) <= 1e-8
+    assert _lands_on(P, s0, 1, seed)
+    # the orbit at other gains is no landing place for this model's seeds
+    other, P2 = orbit_from_model(ModelTemplate.load(FILE).model({"controller.kp": 70.0}),
+                                 phase=spec.phase)
+    assert other.converged and np.max(np.abs(other.s - po.s)) > 1e-3
+    assert not _lands_on(P, po.s, 1, Seed.of(other, P2))
+    # another return count or no Jacobian: never landed
+    assert not _lands_on(P, s0, 2, seed)
+    assert not _lands_on(P, s0, 1, Seed(seed.z, seed.t, seed.signature, 1, seed.mode, True))

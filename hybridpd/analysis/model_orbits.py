@@ -113,11 +113,11 @@ class OrbitSearch:
         Per orbit, the seed (one of the ``seeds`` given) whose Newton run found it, or None
         (found from a simulation): a sweep's record of which neighbour's orbit it continues.
     matched : tuple of (Seed or None, int)
-        Seeds whose Newton run landed on an orbit already ``known`` (its index): they
-        continue that orbit's family.
+        Seeds whose Newton run (or chord steps, :func:`_lands_on`) landed on an orbit
+        already ``known`` (its index): they continue that orbit's family.
     also : tuple of (Seed or None, int)
-        Further seeds whose Newton run landed on orbit ``orbits[i]`` (found from another
-        seed first): they continue its family too.
+        Further seeds whose Newton run or chord steps landed on orbit ``orbits[i]`` (found
+        from another seed first): they continue its family too.
     """
 
     status: int
@@ -160,7 +160,9 @@ class Seed:
     """A starting point for Newton: an orbit's full pre-jump state ``z`` (shape ``(n,)``) at
     time ``t`` on the section, its impact ``signature``, returns per period ``period``, the
     section's ``mode`` (empty: the spec's) and whether it was ``stable``. Full states serve
-    every section mode's chart."""
+    every section mode's chart. ``jacobian``: ``DP^k`` of the orbit in its mode's chart
+    (None if unknown), with which :func:`solve_at` tests cheaply whether another seed lands
+    on this orbit."""
 
     z: np.ndarray
     t: float
@@ -168,13 +170,17 @@ class Seed:
     period: int = 1
     mode: str = ""
     stable: bool = True
+    jacobian: np.ndarray | None = field(default=None, repr=False)
 
     @classmethod
     def of(cls, po: PeriodicOrbit, P) -> Seed:
         """The seed of an orbit found on the map `P`."""
         t = P.section.to_state(po.s)[1]
+        DP = np.asarray(getattr(po, "DP", None), float)
         return cls(np.asarray(po.z, float).copy(), t, tuple(po.signature), int(po.period),
-                   P.section.mode, bool(po.stable))
+                   P.section.mode, bool(po.stable),
+                   DP.copy() if DP.shape == (P.dim, P.dim) and np.all(np.isfinite(DP))
+                   else None)
 
     def point(self, P) -> np.ndarray:
         """The seed in `P`'s section coordinates."""
@@ -271,6 +277,59 @@ class _Search:
         return po
 
 
+#: Chord iterations of :func:`_lands_on` (each one application of the map).
+CHORD_STEPS = 8
+#: Where the chord iterate is this close to the orbit (relative, section coordinates), the
+#: seed lands on it: Newton converges quadratically from there.
+_LANDED = 1e-8
+
+
+def _lands_on(P, s0, k, orbit: Seed) -> bool:
+    """Whether chord iterations from `s0` (Newton's method with the orbit's own ``DP^k``
+    held fixed) converge onto `orbit`: within :data:`_LANDED` of it, each step at least
+    halving the distance, in at most :data:`CHORD_STEPS` applications of ``P^k``.
+
+    A seed that lands on an orbit known at this point is of its family: Newton from it
+    would find that orbit again, at the cost of a Jacobian at the start and one at the end.
+    Undefined or refused images, a distance that does not halve, or the bound reached:
+    False (the seed gets its own Newton run).
+    """
+    if orbit.jacobian is None or orbit.period != k or orbit.mode != P.section.mode:
+        return False
+    ref = orbit.point(P)
+    scale = max(1.0, float(np.max(np.abs(ref))))
+    x = np.asarray(s0, float).copy()
+    try:
+        J = orbit.jacobian - np.eye(P.dim)
+        dist = float(np.max(np.abs(P.wrap(x - ref)))) / scale
+        for _ in range(CHORD_STEPS):
+            r = P.apply(x, k)
+            if not r.ok or not np.all(np.isfinite(r.s)):
+                return False
+            x = x - np.linalg.solve(J, P.wrap(r.s - x))
+            new = float(np.max(np.abs(P.wrap(x - ref)))) / scale
+            if new <= _LANDED:
+                return True
+            if not new <= 0.5 * dist:
+                return False
+            dist = new
+    except (ValueError, RuntimeError, FloatingPointError, np.linalg.LinAlgError):
+        return False
+    return False
+
+
+def _landing(run, P, s0, k, known) -> tuple | None:
+    """``("found", j)`` or ``("known", i)``: the orbit found here, or known, that a seed at
+    `s0` lands on (:func:`_lands_on`), else None."""
+    for j, (_, sd) in enumerate(run.found):
+        if _lands_on(P, s0, k, sd):
+            return "found", j
+    for i, sd in enumerate(known):
+        if _lands_on(P, s0, k, sd):
+            return "known", i
+    return None
+
+
 def _as_seed(seed) -> Seed:
     if isinstance(seed, Seed):
         return seed
@@ -290,7 +349,9 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
         its own ``k`` and section mode when ``spec.period`` is ``"auto"``); each further one
         only if it is no seed of an orbit found already (:meth:`Seed.other_family`): so a
         connected family costs one Newton run per point, and two families meeting are both
-        reported.
+        reported. Before its Newton run, a further seed is tested by chord steps with the
+        ``DP`` of each orbit found or known here (:func:`_lands_on`): one it lands on is
+        not searched again (a few map applications instead of two Jacobians).
     simulate : bool
         Also seed from a simulation of the model (``spec.transient`` reference periods from
         its initial state) where the seeds give no orbit, or only unstable ones although a
@@ -321,6 +382,7 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
                          f"{len(families)}")
     labels = list(families) if families is not None else [None] * len(seeds)
     done = set()        # the families that gave an orbit
+    landed = []         # (seed, i): seeds whose chord steps landed on known[i]
     for seed, label in zip(seeds, labels):
         P = run.map(seed.mode)
         T = P.section.period
@@ -334,7 +396,14 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
         if not np.all(np.isfinite(s0)):
             continue
         k = seed.period if spec.period == "auto" else int(spec.period)
-        if run.attempt(P, s0, k, "a neighbour's orbit", seed).converged and label is not None:
+        # a seed of another look may still land on an orbit found or known here: a few
+        # chord steps tell, where a Newton run would cost two Jacobians
+        hit = _landing(run, P, s0, k, known) if run.found or known else None
+        if hit is not None:
+            (run.again if hit[0] == "found" else landed).append((seed, hit[1]))
+        elif not run.attempt(P, s0, k, "a neighbour's orbit", seed).converged:
+            continue
+        if label is not None:
             done.add(label)
     detail = ""
     lost = not run.found or (not any(po.stable for po, _ in run.found)
@@ -354,7 +423,7 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
                 if po.converged and po.stable:
                     break
             detail = sim.text
-    found, matched = [], []
+    found, matched = [], list(landed)
     for j, ((po, sd), origin) in enumerate(zip(run.found, run.origins)):
         T = run.map(sd.mode).section.period
         same = [i for i, k in enumerate(known) if sd.distance(k, T) <= 1e-6]

@@ -117,33 +117,40 @@ def _tile_order(nx, ny, tile):
 class _Cells:
     """Per-cell results as arrays (the sweep's outputs): :meth:`put` a search, :meth:`add`
     the new orbits of a later search. Each orbit keeps its section point in the map's chart
-    (``s``), its full state and time (``z``, ``t``), its returns per period (``k``) and its
-    section's mode (``mode``, :func:`~hybridpd.mechanics.sections.mode_code`)."""
+    (``s``), its full state and time (``z``, ``t``), its returns per period (``k``), its
+    section's mode (``mode``, :func:`~hybridpd.mechanics.sections.mode_code`) and its
+    ``DP^k`` in that mode's chart (``jac``, top-left block of an ``n x n`` array), with
+    which the repair rounds test cheaply whether a neighbour's orbit lands on it."""
 
-    _SLOTS = (("status", "rho", "s", "sig", "z", "t", "k", "mode"),
-              ("status2", "rho2", "s2", "sig2", "z2", "t2", "k2", "mode2"))
+    _SLOTS = (("status", "rho", "s", "sig", "z", "t", "k", "mode", "jac"),
+              ("status2", "rho2", "s2", "sig2", "z2", "t2", "k2", "mode2", "jac2"))
 
     def __init__(self, m, dim, n):
         # per stored orbit, the neighbour's orbit it continues: 2 * (flat grid index) + slot
         self.a = {"n_orbits": np.zeros(m, np.int64), "attempts": np.zeros(m, np.int64),
                   "from": np.full((m, 2), -1, np.int64)}
         for j, names in enumerate(self._SLOTS):
-            st, rho, s, sig, z, t, k, mode = names
+            st, rho, s, sig, z, t, k, mode, jac = names
             self.a.update({st: np.full(m, 2 if j == 0 else -1, np.int64),
                            rho: np.full(m, np.nan), s: np.full((m, dim), np.nan),
                            sig: np.full((m, _SIG_LEN), -1, np.int16),
                            z: np.full((m, n), np.nan), t: np.full(m, np.nan),
-                           k: np.zeros(m, np.int64), mode: np.full(m, -1, np.int64)})
+                           k: np.zeros(m, np.int64), mode: np.full(m, -1, np.int64),
+                           jac: np.full((m, n, n), np.nan)})
         self.orbits = {}
 
     def _store(self, p, slot, o, seed, ctx):
-        st, rho, s, sig, z, t, k, mode = self._SLOTS[slot]
+        st, rho, s, sig, z, t, k, mode, jac = self._SLOTS[slot]
         self.a[st][p] = 0 if o.stable else 1
         self.a[rho][p] = o.spectral_radius
         self.a[s][p] = ctx.chart.from_state(seed.z, seed.t)
         self.a[sig][p] = signature_codes(o.signature, ctx.table, _SIG_LEN)
         self.a[z][p], self.a[t][p], self.a[k][p] = seed.z, seed.t, seed.period
         self.a[mode][p] = mode_code(ctx.model.automaton, seed.mode)
+        self.a[jac][p] = np.nan
+        if seed.jacobian is not None:
+            d = seed.jacobian.shape[0]
+            self.a[jac][p, :d, :d] = seed.jacobian
 
     def _seeds(self, res, ctx):
         return [Seed.of(o, ctx.maps(o.mode)) for o in res.orbits]
@@ -190,13 +197,16 @@ class _Cells:
         """The stored orbits of cell `p` as seeds (repair rounds)."""
         out = []
         for names in self._SLOTS:
-            _, _, _, sig, z, t, k, mode = names
+            _, _, _, sig, z, t, k, mode, jac = names
             if np.all(np.isfinite(self.a[z][p])):
                 codes = self.a[sig][p]
+                name = mode_name(ctx.model.automaton, self.a[mode][p])
+                d = ctx.maps(name).dim
+                DP = self.a[jac][p, :d, :d]
                 out.append(Seed(self.a[z][p].copy(), float(self.a[t][p]),
                                 tuple(ctx.table[c] for c in codes if c >= 0),
-                                int(self.a[k][p]), mode_name(ctx.model.automaton, self.a[mode][p]),
-                                bool(self.a[names[0]][p] == 0)))
+                                int(self.a[k][p]), name, bool(self.a[names[0]][p] == 0),
+                                DP.copy() if np.all(np.isfinite(DP)) else None))
         return out
 
 
@@ -351,6 +361,9 @@ def _repair(out, order, nx, ny, template, x_name, y_name, xs, ys, ctx, rounds):
     fam = _Families(cells.a["from"])
     changed_total = 0
     todo = range(m)
+    # (cell, neighbour's orbit) pairs already retried: a cell's orbits only grow, so a
+    # retry that found nothing new finds nothing in a later round either
+    tried = set()
     for _ in range(int(rounds)):
         changed = set()
         for p in sorted(todo):
@@ -361,6 +374,9 @@ def _repair(out, order, nx, ny, template, x_name, y_name, xs, ys, ctx, rounds):
                 if 0 <= iy + dy < ny and 0 <= ix + dx < nx:
                     q = (iy + dy) * nx + ix + dx
                     for o in _retry_seeds(cells, fam, p, q, ctx):
+                        if (p, id(o)) in tried:
+                            continue
+                        tried.add((p, id(o)))
                         i = cells.orbits[q].index(o)
                         codes[id(o)] = 2 * q + i if i < 2 else -1
                         seeds.append(o)
@@ -504,7 +520,7 @@ def _search(template, spec, x_name, xs, y_name, ys, tile, repair_rounds, **sweep
                                  "x_name": x_name, "y_name": y_name, "spec": specd,
                                  "dim": P.dim, "n": base.automaton.automaton.n_states,
                                  "main_mode": main_mode, "nx": nx},
-                    metadata={"kind": "model_region_map", "version": 2}, **sweep)
+                    metadata={"kind": "model_region_map", "version": 3}, **sweep)
     ctx = _Context(template, specd, main_mode)
     a, n_rep = _repair(res.outputs, order, nx, ny, template, x_name, y_name, xs, ys, ctx,
                        repair_rounds)
