@@ -23,17 +23,11 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-CHROMIUM = os.environ.get("HYBRIDPD_CHROMIUM", "/usr/bin/chromium")
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
-#: Where Bokeh itself draws the point (kp, kv) of the map, in the page's pixels: its own
-#: scales and its canvas's box, read together (no assumption about the layout).
-_MAP_POINT_JS = """([x, y]) => {
-  const m = Bokeh.documents.map(d => d.get_model_by_name("region-map")).find(v => v);
-  const v = Bokeh.index.find_one(m);
-  const r = v.canvas_view.el.getBoundingClientRect();
-  return [r.left + v.frame.x_scale.compute(x), r.top + v.frame.y_scale.compute(y)];
-}"""
+sys.path.insert(0, str(ROOT / "tests"))
+from _browser import CHROMIUM  # the browser, flags and map script of the tests
+from _browser import CHROMIUM_ARGS as ARGS
+from _browser import MAP_POINT_JS as _MAP_POINT_JS
+
 LIMIT = 30.0        # seconds: the longest any wait below may take
 
 

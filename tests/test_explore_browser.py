@@ -15,11 +15,12 @@ import time
 from pathlib import Path
 
 import pytest
+from _browser import CHROMIUM, CHROMIUM_ARGS
+from _browser import MAP_POINT_JS as _MAP_POINT_JS
 
 import hybridpd as hp
 from hybridpd.explore import state as S
 
-CHROMIUM = os.environ.get("HYBRIDPD_CHROMIUM", "/usr/bin/chromium")
 pytest.importorskip("panel", reason="the page needs Panel (pip install 'hybridpd[explore]')")
 sync_api = pytest.importorskip("playwright.sync_api",
                                reason="browser tests need Playwright (pip install playwright)")
@@ -30,19 +31,6 @@ if not Path(CHROMIUM).exists():
 pytestmark = pytest.mark.browser
 
 ROOT = Path(__file__).resolve().parents[1]
-#: Flags of a headless Chromium on a closed network (without the background networking ones
-#: it waits on connections that never come).
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-                 "--no-first-run", "--disable-background-networking",
-                 "--disable-component-update", "--disable-sync"]
-#: Where Bokeh itself draws the point (kp, kv) of the map, in the page's pixels: its own
-#: scales and its canvas's box, read together (no assumption about the layout).
-_MAP_POINT_JS = """([x, y]) => {
-  const m = Bokeh.documents.map(d => d.get_model_by_name("region-map")).find(v => v);
-  const v = Bokeh.index.find_one(m);
-  const r = v.canvas_view.el.getBoundingClientRect();
-  return [r.left + v.frame.x_scale.compute(x), r.top + v.frame.y_scale.compute(y)];
-}"""
 WAIT_MS = 20_000
 
 
@@ -93,6 +81,14 @@ def _open(page, server, **query):
     return page
 
 
+def _is_number(text) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def _text(page, tid):
     return page.get_by_test_id(tid).inner_text()
 
@@ -115,7 +111,10 @@ def _field(page, name):
 
 def test_the_spectral_radius_is_hybridpd_orbits(page, server):
     _open(page, server, case="noncollocated", e="0.1", kp="12.5", kv="25")
-    rho = float(_text(page, "spectral-radius"))
+    # the orbit panel fills in once its computation is done, possibly after the map
+    _until(page, "selected-kp", lambda t: _is_number(t) and float(t) == 12.5,
+           "the orbit of kp = 12.5 never showed")
+    rho = float(_until(page, "spectral-radius", _is_number, "no spectral radius shown"))
     r = subprocess.run([sys.executable, "-m", "hybridpd", "orbit", "--json", "--case",
                         "noncollocated", "--mu", "0.1", "--e", "0.1", "--gamma", "0.75",
                         "--omega", "5", "--kp", "12.5", "--kv", "25"], capture_output=True,

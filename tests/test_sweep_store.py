@@ -115,7 +115,10 @@ def test_any_interrupted_store_resumes_to_the_uninterrupted_store(tmp_path, n, c
 def _spawn(tmp_path, store, log, executor, workers, sleep):
     mod = model_func.__module__
     code = textwrap.dedent(f"""
-        import importlib, sys
+        import importlib, signal, sys
+        # Ctrl-C as a terminal delivers it: an ignored SIGINT (a disposition the test
+        # process may have been left with by a library) would pass to this child
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         sys.path[:0] = [{str(REPO)!r}, {str(Path(__file__).parent)!r}]
         m = importlib.import_module({mod!r})
         pts, _ = m.points_grid()
@@ -129,9 +132,6 @@ def _spawn(tmp_path, store, log, executor, workers, sleep):
         env={**os.environ, "SWEEP_TEST_SLEEP": str(sleep)},
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
-        # Ctrl-C as a terminal delivers it: an ignored SIGINT (a disposition the test
-        # process may have inherited, or been left with by a library) would pass to the child
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
 
 
