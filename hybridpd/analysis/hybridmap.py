@@ -41,6 +41,9 @@ import math
 
 import numpy as np
 from scipy.linalg import expm
+from scipy.linalg.lapack import dgeqrf as _geqrf
+from scipy.linalg.lapack import dgesdd as _gesdd
+from scipy.linalg.lapack import dorgqr as _orgqr
 
 from hybridpd._deprecated import moved_names
 from hybridpd._jit import njit
@@ -682,8 +685,32 @@ def sensitivity_chain(rec, nseg, nb, modes, pk, Z0, track: bool = False) -> tupl
         # impacts are no tangential touch of the orbit
         tangent = tangent or (tan and not burst[m])
     if track and Q.shape[1]:
-        Q = np.linalg.qr(Q)[0]     # the flows after the last jump (invertible: rank kept)
+        Q = _orthonormal(Q)        # the flows after the last jump (invertible: rank kept)
     return Z, tangent, (Q.shape[1] if track else None)
+
+
+def _orthonormal(Q) -> np.ndarray:
+    """``Q`` of the reduced QR factorisation of ``Q`` (LAPACK's Householder ``geqrf`` and
+    ``orgqr``, as ``numpy.linalg.qr``, called directly: the chain orthonormalises a small
+    basis at every jump of a period, where numpy's checks cost more than the factorisation)."""
+    if Q.shape[1] == 0 or Q.shape[1] > Q.shape[0]:
+        return np.linalg.qr(Q)[0]
+    qr, tau, _, info = _geqrf(Q)
+    if info != 0:
+        return np.linalg.qr(Q)[0]
+    q, _, info = _orgqr(qr, tau)
+    return q if info == 0 else np.linalg.qr(Q)[0]
+
+
+def _svd(M) -> tuple:
+    """``(U, sv)`` of the thin SVD of ``M`` (LAPACK's ``gesdd``, as ``numpy.linalg.svd``,
+    called directly for the same reason as :func:`_orthonormal`)."""
+    if M.size:
+        u, sv, _, info = _gesdd(M, full_matrices=0)
+        if info == 0:
+            return u, sv
+    u, sv, _ = np.linalg.svd(M, full_matrices=False)
+    return u, sv
 
 
 def _image(L, R, Q, regular=None):
@@ -694,9 +721,9 @@ def _image(L, R, Q, regular=None):
     reset drops the directions it removes (a held input overwritten at a sample, a
     contact's normal velocity projected at the start of a sticking phase)."""
     if _invertible(R) if regular is None else regular:
-        return np.linalg.qr(L @ Q)[0]
+        return _orthonormal(L @ Q)
     # ``Q`` may have left orthonormality through the flows since the last jump
-    U, sv, _ = np.linalg.svd(L @ np.linalg.qr(Q)[0], full_matrices=False)
+    U, sv = _svd(L @ _orthonormal(Q))
     # the Frobenius norm bounds the spectral one within sqrt(n): the cut lies far between
     # a removed direction (rounding) and a kept one
     keep = sv > _NULL_RTOL * max(float(np.linalg.norm(L)), 1e-300)
