@@ -32,6 +32,33 @@ def test_the_example_orbit_is_a_fixed_point_of_an_independent_period_map():
     np.testing.assert_allclose(img, po.s, rtol=0, atol=1e-8)
     # the held torque is overwritten at every sample: one structural zero, not noise
     assert len(po.s) - len(po.multipliers) == 1
+    # every period the load enters and leaves the rubber stop and hits the hard stop once,
+    # between the 1000 samples of the 500 Hz controller
+    jumps = [g for g, kind in po.signature if kind == "crossing"]
+    assert jumps.count("enter0+") == jumps.count("leave0+") == 1
+    assert jumps.count("contact1-") == 1 and jumps.count("sample") == 1000
+
+
+def test_the_command_records_and_titles_the_section_it_used(tmp_path, capsys):
+    import json
+
+    from hybridpd.cli import main
+    from hybridpd.plotting.regions import _subject
+    from hybridpd.sweeps.regions import load_region_map
+
+    out = tmp_path / "map.nc"
+    assert main(["regions", "--model", str(FILE), "--x", "controller.kp", "40", "60", "2",
+                 "--y", "controller.kv", "5", "7", "2", "--out", str(out), "--json",
+                 "--quiet"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    # the phase the section fixes from a simulation at the file's values, found anew
+    phase = fix_section(load_model(FILE), SectionSpec())[0].phase
+    for fixed in (d["fixed"], load_region_map(out).fixed):
+        assert fixed["section_event"] == "stroboscopic"
+        assert abs(fixed["section_phase"] - phase) <= 1e-12 * max(1.0, phase)
+    assert d["metadata"]["repair_stopped"].startswith("no cell gained an orbit in round")
+    text = _subject(load_region_map(out))
+    assert f"stroboscopic section at phi0 = {phase:g}" in text and "auto" not in text
 
 
 def test_every_cell_agrees_with_a_cold_orbit_on_the_maps_section(small_map):

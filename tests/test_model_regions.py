@@ -124,6 +124,9 @@ def test_robot_joint_release_map_every_orbit_returns_after_one_period(tmp_path, 
                  "--out", str(out), "--json", "--quiet"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert d["counts"]["stable"] + d["counts"]["unstable"] == 6, d["counts"]
+    # the section actually used is recorded: the releases of contact 0, no phase
+    assert (d["fixed"]["section_event"], d["fixed"]["section_contact"],
+            d["fixed"]["section_phase"]) == ("release", 0, None)
     rm = load_region_map(out)
     for kp, kv, model, sec, z, t0 in _cell_orbits(rm, ModelTemplate.load(f)):
         T = sec.period

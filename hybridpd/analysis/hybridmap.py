@@ -769,9 +769,13 @@ def _jump(q, rec, Z, tgrad, modes, pk, n, linear=False):
             return R @ Z + np.outer(fp - R @ fm, tg), tg, False, R, R
     cf = c @ fm
     tangent = abs(cf) <= 1e-9 * (np.abs(c) @ np.abs(fm)) or jkind[q] == 2
-    tg = -(c @ Z) / cf
-    S = R + np.outer(fp - R @ fm, c) / cf if linear else None
-    return R @ Z + np.outer(fp - R @ fm, c @ Z) / cf, tg, tangent, S, R
+    cZ = c @ Z
+    tg = -cZ / cf
+    # outer products by broadcasting (the values of np.outer, without its per-call work:
+    # this runs at every jump of a period)
+    d = (fp - R @ fm)[:, None]
+    S = R + d * c / cf if linear else None
+    return R @ Z + d * cZ / cf, tg, tangent, S, R
 
 
 def _zeno_time_gradient(q, jt, jg, jsrc, jkind, tgrad, m):

@@ -4,7 +4,9 @@ The building block of region maps, diagrams and basins of general models
 (:mod:`hybridpd.sweeps.model_regions`): :func:`solve_at` looks for the periodic orbits of one
 section of a :class:`~hybridpd.mechanics.modelfile.MechanicalModel` by Newton's method
 (:func:`~hybridpd.analysis.periodic.find_orbit`, every answer checked: whole number of
-reference periods, transversal, confirmed by a simulated period) from a list of seeds (the
+reference periods, transversal, confirmed by a simulated period; on the stroboscopic
+section an orbit continued from a seed is confirmed by its Newton residual, itself a
+simulated period from the point) from a list of seeds (the
 solutions at neighbouring parameter values) and, where none of them gives an orbit or only
 unstable ones, from a simulation of the model from its initial state. Distinct orbits found
 from different seeds are all returned, never silently one.
@@ -257,9 +259,12 @@ class _Search:
     def attempt(self, P, s0, k, why, seed=None):
         self.attempts += 1
         sp = self.spec
+        # on the stroboscopic map Newton's residual is itself a simulation of the period
+        # from the point: a neighbour's orbit continued there needs no second one
+        verify = seed is None or not isinstance(P, StroboscopicMap)
         po = _minimal(P, find_orbit(P, s0, k, tol=sp.tol, max_iter=sp.max_iter,
                                     periods=sp.periods, sampling_period=self.dt,
-                                    jacobian=sp.jacobian),
+                                    jacobian=sp.jacobian, verify=verify),
                       dict(tol=sp.tol, max_iter=sp.max_iter, sampling_period=self.dt,
                            jacobian=sp.jacobian))
         self.last = po

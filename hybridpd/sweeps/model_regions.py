@@ -19,13 +19,19 @@ one section (a contact's impacts or sticking releases, ``k`` returns per orbit) 
   an orbit linked to one of the cell's own is not retried, since Newton from it lands on
   that orbit again (each cell records which neighbour's orbit its orbits continue, or
   landed on). Inside a tile the links join the orbits into families, and a seed of a
-  family that gave an orbit is not tried again. So a cell is reported without an orbit only when Newton
-  failed from every neighbour's solution and from a simulation.
+  family that gave an orbit is not tried again. A seed that looks like another family
+  first takes a few chord steps with the ``DP`` of each orbit already known in the cell
+  (:func:`~hybridpd.analysis.model_orbits.solve_at`): one that lands on such an orbit
+  costs no Newton run, and a neighbour's orbit retried without result is not retried in
+  a later round. So a cell is reported without an orbit only when Newton failed from every
+  neighbour's solution and from a simulation. Each round counts its cells on the progress
+  report; why the rounds stopped is ``metadata["repair_stopped"]``.
 * **Both orbits.** Distinct orbits found in one cell are all counted (``n_orbits``); the
   first two are kept (stable first).
 
 Every orbit is checked by :func:`~hybridpd.analysis.periodic.find_orbit` (whole number of
-reference periods, transversal, a simulated period returns to it). The result is the one
+reference periods, transversal, a simulated period returns to it; on the stroboscopic
+section the Newton residual of an orbit continued from a neighbour is that simulation). The result is the one
 :class:`~hybridpd.sweeps.regions.RegionMap` (one layer) with the variables ``status``,
 ``n_orbits``, ``attempts``, ``section_point``, ``signature``, ``period`` (returns ``k`` per
 period), ``section_mode``, ``section_state``, ``section_time`` and those of the second orbit
@@ -347,9 +353,15 @@ def _retry_seeds(cells, fam, p, q, ctx) -> list:
             and all(o.other_family(k, ctx.maps(k.mode).section.period) for k in own)]
 
 
-def _repair(out, order, nx, ny, template, x_name, y_name, xs, ys, ctx, rounds):
-    """Rounds of retries from every neighbour's orbits (module docstring). Returns the cells
-    (grid order) and the number of cells that gained an orbit."""
+def _repair(out, order, nx, ny, template, x_name, y_name, xs, ys, ctx, rounds,
+            progress=True):
+    """Rounds of retries from every neighbour's orbits (module docstring), each round's
+    cells counted by a progress report. Returns the cells (grid order), the number of cells
+    that gained an orbit and why the rounds stopped (``"no cell gained an orbit"`` after
+    how many rounds, or the bound `rounds` reached)."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.sweeps.progress import Progress
+
     m = nx * ny
     cells = _Cells(m, out["s"].shape[1], out["z"].shape[1])
     inv = np.empty(m, int)
@@ -364,41 +376,53 @@ def _repair(out, order, nx, ny, template, x_name, y_name, xs, ys, ctx, rounds):
     # (cell, neighbour's orbit) pairs already retried: a cell's orbits only grow, so a
     # retry that found nothing new finds nothing in a later round either
     tried = set()
-    for _ in range(int(rounds)):
+    stop = f"the bound of {int(rounds)} rounds reached"
+    for r in range(int(rounds)):
         changed = set()
-        for p in sorted(todo):
-            iy, ix = divmod(p, nx)
-            own = cells.orbits[p]
-            codes, seeds = {}, []
-            for dy, dx in _NEIGH:
-                if 0 <= iy + dy < ny and 0 <= ix + dx < nx:
-                    q = (iy + dy) * nx + ix + dx
-                    for o in _retry_seeds(cells, fam, p, q, ctx):
-                        if (p, id(o)) in tried:
-                            continue
-                        tried.add((p, id(o)))
-                        i = cells.orbits[q].index(o)
-                        codes[id(o)] = 2 * q + i if i < 2 else -1
-                        seeds.append(o)
-            if not seeds:
-                continue
-            res = _solve_cell(template, {x_name: xs[ix], y_name: ys[iy]}, ctx.spec, seeds,
-                              False, own, [fam.root(codes[id(o)]) if codes[id(o)] >= 0
-                                           else None for o in seeds])
-            for sd, i in res.matched:     # a neighbour's orbit that continues an own one
-                if sd is not None and codes.get(id(sd), -1) >= 0 and i < 2:
-                    fam.join(2 * p + i, codes[id(sd)])
-            if cells.add(p, res, ctx, lambda sd, codes=codes: codes.get(id(sd), -1)):
-                changed.add(p)
-                for j in range(2):
-                    if cells.a["from"][p, j] >= 0:
-                        fam.join(2 * p + j, int(cells.a["from"][p, j]))
+        with Progress(len(todo), f"{Path(template.source).name}: repair round {r + 1}",
+                      enabled=bool(progress), unit="cell") as bar:
+            _repair_round(cells, fam, sorted(todo), tried, changed, bar, nx, ny, template,
+                          x_name, y_name, xs, ys, ctx)
         changed_total += len(changed)
         if not changed:
+            stop = f"no cell gained an orbit in round {r + 1}"
             break
         todo = {(q // nx + dy) * nx + q % nx + dx for q in changed for dy, dx in _NEIGH
                 if 0 <= q // nx + dy < ny and 0 <= q % nx + dx < nx}
-    return cells.a, changed_total
+    return cells.a, changed_total, stop
+
+
+def _repair_round(cells, fam, todo, tried, changed, bar, nx, ny, template, x_name, y_name,
+                  xs, ys, ctx):
+    """One repair round over the cells `todo`: those that gain an orbit go into `changed`."""
+    for p in todo:
+        bar.update()
+        iy, ix = divmod(p, nx)
+        own = cells.orbits[p]
+        codes, seeds = {}, []
+        for dy, dx in _NEIGH:
+            if 0 <= iy + dy < ny and 0 <= ix + dx < nx:
+                q = (iy + dy) * nx + ix + dx
+                for o in _retry_seeds(cells, fam, p, q, ctx):
+                    if (p, id(o)) in tried:
+                        continue
+                    tried.add((p, id(o)))
+                    i = cells.orbits[q].index(o)
+                    codes[id(o)] = 2 * q + i if i < 2 else -1
+                    seeds.append(o)
+        if not seeds:
+            continue
+        res = _solve_cell(template, {x_name: xs[ix], y_name: ys[iy]}, ctx.spec, seeds,
+                          False, own, [fam.root(codes[id(o)]) if codes[id(o)] >= 0
+                                       else None for o in seeds])
+        for sd, i in res.matched:     # a neighbour's orbit that continues an own one
+            if sd is not None and codes.get(id(sd), -1) >= 0 and i < 2:
+                fam.join(2 * p + i, codes[id(sd)])
+        if cells.add(p, res, ctx, lambda sd, codes=codes: codes.get(id(sd), -1)):
+            changed.add(p)
+            for j in range(2):
+                if cells.a["from"][p, j] >= 0:
+                    fam.join(2 * p + j, int(cells.a["from"][p, j]))
 
 
 @dataclass(frozen=True, eq=False)
@@ -522,9 +546,9 @@ def _search(template, spec, x_name, xs, y_name, ys, tile, repair_rounds, **sweep
                                  "main_mode": main_mode, "nx": nx},
                     metadata={"kind": "model_region_map", "version": 3}, **sweep)
     ctx = _Context(template, specd, main_mode)
-    a, n_rep = _repair(res.outputs, order, nx, ny, template, x_name, y_name, xs, ys, ctx,
-                       repair_rounds)
-    return a, {"repaired_cells": int(n_rep), "executor": res.executor,
+    a, n_rep, stop = _repair(res.outputs, order, nx, ny, template, x_name, y_name, xs, ys,
+                             ctx, repair_rounds, sweep.get("progress", True))
+    return a, {"repaired_cells": int(n_rep), "repair_stopped": stop, "executor": res.executor,
                "sig_table": [list(p) for p in ctx.table]}, P, spec
 
 
