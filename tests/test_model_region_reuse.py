@@ -108,7 +108,7 @@ def test_seeds_of_one_family_are_tried_once():
 
 
 def test_chord_landing_agrees_with_newton():
-    from hybridpd.analysis.model_orbits import _lands_on
+    from hybridpd.analysis.model_orbits import SEED_DAMPING, _lands_on
     from hybridpd.analysis.periodic import find_orbit
 
     m = load_model(FILE)
@@ -118,9 +118,15 @@ def test_chord_landing_agrees_with_newton():
     assert seed.jacobian is not None and seed.jacobian.shape == (P.dim, P.dim)
     far = Seed(seed.z * 1.5, seed.t, seed.signature, seed.period, seed.mode, True)
     s0 = far.point(P)
-    # Newton from the far seed, independently, lands on the same orbit
+    # Newton from the far seed, independently, lands on the same orbit (with the shallow
+    # line search of a seeded attempt too)
     newton = find_orbit(P, s0, 1)
     assert newton.converged and np.max(np.abs(newton.s - po.s)) <= 1e-8
+    shallow = find_orbit(P, s0, 1, min_lambda=SEED_DAMPING)
+    assert shallow.converged and np.max(np.abs(shallow.s - po.s)) <= 1e-8
+    for bad in (0.0, 1.5, -1e-3, True):
+        with pytest.raises(ValueError, match="min_lambda"):
+            find_orbit(P, s0, 1, min_lambda=bad)
     assert _lands_on(P, s0, 1, seed)
     # the orbit at other gains is no landing place for this model's seeds
     other, P2 = orbit_from_model(ModelTemplate.load(FILE).model({"controller.kp": 70.0}),

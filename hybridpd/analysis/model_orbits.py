@@ -262,9 +262,14 @@ class _Search:
         # on the stroboscopic map Newton's residual is itself a simulation of the period
         # from the point: a neighbour's orbit continued there needs no second one
         verify = seed is None or not isinstance(P, StroboscopicMap)
+        # a neighbour's orbit is a close start: a step damped below SEED_DAMPING is no
+        # continuation of it (a jump of the map between the two points, e.g. an impact
+        # crossing a sample instant), and halving on costs a map run per halving
         po = _minimal(P, find_orbit(P, s0, k, tol=sp.tol, max_iter=sp.max_iter,
                                     periods=sp.periods, sampling_period=self.dt,
-                                    jacobian=sp.jacobian, verify=verify),
+                                    jacobian=sp.jacobian, verify=verify,
+                                    **({} if seed is None else
+                                       {"min_lambda": SEED_DAMPING})),
                       dict(tol=sp.tol, max_iter=sp.max_iter, sampling_period=self.dt,
                            jacobian=sp.jacobian))
         self.last = po
@@ -282,6 +287,9 @@ class _Search:
         return po
 
 
+#: Smallest damping factor of Newton's line search from a seed (a neighbour's orbit); a
+#: simulation's candidates get find_orbit's default.
+SEED_DAMPING = 2.0 ** -10
 #: Chord iterations of :func:`_lands_on` (each one application of the map).
 CHORD_STEPS = 8
 #: Where the chord iterate is this close to the orbit (relative, section coordinates), the
@@ -354,7 +362,9 @@ def solve_at(model, spec: SectionSpec, seeds=(), *, simulate: bool = True,
         its own ``k`` and section mode when ``spec.period`` is ``"auto"``); each further one
         only if it is no seed of an orbit found already (:meth:`Seed.other_family`): so a
         connected family costs one Newton run per point, and two families meeting are both
-        reported. Before its Newton run, a further seed is tested by chord steps with the
+        reported. Newton from a seed damps its steps down to :data:`SEED_DAMPING` only (a
+        neighbour's orbit is a close start). Before its Newton run, a further seed is
+        tested by chord steps with the
         ``DP`` of each orbit found or known here (:func:`_lands_on`): one it lands on is
         not searched again (a few map applications instead of two Jacobians).
     simulate : bool

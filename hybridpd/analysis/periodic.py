@@ -192,7 +192,8 @@ ORBIT_REFUSALS = ("degenerate_return", "grazing", "not_periodic", "fast_return",
 
 
 def find_orbit(P: PoincareMap, s0, period: int = 1, *, tol: float = 1e-11, max_iter: int = 50,
-               jacobian: str = "exact", verify: bool = True, **checks) -> PeriodicOrbit:
+               jacobian: str = "exact", verify: bool = True, min_lambda: float = 2.0 ** -29,
+               **checks) -> PeriodicOrbit:
     """Solve ``P^k(s) = s`` by damped Newton from the guess ``s0``, on any map.
 
     ``P`` is any :class:`~hybridpd.analysis.maps.PoincareMap`: the general section map of a
@@ -232,6 +233,9 @@ def find_orbit(P: PoincareMap, s0, period: int = 1, *, tol: float = 1e-11, max_i
         ``"fd"``: always central finite differences of the map.
     verify : bool
         Passed to ``P.validate`` (a section map simulates one period independently).
+    min_lambda : float
+        Smallest damping factor of Newton's line search, in ``(0, 1]`` (the factors are
+        ``1, 1/2, ...``): a step that must be damped further fails.
     **checks
         Options of the map's hooks: for a section map ``periods`` (reference periods of the
         orbit, default any), ``min_return`` (shortest acceptable return, default ``T / 20``)
@@ -277,6 +281,9 @@ def find_orbit(P: PoincareMap, s0, period: int = 1, *, tol: float = 1e-11, max_i
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) \
             or max_iter < 1:
         raise ValueError(f"max_iter must be an int >= 1, got {max_iter!r}")
+    if isinstance(min_lambda, bool) or not isinstance(min_lambda, (int, float)) \
+            or not 0 < min_lambda <= 1:
+        raise ValueError(f"min_lambda must be a number in (0, 1], got {min_lambda!r}")
     periods = checks.get("periods")
     if periods is not None and (isinstance(periods, bool) or int(periods) != periods
                                 or periods < 1):
@@ -294,8 +301,8 @@ def find_orbit(P: PoincareMap, s0, period: int = 1, *, tol: float = 1e-11, max_i
         return _no_orbit(P, s, k, eq.undefined() if F is None else "diverged", 1, None, eq.why)
     max_iter = int(max_iter)
     res = newton(eq.resid, eq.jac, s, tol=tol, max_iter=max_iter, norm=eq.norm, broyden=True,
-                 difference=eq.difference, canonical=P.canonical, min_lambda=2.0 ** -29,
-                 step_test=False)
+                 difference=eq.difference, canonical=P.canonical,
+                 min_lambda=float(min_lambda), step_test=False)
     # the counts and words of this module: an iteration is one test of the residual
     its = min(len(res.history), max_iter)
     reason = {"converged": "converged", "singular": "singular", "max_iter": "max_iter",
