@@ -690,27 +690,17 @@ def sensitivity_chain(rec, nseg, nb, modes, pk, Z0, track: bool = False) -> tupl
 
 
 def _orthonormal(Q) -> np.ndarray:
-    """``Q`` of the reduced QR factorisation of ``Q`` (LAPACK's Householder ``geqrf`` and
-    ``orgqr``, as ``numpy.linalg.qr``, called directly: the chain orthonormalises a small
-    basis at every jump of a period, where numpy's checks cost more than the factorisation)."""
-    if Q.shape[1] == 0 or Q.shape[1] > Q.shape[0]:
-        return np.linalg.qr(Q)[0]
+    """``Q`` of the reduced QR factorisation of ``Q`` by LAPACK's ``geqrf``/``orgqr`` (what
+    ``numpy.linalg.qr`` calls, without its per-call checks: the chain runs it at every jump)."""
     qr, tau, _, info = _geqrf(Q)
-    if info != 0:
-        return np.linalg.qr(Q)[0]
-    q, _, info = _orgqr(qr, tau)
-    return q if info == 0 else np.linalg.qr(Q)[0]
+    q, _, info2 = _orgqr(qr, tau) if info == 0 else (None, None, 1)
+    return q if info2 == 0 else np.linalg.qr(Q)[0]
 
 
 def _svd(M) -> tuple:
-    """``(U, sv)`` of the thin SVD of ``M`` (LAPACK's ``gesdd``, as ``numpy.linalg.svd``,
-    called directly for the same reason as :func:`_orthonormal`)."""
-    if M.size:
-        u, sv, _, info = _gesdd(M, full_matrices=0)
-        if info == 0:
-            return u, sv
-    u, sv, _ = np.linalg.svd(M, full_matrices=False)
-    return u, sv
+    """``(U, sv)`` of the thin SVD of ``M`` by LAPACK's ``gesdd`` (as :func:`_orthonormal`)."""
+    u, sv, _, info = _gesdd(M, full_matrices=0)
+    return (u, sv) if info == 0 else np.linalg.svd(M, full_matrices=False)[:2]
 
 
 def _image(L, R, Q, regular=None):
@@ -771,8 +761,7 @@ def _jump(q, rec, Z, tgrad, modes, pk, n, linear=False):
     tangent = abs(cf) <= 1e-9 * (np.abs(c) @ np.abs(fm)) or jkind[q] == 2
     cZ = c @ Z
     tg = -cZ / cf
-    # outer products by broadcasting (the values of np.outer, without its per-call work:
-    # this runs at every jump of a period)
+    # np.outer's values by broadcasting, without its per-call work (run at every jump)
     d = (fp - R @ fm)[:, None]
     S = R + d * c / cf if linear else None
     return R @ Z + d * cZ / cf, tg, tangent, S, R
