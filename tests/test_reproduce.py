@@ -305,3 +305,37 @@ def test_the_lead_table_states_each_rows_convention_and_box(run):
     assert f"basins at m2 = {data['conventions']['chosen_m2']:g}" in by_id["4"]
     c5 = next(c for c in data["conclusions"] if c["id"] == 5)["evidence"]
     assert f"kp/m2 in [{c5['gains']['kp'][0]:g}, {c5['gains']['kp'][1]:g}]" in by_id["5"]
+
+
+def test_the_studies_are_certified_at_every_value(run):
+    # SMALL certifies every value: the mu remark's series holds every value of the mu study
+    # (and the paper's mu), the gamma study every value of its own, and the remark's
+    # reported rise is recomputed here from the series it rests on
+    from hybridpd.reproduce.certified import study_values
+
+    S = SMALL
+    path, data = run
+    rem = next(r for r in data["remarks"] if r["id"] == "mu-existence")["evidence"]
+    mus = sorted(set(study_values(S, "mu")) | {data["paper"]["mu"]})
+    for key, series in rem["series"].items():
+        assert [m for m, _ in series] == pytest.approx(mus)
+        ivs = [iv for _, iv in series]
+        best = max(((ivs[j][0] - ivs[i][1], i, j) for i in range(len(ivs))
+                    for j in range(i + 1, len(ivs))), default=(0, 0, 0))
+        against = rem["trends"][key]["against"]
+        if best[0] > 0:
+            # the largest proved rise (ties: any pair that realises it)
+            i, j = (mus.index(pytest.approx(m)) for m in against["interval"])
+            assert i < j and against["by"] == pytest.approx(best[0])
+            assert ivs[j][0] - ivs[i][1] == pytest.approx(best[0])
+        else:
+            assert against is None
+    gam = data["gamma_certified"]["shares"]
+    for case in CASES:
+        for e in ES:
+            r = gam[case][e]
+            assert r["gamma"] == pytest.approx(study_values(S, "gamma"))
+            assert all(0 <= lo <= hi <= 1 for lo, hi in r["exists_stable"])
+            assert r["proved_somewhere"] == [g for g, iv in zip(r["gamma"], r["exists_stable"])
+                                             if iv[0] > 0]
+    assert "Certified at every value of gamma" in path.read_text()

@@ -114,3 +114,44 @@ def test_quick_mode_shares_of_the_scaled_box_are_at_most_0_1_wide():
         for name in CLASSES:
             lo, hi = r.interval(name)
             assert hi - lo <= 0.1, (r.target, name, lo, hi)
+
+
+def test_the_mu_remark_proves_the_rise_inside_the_range_from_real_proofs():
+    # the non-collocated e = 0.5 existence share, certified at the ends of the mu range and
+    # at mu = 1.78 inside it: the remark agrees over the range (the end falls below the
+    # start) and reports the proved rise to mu = 1.78 with the certified shares, each of
+    # which holds the share of its finest grid's cell centres (closed forms, independent)
+    from hybridpd.reproduce import conclusions as C
+
+    mus = (0.01, 10 ** 0.25, 10.0)
+    res = certified_shares([ShareTarget("noncollocated", 0.5, m, properties=("exists",))
+                            for m in mus], grid=8, levels=3, width=0.1)
+    ivs = [r.interval("exists") for r in res]
+    for r, iv in zip(res, ivs):
+        KP, KV = _centres(r)
+        o = symmetric_orbits(KP, KV, mu=r.target.mu, e=0.5, L=0.75, x10=1.0, omega=5.0,
+                             m2=1.0, n=1, case="noncollocated")
+        assert iv[0] - 1e-12 <= np.mean(o.exists) <= iv[1] + 1e-12
+    c = C.check_mu_existence((mus[0], mus[2]), {"noncollocated": [ivs[0]]},
+                             {"noncollocated": [ivs[2]]}, [0.5],
+                             inside={("noncollocated", 0.5): [(mus[1], ivs[1])]})
+    t = c["trends"]["noncollocated e=0.5"]
+    assert t["verdict"] == "agrees"
+    assert t["against"] is not None and t["against"]["interval"] == [mus[0], mus[1]]
+    # the move is proved: the later share's lower end above the earlier one's upper end
+    assert t["against"]["by"] == pytest.approx(ivs[1][0] - ivs[0][1]) and ivs[1][0] > ivs[0][1]
+
+
+def test_a_per_target_gamma_is_the_clearance_of_the_box():
+    # one batch with two values of gamma: each share holds its own closed-form share
+    targets = [ShareTarget("collocated", 0.5, properties=("exists_stable",), gamma=g)
+               for g in (0.5, 1.2)]
+    res = certified_shares(targets, grid=4, levels=1, width=0.05)
+    for r in res:
+        KP, KV = _centres(r)
+        o = symmetric_orbits(KP, KV, mu=0.1, e=0.5, L=r.target.gamma, x10=1.0, omega=5.0,
+                             m2=1.0, n=1, case="collocated")
+        lo, hi = r.interval("exists_stable")
+        assert lo - 1e-12 <= np.mean(np.asarray(o.stable, bool)) <= hi + 1e-12
+    with pytest.raises(ValueError, match="gamma"):
+        ShareTarget("collocated", 0.5, gamma=-1.0)

@@ -54,9 +54,9 @@ import numpy as np
 from hybridpd._results import compact_repr
 from hybridpd.model import Case, check_in_range, check_int, check_odd_order, check_positive
 
-__all__ = ["CLASSES", "MU_LIMIT", "PROPERTIES", "CertifiedShare", "Leaves", "ShareTarget",
-           "certified_shares", "merge_shares", "mu_move_values", "reading_values",
-           "reproduction_shares"]
+__all__ = ["CLASSES", "GROUPS", "MU_LIMIT", "PROPERTIES", "CertifiedShare", "Leaves",
+           "ShareTarget", "certified_shares", "merge_shares", "mu_move_values", "reading_values",
+           "reproduction_shares", "study_values"]
 
 #: The properties whose shares are enclosed.
 PROPERTIES = ("exists_stable", "exists", "exists_unstable")
@@ -89,6 +89,9 @@ class ShareTarget:
         the others are enclosed from the same proofs, as tight as they come.
     key : tuple
         A label for the caller (default ``(case, e, mu, m2)``).
+    gamma : float or None
+        ``gamma = L/x10`` of this box (> 0); None: the ``gamma`` of the
+        :func:`certified_shares` call.
     """
 
     case: str
@@ -98,12 +101,15 @@ class ShareTarget:
     box: tuple = (0.1, 50.0)
     properties: tuple = ("exists_stable", "exists")
     key: tuple = None
+    gamma: float | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "case", Case.parse(self.case).value)
         check_in_range("e", self.e, 0.0, 1.0)
         check_positive("mu", self.mu)
         check_positive("m2", self.m2)
+        if self.gamma is not None:
+            object.__setattr__(self, "gamma", check_positive("gamma", self.gamma))
         lo, hi = (check_positive("box", v) for v in self.box)
         if not lo < hi:
             raise ValueError(f"box must satisfy 0 < lo < hi, got {self.box!r}")
@@ -226,7 +232,7 @@ class CertifiedShare:
             "base_grid": [self.grid, self.grid], "levels": self.levels,
             "base_cells": {p: dict(v, of=self.grid ** 2) for p, v in self.base.items()},
             "box": {"kp/m2": [lo, hi], "kv/m2": [lo, hi]},
-            "case": t.case, "e": t.e, "mu": t.mu, "m2": t.m2,
+            "case": t.case, "e": t.e, "mu": t.mu, "m2": t.m2, "gamma": t.gamma,
             "leaves_evaluated": self.leaves_evaluated, "stop": self.stop})
         return out
 
@@ -241,7 +247,8 @@ def _classify(case, n, kp, kv, mu, e, gamma, omega, chunk):
     for s in range(0, N, chunk):
         sl = slice(s, s + chunk)
         boxes, _ = proofs.scaled_boxes(kp=(kp[0][sl], kp[1][sl]), kv=(kv[0][sl], kv[1][sl]),
-                                       mu=mu[sl], e=e[sl], gamma=gamma, omega=omega, m2=1.0)
+                                       mu=mu[sl], e=e[sl], gamma=gamma[sl], omega=omega,
+                                       m2=1.0)
         _, _, p = proofs.classify(case, n, boxes, details=True)
         ex, v, st, un = p["exists"], p["viable"], p["stable"], p["unstable"]
         real = ex & (v == 1)
@@ -264,6 +271,7 @@ def _certify_case(case, targets, *, grid, levels, width, gamma, omega, n, chunk,
     span = np.array([t.scaled_box[1] - t.scaled_box[0] for t in targets])
     mus = np.array([t.mu for t in targets], float)
     es = np.array([t.e for t in targets], float)
+    gams = np.array([gamma if t.gamma is None else t.gamma for t in targets], float)
     asks = {p: np.array([p in t.properties for t in targets]) for p in PROPERTIES}
     # leaves in integer units of the finest grid: [i, i + size) x [j, j + size)
     J, I = np.divmod(np.arange(grid * grid), grid)
@@ -283,7 +291,7 @@ def _certify_case(case, targets, *, grid, levels, width, gamma, omega, n, chunk,
         a, b = lo[tid], span[tid]
         kp = (a + b * (i0 / F), a + b * ((i0 + size) / F))
         kv = (a + b * (j0 / F), a + b * ((j0 + size) / F))
-        st = _classify(case, n, kp, kv, mus[tid], es[tid], gamma, omega, chunk)
+        st = _classify(case, n, kp, kv, mus[tid], es[tid], gams[tid], omega, chunk)
         # what was proved on a parent holds on its parts (a smaller box's enclosure may
         # still fail to show it)
         st = {p: np.where(inherited[p] != _UNDECIDED, inherited[p], s) for p, s in st.items()}
@@ -425,12 +433,66 @@ def reading_values(settings) -> list:
     return [1.0 if abs(x - 1.0) < 1e-9 else float(x) for x in v]
 
 
-def reproduction_shares(settings, cases=("collocated", "noncollocated")) -> dict:
+def study_values(settings, name) -> list:
+    """The values of the ``mu`` or ``gamma`` study (:attr:`Settings.param_points` log-spaced
+    values of its range, as :func:`~hybridpd.reproduce.params.param_study` computes them)."""
+    lo, hi = settings.mu_range if name == "mu" else settings.gamma_range
+    return [float(v) for v in np.logspace(np.log10(lo), np.log10(hi), settings.param_points)]
+
+
+def _is_paper_mu(mu) -> bool:
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.reproduce.settings import PAPER
+
+    return abs(mu / PAPER["mu"] - 1.0) < 1e-9
+
+
+#: The groups of :func:`reproduction_shares`.
+GROUPS = ("main", "limit", "mu_ends", "readings", "mu_moves", "mu_values", "gamma_values")
+
+
+def _groups(settings, cases) -> dict:
+    """``{group: (targets, (grid, levels, width))}`` (see :func:`reproduction_shares`)."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.reproduce.settings import PAPER
+
+    es = [float(e) for e in PAPER["e"]]
+    mu0 = PAPER["mu"]
+    es_only, ex_only = ("exists_stable",), ("exists",)
+    moves = {(c, e): mu_move_values(settings, c, e) for c in cases for e in es}
+    every = settings.certify_every_value
+    # values certified by another group already: the ends, the paper's mu (the main box,
+    # whose cells serve both), the values of the largest sampled move
+    taken = lambda c, e, m: (m in settings.mu_range or _is_paper_mu(m) or m in moves[(c, e)])
+    return {
+        "main": ([ShareTarget(c, e, mu0, properties=PROPERTIES, key=(c, e)) for c in cases
+                  for e in es], settings.certified),
+        "limit": ([ShareTarget(c, e, MU_LIMIT, properties=es_only, key=(c, e)) for c in cases
+                   for e in es], settings.certified_ends),
+        "mu_ends": ([ShareTarget(c, e, m, properties=ex_only, key=(c, e, m)) for c in cases
+                     for e in es for m in settings.mu_range], settings.certified_ends),
+        "readings": ([ShareTarget(c, e, mu0, m2, properties=es_only, key=(c, e, m2))
+                      for c in cases for e in es for m2 in reading_values(settings)
+                      if m2 != 1.0], settings.certified_readings),
+        "mu_moves": ([ShareTarget(c, e, m, properties=ex_only, key=(c, e, m)) for c in cases
+                      for e in es for m in moves[(c, e)]
+                      if m not in settings.mu_range and not _is_paper_mu(m)],
+                     settings.certified_ends),
+        "mu_values": ([ShareTarget(c, e, m, properties=ex_only, key=(c, e, m)) for c in cases
+                       for e in es for m in study_values(settings, "mu")
+                       if every and not taken(c, e, m)], settings.certified_values),
+        "gamma_values": ([ShareTarget(c, e, mu0, properties=es_only, key=(c, e, g), gamma=g)
+                          for c in cases for e in es for g in study_values(settings, "gamma")
+                          if every], settings.certified_values)}
+
+
+def reproduction_shares(settings, cases=("collocated", "noncollocated"), groups=None) -> dict:
     """Every certified share the reproduction's verdicts need, for ``cases``.
 
     * ``"main"``: the scaled box (``kp/m2``, ``kv/m2`` in ``[0.1, 50]``) at the paper's
       ``mu``, every ``e``, refined until every class (:data:`PROPERTIES`) is within the
-      width (:attr:`Settings.certified`); conclusions 1-3, the ``m2 = 1`` reading;
+      width (:attr:`Settings.certified`); conclusions 1-3, the ``m2 = 1`` reading, and the
+      ``mu`` study at the paper's ``mu``;
     * ``"limit"``: the same box at ``mu = 1e-4`` (the remark ``mu -> 0``;
       :attr:`Settings.certified_ends`);
     * ``"mu_ends"``: existence at both ends of :attr:`Settings.mu_range` (the remark on
@@ -439,40 +501,35 @@ def reproduction_shares(settings, cases=("collocated", "noncollocated")) -> dict
       (:attr:`Settings.certified_readings`);
     * ``"mu_moves"``: existence at the two values of ``mu`` between which the sampled share
       rises most (:func:`mu_move_values`; the largest move against the remark's trend,
-      certified so that the remark can report it; :attr:`Settings.certified_ends`).
+      certified so that the remark can report it; :attr:`Settings.certified_ends`);
+    * ``"mu_values"``, ``"gamma_values"`` (with :attr:`Settings.certify_every_value`):
+      existence at every other value of the ``mu`` study, existence and stability at every
+      value of the ``gamma`` study (:func:`study_values`; :attr:`Settings.certified_values`).
+
+    ``groups`` (a subset of :data:`GROUPS`, default all) lets the groups run in separate
+    processes.
 
     Returns
     -------
     dict
-        ``{group: {key: CertifiedShare}}`` with keys ``(case, e)``, ``(case, e, mu)`` and
-        ``(case, e, m2)``, and ``"seconds"``/``"cpu_seconds"`` per group.
+        ``{group: {key: CertifiedShare}}`` with keys ``(case, e)``, ``(case, e, mu)``,
+        ``(case, e, m2)`` and ``(case, e, gamma)``, and ``"seconds"``/``"cpu_seconds"`` per
+        group.
     """
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.reproduce.settings import PAPER
 
-    es = [float(e) for e in PAPER["e"]]
-    mu0 = PAPER["mu"]
+    groups = GROUPS if groups is None else tuple(groups)
+    bad = [g for g in groups if g not in GROUPS]
+    if bad:
+        raise ValueError(f"groups must be a subset of {GROUPS}, got {bad!r}")
     common = dict(gamma=settings.gamma, omega=PAPER["omega"], n=PAPER["n"])
-    fine = dict(zip(("grid", "levels", "width"), settings.certified))
-    coarse = dict(zip(("grid", "levels", "width"), settings.certified_readings))
-    ends = dict(zip(("grid", "levels", "width"), settings.certified_ends))
-    es_only, ex_only = ("exists_stable",), ("exists",)
-    groups = {
-        "main": ([ShareTarget(c, e, mu0, properties=PROPERTIES, key=(c, e)) for c in cases
-                  for e in es], fine),
-        "limit": ([ShareTarget(c, e, MU_LIMIT, properties=es_only, key=(c, e)) for c in cases
-                   for e in es], ends),
-        "mu_ends": ([ShareTarget(c, e, m, properties=ex_only, key=(c, e, m)) for c in cases
-                     for e in es for m in settings.mu_range], ends),
-        "readings": ([ShareTarget(c, e, mu0, m2, properties=es_only, key=(c, e, m2))
-                      for c in cases for e in es for m2 in reading_values(settings)
-                      if m2 != 1.0], coarse),
-        "mu_moves": ([ShareTarget(c, e, m, properties=ex_only, key=(c, e, m)) for c in cases
-                      for e in es for m in mu_move_values(settings, c, e)
-                      if m not in settings.mu_range], ends)}
     out = {"seconds": {}, "cpu_seconds": {}}
-    for name, (targets, cfg) in groups.items():
+    for name, (targets, cfg) in _groups(settings, cases).items():
+        if name not in groups:
+            continue
         t0, c0 = time.perf_counter(), time.process_time()
+        cfg = dict(zip(("grid", "levels", "width"), cfg))
         res = certified_shares(targets, **cfg, **common) if targets else []
         out[name] = {t.key: r for t, r in zip(targets, res)}
         out["seconds"][name] = time.perf_counter() - t0

@@ -180,9 +180,25 @@ def certified_points(shares) -> dict:
         ex[PAPER["mu"]] = [shares["main"][(case, e)].interval("exists") for e in es]
         st[PAPER["mu"]] = [shares["main"][(case, e)].interval("exists_stable") for e in es]
         st[MU_LIMIT] = [shares["limit"][(case, e)].interval("exists_stable") for e in es]
-        for (c, e, mu), r in shares["mu_ends"].items():
-            if c == case:
-                ex.setdefault(mu, [None] * len(es))[es.index(e)] = r.interval("exists")
+        for g in ("mu_ends", "mu_moves", "mu_values"):
+            for (c, e, mu), r in shares.get(g, {}).items():
+                if c == case:
+                    ex.setdefault(mu, [None] * len(es))[es.index(e)] = r.interval("exists")
+    return out
+
+
+def certified_gamma_points(shares) -> dict | None:
+    """The ``gamma`` study's certified intervals for its figure, as :func:`certified_points`
+    (``{"exists_stable": {case: {gamma: [(lo, hi) per e]}}}``), or None when the study is
+    sampled only."""
+    group = shares.get("gamma_values") or {}
+    if not group:
+        return None
+    es = [float(e) for e in PAPER["e"]]
+    out = {"exists_stable": {}}
+    for (c, e, g), r in group.items():
+        per = out["exists_stable"].setdefault(c, {})
+        per.setdefault(g, [None] * len(es))[es.index(e)] = r.interval("exists_stable")
     return out
 
 
@@ -214,10 +230,9 @@ def study_figures(out, *, study, studies, settings, runs, table, shares, hook=No
                 if isinstance(row["id"], int)}
     save(plot_m2_study(study, readings=readings, m2_range=settings.m2_range,
                        runs=[r.m2 for r in runs]), out / "m2_study.png", hook)
-    cert = certified_points(shares)
+    cert = {"mu": certified_points(shares), "gamma": certified_gamma_points(shares)}
     for name, ps in studies.items():
-        save(plot_param_study(ps, certified=cert if name == "mu" else None),
-             out / f"{name}_study.png", hook)
+        save(plot_param_study(ps, certified=cert.get(name)), out / f"{name}_study.png", hook)
 
 
 def convention_figures(run, settings, *, study=None, hook=None, cache=None) -> None:

@@ -303,11 +303,27 @@ def resolve_conventions(settings: Settings, study: M2Study | None) -> list:
     return list(dict.fromkeys(out))
 
 
-def _certified_job(settings, cases):
+def _certified_job(settings, cases, groups=None):
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.reproduce.certified import reproduction_shares
 
-    return reproduction_shares(settings, cases)
+    return reproduction_shares(settings, cases, groups)
+
+
+#: The certified groups of the verdicts (one job per case) and of the studies' values (one
+#: job per study and case: the longest work, spread over the workers).
+_VERDICT_GROUPS = ("main", "limit", "mu_ends", "readings", "mu_moves")
+
+
+def _certified_jobs(settings) -> dict:
+    jobs = {f"certified {c}": (_certified_job, (settings, (c,), _VERDICT_GROUPS))
+            for c in CASES}
+    if settings.certify_every_value:
+        for study in ("gamma", "mu"):
+            for c in CASES:
+                jobs[f"certified {study} values {c}"] = (
+                    _certified_job, (settings, (c,), (f"{study}_values",)))
+    return jobs
 
 
 def _traced_job(settings):
@@ -398,9 +414,7 @@ def reproduce(out="reproduce-out", *, mode="quick", executor="processes", max_wo
     # the traced boundaries first: the first convention's figures wait for them, the
     # certified shares are needed only at the end
     bg = _Background({"traced boundaries": (_traced_job, (settings,)),
-                      "certified collocated": (_certified_job, (settings, ("collocated",))),
-                      "certified noncollocated": (_certified_job,
-                                                  (settings, ("noncollocated",)))}, parallel)
+                      **_certified_jobs(settings)}, parallel)
     try:
         return _reproduce(out, mode, settings, bg, executor=executor, max_workers=max_workers,
                           progress=progress, log=log, figure_hook=figure_hook)
@@ -467,7 +481,7 @@ def _reproduce(out, mode, settings, bg, *, executor, max_workers, progress, log,
                            progress=progress, log=say, tick=tick, figure_hook=figure_hook,
                            study=study, cache=cache) for m2 in conventions]
     t0 = time.perf_counter()
-    shares = merge_shares([bg.get("certified collocated"), bg.get("certified noncollocated")])
+    shares = merge_shares([bg.get(k) for k in _certified_jobs(settings)])
     timings["waiting for the certified shares"] = time.perf_counter() - t0
     tick("certified shares")
     t0 = time.perf_counter()

@@ -108,6 +108,17 @@ class Settings:
         The same for the remarks on ``mu``: the scaled box at ``mu = 1e-4`` and at both ends
         of :attr:`mu_range` (a coarse base grid refined deeper: the proofs at extreme ``mu``
         need smaller cells).
+    certified_values : (int, int, float)
+        The same for every other value of the ``mu`` and ``gamma`` studies, when
+        :attr:`certify_every_value` (existence against ``mu``, existence and stability against
+        ``gamma``).
+    certify_every_value : bool
+        Certify the ``mu`` and ``gamma`` studies at every one of their :attr:`param_points`
+        values (full mode). Otherwise the ``mu`` study is certified at the ends of its range,
+        at the paper's ``mu`` and at the two values between which its sampled share moves most
+        against the remark's trend (:func:`~hybridpd.reproduce.certified.mu_move_values`), and
+        the ``gamma`` study is sampled only: certifying ``2 x 3 x param_points`` boxes costs
+        several minutes of CPU.
     mu_range, gamma_range : (lo, hi)
         Ranges of the ``mu`` and ``gamma`` studies (log axes).
     param_points : int
@@ -139,6 +150,8 @@ class Settings:
     certified: tuple = (16, 3, 0.02)
     certified_readings: tuple = (8, 2, 0.05)
     certified_ends: tuple = (8, 5, 0.05)
+    certified_values: tuple = (8, 3, 0.1)
+    certify_every_value: bool = False
     mu_range: tuple = (0.01, 10.0)
     gamma_range: tuple = (0.05, 2.0)
     param_points: int = 41
@@ -184,7 +197,7 @@ class Settings:
         _count("m2_robust", self.m2_robust, 1)
         for v in self.m2_robust_grid:
             _count("m2_robust_grid", v)
-        for nm in ("certified", "certified_readings", "certified_ends"):
+        for nm in ("certified", "certified_readings", "certified_ends", "certified_values"):
             v = getattr(self, nm)
             if len(v) != 3:
                 raise ValueError(f"{nm} must be (grid, levels, width), got {v!r}")
@@ -194,6 +207,9 @@ class Settings:
                 raise ValueError(f"{nm} width must lie in [0, 1], got {v[2]!r}")
         for nm in ("param_points", "param_grid"):
             _count(nm, getattr(self, nm))
+        if not isinstance(self.certify_every_value, bool):
+            raise ValueError(f"certify_every_value must be True or False, "
+                             f"got {self.certify_every_value!r}")
 
     @classmethod
     def quick(cls, **kw) -> Settings:
@@ -213,7 +229,8 @@ class Settings:
                     basin_extensions=1, m2_grid=8001, m2_verdicts=9, m2_robust=5,
                     m2_robust_grid=(16, 16), certified=(32, 4, 0.01),
                     certified_readings=(16, 3, 0.02),
-                    certified_ends=(16, 5, 0.02), param_points=61, param_grid=31)
+                    certified_ends=(16, 5, 0.02), certified_values=(8, 3, 0.1),
+                    certify_every_value=True, param_points=31, param_grid=31)
         return cls(**{**base, **kw})
 
     def check_num(self, num: int, scale: float | None = None) -> int:

@@ -218,17 +218,21 @@ def _checks(shares, es, settings, check5) -> dict:
     lo_mu, hi_mu = settings.mu_range
     ends = {m: {c: _intervals(shares, "mu_ends", [(c, e, m) for e in es], "exists")
                 for c in CASES} for m in (lo_mu, hi_mu)}
-    # the values between which a sampled share rises most, certified too (per case and e)
-    moves = {(c, e): sorted((k[2], r.interval("exists"))
-                            for k, r in shares.get("mu_moves", {}).items()
-                            if k[0] == c and k[1] == e) for c in CASES for e in es}
+    # every certified value inside the range: the values between which a sampled share
+    # rises most, every other value of the study (when certified) and the paper's mu, whose
+    # cells are the main box's
+    inside = {(c, e): sorted([(k[2], r.interval("exists"))
+                              for g in ("mu_moves", "mu_values")
+                              for k, r in shares.get(g, {}).items() if k[:2] == (c, e)]
+                             + [(PAPER["mu"], shares["main"][(c, e)].interval("exists"))])
+              for c in CASES for e in es}
     limit = {c: _intervals(shares, "limit", [(c, e) for e in es]) for c in CASES}
     return {1: C.check_1(main["collocated"], main["noncollocated"], es,
                          col_exists=exist["collocated"], non_exists=exist["noncollocated"]),
             2: C.check_2(main["collocated"], main["noncollocated"], es),
             3: C.check_3(main["collocated"], es), 5: check5,
             "mu-existence": C.check_mu_existence((lo_mu, hi_mu), ends[lo_mu], ends[hi_mu], es,
-                                                 inside=moves),
+                                                 inside=inside),
             "mu-small": C.check_mu_small((MU_LIMIT, PAPER["mu"]), limit, main, es)}
 
 
@@ -313,8 +317,34 @@ def _certified_section(shares, settings) -> dict:
             "main": cfg(settings.certified, "main"), "limit": cfg(settings.certified_ends, "limit"),
             "mu_ends": cfg(settings.certified_ends, "mu_ends"),
             "readings": cfg(settings.certified_readings, "readings"),
+            "values": cfg(settings.certified_values, "mu_values")
+            if shares.get("mu_values") else None,
+            "every_value": bool(shares.get("mu_values") or shares.get("gamma_values")),
             "mu_limit": MU_LIMIT, "mu_ends_values": list(settings.mu_range),
             "readings_m2": reading_values(settings)}
+
+
+def gamma_certified(shares, settings) -> dict | None:
+    """The ``gamma`` study certified at every value (None when it is sampled only): per case
+    and ``e`` the certified share where the orbit exists and is stable at each value, and the
+    values where stable gains are proved to exist somewhere in the box (``lo > 0``) and where
+    they are proved absent from it (``hi = 0``)."""
+    group = shares.get("gamma_values") or {}
+    if not group:
+        return None
+    out = {}
+    for case in CASES:
+        for e in (float(v) for v in PAPER["e"]):
+            pts = sorted((k[2], r.interval("exists_stable")) for k, r in group.items()
+                         if k[:2] == (case, e))
+            out.setdefault(case, {})[f"{e:g}"] = {
+                "gamma": [g for g, _ in pts], "exists_stable": [list(iv) for _, iv in pts],
+                "proved_somewhere": [g for g, iv in pts if iv[0] > 0],
+                "proved_nowhere": [g for g, iv in pts if iv[1] == 0]}
+    r = next(iter(group.values()))
+    return {"grid": [r.finest, r.finest], "base_grid": settings.certified_values[0],
+            "levels": settings.certified_values[1], "width": settings.certified_values[2],
+            "shares": out}
 
 
 def _shares_json(group, keyfmt) -> dict:
@@ -377,7 +407,10 @@ def build_summary(*, settings, mode, study, studies, runs, shares, check5, timin
             "mu_ends": _shares_json(shares["mu_ends"], lambda k: (k[0], f"{k[2]:g}",
                                                                   f"{k[1]:g}")),
             "readings": _shares_json(shares["readings"], lambda k: (k[0], f"{k[2]:g}",
-                                                                    f"{k[1]:g}"))},
+                                                                    f"{k[1]:g}")),
+            **{g: _shares_json(shares.get(g, {}), lambda k: (k[0], f"{k[2]:.6g}", f"{k[1]:g}"))
+               for g in ("mu_moves", "mu_values", "gamma_values")}},
+        "gamma_certified": gamma_certified(shares, settings),
         "conclusions": conclusions, "remarks": remarks,
         "m2_stable_intervals": ivs, "m2_interval_ends": ends,
         "m2_study": {"range": list(settings.m2_range), "bracketing_points": settings.m2_grid,

@@ -222,10 +222,14 @@ def _row_mu_existence(c, grid):
             moves += 1
         parts.append(item)
     mu0, mu1 = c["mu"]
+    counts = sorted({len(v) for v in c.get("series", {}).values()}) or [2]
+    where = (f"at {counts[-1]} values of mu" if len(counts) == 1
+             else f"at {counts[0]}-{counts[-1]} values of mu")
     text = (f"existence share of the box at mu = {mu0:g} → mu = {mu1:g}: " + "; ".join(parts)
-            + f" ({_cert(grid)}; the ends of the studied range decide a trend over it; "
-            + ("a proved rise inside the range is reported and does not decide" if moves else
-               "no rise inside the range is proved where the sampled shares rise most")
+            + f" ({_cert(grid)}; certified {where} in the range, whose ends decide a trend "
+            "over it; "
+            + ("the largest proved rise inside the range is reported and does not decide"
+               if moves else "no rise inside the range is proved")
             + ")")
     return _row("mu-existence", c["verdict"], text,
                 readings_text="read on the scaled box (m2 = 1)")
