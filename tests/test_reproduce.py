@@ -305,6 +305,9 @@ def test_the_lead_table_states_each_rows_convention_and_box(run):
     assert f"basins at m2 = {data['conventions']['chosen_m2']:g}" in by_id["4"]
     c5 = next(c for c in data["conclusions"] if c["id"] == 5)["evidence"]
     assert f"kp/m2 in [{c5['gains']['kp'][0]:g}, {c5['gains']['kp'][1]:g}]" in by_id["5"]
+    # one box for every region row: conclusion 5's gain grid spans the certified box
+    assert c5["gains"]["kp"] == pytest.approx(box)
+    assert c5["gains"]["kv"] == pytest.approx(data["certified"]["box"]["kv/m2"])
 
 
 def test_the_studies_are_certified_at_every_value(run):

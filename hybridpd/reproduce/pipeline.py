@@ -125,11 +125,13 @@ def _comparison(m2, settings, grid, n_starts, maxiter, *, scaled=True, uncertain
 
     P = PAPER
     s = m2 if scaled else 1.0
+    # the gain box of the region verdicts (Figs 4-5's box), so that every row reads one box
+    kpm, kvm, _ = settings.gains
     return robustness_comparison(
         mu=P["mu"], gamma=P["gamma"], x10=settings.x10, m2=m2, n=P["n"], omega=P["omega"],
         e=0.5, grid=tuple(grid), uncertainty_grid=uncertainty or settings.uncertainty_grid,
-        n_starts=n_starts, maxiter=maxiter, kp_range=(0.1 * s, 100.0 * s),
-        kv_range=(0.1 * s, 100.0 * s))
+        n_starts=n_starts, maxiter=maxiter, kp_range=(0.1 * s, kpm * s),
+        kv_range=(0.1 * s, kvm * s))
 
 
 def m2_study(settings: Settings, *, log=None) -> M2Study:
