@@ -53,11 +53,11 @@ def _sampled_classes(case, e, x, y, k=8):
 
 
 COARSE = [
-    # the default depth ("auto": 7 for 9 x 9 cells) must do it
+    # the default depth and budget ("auto": depth 10 for 9 x 9 cells, 512 parts) must do it
     pytest.param("noncollocated", 0.5, ("kp", 5, 9, 9), ("kv", 0.1, 4, 9), "auto",
                  id="noncollocated"),
     pytest.param("collocated", 0.1, ("kp", 0.1, 20, 9), ("kv", 0.1, 50, 9), "auto",
-                 id="collocated", marks=pytest.mark.slow),   # ~10 s
+                 id="collocated", marks=pytest.mark.slow),   # ~10 s (2 s of arb)
 ]
 
 

@@ -1,9 +1,9 @@
 """Certified classification: the interval layer against arb, the proofs against point
 evaluations and an independent implementation of the paper's orbit.
 
-The independent implementation (``_Paper``) is written here from the paper's equations only:
-the closed loop between impacts as a 6 x 6 linear system flowed with ``scipy.linalg.expm``,
-Newton's impact law, the symmetry conditions (13)-(14) solved as a linear system for
+The independent implementation (``Paper``, ``tests/_paper_orbit.py``) is written from the
+paper's equations only: the closed loop between impacts as a 6 x 6 linear system flowed
+with ``scipy.linalg.expm``, Newton's impact law, the symmetry conditions (13)-(14) solved as a linear system for
 ``(C, S) = xm (cos w t0, sin w t0)``, viability by dense sampling of the gap, and the
 multipliers from central finite differences of the impact map (contacts located with
 ``brentq``).
@@ -12,11 +12,10 @@ import math
 
 import numpy as np
 import pytest
-import scipy.linalg
+from _paper_orbit import Paper
 from _regions import pair_region_map
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from scipy.optimize import brentq
 
 import hybridpd as hp
 from hybridpd.pair import intervals as iv
@@ -230,86 +229,6 @@ def test_stability_criteria_agree_with_eigenvalues(seed):
 # ---------------------------------------------------------------------------------------------
 # the paper, independently: expm flows, the symmetry conditions, finite-difference multipliers
 
-class _Paper:
-    """The simple symmetric orbit of order 1 from the paper's equations (see module)."""
-
-    def __init__(self, case, kp, kv, mu, e, L, omega, m2=1.0, x10=1.0):
-        self.mu, self.e, self.L, self.w, self.x10 = mu, e, L, omega, x10
-        A = np.zeros((6, 6))
-        A[0, 1] = A[2, 3] = 1.0
-        A[4, 5], A[5, 4] = -omega, omega
-        # m2 y2' = m2 xd'' + kp (xd - x) + kv (xd' - y), xd = pc, xd' = -w ps, xd'' = -w^2 pc
-        x_col, y_col = (2, 3) if case == "collocated" else (0, 1)
-        A[3, 4] = -omega**2 + kp / m2
-        A[3, 5] = -kv * omega / m2
-        A[3, x_col] -= kp / m2
-        A[3, y_col] -= kv / m2
-        self.A = A
-        self.tau = math.pi / omega
-        self.v = 2 * x10 * omega / math.pi
-        self.y20 = self.v * (e - 2 * mu - 1) / (1 + e)
-        self.y21 = self.v * (e + 2 * e * mu - 1) / (1 + e)
-        x20 = x10 - L
-        Phi = scipy.linalg.expm(A * self.tau)
-        # x2(tau) = -x20, y2(tau) = -y20, linear in (C, S)
-        base = Phi @ np.array([x10, -self.v, x20, self.y21, 0.0, 0.0])
-        Mcs = Phi[2:4, 4:6]
-        self.C, self.S = np.linalg.solve(Mcs, -np.array([x20, self.y20]) - base[2:4])
-        self.xm = math.hypot(self.C, self.S)
-        self.X0 = np.array([x10, -self.v, x20, self.y21, self.C, self.S])
-
-    def flow(self, X, t):
-        return scipy.linalg.expm(self.A * t) @ X
-
-    def gap_max(self, num=2000):
-        """max |x1 - x2| over the open flight (dense sampling)."""
-        ts = np.linspace(0, self.tau, num + 2)[1:-1]
-        return max(abs(self.flow(self.X0, t)[0] - self.flow(self.X0, t)[2]) for t in ts)
-
-    def _impact(self, X):
-        y1, y2 = X[1], X[3]
-        mu, e = self.mu, self.e
-        X = X.copy()
-        X[1] = ((mu - e) * y1 + (1 + e) * y2) / (1 + mu)
-        X[3] = ((1 + e) * mu * y1 + (1 - mu * e) * y2) / (1 + mu)
-        return X
-
-    def _to_wall(self, X, wall):
-        """Flow until z3 = wall * L (first crossing after leaving the other wall)."""
-        g = lambda t: self.flow(X, t)[0] - self.flow(X, t)[2] - wall * self.L
-        ts = np.linspace(1e-9, 3 * self.tau, 240)
-        vals = [g(t) for t in ts]
-        for k in range(1, len(ts)):
-            if vals[k - 1] * vals[k] <= 0:
-                t = brentq(g, ts[k - 1], ts[k], xtol=1e-15, rtol=1e-15)
-                return self.flow(X, t)
-        raise AssertionError("no contact")
-
-    def section_map(self, s):
-        """P on the pre-impact section z3 = +L: (phi, z1, z2, z4) -> the next one."""
-        phi, z1, z2, z4 = s
-        X = np.array([z1 + self.L, z2 + z4, z1, z2, self.xm * math.cos(self.w * phi),
-                      self.xm * math.sin(self.w * phi)])
-        X = self._to_wall(self._impact(X), -1)
-        X = self._to_wall(self._impact(X), +1)
-        ph = math.atan2(X[5], X[4]) / self.w
-        ph += round((phi - ph) * self.w / (2 * math.pi)) * 2 * math.pi / self.w
-        return np.array([ph, X[2], X[3], X[1] - X[3]])
-
-    def fixed_point(self):
-        phi0 = math.atan2(self.S, self.C) / self.w % (2 * math.pi / self.w)
-        return np.array([phi0, self.x10 - self.L, self.y20, self.v - self.y20])
-
-    def multipliers(self, h=1e-6):
-        s0 = self.fixed_point()
-        J = np.zeros((4, 4))
-        for j in range(4):
-            d = np.zeros(4)
-            d[j] = h * max(1.0, abs(s0[j]))
-            J[:, j] = (self.section_map(s0 + d) - self.section_map(s0 - d)) / (2 * d[j])
-        return np.sort(np.abs(np.linalg.eigvals(J)))[::-1]
-
-
 def _corners_and_centre(b):
     (a0, a1), (b0, b1) = b["kp"], b["kv"]
     return [(0.5 * (a0 + a1), 0.5 * (b0 + b1)), (a0, b0), (a0, b1), (a1, b0), (a1, b1)]
@@ -338,7 +257,7 @@ def test_proved_cell_against_points_and_the_paper(case, e, kp, kv, expected):
         assert pts.exists.all()
         assert (pts.stable if expected == "proved_stable" else ~pts.stable).all()
     for a, c in _corners_and_centre(b):
-        paper = _Paper(case, a, c, 0.1, e, 0.75, 5.0)
+        paper = Paper(case, a, c, 0.1, e, 0.75, 5.0)
         gap = paper.gap_max()
         if expected == "proved_no_orbit":
             assert gap > 0.75
@@ -363,7 +282,7 @@ def test_point_certificate_encloses_the_float_path_and_the_paper():
     moduli = np.sort(np.abs(orb.multipliers))[::-1]
     for (lo, hi), m in zip(c.multiplier_moduli, moduli):
         assert lo - 1e-9 <= m <= hi + 1e-9
-    paper = _Paper("collocated", 10, 20, 0.1, 0.5, 0.75, 5.0)
+    paper = Paper("collocated", 10, 20, 0.1, 0.5, 0.75, 5.0)
     np.testing.assert_allclose(paper.xm, np.mean(c.xm), rtol=1e-9, atol=0)
     np.testing.assert_allclose(paper.multipliers(), [np.mean(m) for m in c.multiplier_moduli],
                                rtol=1e-4, atol=1e-6)

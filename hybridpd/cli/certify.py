@@ -27,9 +27,10 @@ def register(sub):
     cli.add_pair(p, grid=("kp", "kv"), many=("e",))
     p.add_argument("--depth", type=cli.depth_arg, default="auto",
                    help="bisections of an undecided part of a cell (default auto: 3 for a "
-                        "101 x 101 grid, one more for every factor 4 fewer cells, at most 10)")
-    p.add_argument("--max-parts", type=int, default=None,
-                   help="parts classified per cell at most (default: only --depth bounds them)")
+                        "101 x 101 grid, one more for every factor 2 fewer cells, at most 12)")
+    p.add_argument("--max-parts", type=lambda t: cli._auto_or_int(t, 1, None), default="auto",
+                   help="parts classified per cell at most (default auto: the full tree of "
+                        "--depth, at most 512)")
     p.add_argument("--no-confirm", action="store_true",
                    help="skip the confirmation of every proved cell in arb")
     p.add_argument("--certificate", default=None, metavar="FILE",

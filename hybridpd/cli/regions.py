@@ -52,7 +52,7 @@ def register(sub):
                         "--out; the figure draws the proved classes)")
     p.add_argument("--certify-depth", type=cli.depth_arg, default="auto",
                    help="--certify: bisections of an undecided cell (default auto: 3 for a "
-                        "101 x 101 grid, one more for every factor 4 fewer cells)")
+                        "101 x 101 grid, one more for every factor 2 fewer cells)")
     cli.add_executor(p, default="serial")
     cli.add_output(p, out=(".nc", ".zarr", ".npz"), model_out=(".nc", ".zarr"), store=True,
                    plot="the region map (one panel per e)")

@@ -47,10 +47,10 @@ from hybridpd.model import (
 from hybridpd.pair import proofs
 from hybridpd.pair.intervals import widen_down, widen_up
 
-__all__ = ["FLAG_MEANINGS", "FLAG_VALUES", "MAP_AXES", "REASONS", "BoxCertificate",
-           "CertifiedCells", "CertifiedMap", "OrbitCertificate", "auto_depth", "cell_boxes",
-           "cell_edges", "certified_map", "certify_box", "certify_cells", "certify_orbit",
-           "class_shares", "resolve_depth"]
+__all__ = ["FLAG_MEANINGS", "FLAG_VALUES", "MAP_AXES", "REASONS", "STOPS", "BoxCertificate",
+           "CertifiedCells", "CertifiedMap", "OrbitCertificate", "auto_depth", "auto_parts",
+           "cell_boxes", "cell_edges", "certified_map", "certify_box", "certify_cells",
+           "certify_orbit", "class_shares", "resolve_depth", "resolve_parts"]
 
 #: CF flag values of a certified map and their meanings (``flag_meanings`` is one string).
 FLAG_VALUES = (0, 1, 2, 3)
@@ -62,6 +62,9 @@ MAP_AXES = ("kp", "kv", "mu", "L", "omega", "m2", "x10")
 REASONS = tuple(proofs.REASONS) + (
     "undecided: proved in float intervals but not confirmed in arb",)
 R_ARB = len(proofs.REASONS)
+
+#: Why the subdivision of a cell stopped (:data:`hybridpd.pair.proofs.CELL_STOPS`).
+STOPS = proofs.CELL_STOPS
 
 _DOMAIN = {"e": (0.0, 1.0)}  # closed; every other parameter is > 0
 
@@ -127,9 +130,16 @@ class CertifiedCells:
     arb_unconfirmed: int = 0
     tree: object = field(default=None, repr=False)
 
+    @property
+    def stops(self) -> np.ndarray:
+        """Why each box's subdivision stopped, indices into :data:`STOPS` (shape of
+        ``flags``): ``proved`` (a box arb did not confirm keeps it; its reason says so),
+        ``mixed``, ``depth``, ``budget`` or ``max_boxes``."""
+        return np.asarray(self.tree.cell_stop, np.int8).reshape(np.shape(self.flags))
+
 
 def certify_cells(case="collocated", *, kp, kv, mu, e, omega, m2=1.0, gamma=None, L=None,
-                  x10=1.0, n=1, depth=3, max_parts=None, confirm=True):
+                  x10=1.0, n=1, depth=3, max_parts="auto", confirm=True):
     """Classify many boxes at once (vectorised); every parameter a number or ``(lo, hi)``.
 
     The interval layer proves (:func:`hybridpd.pair.prooftree.prove_cells`: undecided parts
@@ -150,8 +160,9 @@ def certify_cells(case="collocated", *, kp, kv, mu, e, omega, m2=1.0, gamma=None
         Odd order.
     depth : int
         Bisections of an undecided part at most; ``0`` classifies the boxes as given.
-    max_parts : int or None
-        Parts classified per box at most (``None``: ``depth`` alone bounds the work).
+    max_parts : int, None or "auto"
+        Parts classified per box at most (``None``: ``depth`` alone bounds the work;
+        ``"auto"``, the default: :func:`auto_parts` of ``depth``).
     confirm : bool
         Confirm every proved box in arb.
 
@@ -172,8 +183,7 @@ def certify_cells(case="collocated", *, kp, kv, mu, e, omega, m2=1.0, gamma=None
     case = Case.parse(case).value
     n = check_odd_order(n)
     depth = check_int("depth", depth, 0, 16)
-    if max_parts is not None:
-        max_parts = check_int("max_parts", max_parts, 1)
+    max_parts = resolve_parts(max_parts, depth)
     if (gamma is None) == (L is None):
         raise ValueError("give exactly one of gamma or L (gamma = L / x10)")
     gam = _interval_arg("gamma", gamma) if gamma is not None else \
@@ -590,6 +600,12 @@ class CertifiedMap:
         Wall time of the arb confirmation.
     certificate : Certificate or None
         The proof (:class:`hybridpd.pair.certificate.Certificate`) when asked for.
+    stops : ndarray of int8, same shape as ``flags``
+        Why each cell's subdivision stopped, indices into :data:`STOPS` (``proved``,
+        ``mixed``, ``depth``, ``budget``, ``max_boxes``; a cell arb did not confirm keeps
+        ``proved``, its reason says why it is undecided).
+    max_parts : int or None
+        The budget of parts per cell used.
     """
 
     __repr__ = compact_repr
@@ -612,6 +628,8 @@ class CertifiedMap:
     arb_unconfirmed: np.ndarray = None
     arb_seconds: float = 0.0
     certificate: object = field(default=None, repr=False)
+    stops: np.ndarray = field(default=None, repr=False)
+    max_parts: int = None
 
     def save_certificate(self, path):
         """Write the map's certificate (JSON, ``.gz`` compressed); re-check it with
@@ -630,14 +648,21 @@ class CertifiedMap:
         return (self.flags != 0).mean(axis=(1, 2))
 
     def summary(self) -> list:
-        """One line per ``e``: the proved counts and each class's share interval."""
+        """One line per ``e``: the proved counts, each class's share interval and why the
+        undecided cells' subdivision stopped."""
         lines = []
-        for e, sh in zip(self.e, self.shares()):
+        for i, (e, sh) in enumerate(zip(self.e, self.shares())):
             N = sh["undecided"]["cells"]
             parts = [f"{name} {d['proved']}/{N} [{100 * d['share'][0]:.1f}, "
                      f"{100 * d['share'][1]:.1f}]%" for name, d in sh.items() if name != "undecided"]
-            lines.append(f"e = {e:g}: undecided {sh['undecided']['proved']}/{N}; "
-                         + "; ".join(parts))
+            line = f"e = {e:g}: undecided {sh['undecided']['proved']}/{N}; " + "; ".join(parts)
+            if self.stops is not None:
+                und = self.flags[i] == 0
+                count = np.bincount(self.stops[i][und].astype(np.int64), minlength=len(STOPS))
+                why = [f"{STOPS[k]} {int(c)}" for k, c in enumerate(count) if c]
+                if why:
+                    line += f" (undecided cells stopped: {', '.join(why)})"
+            lines.append(line)
         return lines
 
     def to_dict(self) -> dict:
@@ -649,6 +674,9 @@ class CertifiedMap:
                 "flag_values": list(FLAG_VALUES), "flag_meanings": FLAG_MEANINGS,
                 "flags": self.flags.tolist(), "reasons": self.reasons.tolist(),
                 "reason_texts": list(REASONS), "depth": self.depth,
+                "max_parts": self.max_parts,
+                "stops": None if self.stops is None else self.stops.tolist(),
+                "stop_texts": list(STOPS),
                 "seconds": self.seconds, "boxes_evaluated": self.boxes_evaluated,
                 "arb_unconfirmed": None if self.arb_unconfirmed is None else
                 [int(v) for v in self.arb_unconfirmed], "arb_seconds": self.arb_seconds,
@@ -694,21 +722,48 @@ def cell_boxes(x_name, x_edges, y_name, y_edges):
 
 #: The grid whose cells ``depth = 3`` suits (the benchmark's 101 x 101)
 _DENSE_CELLS = 101 * 101
+#: The largest depth :func:`auto_depth` chooses and the parts per cell :func:`auto_parts`
+#: allows at most (twice the 255 parts of the former largest automatic depth, 7).
+MAX_AUTO_DEPTH = 12
+MAX_AUTO_PARTS = 512
 
 
 def auto_depth(n_cells: int) -> int:
-    """Bisections per undecided cell for a grid of `n_cells` cells: 3 for a 101 x 101 grid,
-    one more for every factor 4 fewer cells (a coarse cell holds that many dense ones; its
-    boundaries are resolved as finely), at most 10.
+    """Bisections per undecided part for a grid of `n_cells` cells: 3 for a 101 x 101 grid,
+    one more for every factor 2 fewer cells, at most :data:`MAX_AUTO_DEPTH`.
+
+    A coarse cell holding ``4^k`` dense ones is cut to their size by ``k`` halvings along
+    each of the two axes, ``2 k`` in all: its parts are then as fine as the dense grid's
+    cells, and below them as finely subdivided.
 
     Examples
     --------
     >>> from hybridpd.pair.certified import auto_depth
     >>> auto_depth(101 * 101), auto_depth(51 * 51), auto_depth(81), auto_depth(1)
-    (3, 4, 7, 10)
+    (3, 5, 10, 12)
     """
     n_cells = check_int("n_cells", n_cells, 1)
-    return int(min(10, 3 + max(0, math.ceil(math.log(_DENSE_CELLS / n_cells, 4) - 1e-9))))
+    more = max(0, math.ceil(math.log2(_DENSE_CELLS / n_cells) - 1e-9))
+    return int(min(MAX_AUTO_DEPTH, 3 + more))
+
+
+def auto_parts(depth: int) -> int:
+    """Parts classified per cell at most with bisection depth `depth`: all ``2^(depth+1) - 1``
+    parts of the full tree, at most :data:`MAX_AUTO_PARTS`.
+
+    A cell proved in one class is seldom a full tree: it is cut finely only along the
+    boundaries of its enclosures' failure, and a cell that a class boundary crosses stops
+    when two of its parts are proved in different classes. The budget bounds the work of a
+    cell whose parts stay undecided along a long curve.
+
+    Examples
+    --------
+    >>> from hybridpd.pair.certified import auto_parts
+    >>> auto_parts(3), auto_parts(10)
+    (15, 512)
+    """
+    depth = check_int("depth", depth, 0, 16)
+    return int(min(2 ** (depth + 1) - 1, MAX_AUTO_PARTS))
 
 
 def resolve_depth(depth, n_cells: int) -> int:
@@ -721,10 +776,21 @@ def resolve_depth(depth, n_cells: int) -> int:
     return check_int("depth", depth, 0, 16)
 
 
+def resolve_parts(max_parts, depth: int):
+    """``max_parts`` as an int or ``None``: ``"auto"`` is :func:`auto_parts` of ``depth``,
+    ``None`` no budget, else an int >= 1 (``ValueError`` naming it)."""
+    if isinstance(max_parts, str):
+        if max_parts != "auto":
+            raise ValueError(f"max_parts must be 'auto', None or an int >= 1, got "
+                             f"{max_parts!r}")
+        return auto_parts(depth)
+    return None if max_parts is None else check_int("max_parts", max_parts, 1)
+
+
 def certified_map(case="collocated", *, x=("kp", 0.1, 50.0, 101), y=("kv", 0.1, 50.0, 101),
                   e=(0.1, 0.5, 0.9), mu=None, omega=None, L=None, gamma=None, x10=1.0,
                   m2=1.0, n=1, kp=None, kv=None, spacing="linear", depth="auto",
-                  chunk_size=4096, max_parts=None, confirm=True,
+                  chunk_size=4096, max_parts="auto", confirm=True,
                   certificate=None) -> CertifiedMap:
     """Certified classification of every cell of a grid (see the module docstring).
 
@@ -748,12 +814,13 @@ def certified_map(case="collocated", *, x=("kp", 0.1, 50.0, 101), y=("kv", 0.1, 
         The cells' convention of :func:`cell_edges`.
     depth : int or "auto"
         Bisections of an undecided part of a cell at most; ``"auto"`` (default): 3 for a
-        101 x 101 grid and one more for every factor 4 fewer cells (:func:`auto_depth`),
+        101 x 101 grid and one more for every factor 2 fewer cells (:func:`auto_depth`),
         so that coarse cells are subdivided as finely as a dense grid's.
     chunk_size : int
         Cells classified per vectorised batch.
-    max_parts : int or None
-        Parts classified per cell at most (``None``: ``depth`` alone bounds the work).
+    max_parts : int, None or "auto"
+        Parts classified per cell at most (``None``: ``depth`` alone bounds the work;
+        ``"auto"``, the default: :func:`auto_parts` of the depth, at most 512).
     confirm : bool
         Confirm every proved cell in arb.
     certificate : None, True, str or Path
@@ -794,24 +861,26 @@ def certified_map(case="collocated", *, x=("kp", 0.1, 50.0, 101), y=("kv", 0.1, 
     fixed = _fixed_params(xname, yname, mu=mu, omega=omega, L=L, gamma=gamma, x10=x10, m2=m2,
                           kp=kp, kv=kv)
     depth = resolve_depth(depth, xs.size * ys.size)
+    max_parts = resolve_parts(max_parts, depth)
     xe, ye = cell_edges(xs, sx), cell_edges(ys, sy)
     cells = cell_boxes(xname, xe, yname, ye)
     flags = np.zeros((es.size, ys.size, xs.size), np.int8)
     reasons = np.zeros_like(flags)
+    stops = np.zeros_like(flags)
     evaluated = 0
     unconfirmed = np.zeros(es.size, np.int64)
     arb_seconds = 0.0
     maps = []
     flat = {k: (lo.ravel(), hi.ravel()) for k, (lo, hi) in cells.items()}
     for i, ev in enumerate(es):
-        f_out, r_out = flags[i].reshape(-1), reasons[i].reshape(-1)
+        f_out, r_out, s_out = (a[i].reshape(-1) for a in (flags, reasons, stops))
         trees = []
         for c in range(0, xs.size * ys.size, chunk_size):
             sl = slice(c, c + chunk_size)
             part = {k: (lo[sl], hi[sl]) for k, (lo, hi) in flat.items()}
             r = certify_cells(case, n=n, depth=depth, e=ev, max_parts=max_parts, confirm=False,
                               **fixed, **part)
-            f_out[sl], r_out[sl] = r.flags, r.reasons
+            f_out[sl], r_out[sl], s_out[sl] = r.flags, r.reasons, r.stops
             evaluated += r.boxes_evaluated
             trees.append((c, r.tree))
         if confirm or certificate is not None:
@@ -836,7 +905,7 @@ def certified_map(case="collocated", *, x=("kp", 0.1, 50.0, 101), y=("kv", 0.1, 
             cert.save(certificate)
     return CertifiedMap(case, n, xname, yname, xs, ys, xe, ye, es, {**fixed, "n": n}, flags,
                         reasons, int(depth), time.perf_counter() - t0, evaluated, unconfirmed,
-                        arb_seconds, cert)
+                        arb_seconds, cert, stops, max_parts)
 
 
 def _merge_trees(trees):

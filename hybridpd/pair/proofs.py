@@ -39,7 +39,7 @@ from hybridpd.pair.interval_kernels import interval_kernel
 from hybridpd.pair.intervals import EmptyIntersectionError, Interval, widen_down, widen_up
 from hybridpd.pair.selftest import require_libm
 
-__all__ = ["CLASSES", "REASONS", "SCALED", "Boxes", "classify", "classify_bisect", "viability"]
+__all__ = ["CELL_STOPS", "CLASSES", "REASONS", "SCALED", "Boxes", "classify", "classify_bisect", "viability"]
 
 #: Class codes (CF flag values) and their names.
 CLASSES = ("undecided", "proved_stable", "proved_unstable", "proved_no_orbit")
@@ -59,6 +59,12 @@ REASONS = (
 )
 R_STABLE, R_UNSTABLE, R_VIOLATED, R_EXIST, R_VIAB, R_STAB, R_MIXED, R_EMPTY = \
     range(len(REASONS))
+
+#: Why the subdivision of a cell stopped: proved (all its parts in one class), two parts
+#: proved in different classes, an undecided part at the depth bound, the cell's budget of
+#: parts spent, the round's bound on boxes reached.
+CELL_STOPS = ("proved", "mixed", "depth", "budget", "max_boxes")
+STOP_PROVED, STOP_MIXED, STOP_DEPTH, STOP_BUDGET, STOP_MAX_BOXES = range(len(CELL_STOPS))
 
 #: The scaled parameters of a box, in the kernels' argument order.
 SCALED = ("kpt", "kvt", "mu", "e", "gam", "w")

@@ -55,6 +55,7 @@ from hybridpd.pair.centred import INTERVAL_OPS, CForm, CForm2
 from hybridpd.pair.interval_kernels import interval_kernel
 from hybridpd.pair.intervals import Interval
 from hybridpd.pair.proofs import (
+    CELL_STOPS,
     NO_ORBIT,
     R_EXIST,
     R_MIXED,
@@ -65,6 +66,11 @@ from hybridpd.pair.proofs import (
     R_VIOLATED,
     SCALED,
     STABLE,
+    STOP_BUDGET,
+    STOP_DEPTH,
+    STOP_MAX_BOXES,
+    STOP_MIXED,
+    STOP_PROVED,
     UNDECIDED,
     UNSTABLE,
     Boxes,
@@ -80,7 +86,7 @@ EmptyIntersectionError = getattr(_intervals, "EmptyIntersectionError", _NeverRai
 #: Reason of a box whose enclosures met empty (an arithmetic fault; nothing proved).
 R_EMPTY = getattr(proofs, "R_EMPTY", R_EXIST)
 
-__all__ = ["PIECE_KINDS", "TIGHT_OPS", "UNSTABLE_KINDS", "ProofTree", "classify_record",
+__all__ = ["CELL_STOPS", "PIECE_KINDS", "TIGHT_OPS", "UNSTABLE_KINDS", "ProofTree", "classify_record",
            "prove_cells"]
 
 #: The tests of a piece of the flight: both walls from the gap's range, or the end pieces'.
@@ -569,6 +575,8 @@ class ProofTree:
         Boxes classified (cells and parts).
     stop : str
         ``"decided"``, ``"depth"``, ``"budget"`` or ``"max_boxes"``.
+    cell_stop : ndarray of int, shape (N,)
+        Why each cell's subdivision stopped, an index into :data:`CELL_STOPS`.
     """
 
     __repr__ = compact_repr
@@ -582,6 +590,7 @@ class ProofTree:
     record: dict = field(repr=False)
     evaluated: int
     stop: str
+    cell_stop: np.ndarray = field(default=None, repr=False)
 
     def leaves_of(self, cell: int) -> np.ndarray:
         """Indices of the leaves of one cell."""
@@ -645,6 +654,7 @@ def prove_cells(case, n, boxes: Boxes, *, depth=3, max_parts=None, pieces=8, fli
     mixed = np.zeros(N, bool)
     open_ = np.zeros(N, bool)
     used = np.zeros(N, np.int64)
+    halted = np.full(N, -1, np.int64)   # why a cell with undecided parts stopped
     first_why = None
     last_why = np.full(N, -1, np.int64)
     owner = np.arange(N)
@@ -669,14 +679,18 @@ def prove_cells(case, n, boxes: Boxes, *, depth=3, max_parts=None, pieces=8, fli
             kept.append((owner[dec], cur.take(np.flatnonzero(dec)), c[dec],
                          _select_record(rec, dec)))
         und = ~dec & ~mixed[owner]
-        open_[:] = False
+        # a cell whose undecided parts the budget dropped stays open: those parts are no
+        # longer classified, but they are not proved either
+        dropped = halted == STOP_BUDGET
+        open_[:] = dropped
         open_[owner[und]] = True
-        last_why[:] = -1
+        last_why[~dropped] = -1
         last_why[owner[und]] = w[und]
         if not np.any(und):
             break
         if level == depth:
             stop = "depth"
+            halted[open_] = STOP_DEPTH
             break
         cand = np.flatnonzero(und)
         if max_parts is not None:
@@ -686,11 +700,13 @@ def prove_cells(case, n, boxes: Boxes, *, depth=3, max_parts=None, pieces=8, fli
             over = cand[~allowed[owner[cand]]]
             if over.size:
                 stop = "budget"
+                halted[owner[over]] = STOP_BUDGET
             cand = cand[allowed[owner[cand]]]
             if cand.size == 0:
                 break
         if 2 * cand.size > max_boxes:
             stop = "max_boxes"
+            halted[open_ & (halted < 0)] = STOP_MAX_BOXES
             break
         sub = cur.take(cand)
         sub_owner = owner[cand]
@@ -706,7 +722,8 @@ def prove_cells(case, n, boxes: Boxes, *, depth=3, max_parts=None, pieces=8, fli
     why = np.where(done, np.select([agreed == STABLE, agreed == UNSTABLE], [R_STABLE, R_UNSTABLE],
                                    R_VIOLATED),
                    np.where(mixed, R_MIXED, np.where(last_why >= 0, last_why, first_why)))
-    return _tree(cls, why, boxes, kept, done, evaluated, stop)
+    cell_stop = np.where(done, STOP_PROVED, np.where(mixed, STOP_MIXED, halted))
+    return _tree(cls, why, boxes, kept, done, evaluated, stop, cell_stop)
 
 
 def _select_record(rec, mask):
@@ -727,7 +744,7 @@ def _select_record(rec, mask):
     return out
 
 
-def _tree(cls, why, cells, kept, done, evaluated, stop):
+def _tree(cls, why, cells, kept, done, evaluated, stop, cell_stop):
     owners, boxes, classes, recs = [], [], [], []
     offset = 0
     for o, b, c, r in kept:
@@ -772,4 +789,4 @@ def _tree(cls, why, cells, kept, done, evaluated, stop):
         else:
             rec2[k] = v[order]
     return ProofTree(cls.astype(np.int64), why.astype(np.int64), cells, leaf_cell, leaves,
-                     leaf_cls, rec2, int(evaluated), stop)
+                     leaf_cls, rec2, int(evaluated), stop, cell_stop.astype(np.int64))

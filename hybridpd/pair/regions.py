@@ -127,7 +127,7 @@ class SymmetricFamily:
             ``NAME.certified.zarr`` beside it.
         certify_depth : int or "auto"
             Bisections of an undecided cell (0 to 12; ``"auto"``: 3 for a 101 x 101 grid, one
-            more for every factor 4 fewer cells, :func:`hybridpd.pair.certified.auto_depth`).
+            more for every factor 2 fewer cells, :func:`hybridpd.pair.certified.auto_depth`).
 
         Returns
         -------
