@@ -52,7 +52,7 @@ def test_coarse_stable_cells_proved_and_checked_independently():
     assert (flags == 1).all(), flags                       # every cell proved stable
     assert cm.arb_unconfirmed.tolist() == [0]
     assert {STOPS[s] for s in cm.stops[0].ravel()} == {"proved"}
-    assert "stopped" not in cm.summary()[0]                # no undecided cell to explain
+    assert "why undecided" not in cm.summary()[0]          # no undecided cell to explain
     # the hardest cell, undecided at depth 9: its subdivision stops at the depth bound there
     xe, ye = cm.x_edges, cm.y_edges
     boxes, _ = proofs.scaled_boxes(kp=(xe[0], xe[1]), kv=(ye[1], ye[2]), e=0.1, m2=1.0,
@@ -80,6 +80,9 @@ def test_proved_cells_of_a_coarse_noncollocated_grid_agree_with_their_points():
     flags, stops = cm.flags[0], cm.stops[0]
     assert {1, 2} <= set(flags.ravel().tolist())
     assert cm.arb_unconfirmed.tolist() == [0]
+    if (flags == 0).any():
+        assert "why undecided: mixed" in cm.summary()[0]
+    assert cm.to_dict()["stops"] == cm.stops.tolist()
     xe, ye = cm.x_edges, cm.y_edges
     rng = np.random.default_rng(2)
     for j in range(4):

@@ -659,9 +659,11 @@ class CertifiedMap:
             if self.stops is not None:
                 und = self.flags[i] == 0
                 count = np.bincount(self.stops[i][und].astype(np.int64), minlength=len(STOPS))
-                why = [f"{STOPS[k]} {int(c)}" for k, c in enumerate(count) if c]
+                # an undecided cell whose subdivision proved it: arb did not confirm it
+                names = ("not confirmed in arb",) + STOPS[1:]
+                why = [f"{names[k]} {int(c)}" for k, c in enumerate(count) if c]
                 if why:
-                    line += f" (undecided cells stopped: {', '.join(why)})"
+                    line += f" (why undecided: {', '.join(why)})"
             lines.append(line)
         return lines
 

@@ -312,14 +312,15 @@ def _certified_job(settings, cases, groups=None):
     return reproduction_shares(settings, cases, groups)
 
 
-#: The certified groups of the verdicts (one job per case) and of the studies' values (one
-#: job per study and case: the longest work, spread over the workers).
-_VERDICT_GROUPS = ("main", "limit", "mu_ends", "readings", "mu_moves")
+#: The certified groups of the verdicts in two jobs per case (the collocated proofs cost
+#: about three times the non-collocated ones: four jobs keep both workers busy to the end),
+#: then those of the studies' values (full mode), one job per study and case.
+_VERDICT_JOBS = (("limit", "mu_ends", "mu_moves"), ("main", "readings"))
 
 
 def _certified_jobs(settings) -> dict:
-    jobs = {f"certified {c}": (_certified_job, (settings, (c,), _VERDICT_GROUPS))
-            for c in CASES}
+    jobs = {f"certified {c} {'+'.join(g)}": (_certified_job, (settings, (c,), g))
+            for c in CASES for g in _VERDICT_JOBS}
     if settings.certify_every_value:
         for study in ("gamma", "mu"):
             for c in CASES:

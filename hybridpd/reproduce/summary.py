@@ -372,7 +372,7 @@ def build_summary(*, settings, mode, study, studies, runs, shares, check5, timin
                  "grid": list(settings.basin)} for r in runs
                 if all(o.exists and o.stable for o in r.orbits.values())]
     finest = {g: (next(iter(shares[g].values())).finest,) * 2
-              for g in ("main", "limit", "mu_ends")}
+              for g in ("main", "limit", "mu_ends", "mu_values") if shares.get(g)}
     table = build_table(checks=checks, readings=readings, basins_measured=measured,
                         grids=finest)
     conclusions = []

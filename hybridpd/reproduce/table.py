@@ -205,7 +205,7 @@ def _row_5(c, readings_by):
     return _row(5, c["verdict"], text, readings_by, rtext, basis="sampled grid")
 
 
-def _row_mu_existence(c, grid):
+def _row_mu_existence(c, grid, values_grid=None):
     parts, moves = [], 0
     for key, t in c["trends"].items():
         case, e = key.split(" ")
@@ -225,9 +225,12 @@ def _row_mu_existence(c, grid):
     counts = sorted({len(v) for v in c.get("series", {}).values()}) or [2]
     where = (f"at {counts[-1]} values of mu" if len(counts) == 1
              else f"at {counts[0]}-{counts[-1]} values of mu")
+    others = ("" if values_grid is None else
+              f", the values other than the ends and the largest sampled rise on "
+              f"{values_grid[0]} × {values_grid[1]} cells at most")
     text = (f"existence share of the box at mu = {mu0:g} → mu = {mu1:g}: " + "; ".join(parts)
-            + f" ({_cert(grid)}; certified {where} in the range, whose ends decide a trend "
-            "over it; "
+            + f" ({_cert(grid)}; certified {where} in the range{others}, whose ends decide "
+            "a trend over it; "
             + ("the largest proved rise inside the range is reported and does not decide"
                if moves else "no rise inside the range is proved")
             + ")")
@@ -275,12 +278,13 @@ def build_table(*, checks: dict, readings: dict, basins_measured: list, grids: d
         "verdict", "window", "grid"}``.
     grids : dict
         Cells ``(n, n)`` of the finest grids of the certified boxes: ``"main"`` (the scaled
-        box), ``"limit"`` (the same at ``mu = 1e-4``) and ``"mu_ends"`` (the ends of the
-        ``mu`` range).
+        box), ``"limit"`` (the same at ``mu = 1e-4``), ``"mu_ends"`` (the ends of the
+        ``mu`` range) and, where the run certifies every value of the ``mu`` study,
+        ``"mu_values"``.
     """
     g = grids["main"]
     return [_row_1(checks[1], readings[1], g), _row_2(checks[2], readings[2], g),
             _row_3(checks[3], readings[3], g), _row_4(readings[4], basins_measured),
             _row_5(checks[5], readings[5]),
-            _row_mu_existence(checks["mu-existence"], grids["mu_ends"]),
+            _row_mu_existence(checks["mu-existence"], grids["mu_ends"], grids.get("mu_values")),
             _row_mu_small(checks["mu-small"], grids["limit"], g)]
