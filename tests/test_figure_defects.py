@@ -26,6 +26,7 @@ from hybridpd.plotting.basins import plot_basin
 from hybridpd.plotting.regions import plot_region_panels
 from hybridpd.plotting.studies import (
     CERT_LABEL,
+    CERT_PLAIN,
     plot_m2_study,
     plot_param_study,
     plot_scaled_regions,
@@ -279,6 +280,34 @@ def test_gamma_study_draws_a_one_point_non_collocated_region_visibly():
         assert np.allclose(outline.get_colors()[0], _VERMILLION)
         assert outline.get_linewidths()[0] >= 1.0
     _assert_no_raw_caret(fig, "gamma_study")
+
+
+def test_gamma_study_certified_at_every_value_draws_bands_not_bars():
+    # 12 values certified (a full run certifies every value): bars that close would hide
+    # each other, so each e is a band between the certified ends, hatched per e
+    ps = _param_study("gamma")
+    ps.values = np.logspace(np.log10(0.05), np.log10(2), 12)
+    ps.fractions = {c: {q: np.full((3, 12), 0.02) for q in ("exists", "both")}
+                    for c in ("collocated", "noncollocated")}
+    ps.maps = {c: {"stable": np.zeros((3, ps.map_kv.size, 12), bool)}
+               for c in ("collocated", "noncollocated")}
+    iv = [(0.01, 0.05), (0.0, 0.08), (0.02, 0.03)]
+    cert = {"exists_stable": {c: {float(g): iv for g in ps.values}
+                              for c in ("collocated", "noncollocated")}}
+    fig = plot_param_study(ps, certified=cert)
+    _plain_figure(fig)
+    _draw(fig)
+    assert not [ln for ax in fig.axes for ln in ax.lines if ln.get_gid() in
+                (CERT_PLAIN, CERT_LABEL)]
+    for ax in [a for a in fig.axes if a.get_ylabel() == "exists and stable (%)"]:
+        bands = [c for c in ax.collections if c.get_gid() == CERT_PLAIN]
+        assert len(bands) == 3
+        assert len({c.get_hatch() for c in bands}) == 3
+        assert len({tuple(to_rgba(c.get_facecolor()[0])[:3]) for c in bands}) == 3
+        assert ax.get_ylim()[1] >= 8.0          # the widest upper end is on the axis
+    (lg,) = fig.legends
+    entry = _legend_entries(lg)[CERT_PLAIN]
+    assert len(entry) == 3
 
 
 def test_scaled_regions_render_the_unit_power_as_mathematics():

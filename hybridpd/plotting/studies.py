@@ -287,24 +287,48 @@ def plot_m2_study(study, *, readings, m2_range=None, runs=()):
 FEW_POINTS = 3
 #: Legend words of the certified bars.
 CERT_LABEL = "certified interval (decides the remark)"
+#: Legend words of certified intervals that decide nothing (the gamma study).
+CERT_PLAIN = "certified interval"
+#: More certified values than this in the sampled range are drawn as a band, not as bars.
+BAND_FROM = 8
+#: Hatch of each series' band (colour and hatch tell the series apart).
+_BAND_HATCH = ("", "////", "\\\\\\\\")
 
 
-def _cert_bars(ax, points, k, e_count):
+def _cert_bars(ax, points, k, e_count, *, span=None, label=CERT_LABEL):
     """Certified intervals ``{p: [(lo, hi) per e]}`` of series ``k`` as vertical bars in the
     series' colour, a cap at both ends (offset along the log axis so that the ``e`` stay
-    apart). The legend entry shows one bar per ``e``, in the colours drawn."""
+    apart). Where more than :data:`BAND_FROM` values lie in ``span`` (the sampled range) they
+    are drawn as one band between the lower and upper ends instead (bars that close would
+    hide each other), hatched per series; the values outside stay bars. The legend entry
+    shows one mark per ``e``, in the colours drawn."""
     s = series(k)
+    inside = {p: iv for p, iv in points.items()
+              if span is not None and span[0] / 1.01 <= p <= span[1] * 1.01}
+    band = len(inside) > BAND_FROM
+    if band:
+        proxy = tuple(patch_proxy(facecolor=series(j)["color"], alpha=0.3,
+                                  edgecolor=series(j)["color"], hatch=_BAND_HATCH[j % 3])
+                      for j in range(e_count))
+        xs = sorted(inside)
+        lo = [100 * inside[p][k][0] if inside[p][k] is not None else np.nan for p in xs]
+        hi = [100 * inside[p][k][1] if inside[p][k] is not None else np.nan for p in xs]
+        poly = ax.fill_between(xs, lo, hi, facecolor=s["color"], alpha=0.3,
+                               edgecolor=s["color"], hatch=_BAND_HATCH[k % 3], lw=0.8,
+                               zorder=1.5)
+        register(ax, poly, label, proxy)
+    else:
+        proxy = tuple(line_proxy(color=series(j)["color"], ls="none", marker="|", ms=9,
+                                 mew=1.6) for j in range(e_count))
     shift = 10 ** (0.06 * (k - (e_count - 1) / 2))
-    proxy = tuple(line_proxy(color=series(j)["color"], ls="none", marker="|", ms=9, mew=1.6)
-                  for j in range(e_count))
     for p, ivs in sorted(points.items()):
         iv = ivs[k]
-        if iv is None:
+        if iv is None or (band and p in inside):
             continue
         x = p * shift
         (ln,) = ax.plot([x, x], [100 * iv[0], 100 * iv[1]], color=s["color"], ls="-", lw=1.6,
                         marker="_", ms=7, mew=1.6, zorder=6)
-        register(ax, ln, CERT_LABEL, proxy)
+        register(ax, ln, label, proxy)
 
 
 def _gaps(values, extra, decades=1.0):
@@ -427,6 +451,7 @@ def plot_param_study(ps, *, certified=None):
               if certified else [])
     far, near = _gaps(ps.values, cert_x)
     xlim = (min(near) / 1.8, max(near) * 1.8)
+    span = (float(np.min(ps.values)), float(np.max(ps.values)))
     for i, (case, q) in enumerate(ps.fractions.items()):
         for j, (quantity, what) in enumerate((("exists", "exists"),
                                               ("both", "exists and stable"))):
@@ -441,7 +466,8 @@ def plot_param_study(ps, *, certified=None):
                 if pts:
                     for a in (ax, left):
                         if a is not None:
-                            _cert_bars(a, pts, k, ne)
+                            _cert_bars(a, pts, k, ne, span=span,
+                                       label=CERT_LABEL if name == "mu" else CERT_PLAIN)
                     top_val = max(top_val, max(100 * iv[k][1] for iv in pts.values()
                                                if iv[k] is not None))
             ax.set_ylim(0, max(1.0, 1.08 * top_val))

@@ -72,11 +72,13 @@ CAPTIONS = {
     "mu_study": (
         "Shares of the gain box (kp/m2, kv/m2 in [0.1, 50]) where the orbit exists, and "
         "exists and is stable, against mu, each on its own axis; lines: the sampled grid; "
-        "bars: certified intervals (the shares that decide the remarks on mu); bottom: the "
+        "bars: certified intervals (the shares that decide the remarks on mu; a hatched band "
+        "per e where every value is certified); bottom: the "
         "(mu, kv) plane at kp = 10 m2."),
     "gamma_study": (
-        "As the mu study, against gamma = L / x10 (the paper leaves gamma open); bars: "
-        "certified intervals, where the run certifies every value of the study.")}
+        "As the mu study, against gamma = L / x10 (the paper leaves gamma open); shaded "
+        "bands, hatched per e: the certified intervals, where the run certifies every value "
+        "of the study (the full run).")}
 
 
 def bottom_line(d: dict) -> list:
