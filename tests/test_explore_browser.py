@@ -205,7 +205,7 @@ def test_basin_and_branch_on_demand(page, server):
     assert 21.9 < graze < 22.0
 
 
-def test_a_model_files_cell_shows_hybridpd_orbits_multipliers(browser):
+def test_a_model_files_cell_shows_hybridpd_orbits_multipliers(browser, tmp_path):
     """``--model``: the map over two entries, a click, the cell's orbit on the stroboscopic
     section against ``hybridpd orbit --model --set``."""
     from hybridpd.explore.server import free_port
@@ -236,6 +236,34 @@ def test_a_model_files_cell_shows_hybridpd_orbits_multipliers(browser):
         rho = float(_text(page, "spectral-radius"))
         assert abs(rho - cli["spectral_radius"]) <= 1e-6 * max(1.0, cli["spectral_radius"])
         assert _text(page, "stable") == str(cli["stable"]).lower()
+        # the panels save what the command line writes: the orbit's --json object (with
+        # the mapped values), the multipliers' figure, the map's file
+        with page.expect_download() as dl:
+            page.get_by_role("button", name="save orbit data").click()
+        saved = tmp_path / "orbit.json"
+        dl.value.save_as(saved)
+        d = json.loads(saved.read_text())
+        assert set(d["values"]) == {"controller.kp", "controller.kv"}
+        assert d["values"]["controller.kp"] == pytest.approx(kp, rel=1e-10)
+        assert d["values"]["controller.kv"] == pytest.approx(kv, rel=1e-10)
+        assert set(cli) <= set(d) and d["event"] == cli["event"] == "stroboscopic"
+        assert d["spectral_radius"] == pytest.approx(cli["spectral_radius"], rel=1e-9)
+        with page.expect_download() as dl:
+            page.get_by_role("button", name="save orbit figure").click()
+        png = tmp_path / "orbit.png"
+        dl.value.save_as(png)
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        with page.expect_download() as dl:
+            page.get_by_role("button", name="save map data").click()
+        nc = tmp_path / "map.nc"
+        dl.value.save_as(nc)
+        rm = hp.load_region_map(nc)
+        assert rm.x.size == 4 and rm.y.size == 4
+        with page.expect_download() as dl:          # no basin yet: says so, saves no file
+            page.get_by_role("button", name="save basin data").click()
+        empty = tmp_path / "basin.npz"
+        dl.value.save_as(empty)
+        assert empty.read_bytes().startswith(b"cannot save: nothing computed yet")
     finally:
         ctx.close()
         proc.terminate()

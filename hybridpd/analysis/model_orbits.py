@@ -46,6 +46,7 @@ __all__ = [
     "Seed",
     "SimulatedReturns",
     "orbit_from_model",
+    "orbit_record",
     "orbit_status",
     "other_family",
     "signature_codes",
@@ -575,3 +576,56 @@ def orbit_from_model(model, contact: int = 0, wall: int | None = None, period="a
     return po, P
 
 
+def orbit_record(model, orb, P) -> dict:
+    """The JSON object of a model's orbit (``hybridpd orbit --model --json``).
+
+    The orbit's own fields (:meth:`PeriodicOrbit.to_dict`), its section (``event``
+    ``stroboscopic``/``impact``/``release``, ``contact`` and ``wall`` of an event section,
+    ``section_mode``, the period ``T``, the phase ``phi0``, the start time ``t0``), ``n``
+    returns per period, the count of structural zeros of ``DP``, how ``DP`` was obtained, and
+    the pre- and post-jump mechanical states ``[q_1, v_1, ..., q_n, v_n]`` at the section.
+
+    Parameters
+    ----------
+    model : MechanicalModel
+    orb, P : PeriodicOrbit, SectionMap
+        As :func:`orbit_from_model` returns them.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> import hybridpd
+    >>> f = Path(hybridpd.__file__).parents[1] / "examples" / "models" / "robot_joint_pd.toml"
+    >>> m = hybridpd.load_model(f)
+    >>> d = orbit_record(m, *orbit_from_model(m, 0))
+    >>> d["event"], d["exists"], len(d["pre"]) == 2 * m.system.n
+    ('stroboscopic', True, True)
+    """
+    sec = P.section
+    d = orb.to_dict()
+    n = model.system.n
+    lay = model.automaton.layout
+    z = orb.z
+    strobe = sec.guard is None
+    reset = None if strobe else sec.automaton.mode(sec.mode).guards[sec.guard_index].reset
+    zp = z if reset is None else reset[0] @ z + reset[1]
+
+    def mech(x):      # [q_1, v_1, ..., q_n, v_n]
+        return [float(x[lay["q"][i]]) if j == 0 else float(x[lay["v"][i]])
+                for i in range(n) for j in (0, 1)]
+
+    t0 = sec.to_state(orb.s)[1] if np.all(np.isfinite(orb.s)) else None
+    zeros = len(orb.s) - len(orb.multipliers) if orb.converged else None
+    event = "stroboscopic" if strobe else ("release" if sec.guard.startswith("release")
+                                           else "impact")
+    contact = None if strobe else int("".join(c for c in sec.guard if c.isdigit()))
+    d.update({"model": model.source, "contact": contact,
+              "wall": None if strobe else (1 if sec.guard.endswith("+") else -1),
+              "event": event, "section_mode": sec.mode, "T": sec.period,
+              "phi0": sec.phase if strobe else (float(orb.s[0]) if sec.has_phase else None),
+              "t0": t0, "n": orb.period, "structural_zeros": zeros,
+              "jacobian": orb.quantities.get("jacobian"),
+              "section_choice": orb.quantities.get("section_choice"),
+              "jacobian_error": orb.quantities.get("jacobian_error"),
+              "pre": mech(z), "post": mech(zp)})
+    return d

@@ -165,7 +165,7 @@ def sequence_summary(signature, max_runs: int = _MAX_RUNS) -> str:
 
 def _run_model(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.analysis.model_orbits import orbit_from_model
+    from hybridpd.analysis.model_orbits import orbit_from_model, orbit_record
     from hybridpd.analysis.model_sections import DivergedRun
 
     model = model_of(args)
@@ -183,7 +183,7 @@ def _run_model(args) -> int:
             raise
         print(f"hybridpd orbit: the run diverged: {why} ({exc})", file=sys.stderr)
         return EXIT_DIVERGED
-    d = _model_record(model, orb, P, args)
+    d = orbit_record(model, orb, P)
     status = model_status(orb)
     if args.json:
         print_json(d)
@@ -230,45 +230,6 @@ def _section_words(d) -> str:
                 f"period {d['T']:.6g}, mode {d['section_mode']}")
     return (f"contact {d['contact']} (wall {d['wall']:+d}, {d['event']} in mode "
             f"{d['section_mode']}")
-
-
-def _model_record(model, orb, P, args) -> dict:
-    """The ``--json`` object of a model's orbit: the orbit's fields, the section, and the
-    pre- and post-jump mechanical states ``[q_1, v_1, ..., q_n, v_n]``."""
-    sec = P.section
-    d = orb.to_dict()
-    n = model.system.n
-    lay = model.automaton.layout
-    z = orb.z
-    strobe = sec.guard is None
-    reset = None if strobe else sec.automaton.mode(sec.mode).guards[sec.guard_index].reset
-    zp = z if reset is None else reset[0] @ z + reset[1]
-
-    def mech(x):      # [q_1, v_1, ..., q_n, v_n]
-        return [float(x[lay["q"][i]]) if j == 0 else float(x[lay["v"][i]])
-                for i in range(n) for j in (0, 1)]
-
-    t0 = sec.to_state(orb.s)[1] if np.all(np.isfinite(orb.s)) else None
-    zeros = None
-    if orb.converged:
-        zeros = len(orb.s) - len(orb.multipliers)
-    event = "stroboscopic" if strobe else ("release" if sec.guard.startswith("release")
-                                           else "impact")
-    d.update({"model": model.source, "contact": None if strobe else _contact_of(sec.guard),
-              "wall": None if strobe else (1 if sec.guard.endswith("+") else -1),
-              "event": event, "section_mode": sec.mode, "T": sec.period,
-              "phi0": sec.phase if strobe else (float(orb.s[0]) if sec.has_phase else None),
-              "t0": t0, "n": orb.period, "structural_zeros": zeros,
-              "jacobian": orb.quantities.get("jacobian"),
-              "section_choice": orb.quantities.get("section_choice"),
-              "jacobian_error": orb.quantities.get("jacobian_error"),
-              "pre": mech(z), "post": mech(zp)})
-    return d
-
-
-def _contact_of(guard: str) -> int:
-    """The contact index in a section guard's name (``contact0+``, ``release12-``)."""
-    return int(re.sub(r"\D", "", guard))
 
 
 def _transient_diverged(model, args) -> str | None:

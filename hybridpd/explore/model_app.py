@@ -12,6 +12,7 @@ worker thread with a progress indicator; the page stays live.
 from __future__ import annotations
 
 import html
+import io
 import time
 
 import numpy as np
@@ -20,6 +21,7 @@ from bokeh.events import Tap
 from bokeh.models import ColumnDataSource, LinearColorMapper
 from bokeh.plotting import figure
 
+from hybridpd.explore import figures as F
 from hybridpd.explore.app import (
     _BASIN_COLORS,
     _CLASS_COLORS,
@@ -58,11 +60,14 @@ class ModelExplorer:
     _on_doc = PairExplorer._on_doc
     _safely = PairExplorer._safely
     _say = PairExplorer._say
+    _need = staticmethod(PairExplorer._need)
+    _guarded = PairExplorer._guarded
 
     def __init__(self, path: str, x: tuple, y: tuple, section: dict):
         self.path, self.x, self.y, self.section = path, x, y, dict(section)
         self._doc = pn.state.curdoc
-        self.rm = self.orb = None
+        self.rm = self.orb = self.mb = None
+        self.record = None
         self.values = None
         self._gen = {"orbit": 0, "basin": 0}
         self.status = pn.pane.HTML(_tid("status", "starting"), margin=(2, 10))
@@ -100,9 +105,13 @@ class ModelExplorer:
         self.basin_fig = b
         self.basin_info = pn.pane.HTML(_tid("basin-status", "not computed"), width=420)
         self.layout = pn.Column(
-            self.status, pn.Row(pn.Column(pn.pane.Bokeh(f), self.progress, self.map_info),
-                                pn.Column(self.orbit_info, pn.pane.Bokeh(m))),
-            pn.Row(pn.Column(self.basin_button, pn.pane.Bokeh(b), self.basin_info)))
+            self.status,
+            pn.Row(pn.Column(pn.pane.Bokeh(f), self.progress, self.map_info,
+                             self._downloads("map", lambda: self.rm)),
+                   pn.Column(self.orbit_info, pn.pane.Bokeh(m),
+                             self._downloads("orbit", lambda: self.record))),
+            pn.Row(pn.Column(self.basin_button, pn.pane.Bokeh(b), self.basin_info,
+                             self._downloads("basin", lambda: self.mb))))
         self._schedule(self._start_map)
 
     # ---- the map ------------------------------------------------------------------------
@@ -169,7 +178,7 @@ class ModelExplorer:
         self.sel_src.data = dict(x=[xv], y=[yv])
         self._gen["orbit"] += 1
         self._gen["basin"] += 1
-        self.orb = None
+        self.orb = self.record = self.mb = None
         self.orbit_info.object = (self._head() + "<br>" + _tid("orbit-status", "searching"))
         self._schedule(lambda: self._run_orbit(self._gen["orbit"], dict(self.values)))
 
@@ -186,26 +195,30 @@ class ModelExplorer:
 
     async def _run_orbit(self, gen, values):
         # deferred import: loaded only when a model's page is built
-        from hybridpd.analysis.model_orbits import orbit_from_model
+        from hybridpd.analysis.model_orbits import orbit_from_model, orbit_record
 
         s = self.section
 
         def find():
-            return orbit_from_model(self._model(values), s["contact"], s["wall"], s["period"],
-                                    event=s["event"], periods=s["periods"], mode=s["mode"],
-                                    phase=s["phase"])[0]
+            model = self._model(values)
+            orb, P = orbit_from_model(model, s["contact"], s["wall"], s["period"],
+                                      event=s["event"], periods=s["periods"], mode=s["mode"],
+                                      phase=s["phase"])
+            rec = orbit_record(model, orb, P)
+            rec["values"] = dict(values)
+            return orb, rec
         try:
-            orb = await self._off_loop(find)
+            orb, rec = await self._off_loop(find)
         except Exception as exc:   # noqa: BLE001 - the panel says why
             if gen == self._gen["orbit"]:
                 self._on_doc(self._failed, self.orbit_info, "orbit-status",
                              f"the orbit search failed: {exc}")
             return
         if gen == self._gen["orbit"]:
-            self._on_doc(self._show_orbit, orb)
+            self._on_doc(self._show_orbit, orb, rec)
 
-    def _show_orbit(self, orb):
-        self.orb = orb
+    def _show_orbit(self, orb, record=None):
+        self.orb, self.record = orb, record
         rows = [("exists", _tid("exists", str(bool(orb.converged)).lower())),
                 ("reason", _tid("reason", orb.reason))]
         if orb.converged:
@@ -259,6 +272,7 @@ class ModelExplorer:
             self._on_doc(self._show_basin, mb)
 
     def _show_basin(self, mb):
+        self.mb = mb
         codes = sorted({int(a.label) for a in mb.attractors})
         index = {c: i for i, c in enumerate(codes)}
         img = np.vectorize(lambda v: index.get(int(v), np.nan), otypes=[float])(mb.labels)
@@ -268,6 +282,41 @@ class ModelExplorer:
         self.basin_fig.xaxis.axis_label, self.basin_fig.yaxis.axis_label = mb.x_name, mb.y_name
         self.basin_info.object = (_tid("basin-status", "done") + "<br>"
                                   + "<br>".join(html.escape(x) for x in mb.summary()))
+
+
+    # ---- saving -----------------------------------------------------------------------
+    def _downloads(self, panel: str, get):
+        """Two buttons: the panel's figure (PNG, house style: the region map of ``hybridpd
+        regions --plot``, the multipliers on the unit circle, the basin of ``hybridpd basin
+        --plot``) and its data as the command line writes it (the map's ``.nc``, ``hybridpd
+        orbit --model --json``'s object with the mapped values, the basin's ``.npz``)."""
+        def fig():
+            def make():
+                r = self._need(get)
+                if panel == "orbit":
+                    if self.orb is None or not self.orb.converged:
+                        raise ValueError("no orbit at the selected cell: no multipliers")
+                    return F.figure_bytes("multipliers", self.orb)
+                return F.figure_bytes(panel, r)
+            return io.BytesIO(self._guarded(make))
+
+        def data():
+            def make():
+                r = self._need(get)
+                if panel == "orbit":
+                    # deferred import: loaded only when a file is saved
+                    from hybridpd.cli._common import dumps_json
+
+                    return (dumps_json(r) + "\n").encode()
+                return F.data_bytes(panel, r)
+            return io.BytesIO(self._guarded(make))
+
+        suffix = {"map": ".nc", "orbit": ".json", "basin": ".npz"}[panel]
+        return pn.Row(
+            pn.widgets.FileDownload(callback=fig, filename=f"{panel}.png",
+                                    label=f"save {panel} figure"),
+            pn.widgets.FileDownload(callback=data, filename=f"{panel}{suffix}",
+                                    label=f"save {panel} data"))
 
 
 def model_app(path: str, x: tuple, y: tuple, section: dict):
