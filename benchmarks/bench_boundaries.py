@@ -17,9 +17,8 @@ import time
 
 import numpy as np
 
-from hybridpd.pair.boundaries import boundary_curves
+from hybridpd.pair.boundaries import TestCurve, boundary_curves
 from hybridpd.pair.boundarymask import compare_with_mask, region_status
-from hybridpd.pair.tracing import Tracer
 
 BOXES = [("noncollocated", 0.5, ("kp", 0.1, 20.0), ("kv", 0.1, 6.0)),
          ("collocated", 0.1, ("kp", 0.1, 50.0), ("kv", 0.1, 50.0))]
@@ -30,7 +29,7 @@ def position_error(res):
     """Largest ``|F| / |grad F|`` over the curve points (box units)."""
     worst = 0.0
     for c in res.curves:
-        tr = Tracer(res.plane, c.kind)
+        tr = TestCurve(res.plane, c.kind)
         for u in c.u:
             ((F, g),), _ = tr.fgrad(u)
             worst = max(worst, abs(F) / max(np.linalg.norm(g), 1e-300))

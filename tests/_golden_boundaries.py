@@ -21,7 +21,7 @@ from types import SimpleNamespace
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-import _golden  # noqa: E402
+import _golden
 
 PATH = _golden.DATA / "golden_boundaries.npz"
 PAPER = dict(mu=0.1, gamma=0.75, omega=5.0)

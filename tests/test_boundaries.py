@@ -116,12 +116,12 @@ def test_completeness_against_a_fine_mask_all(name):
 def _crossings(res, kind, name, value):
     """The other parameter where the traced curves of ``kind`` cross ``name = value``,
     corrected onto the curve (exact, not the chord)."""
-    from hybridpd.pair.tracing import Tracer
+    from hybridpd.pair.boundaries import TestCurve
 
     axis = 0 if name == res.x_name else 1
     ax = (res.plane.x, res.plane.y)
     v = ax[axis].to_unit(value)
-    tr = Tracer(res.plane, kind)
+    tr = TestCurve(res.plane, kind)
     out = []
     for c in res.of_kind(kind):
         w = c.u[:, axis] - v
@@ -348,3 +348,48 @@ def test_random_planes_every_status_change_of_the_seed_grid_is_traced(case, plan
         assert cmp.mask_to_curves_cells <= 1.0, cmp
     for kind, left, right in side_status(res):
         assert np.all(left != right), kind
+
+
+def test_curve_stepper_follows_an_ellipse_once_around():
+    """The curve stepper of follow_path on x^2/4 + y^2 = 1 (exact gradient, Newton corrector):
+    every point on the ellipse, every step within (0.2 h, 1.6 h] of the largest step, the
+    tangent's turn per step within max_turn, and the curve closed after one turn."""
+    from hybridpd.analysis.pathfollow import CurvePoint, CurveStepper, follow_path, perp
+
+    def F(u):
+        return u[0] ** 2 / 4 + u[1] ** 2 - 1.0
+
+    def grad(u):
+        return np.array([u[0] / 2, 2 * u[1]])
+
+    def correct(u_pred, t, max_dist):
+        u = np.array(u_pred, float)
+        for it in range(1, 13):
+            u = u - np.linalg.solve(np.vstack([grad(u), t]), [F(u), t @ (u - u_pred)])
+            if np.linalg.norm(u - u_pred) > max_dist:
+                break
+            if abs(F(u)) < 1e-13:
+                return True, u, F(u), grad(u), None, it
+        return False, u, F(u), grad(u), None, it
+
+    start = np.array([2.0, 0.0])
+    first = CurvePoint(start, grad(start), perp(grad(start)))
+    angle = lambda u: np.arctan2(u[1], u[0] / 2) % (2 * np.pi)
+
+    def detect(a, b, i):      # stop on passing angle 0 again
+        return [], (CurvePoint(start, None, None), "closed") if (
+            i > 1 and angle(b.u) < angle(a.u)) else None
+
+    pts, _, end, _, _ = follow_path(first, None, stepper=CurveStepper(correct, max_step=0.1),
+                                    step=0.01, min_step=1e-6, max_step=0.1, max_steps=2000,
+                                    detect=detect)
+    U = np.array([p.u for p in pts])
+    assert end == "closed"
+    assert np.max(np.abs(U[:, 0] ** 2 / 4 + U[:, 1] ** 2 - 1)) < 1e-12
+    steps = np.linalg.norm(np.diff(U[:-1], axis=0), axis=1)
+    assert np.all(steps < 1.6 * 0.1) and np.all(steps > 0)
+    assert all(p.turn <= 0.1 for p in pts[1:-1])
+    # one turn around: the polyline's length is the ellipse's perimeter (9.688448) to the
+    # chords' shortfall
+    length = float(np.sum(np.linalg.norm(np.diff(U, axis=0), axis=1)))
+    assert 9.6 < length <= 9.688449

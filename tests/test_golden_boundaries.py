@@ -1,8 +1,7 @@
 """The traced boundaries (curves, ends, codim-2 points) against the stored golden results:
 bitwise on the recording machine, to a tolerance elsewhere (``tests/_golden.py``)."""
-import pytest
-
 import _golden
+import pytest
 from _golden_boundaries import PATH, compute
 
 

@@ -4,18 +4,23 @@ Unknowns ``u = (s, p)``: a section point and the parameter; :func:`follow_path` 
 solution of ``F(u) = P^k(s; p) - s = 0`` by natural or pseudo-arclength steps (passing
 folds). Its callers (:func:`hybridpd.analysis.continuation.continue_orbit` for any map,
 :func:`hybridpd.pair.continuation.continue_pair_orbit` for the impact pair) give the map
-through ``F``, ``Fs``, ``Fp`` and ``make_point`` and their events through ``detect``.
+through ``F``, ``Fs``, ``Fp`` and ``make_point`` and their events through ``detect``; other
+paths bring their step rules as a :class:`Stepper` (:class:`CurveStepper`: a zero curve in a
+plane, :func:`hybridpd.pair.boundaries.boundary_curves`).
 :func:`newton` (damped; with Broyden updates for
 :func:`~hybridpd.analysis.periodic.find_orbit`) is the Newton method of the correctors and of
 the orbit searches; :func:`illinois` the bracketing root step of event location.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
-__all__ = ["NewtonResult", "bisect_predicate", "corrector", "follow_path", "illinois", "newton"]
+__all__ = ["CurvePoint", "CurveStepper", "NewtonResult", "Stepper", "bisect_predicate", "corrector",
+           "follow_path", "illinois", "newton", "perp"]
 
 _MAX_HALVINGS = 60         # bound on step halvings in one continuation step
 
@@ -225,9 +230,10 @@ def _tangent(DP, fp):
     return np.linalg.svd(np.column_stack([DP - np.eye(DP.shape[0]), fp]))[2][-1]
 
 
-def follow_path(first, stop, *, F, Fs, Fp, make_point, correct, method="arclength", step,
-                min_step, max_step, max_steps, k=1, lower_period=None, unwrap=None,
-                detect=None, out_of_range=None, tol=1e-10, name="p", grow=1.5, explain=None):
+def follow_path(first, stop, *, F=None, Fs=None, Fp=None, make_point=None, correct=None,
+                method="arclength", step, min_step, max_step, max_steps, k=1,
+                lower_period=None, unwrap=None, detect=None, out_of_range=None, tol=1e-10,
+                name="p", grow=1.5, explain=None, stepper=None):
     """Continue from the accepted point ``first`` (its ``u``) towards ``p = stop``.
 
     ``method="natural"``: ``p`` steps by ``h`` (secant predictor through the last two
@@ -277,6 +283,13 @@ def follow_path(first, stop, *, F, Fs, Fp, make_point, correct, method="arclengt
     explain : callable, optional
         ``explain()``: why the map was undefined at a point tried since the previous call
         (``""`` if it was not); names the cause when a corrected point has no Jacobian.
+    stepper : Stepper, optional
+        Step rules of another kind of path (e.g. :class:`CurveStepper`, a zero curve in a
+        plane). Then ``stepper`` predicts and corrects, and ``F``, ``Fs``, ``Fp``,
+        ``make_point``, ``correct``, ``method``, ``stop`` and the options after ``max_steps``
+        but ``detect`` are not used; ``detect(cur, new, index)`` returns ``(events, end)``
+        with ``end`` None (go on) or ``(last, termination)``: the path stops there, with
+        ``last`` (a point or None) appended. None: today's arclength or natural rules.
 
     Returns
     -------
@@ -292,6 +305,9 @@ def follow_path(first, stop, *, F, Fs, Fp, make_point, correct, method="arclengt
     stuck : str
         Why the last step failed (``""`` unless the step fell below ``min_step``).
     """
+    if stepper is not None:
+        return _follow_stepper(first, stepper, step=step, min_step=min_step,
+                               max_step=max_step, max_steps=max_steps, detect=detect)
     pts = [first]
     evs = []
     rejected = 0
@@ -435,6 +451,134 @@ def _step(cur, prev_u, h, tangent, stop, direction, method, correct, make_point,
         if h < min_step:
             break
     return (None, rejected, h, tangent), res, why
+
+
+class Stepper(Protocol):
+    """The step rules of :func:`follow_path` for a path other than a branch of orbits.
+
+    ``predict(cur, h)``: the corrected point a step ``h`` ahead of ``cur`` (predictor and
+    corrector), or None where the correction failed; ``accept(cur, new, h)``: whether that
+    point is the path's next one (else ``h`` is halved); ``next_step(h, cur, new)``: the step
+    after an accepted one.
+    """
+
+    def predict(self, cur, h): ...
+
+    def accept(self, cur, new, h) -> bool: ...
+
+    def next_step(self, h, cur, new) -> float: ...
+
+
+@dataclass
+class CurvePoint:
+    """A point of a zero curve ``F(u) = 0`` in a plane (:class:`CurveStepper`).
+
+    ``u``: the point; ``g``: ``grad F`` there; ``t``: the unit tangent the path moves along
+    (``perp(g)``, oriented); ``data``: the caller's values at ``u``; ``iterations``, ``turn``:
+    the corrector's Newton steps and the tangent's turn (radians) from the previous point.
+    """
+
+    u: np.ndarray
+    g: np.ndarray
+    t: np.ndarray
+    data: object = None
+    iterations: int = 0
+    turn: float = 0.0
+
+
+def perp(g):
+    """The unit vector ``(-g[1], g[0]) / |g|`` (NaN where ``g = 0``): a zero curve's tangent."""
+    n = math.hypot(g[0], g[1])
+    return np.array([-g[1], g[0]]) / n if n > 0 else np.array([np.nan, np.nan])
+
+
+class CurveStepper:
+    """Step rules of a zero curve ``F(u) = 0`` of a function of two unknowns.
+
+    The predictor steps ``h`` along the tangent ``t = perp(grad F)`` of the current point; the
+    corrector ``correct(u_pred, t, max_dist)`` (Newton on ``[F; t . (u - u_pred)] = 0`` within
+    ``max_dist = h`` of the predictor) returns ``(ok, u, F, g, data, iterations)``. A corrected
+    point is accepted when the tangent turned by at most ``max_turn`` and the step's length
+    lies in ``(0.2 h, 1.6 h)``; the step grows by 1.5 (to ``max_step``) after an easy one (at
+    most 3 Newton steps, a turn below ``max_turn / 3``).
+
+    Examples
+    --------
+    The unit circle, one quarter of it from ``(1, 0)``: the turn per step is the step itself,
+    above ``max_turn / 3``, so the steps stay 0.05 and a quarter (length 1.571) takes 32:
+
+    >>> def correct(u_pred, t, max_dist):
+    ...     u = np.array(u_pred, float)
+    ...     for it in range(1, 20):
+    ...         F, g = u @ u - 1.0, 2 * u
+    ...         u = u - np.linalg.solve(np.vstack([g, t]), [F, 0.0])
+    ...         if abs(u @ u - 1.0) < 1e-14:
+    ...             return True, u, 0.0, 2 * u, None, it
+    ...     return False, u, F, g, None, it
+    >>> st = CurveStepper(correct, max_step=0.1)
+    >>> first = CurvePoint(np.array([1.0, 0.0]), np.array([2.0, 0.0]), np.array([0.0, 1.0]))
+    >>> pts, _, end, _, _ = follow_path(
+    ...     first, None, stepper=st, step=0.05, min_step=1e-6, max_step=0.1, max_steps=100,
+    ...     detect=lambda a, b, i: ([], None if b.u[0] > 0 else (None, "quarter")))
+    >>> end, bool(np.allclose([p.u @ p.u for p in pts], 1.0)), len(pts)
+    ('quarter', True, 32)
+    """
+
+    def __init__(self, correct, *, max_step, max_turn=0.1):
+        self.correct = correct
+        self.max_step = max_step
+        self.max_turn = max_turn
+
+    def predict(self, cur, h):
+        t = cur.t
+        ok, u1, _, g1, data, its = self.correct(cur.u + h * t, t, h)
+        if not ok:
+            return None
+        t1 = perp(g1)
+        if t1 @ t < 0:
+            t1 = -t1
+        turn = math.acos(min(1.0, max(-1.0, float(t1 @ t))))
+        return CurvePoint(u1, g1, t1, data, its, turn)
+
+    def accept(self, cur, new, h) -> bool:
+        step = float(np.linalg.norm(new.u - cur.u))
+        return new.turn <= self.max_turn and 0.2 * h < step < 1.6 * h
+
+    def next_step(self, h, cur, new) -> float:
+        if new.iterations <= 3 and new.turn < self.max_turn / 3:
+            return min(1.5 * h, self.max_step)
+        return h
+
+
+def _follow_stepper(first, stepper, *, step, min_step, max_step, max_steps, detect):
+    """:func:`follow_path` with a :class:`Stepper`: the same returns."""
+    pts = [first]
+    evs = []
+    rejected = 0
+    h = min(step, max_step)
+    for _ in range(max_steps):
+        cur = pts[-1]
+        new = None
+        while h >= min_step:      # halvings: bounded by min_step
+            cand = stepper.predict(cur, h)
+            if cand is not None and stepper.accept(cur, cand, h):
+                new = cand
+                break
+            rejected += 1
+            h *= 0.5
+        if new is None:
+            why = "no accepted point at the smallest step"
+            return pts, evs, f"step below min_step = {min_step:g}: {why}", rejected, why
+        if detect is not None:
+            found, end = detect(cur, new, len(pts) - 1)
+            evs.extend(found)
+            if end is not None:
+                if end[0] is not None:
+                    pts.append(end[0])
+                return pts, evs, end[1], rejected, ""
+        pts.append(new)
+        h = stepper.next_step(h, cur, new)
+    return pts, evs, f"max_steps = {max_steps} reached", rejected, ""
 
 
 def illinois(evaluate, ftest, fa, fb, pa, pb, *, size, tol, max_iter, ftol=0.0,
