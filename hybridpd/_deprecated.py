@@ -50,7 +50,6 @@ MOVED_MODULES = {
     "hybridpd.analysis.lti": "hybridpd.pair.lti",
     "hybridpd.analysis.boundaries": "hybridpd.pair.boundaries",
     "hybridpd.analysis.boundarymask": "hybridpd.pair.boundarymask",
-    "hybridpd.analysis.tracing": "hybridpd.pair.tracing",
     "hybridpd.analysis.testfunctions": "hybridpd.pair.testfunctions",
     "hybridpd.analysis.design": "hybridpd.pair.design",
     # the pair's package once at hybridpd.analysis.continuation, whose name is now the one
