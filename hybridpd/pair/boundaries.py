@@ -112,7 +112,6 @@ def _take(tv: TestValues, i: int) -> TestValues:
     return TestValues(**{k: getattr(tv, k)[i:i + 1] for k in tv.__dataclass_fields__})
 
 
-
 class TestCurve:
     """The zero curve ``F(u) = 0`` of one test function in the unit box of ``plane``.
 
