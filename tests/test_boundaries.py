@@ -116,7 +116,7 @@ def test_completeness_against_a_fine_mask_all(name):
 def _crossings(res, kind, name, value):
     """The other parameter where the traced curves of ``kind`` cross ``name = value``,
     corrected onto the curve (exact, not the chord)."""
-    from hybridpd.pair.boundaries import TestCurve
+    from hybridpd.pair.testcurve import TestCurve
 
     axis = 0 if name == res.x_name else 1
     ax = (res.plane.x, res.plane.y)
