@@ -450,6 +450,18 @@ def test_progress_counts_points_on_stderr_only(capfd, monkeypatch):
     assert capfd.readouterr() == ("", "")
 
 
+def test_a_callable_progress_gets_the_points_done_and_nothing_on_stderr(capfd):
+    calls = []
+    pts = {"x0": np.arange(100.0), "x1": np.ones(100)}
+    r = run_sweep(sum_func, pts, chunk_size=30, executor="serial",
+                  progress=lambda done, total: calls.append((done, total)))
+    assert calls == [(0, 100), (30, 100), (60, 100), (90, 100), (100, 100)]
+    assert np.array_equal(r.outputs["s"], pts["x0"] + 2 * pts["x1"])
+    assert capfd.readouterr() == ("", "")
+    with pytest.raises(ValueError, match="progress"):
+        run_sweep(sum_func, pts, progress="yes")
+
+
 def test_import_is_light():
     code = (
         "import sys; import hybridpd; before = set(sys.modules); import hybridpd.sweeps.sweep; "

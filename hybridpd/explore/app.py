@@ -425,20 +425,27 @@ class PairExplorer:
             return None
         self._gen["basin"] += 1
         self.basin_progress.visible, self.basin_progress.active = True, True
-        self.basin_progress.value = -1      # indeterminate: the run reports no fraction
-        slow = "" if self.orb.stable else (" (the orbit is unstable: no point converges, "
-                                           "each runs all 1500 iterations)")
+        self.basin_progress.value = 0
+        slow = "" if self.orb.stable else (
+            " (the orbit is unstable: no point converges to it; each runs "
+            f"{S.UNSTABLE_ITERATIONS} iterations, looking for other attractors)")
         self.basin_info.object = _tid("basin-status", f"computing {num} x {num} points{slow}")
         return self._run_basin(self._gen["basin"], self.orb, num, time.perf_counter())
 
     async def _run_basin(self, gen, orb, num, t0):
         err = ""
         try:
-            ab = await self._off_loop(S.pair_basin, orb, num)
+            ab = await self._off_loop(S.pair_basin, orb, num,
+                                      lambda done, total: self._on_doc(
+                                          self._basin_done, gen, done, total))
         except Exception as exc:   # noqa: BLE001 - the panel says why
             ab, err = None, str(exc)
         if gen == self._gen["basin"]:
             self._on_doc(self._show_basin, ab, orb, err, 1000 * (time.perf_counter() - t0))
+
+    def _basin_done(self, gen, done: int, total: int):
+        if gen == self._gen["basin"] and total:
+            self.basin_progress.value = int(100 * done / total)
 
     def _show_basin(self, ab, orb, err, ms: float):
         self.basin_progress.active, self.basin_progress.visible = False, False

@@ -512,10 +512,13 @@ def run_sweep(func: Callable[..., Mapping[str, Any]], points: Mapping[str, Any] 
         chunks are loaded instead of recomputed. A store holding a different
         sweep raises ``ValueError``. With False, the store is deleted first
         and everything is recomputed.
-    progress : bool, default True
+    progress : bool or callable, default True
         Report progress on stderr in points (a tqdm bar on a terminal, a
         plain line every ~10 s otherwise; nothing for runs under ~2 s); see
-        :class:`hybridpd.sweeps.progress.Progress`. Never writes to stdout.
+        :class:`hybridpd.sweeps.progress.Progress`. Never writes to stdout. A callable
+        ``progress(done, total)`` is called instead (no report on stderr) with the points
+        done so far and in all, once before the first chunk and after each chunk, in the
+        calling process (a page's progress bar).
     label : str, optional
         What runs, shown by the progress report (default: the function's name).
     metadata : dict, optional
@@ -587,7 +590,8 @@ def run_sweep(func: Callable[..., Mapping[str, Any]], points: Mapping[str, Any] 
     if not callable(func):
         raise ValueError(f"func must be callable, got {type(func).__qualname__}")
     resume = _check_bool(resume, "resume")
-    progress = _check_bool(progress, "progress")
+    report = progress if callable(progress) else None
+    progress = False if report is not None else _check_bool(progress, "progress")
     allow_nan = _check_bool(allow_nan, "allow_nan")
     if label is not None and not isinstance(label, str):
         raise ValueError(f"label must be None or a string, got {label!r}")
@@ -633,6 +637,8 @@ def run_sweep(func: Callable[..., Mapping[str, Any]], points: Mapping[str, Any] 
         label = f"sweep {getattr(func, '__name__', type(func).__name__)}"
     with Progress(n_points, label, enabled=progress,
                   initial=sum(b - a for a, b in map(asm.bounds, asm.done))) as bar:
+        if report is not None:
+            report(bar.n, n_points)
 
         def on_result(i: int, out: Any, seconds: float) -> None:
             nonlocal compute_time
@@ -642,6 +648,8 @@ def run_sweep(func: Callable[..., Mapping[str, Any]], points: Mapping[str, Any] 
             compute_time += seconds
             start, stop = asm.bounds(i)
             bar.update(stop - start)
+            if report is not None:
+                report(bar.n, n_points)
 
         try:
             compute(spec, func, cols, func_kwargs, pending, asm.bounds, on_result, timeout)
