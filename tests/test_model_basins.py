@@ -55,3 +55,29 @@ def test_basin_cli_with_a_model_file(tmp_path, capsys):
     assert main(["basin", "--model", str(f), "--x", "x2", "-0.5", "0.5", "3", "--y",
                  "x1_dot", "0", "2", "3", "--set", "controller.kq", "12"]) == 2
     assert "controller.kq" in capsys.readouterr().err
+
+
+def test_basin_cli_without_axes_takes_the_default_slice_through_the_orbit(tmp_path, capsys):
+    from matplotlib.image import imread
+
+    from hybridpd.sweeps.model_basins import default_axes
+
+    f = tmp_path / "pair.toml"
+    f.write_text(PAIR_TOML)
+    png = tmp_path / "b.png"
+    assert main(["basin", "--model", str(f), "--iterations", "60", "--json", "--quiet",
+                 "--plot", str(png)]) == 0
+    d = json.loads(capsys.readouterr().out)
+    labels = np.array(d["labels"])
+    assert labels.shape == (21, 21)
+    # the same slice given explicitly: first two section coordinates, s_i +- max|s_0|, |s_1|
+    b = model_basin(f, n_iter=60)
+    x, y = default_axes(b.fixed_point, b.names)
+    assert (b.x_name, b.y_name) == (x[0], y[0]) == (b.names[0], b.names[1])
+    r = max(abs(b.fixed_point[0]), abs(b.fixed_point[1]))
+    np.testing.assert_allclose([b.x[0], b.x[-1]], [b.fixed_point[0] - r, b.fixed_point[0] + r])
+    same = model_basin(f, x, y, n_iter=60)
+    assert np.array_equal(same.labels, b.labels) and np.array_equal(labels, b.labels)
+    assert imread(png).shape[1] == 1050                       # 3.5 in at 300 dpi
+    assert main(["basin", "--model", str(f), "--x", "x2", "-1", "1", "3"]) == 2  # x alone
+    assert "or neither" in capsys.readouterr().err

@@ -147,7 +147,11 @@ def _run_model(args) -> int:
     from hybridpd.analysis.model_sections import DivergedRun
     from hybridpd.sweeps.model_basins import model_basin
 
-    check_model_command(args, _PAIR, "set the file's entries with --set KEY VALUE", "COORD")
+    check_model_command(args, _PAIR, "set the file's entries with --set KEY VALUE")
+    if (args.x is None) != (args.y is None):
+        raise UsageError("--model: give both --x COORD MIN MAX NUM and --y COORD MIN MAX NUM, "
+                         "or neither (the slice through the orbit in its first two section "
+                         "coordinates)")
     values = set_option_values(args)
     if values:
         # deferred import: loaded only when this runs, for start-up time
@@ -155,7 +159,8 @@ def _run_model(args) -> int:
 
         template_of(args.model).check(*values)
     try:
-        mb = model_basin(args.model, tuple(args.x), tuple(args.y), values=values,
+        mb = model_basin(args.model, args.x and tuple(args.x), args.y and tuple(args.y),
+                         values=values,
                          contact=args.contact, wall=args.wall, event=args.event,
                          period=args.period, periods=args.periods, mode=args.mode,
                          phase=args.phase,

@@ -248,13 +248,10 @@ class ModelExplorer:
 
     async def _run_basin(self, gen, orb, values):
         # deferred import: loaded only when a model's page is built
-        from hybridpd.sweeps.model_basins import model_basin
+        from hybridpd.sweeps.model_basins import default_axes, model_basin
 
         s = self.section
-        n = check_int("basin points", BASIN_NUM, 2)
-        scale = max(float(np.max(np.abs(orb.s[:2]))), 1e-6)
-        axes = [(orb.names[i], float(orb.s[i]) - scale, float(orb.s[i]) + scale, n)
-                for i in (0, 1)]
+        axes = default_axes(orb.s, orb.names, check_int("basin points", BASIN_NUM, 2))
 
         def run():
             return model_basin(self.path, axes[0], axes[1], values=values,

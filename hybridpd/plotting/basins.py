@@ -333,7 +333,7 @@ def plot_model_basin(basin, ax=None, title=None):
                        if n not in (basin.x_name, basin.y_name))
     others = "\n".join(", ".join(parts) for parts in _rows(others.split(", "), 3))
     fig.legend(handles=handles, loc="outside lower center", fontsize=7, frameon=False,
-               title=f"slice through the orbit:\n{others}\nshares of all {lab.size} points "
+               title=f"slice through the orbit:\n{others}\nshares of all {lab.size} points\n"
                      "(off the section and inadmissible ones in no basin)", title_fontsize=7)
     return fig
 

@@ -24,7 +24,10 @@ from hybridpd.analysis.periodic import SectionMapper, find_orbit
 from hybridpd.sweeps.model_regions import _grid_spec, template_of
 from hybridpd.sweeps.section_basins import off_section_axis
 
-__all__ = ["model_basin"]
+__all__ = ["DEFAULT_NUM", "default_axes", "model_basin"]
+
+#: Points per axis of the default slice (a run of the section map each).
+DEFAULT_NUM = 21
 
 
 def _grid(name, spec, sec):
@@ -63,7 +66,21 @@ def _find_attractor(P, s, max_period, known, n_transient=200):
     return None
 
 
-def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
+def default_axes(s, names, num: int = DEFAULT_NUM) -> tuple:
+    """The default slice of a basin through the section point ``s``: its first two section
+    coordinates, each over ``s_i +- r`` with ``r = max(|s_0|, |s_1|)`` (at least 1e-6),
+    ``num`` points each (``(x, y)`` as :func:`model_basin` takes them).
+
+    Examples
+    --------
+    >>> default_axes([0.5, -2.0, 7.0], ("link", "link_dot", "h0"), 5)
+    (('link', -1.5, 2.5, 5), ('link_dot', -4.0, 0.0, 5))
+    """
+    r = max(float(abs(s[0])), float(abs(s[1])), 1e-6)
+    return tuple((names[i], float(s[i]) - r, float(s[i]) + r, int(num)) for i in (0, 1))
+
+
+def model_basin(model, x=None, y=None, *, values: dict | None = None, contact: int = 0,
                 wall: int | None = None, event: str = "auto", period="auto",
                 periods: int | None = None, mode: str | None = None,
                 phase: float | None = None, n_iter: int = 300,
@@ -75,9 +92,10 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
     Parameters
     ----------
     model : str, Path, dict or ModelTemplate
-    x, y : (str, float, float, int)
+    x, y : (str, float, float, int), optional
         ``(COORDINATE, MIN, MAX, NUM)``: a section coordinate (e.g. ``"motor"``,
-        ``"motor_dot"``; ``phi`` is the reference phase) and its grid.
+        ``"motor_dot"``; ``phi`` is the reference phase) and its grid. Not given: the
+        slice of :func:`default_axes` through the orbit found.
     values : dict, optional
         ``{dotted path: value}`` set in the file first (e.g. ``{"controller.kp": 30}``).
     contact, wall, event, period, periods, mode, phase
@@ -120,6 +138,9 @@ def model_basin(model, x, y, *, values: dict | None = None, contact: int = 0,
     po = res.orbits[0]
     P = spec.section_map(m, po.mode)
     names = P.section.names
+    if x is None or y is None:
+        dx, dy = default_axes(po.s, names)
+        x, y = x or dx, y or dy
     xn, xg = _grid("x", x, P.section)
     yn, yg = _grid("y", y, P.section)
     if xn == yn:
