@@ -180,7 +180,10 @@ def plot_bifurcation(diagram, ax=None, coordinate: str | None = None, branches=(
                                        + (" (model units)" if "source" in diagram.metadata
                                           else "")))
     ax.set_ylabel(ylabel)
-    ax.set_xlim(float(np.min(diagram.values)), float(np.max(diagram.values)))
+    lo, hi = float(np.min(diagram.values)), float(np.max(diagram.values))
+    # half a step beyond the end values, so that their iterates are not cut by the frame
+    pad = 0.5 * (hi - lo) / max(len(diagram.values) - 1, 1)
+    ax.set_xlim(lo - pad, hi + pad)
     ax.set_title(title if title is not None else _title(diagram))
     if legend:
         bifurcation_legend(ax)
