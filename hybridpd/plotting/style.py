@@ -58,15 +58,20 @@ _UNITS = {
 
 
 def axis_label(name: str) -> str:
-    """The axis label of a quantity: its symbol and unit (``name`` itself if unknown).
+    """The axis label of a quantity: its symbol and unit; a model file's entry (a dotted
+    path) in the file's own units, any other name as it is.
 
     Examples
     --------
     >>> from hybridpd.plotting.style import axis_label
     >>> axis_label("kp")
     '$k_p$ (force/length)'
+    >>> axis_label("controller.kv")
+    'controller.kv (model units)'
     """
-    return _UNITS.get(name, name)
+    if name in _UNITS:
+        return _UNITS[name]
+    return f"{name} (model units)" if "." in name else name
 
 
 def series(k: int) -> dict:
