@@ -425,8 +425,8 @@ def test_cli_basin_prints_attractors_and_measures(capsys):
     from hybridpd.cli import main
 
     base = ["basin", "--case", "collocated", "--mu", "0.1", "--gamma", "0.75", "--omega", "5",
-            "--n", "1", "--e", "0.1", "--kp", "10", "--kv", "20", "--x1", "-3", "5", "12",
-            "--y1", "-2", "10", "12", "--max-extensions", "0"]
+            "--n", "1", "--e", "0.1", "--kp", "10", "--kv", "20", "--x", "x1", "-3", "5", "12",
+            "--y", "y1", "-2", "10", "12", "--max-extensions", "0"]
     assert main(base) == 0
     out = capsys.readouterr().out
     assert "period-2 orbit: " in out and "symmetric orbit (period 1): " in out

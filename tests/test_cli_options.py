@@ -114,3 +114,29 @@ def test_no_public_function_of_the_command_line_shares_a_name_with_the_library()
     assert not clash, clash
     twice = {n: where for n, where in cli_names.items() if len(where) > 1}
     assert not twice, twice
+
+
+def test_grid_axes_and_max_period_have_one_shape_in_every_command(capsys):
+    from hybridpd.cli import build_parser
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command").choices
+    for name, word, nargs in (("regions", "KEY", 4), ("basin", "COORD", 4),
+                              ("boundaries", "NAME", 3)):
+        acts = {a.dest: a for a in sub[name]._actions}
+        for ax in ("x", "y"):
+            assert acts[ax].nargs == nargs and acts[ax].metavar[0] == word
+            assert acts[ax].metavar[1:3] == ("MIN", "MAX")
+    assert not {"x1", "y1"} & {a.dest for a in sub["basin"]._actions}
+    defaults = {n: next(a.default for a in sub[n]._actions if a.dest == "max_period")
+                for n in ("basin", "bifurcation")}
+    assert defaults == {"basin": 8, "bifurcation": 32}
+    # the pair's basin takes its slice axes by name, x1 and y1 only
+    pair = ["basin", "--case", "collocated", "--mu", "0.1", "--e", "0.5", "--gamma", "0.75",
+            "--omega", "5", "--kp", "10", "--kv", "20"]
+    assert main([*pair, "--x", "motor", "-1", "1", "3"]) == 2
+    assert "takes x1, got 'motor'" in capsys.readouterr().err
+    assert main([*pair, "--x", "x1", "-1", "1", "3.5"]) == 2
+    assert "NUM must be an integer" in capsys.readouterr().err
+    assert main([*pair, "--max-period", "65"]) == 2
+    assert "--max-period must be in [1, 64]" in capsys.readouterr().err

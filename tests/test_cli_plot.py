@@ -15,8 +15,8 @@ SIM = [*PAIR, "--L", "0.75", "--kp", "10", "--kv", "20", "--xm", "1",
        "--x0", "0.3", "0.5", "0", "0", "--t-end", "4"]
 REGIONS = [*PAIR[:4], "--e", "0.1", "0.5", "--gamma", "0.75", "--omega", "5",
            "--kp", "1", "50", "6", "--kv", "1", "50", "5", "--quiet"]
-BASIN = [*PAIR, "--gamma", "0.75", "--kp", "10", "--kv", "20", "--x1", "-3", "5", "7",
-         "--y1", "-2", "10", "6", "--iterations", "100", "--max-extensions", "0", "--quiet"]
+BASIN = [*PAIR, "--gamma", "0.75", "--kp", "10", "--kv", "20", "--x", "x1", "-3", "5", "7",
+         "--y", "y1", "-2", "10", "6", "--iterations", "100", "--max-extensions", "0", "--quiet"]
 MODEL = str(Path(__file__).resolve().parents[1] / "examples" / "models" / "drivetrain.toml")
 
 

@@ -197,7 +197,7 @@ def _cli_figures(tmp_path, monkeypatch):
          "--kp", "0.1", "20", "15", "--kv", "0.1", "6", "15", "--out", str(t / "r.nc"),
          "--plot", str(t / "regions.png")],
         ["basin", "--case", "collocated", *plant, "--e", "0.1", "--kp", "10", "--kv", "20",
-         "--x1", "-3", "5", "8", "--y1", "-2", "10", "8", "--iterations", "200",
+         "--x", "x1", "-3", "5", "8", "--y", "y1", "-2", "10", "8", "--iterations", "200",
          "--max-extensions", "0", "--executor", "serial", "--out", str(t / "b.nc"),
          "--plot", str(t / "basin.png")],
         ["bifurcation", "--case", "collocated", *plant, "--e", "0.5", "--kp", "10",

@@ -152,7 +152,7 @@ def test_cli_regions_and_basin_json():
             "2", "3", *PLANT)
     assert r.returncode == 2 and r.stderr.count("\n") == 1
     r = cli("basin", "--case", "collocated", "--e", "0.5", "--kp", "10", "--kv", "20", *PLANT,
-            "--x1", "-2", "4", "5", "--y1", "-1", "8", "4", "--json")
+            "--x", "x1", "-2", "4", "5", "--y", "y1", "-1", "8", "4", "--json")
     assert r.returncode == 0, r.stderr
     d = json.loads(r.stdout)
     assert np.array(d["labels"]).shape == (4, 5) and d["label_names"][0] == "converged"

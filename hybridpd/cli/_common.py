@@ -450,6 +450,30 @@ def _either(suffixes) -> str:
         ", ".join(suffixes[:-1]) + " or " + suffixes[-1])
 
 
+def add_grid_axes(p, word: str, help_x: str, *, num: bool = True,
+                  required: bool = False) -> None:
+    """``--x`` and ``--y`` in the one shape every command uses: ``WORD MIN MAX NUM`` (``NUM``
+    left out where the command chooses the points itself, ``num=False``); ``--y`` as ``--x``.
+    """
+    mv = (word, "MIN", "MAX", "NUM") if num else (word, "MIN", "MAX")
+    p.add_argument("--x", nargs=len(mv), default=None, required=required, metavar=mv,
+                   help=help_x)
+    p.add_argument("--y", nargs=len(mv), default=None, required=required, metavar=mv,
+                   help="second axis, as --x (a different one)")
+
+
+def add_max_period(p, default: int, what: str = "largest period of P detected") -> None:
+    """``--max-period K``: the one declaration; each command passes its own default."""
+    p.add_argument("--max-period", type=int, default=default,
+                   help=f"{what} (default {default})")
+
+
+def check_max_period(args) -> None:
+    """``--max-period`` within ``[1, 64]`` (``ValueError`` naming it)."""
+    if not 1 <= args.max_period <= 64:
+        raise ValueError(f"--max-period must be in [1, 64], got {args.max_period}")
+
+
 def add_executor(p, default: str = "serial", *, quiet: bool = True):
     """The executor options, declared here once for every command: ``--executor``,
     ``--workers``, ``--scheduler`` (see :func:`executor_of`) and, with `quiet`, ``--quiet``.

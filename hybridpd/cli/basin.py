@@ -7,9 +7,12 @@ from hybridpd.cli._common import (
     EXIT_DIVERGED,
     UsageError,
     add_executor,
+    add_grid_axes,
+    add_max_period,
     add_model,
     add_output,
     add_pair,
+    check_max_period,
     check_model_command,
     check_pair_command,
     command,
@@ -33,7 +36,7 @@ def register(sub):
     p = command(sub, "basin", help="basin of attraction of the symmetric orbit",
                 description=DESCRIPTION,
                 example=("hybridpd basin --case collocated --mu 0.1 --e 0.5 --gamma "
-                         "0.75 --omega 5 --kp 10 --kv 20 --x1 -3 5 100 --y1 -2 10 100"
+                         "0.75 --omega 5 --kp 10 --kv 20 --x x1 -3 5 100 --y y1 -2 10 100"
                          " --executor processes --out basin.npz --plot basin.png\n  hybridpd "
                          "basin --model examples/models/drivetrain.toml --event release --set "
                          "controller.kv 2 --x motor -1.5 1.5 31 --y motor_dot -6 6 31 --out "
@@ -43,22 +46,16 @@ def register(sub):
                       "search)")
     add_pair(p)
     add_model(p)
-    p.add_argument("--x", nargs=4, default=None, metavar=("COORD", "MIN", "MAX", "NUM"),
-                   help="--model: grid over this section coordinate (e.g. motor, motor_dot)")
-    p.add_argument("--y", nargs=4, default=None, metavar=("COORD", "MIN", "MAX", "NUM"),
-                   help="--model: second grid axis (as --x)")
-    p.add_argument("--x1", type=float, nargs=3, default=None, metavar=("MIN", "MAX", "NUM"),
-                   help="slice window in x1 (default: the reproduction's, -3 x10 .. 5 x10, "
-                        "41 points)")
-    p.add_argument("--y1", type=float, nargs=3, default=None, metavar=("MIN", "MAX", "NUM"),
-                   help="slice window in y1 (default -2 x10 .. 10 x10, 41 points)")
+    add_grid_axes(p, "COORD", "grid over this section coordinate: x1 or y1 for the pair (x1 "
+                  "-3 5 41 and y1 -2 10 41 times x10 by default: the reproduction's window); "
+                  "--model: a coordinate of the file's section (e.g. motor, motor_dot; "
+                  "default: the orbit's first two, around it)")
     p.add_argument("--iterations", type=int, default=None,
                    help="iterations of the impact map (default 1500, two impacts each; "
                         "--model: 300 of P^k)")
     p.add_argument("--no-early-exit", action="store_true",
                    help="run every trajectory for all iterations")
-    p.add_argument("--max-period", type=int, default=8,
-                   help="largest period of P searched for attractors")
+    add_max_period(p, 8, "largest period of P searched for attractors")
     p.add_argument("--max-extensions", type=int, default=3,
                    help="window extensions while the symmetric orbit's basin touches the edge "
                         "(0: keep the window)")
@@ -77,8 +74,8 @@ def run(args) -> int:
 
     if args.model is not None:
         return _run_model(args)
-    if args.x is not None or args.y is not None or args.set:
-        raise UsageError("--x, --y and --set need --model FILE.toml")
+    if args.set:
+        raise UsageError("--set needs --model FILE.toml")
     L, x10 = check_pair_command(args, _PAIR)
     if args.iterations is None:
         args.iterations = 1500
@@ -90,23 +87,16 @@ def run(args) -> int:
     from hybridpd.reproduce.settings import Settings
 
     win = Settings.__dataclass_fields__["basin_window"].default
-    if args.x1 is None:
-        args.x1 = [win[0] * x10, win[1] * x10, 41]
-    if args.y1 is None:
-        args.y1 = [win[2] * x10, win[3] * x10, 41]
-    for nm in ("x1", "y1"):
-        num = getattr(args, nm)[2]
-        if num != int(num):
-            raise ValueError(f"--{nm} NUM must be an integer, got {num:g}")
+    x1 = _pair_axis("--x", args.x, "x1", (win[0] * x10, win[1] * x10, 41))
+    y1 = _pair_axis("--y", args.y, "y1", (win[2] * x10, win[3] * x10, 41))
     if args.iterations < 1:
         raise ValueError(f"--iterations must be >= 1, got {args.iterations}")
-    if not 1 <= args.max_period <= 64:
-        raise ValueError(f"--max-period must be in [1, 64], got {args.max_period}")
+    check_max_period(args)
     if args.max_extensions < 0:
         raise ValueError(f"--max-extensions must be >= 0, got {args.max_extensions}")
     mapper = ImpactMapper.from_orbit(orb, n_iter=args.iterations,
                                      early_exit=not args.no_early_exit)
-    ab = attractor_basin(mapper, args.x1, args.y1, max_period=args.max_period,
+    ab = attractor_basin(mapper, x1, y1, max_period=args.max_period,
                          extend=args.max_extensions > 0, max_extensions=args.max_extensions,
                          executor=executor_of(args), max_workers=args.workers,
                          progress=progress_wanted(args))
@@ -140,6 +130,24 @@ def run(args) -> int:
             print(f"  {a.name}: section points (phi, z1, z2, z4) {pts}; multipliers "
                   + ", ".join(f"{abs(z):.4g}" for z in a.multipliers) + " (moduli)")
     return 0
+
+
+def _pair_axis(flag: str, given, name: str, default: tuple) -> tuple:
+    """The pair's slice axis ``(MIN, MAX, NUM)`` of ``flag`` (``name MIN MAX NUM``; the
+    pair's slice is the plane (x1, y1): ``name`` is the only coordinate it takes there)."""
+    if given is None:
+        return default
+    coord, lo, hi, num = given
+    if coord != name:
+        raise ValueError(f"{flag}: the impact pair's slice is ({'x1, y1'}): {flag} takes "
+                         f"{name}, got {coord!r} (other coordinates: --model)")
+    try:
+        lo, hi, num = float(lo), float(hi), float(num)
+    except ValueError:
+        raise ValueError(f"{flag} {name} MIN MAX NUM: numbers, got {given[1:]}") from None
+    if num != int(num):
+        raise ValueError(f"{flag} NUM must be an integer, got {num:g}")
+    return lo, hi, int(num)
 
 
 def _run_model(args) -> int:

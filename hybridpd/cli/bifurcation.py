@@ -8,6 +8,7 @@ from hybridpd.cli._common import (
     EXIT_NO_ORBIT,
     UsageError,
     add_executor,
+    add_max_period,
     add_model,
     add_output,
     add_pair,
@@ -80,8 +81,7 @@ def register(sub):
     p.add_argument("--initial", type=float, nargs=4, metavar=("PHI", "Z1", "Z2", "Z4"),
                    help="initial section point (default: the symmetric fixed point at MIN, "
                    "displaced by 1e-3 in z1)")
-    p.add_argument("--max-period", type=int, default=32,
-                   help="largest period detected (default 32)")
+    add_max_period(p, 32)
     add_output(p, out=(".nc", ".zarr"), model_out=(".nc", ".zarr"), what="the diagram (required)",
                plot="the diagram")
     p.add_argument("--coordinate", default="z1",

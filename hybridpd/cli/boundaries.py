@@ -1,7 +1,7 @@
 """``hybridpd boundaries``: traced boundary curves of the symmetric orbit in a parameter box."""
 from __future__ import annotations
 
-from hybridpd.cli._common import add_output, add_pair, print_json
+from hybridpd.cli._common import add_grid_axes, add_output, add_pair, print_json
 from hybridpd.pair.testfunctions import PARAMETERS
 
 _EPILOG = """\
@@ -31,11 +31,9 @@ def register(sub):
     # m2 defaults to None: boundary_curves then takes the pair's own default
     add_pair(p, names=("case", "mu", "m2", "omega", "gamma", "x10", "e", "kp", "kv", "n"),
              required=("case",), m2=None)
-    p.add_argument("--x", nargs=3, required=True, metavar=("NAME", "MIN", "MAX"),
-                   help=f"horizontal axis: a parameter among {', '.join(PARAMETERS)} and "
-                   "its range (MIN < MAX)")
-    p.add_argument("--y", nargs=3, required=True, metavar=("NAME", "MIN", "MAX"),
-                   help="vertical axis, as --x (a different parameter)")
+    add_grid_axes(p, "NAME", f"horizontal axis: a parameter among {', '.join(PARAMETERS)} "
+                  "and its range (MIN < MAX; the curves are traced, not gridded)", num=False,
+                  required=True)
     p.add_argument("--seed-grid", type=int, default=41,
                    help="points per axis of the coarse seeding map (>= 3), default 41")
     p.add_argument("--max-step", type=float, default=0.02,
