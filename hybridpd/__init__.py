@@ -29,8 +29,7 @@ The names load lazily (PEP 562): ``import hybridpd`` imports NumPy only, and eac
 in just the modules it needs (SymPy, numba, python-control, matplotlib and xarray only where
 they are used; Panel and Bokeh only when :func:`explore` builds a page). The subpackages
 (``hybridpd.hybrid``, ``pair``, ``mechanics``, ``analysis``, ``sweeps``, ``plotting``,
-``reproduce``, ``explore``) stay importable for everything else. Module paths of
-earlier versions still import, with a ``DeprecationWarning`` naming the new place.
+``reproduce``, ``explore``) stay importable for everything else.
 
 Starting is cheap: the SymPy derivations of the closed forms run once per installation and
 version; their generated code is cached on disk (see :mod:`hybridpd._codecache`). numba
@@ -51,10 +50,7 @@ Examples
 """
 import importlib as _importlib
 
-from hybridpd import _deprecated
 from hybridpd._version import __version__
-
-_deprecated.install()      # old module paths import, with a DeprecationWarning
 
 # Each public name and the module that defines it. Nothing below is imported until used.
 _NAMES = {
@@ -111,10 +107,6 @@ _NAMES = {
     # the page (a callable package, as ``reproduce``: served from _SUBPACKAGES)
     "explore": "hybridpd.explore"}
 
-# flat names replaced by others (served with a DeprecationWarning)
-_RENAMED = _deprecated.moved_names(__name__, {
-    "load_attractor_basin": "hybridpd.analysis.basins:load_basin"})
-
 # ``reproduce`` is both a subpackage and its main function: the package is callable (it runs
 # :func:`hybridpd.reproduce.reproduce`), so ``hp.reproduce(...)`` works whichever Python binds.
 # ``explore`` likewise (:func:`hybridpd.explore.explore`).
@@ -140,10 +132,6 @@ def __getattr__(name):
         value = getattr(_importlib.import_module(module), name)
         globals()[name] = value  # later look-ups skip __getattr__
         return value
-    if name == "load_attractor_basin":
-        return _RENAMED(name)
-    if name == "continue_family":   # its argument order differs: the alias there warns
-        return getattr(_importlib.import_module("hybridpd.analysis.continuation"), name)
     raise AttributeError(f"module 'hybridpd' has no attribute {name!r}")
 
 

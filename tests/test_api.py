@@ -1,9 +1,9 @@
-"""The public API: a flat, lazily loaded namespace and old import paths that still work.
+"""The public API: a flat, lazily loaded namespace, and no compatibility layer.
 
 ``import hybridpd as hp`` gives every workflow name; importing the package loads none of the
 heavy libraries, and the general path loads no module of the impact pair. Module paths of
-earlier versions, and names moved since, import with a ``DeprecationWarning`` naming the new
-place (one release, then they go).
+earlier versions, and names moved since, are gone (the CHANGELOG lists them): importing one
+fails, naming it, instead of being served with a warning.
 """
 import importlib
 import inspect
@@ -13,7 +13,6 @@ import sys
 import warnings
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 import hybridpd as hp
@@ -172,63 +171,6 @@ def test_reproduce_is_callable_as_name_and_as_package():
         hp.reproduce(mode="fastest")
 
 
-def test_old_design_module_keeps_the_flat_design_callable():
-    sys.modules.pop("hybridpd.design", None)
-    with pytest.deprecated_call():
-        importlib.import_module("hybridpd.design")
-    from hybridpd.pair.design import design
-
-    assert callable(hp.design)
-    with pytest.raises(ValueError):
-        hp.design(case="sideways", mu=0.1, e=0.5, omega=5.0)
-    with pytest.raises(ValueError):
-        design(case="sideways", mu=0.1, e=0.5, omega=5.0)
-
-
-def test_every_old_path_is_served_by_the_import_hook():
-    from hybridpd._deprecated import MOVED_MODULES, MovedModuleFinder
-
-    assert set(OLD_MODULES) <= set(MOVED_MODULES)
-    assert any(isinstance(f, MovedModuleFinder) for f in sys.meta_path)
-    for old in MOVED_MODULES:      # no file at an old path: the hook serves it
-        path = ROOT / (old.replace(".", "/") + ".py")
-        assert not path.exists() and not path.with_suffix("").is_dir(), old
-    root = [p.name for p in (ROOT / "hybridpd").glob("*.py")]
-    assert len(root) <= 10, root
-
-
-def test_a_module_below_a_moved_package_imports_with_a_warning():
-    old = "hybridpd.analysis.continuation.switching"
-    sys.modules.pop(old, None)
-    with pytest.deprecated_call(match=r"hybridpd\.pair\.continuation"):
-        mod = importlib.import_module(old)
-    from hybridpd.pair.continuation.switching import switch_branch
-
-    assert mod.switch_branch is switch_branch
-
-
-@pytest.mark.parametrize("old", sorted(OLD_MODULES))
-def test_old_module_paths_import_with_a_warning(old):
-    new, names = OLD_MODULES[old]
-    sys.modules.pop(old, None)
-    with pytest.deprecated_call(match=new.replace(".", r"\.")):
-        mod = importlib.import_module(old)
-    target = importlib.import_module(new)
-    with warnings.catch_warnings():
-        # a name that moved again since (e.g. the basin result) warns on its own
-        warnings.simplefilter("ignore", DeprecationWarning)
-        for name in names.split():
-            assert getattr(mod, name) is getattr(target, name), f"{old}.{name}"
-
-
-@pytest.mark.parametrize(("old", "name", "new"), MOVED_NAMES)
-def test_moved_names_warn_and_resolve(old, name, new):
-    mod = importlib.import_module(old)
-    with pytest.deprecated_call(match=new.replace(".", r"\.")):
-        obj = getattr(mod, name)
-    assert obj is getattr(importlib.import_module(new), name)
-
-
 # Names replaced by another (old module, old name, new module, new name).
 RENAMED = [
     ("hybridpd.pair.basins", "AttractorBasin", "hybridpd.analysis.basins", "BasinResult"),
@@ -243,34 +185,40 @@ RENAMED = [
 ]
 
 
-@pytest.mark.parametrize(("old", "name", "new", "now"), RENAMED)
-def test_replaced_names_warn_and_resolve_to_the_new_one(old, name, new, now):
+def test_old_module_paths_are_gone():
+    for old in sorted(OLD_MODULES) + ["hybridpd.design", "hybridpd.sweeps.basin_result",
+                                      "hybridpd.analysis.continuation.switching"]:
+        sys.modules.pop(old, None)
+        with pytest.raises(ModuleNotFoundError):
+            importlib.import_module(old)
+    assert not any(type(f).__name__ == "MovedModuleFinder" for f in sys.meta_path)
+    root = [p.name for p in (ROOT / "hybridpd").glob("*.py")]
+    assert len(root) <= 10, root
+
+
+@pytest.mark.parametrize(("old", "name", "new"), MOVED_NAMES + [
+    (o, n, m) for o, n, m, _ in RENAMED])
+def test_moved_and_renamed_names_are_gone_from_their_old_modules(old, name, new):
     mod = importlib.import_module(old)
-    with pytest.deprecated_call(match=f"{new}.{now}".replace(".", r"\.")):
-        obj = getattr(mod, name)
-    assert obj is getattr(importlib.import_module(new), now)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")       # no shim answers with a warning
+        with pytest.raises(AttributeError, match="no attribute"):
+            getattr(mod, name)
+    importlib.import_module(new)             # the new home exists
 
 
-def test_the_old_basin_result_module_imports_with_a_warning():
-    sys.modules.pop("hybridpd.sweeps.basin_result", None)
-    with pytest.deprecated_call(match=r"hybridpd\.analysis\.basins"):
-        mod = importlib.import_module("hybridpd.sweeps.basin_result")
-    from hybridpd.analysis.basins import BasinResult, load_basin
+def test_only_the_root_namespace_has_a_module_getattr():
+    import ast
 
-    assert (mod.BasinResult, mod.load_basin) == (BasinResult, load_basin)
-
-
-def test_a_moved_name_warning_points_at_the_caller():
-    mod = importlib.import_module("hybridpd.pair.basins")
-    with warnings.catch_warnings(record=True) as rec:
-        warnings.simplefilter("always")
-        mod.load_attractor_basin  # noqa: B018
-    assert rec and Path(rec[0].filename).name == Path(__file__).name
-
-
-def test_shims_do_not_hide_missing_names():
-    with pytest.raises(AttributeError, match="no attribute"):
-        importlib.import_module("hybridpd.pair.basins").no_such_name  # noqa: B018
+    found = []
+    for f in sorted((ROOT / "hybridpd").rglob("*.py")):
+        tree = ast.parse(f.read_text())
+        for node in tree.body:
+            names = ([node.name] if isinstance(node, ast.FunctionDef) else
+                     [tg.id for tg in getattr(node, "targets", []) if isinstance(tg, ast.Name)])
+            if "__getattr__" in names or "__path__" in names:
+                found.append(str(f.relative_to(ROOT)))
+    assert found == ["hybridpd/__init__.py"], found
 
 
 def test_flat_names_have_docstrings_with_examples():
@@ -297,36 +245,11 @@ def test_continue_orbit_takes_a_builder_of_any_map():
     sec = {"mode": "free", "guard": "impact",
            "reference": (oscillator_initial_state(0, 0, omega=0.8), 0.0)}
     a = hp.continue_orbit(build, 0.8, 0.81, [7.7, 1.66], section=sec, step=0.01)
-    with pytest.deprecated_call(match="continue_family"):
-        old = hp.continue_family
-    b = old(build, [7.7, 1.66], 0.8, 0.81, section=sec, step=0.01)
-    np.testing.assert_allclose(a.points, b.points, rtol=0, atol=1e-12, err_msg="same engine, same path")
-    np.testing.assert_allclose(a.parameter, b.parameter, rtol=0, atol=1e-12)
+    assert a.termination == "reached" and a.parameter[-1] == pytest.approx(0.81)
+    with pytest.raises(AttributeError):
+        hp.continue_family  # noqa: B018
     with pytest.raises(ValueError, match="builder"):
         hp.continue_orbit("not a builder", 0.8, 0.81, [7.7, 1.66])
-
-
-def test_a_name_that_moved_apart_from_its_module_still_resolves():
-    old = "hybridpd.analysis.sections"
-    sys.modules.pop(old, None)
-    with pytest.deprecated_call(match=r"hybridpd\.mechanics\.sections"):
-        mod = importlib.import_module(old)
-    from hybridpd.pair.section import impact_pair_section
-
-    assert mod.impact_pair_section is impact_pair_section
-
-
-@pytest.mark.parametrize(("module", "old", "new"), [
-    ("hybridpd.pair.symbolic", "symmetric_orbit", "solve_symmetric_orbit"),
-    ("hybridpd.pair.symbolic", "impact_map", "closed_form_map"),
-    ("hybridpd.pair.symbolic.existence", "symmetric_orbit", "solve_symmetric_orbit"),
-    ("hybridpd.pair.symbolic.section_map", "impact_map", "closed_form_map"),
-])
-def test_renamed_functions_warn_and_resolve(module, old, new):
-    mod = importlib.import_module(module)
-    with pytest.deprecated_call(match=new):
-        obj = getattr(mod, old)
-    assert obj is getattr(mod, new)
 
 
 def test_no_public_name_is_defined_in_two_modules():

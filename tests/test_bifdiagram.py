@@ -206,15 +206,14 @@ def test_period_detection_finds_the_minimal_period(k, n, seed, shift):
     assert detect_period(X, wrap, 16, 1e-8) == want
 
 
-def test_old_names_warn_and_give_the_same_diagram(tmp_path):
-    """The 0.2.0 call and file of the pair's diagram: a DeprecationWarning, the same result."""
-    with pytest.warns(DeprecationWarning, match="ImpactMapFamily"):
-        from hybridpd.pair.bifdiagram import bifurcation_diagram as old
-    new = bifurcation_diagram(PAIR01, PDGains(10, 20), W, "kv", [20.0, 23.0], iterations=100,
-                              keep=16)
-    d = old(PAIR01, PDGains(10, 20), W, "kv", [20.0, 23.0], iterations=100, keep=16)
-    np.testing.assert_allclose(d.points, new.points, rtol=0, atol=0)
-    assert d.classification == new.classification
+def test_a_file_of_the_earlier_layout_reads_as_the_same_diagram(tmp_path):
+    """The 0.2.0 ``.npz`` file of the pair's diagram (its old call is gone)."""
+    import hybridpd.pair.bifdiagram as bd
+
+    with pytest.raises(AttributeError):
+        bd.pair_diagram  # noqa: B018
+    d = bifurcation_diagram(PAIR01, PDGains(10, 20), W, "kv", [20.0, 23.0], iterations=100,
+                            keep=16)
     # the 0.2.0 .npz layout, written here by hand from the arrays of that version
     meta = {"parameter_name": "kv", "iterations": 100, "keep": 16, "follow": False,
             "case": "collocated", "fixed": d.fixed, "design": True, "settings": {},

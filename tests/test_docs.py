@@ -56,10 +56,7 @@ def rst_blocks(text):
 
 def run_blocks(blocks, cwd, label, timeout=300):
     """Run the blocks one after the other in one fresh interpreter; fail naming the block."""
-    # the documentation never shows an import path that is going away
-    script = ["import sys, warnings",
-              ("warnings.filterwarnings('error', message=r'.*will be removed in hybridpd',"
-               " category=DeprecationWarning)")]
+    script = ["import sys"]
     for i, b in enumerate(blocks, 1):
         script.append(f"print('--- block {i}', file=sys.stderr, flush=True)")
         script.append(b)
@@ -138,13 +135,9 @@ class TolerantChecker(doctest.OutputChecker):
 
 
 def _public_modules():
-    from hybridpd._deprecated import MOVED_MODULES
-
     names = ["hybridpd"]
     for info in pkgutil.walk_packages(hybridpd.__path__, "hybridpd."):
-        # deprecated shims only forward to modules collected under their new names
-        if not any(part.startswith("_") for part in info.name.split(".")) and \
-                info.name not in MOVED_MODULES:
+        if not any(part.startswith("_") for part in info.name.split(".")):
             names.append(info.name)
     return sorted(names)
 

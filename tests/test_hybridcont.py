@@ -140,20 +140,3 @@ def test_the_pair_on_the_one_engine_through_its_family_hook():
     assert not br.events_of("fold"), br.events
     with pytest.raises(ValueError, match="parameter"):
         P.family("kd")
-
-
-def test_names_of_earlier_versions_warn_and_do_the_same():
-    import hybridpd.analysis.continuation as cont
-
-    build = _kv_builder(ImpactPair(0.1, 0.5, 0.75), symmetric_orbit(
-        ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), W).xm)
-    s0 = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), W).fixed_point
-    with pytest.deprecated_call(match="continue_orbit"):
-        old = cont.continue_family
-    a = old(build, s0, 20.0, 21.0, method="natural", step=0.5)
-    b = continue_any(build, 20.0, 21.0, s0, method="natural", step=0.5)
-    np.testing.assert_allclose(a.points, b.points, rtol=0, atol=1e-12)
-    with pytest.deprecated_call(match="Branch"):
-        assert cont.FamilyBranch is cont.Branch
-    with pytest.deprecated_call(match="BifurcationEvent"):
-        assert cont.FamilyEvent is cont.BifurcationEvent

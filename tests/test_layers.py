@@ -12,6 +12,7 @@ the deprecated paths are served by an import hook that names its targets as stri
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -72,12 +73,37 @@ def _imports(path: Path):
                 yield n, node.lineno, id(node) not in top
 
 
+_DOTTED = re.compile(r"^hybridpd(\.\w+)+(:\w+)?$")
+
+
+def _string_imports(path: Path, modules):
+    """Yield ``(target module, line, True)`` for imports by name: a string that is a module
+    path (``"hybridpd.x.y"`` or ``"hybridpd.x.y:name"``, as ``import_module`` and lazy tables
+    take them) and ``import_module(f"hybridpd.x.{...}")`` (every module below
+    ``hybridpd.x``). An import by name is an import: it counts for cycles and layers."""
+    tree = ast.parse(path.read_text())
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) \
+                and _DOTTED.match(node.value):
+            yield node.value.split(":")[0], node.lineno, True
+        elif isinstance(node, ast.JoinedStr) and node.values \
+                and isinstance(node.values[0], ast.Constant) \
+                and str(node.values[0].value).startswith("hybridpd."):
+            head = str(node.values[0].value).rstrip(".")
+            for m in modules:
+                if m.startswith(head + "."):
+                    yield m, node.lineno, True
+
+
 def _graph():
     modules = {_module_name(p): p for p in PKG.rglob("*.py")}
     edges = {}
     for mod, path in modules.items():
         targets = set()
-        for name, line, deferred in _imports(path):
+        arrows = [*_imports(path)]
+        if mod != "hybridpd":      # the root's lazy table names every public module
+            arrows += [*_string_imports(path, modules)]
+        for name, line, deferred in arrows:
             # resolve to the longest existing module prefix
             parts = name.split(".")
             while parts and ".".join(parts) not in modules:
@@ -192,3 +218,16 @@ def test_deferred_imports_say_why():
     so; one placed there to dodge a cycle would show up in test_no_import_cycles."""
     bad = sorted({b for p in PKG.rglob("*.py") for b in _deferred_without_reason(p)})
     assert not bad, "deferred imports without a comment saying why:\n" + "\n".join(bad)
+
+
+def test_imports_by_name_are_arrows(tmp_path):
+    f = tmp_path / "m.py"
+    f.write_text('import importlib\nX = {"a": "hybridpd.sweeps.regions:RegionMap"}\n'
+                 'def g(k):\n    return importlib.import_module(f"hybridpd.plotting.{k}")\n'
+                 'DOC = "see hybridpd.pair for more"\n')
+    got = {(m, line) for m, line, _ in _string_imports(f, MODULES)}
+    assert ("hybridpd.sweeps.regions", 2) in got
+    assert ("hybridpd.plotting.regions", 4) in got and ("hybridpd.plotting.basins", 4) in got
+    assert not any(line == 5 for _, line in got)          # prose is not an import
+    # the command line's f-string import of its subcommands is in the graph
+    assert any(t == "hybridpd.cli.basin" for t, _, _ in EDGES["hybridpd.cli"])

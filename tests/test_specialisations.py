@@ -151,14 +151,13 @@ def test_basin_labels_agree(e):
     np.testing.assert_array_equal(a, b)
 
 
-def test_former_batch_call_of_the_closed_form_map_warns_and_agrees():
+def test_the_batch_call_of_the_closed_form_map_agrees_with_single_points():
     orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), W)
     Q = ImpactMap(orb.pair, orb.gains, orb.reference())
     S = orb.fixed_point + np.array([[0.0, 0.0, 0.0, 0.0], [0.01, -0.02, 0.03, 0.1]])
-    with pytest.warns(DeprecationWarning, match="apply_batch"):
-        old = Q.apply(S)
+    with pytest.raises(ValueError, match="s"):     # apply takes one point: apply_batch many
+        Q.apply(S)
     new = Q.apply_batch(S)
-    np.testing.assert_array_equal(old.ok, new.ok)
-    np.testing.assert_allclose(old.s, new.s, rtol=0, atol=1e-15)
+    assert new.ok.all()
     for s, img in zip(S, new.s):      # the protocol's single-point result is the same image
         np.testing.assert_allclose(Q.apply(s).s, img, rtol=0, atol=1e-15)

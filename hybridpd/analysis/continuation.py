@@ -33,22 +33,16 @@ The result is the package's one :class:`Branch` (per-point arrays; ``branch[i]``
 :class:`BranchPoint`) with :class:`BifurcationEvent` (``kind``, ``index``, ``parameter``,
 ``detail``): the impact pair's continuations return the same class, with their own
 quantities in ``variables`` and ``metadata``. Branches are saved as ``.nc`` or ``.zarr``
-(:meth:`Branch.save`, :func:`load_branch`). The names of earlier versions
-(``continue_family``, ``FamilyBranch``, ``FamilyEvent``, ``FAMILY_EVENTS``, the module path
-``hybridpd.analysis.hybridcont``, and the impact pair's names once at this path, now in
-:mod:`hybridpd.pair.continuation`) still resolve with a ``DeprecationWarning``.
+(:meth:`Branch.save`, :func:`load_branch`).
 """
 from __future__ import annotations
 
-import importlib
 import json
 import math
-import warnings
 from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from hybridpd._deprecated import _message
 from hybridpd._results import (
     Result,
     WithExtras,
@@ -269,18 +263,6 @@ class Branch(WithExtras, Result):
     def __iter__(self):
         return (self[i] for i in range(len(self)))
 
-    @property
-    def p(self) -> np.ndarray:
-        """``parameter`` (the name of earlier versions; deprecated)."""
-        warnings.warn("Branch.p is deprecated; use Branch.parameter", DeprecationWarning, 2)
-        return self.parameter
-
-    @property
-    def s(self) -> np.ndarray:
-        """``points`` (the name of earlier versions; deprecated)."""
-        warnings.warn("Branch.s is deprecated; use Branch.points", DeprecationWarning, 2)
-        return self.points
-
     def events_of(self, kind: str) -> list:
         """The events of one kind."""
         return [e for e in self.events if e.kind == kind]
@@ -452,8 +434,7 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
                    max_step: float | None = None, min_step: float | None = None,
                    max_steps: int = 200, tol: float = 1e-10, fd_step: float = 1e-6,
                    locate: bool = True, event_tol: float = 1e-9,
-                   events: tuple = EVENT_KINDS, map_options: dict | None = None,
-                   **options) -> Branch:
+                   events: tuple = EVENT_KINDS, map_options: dict | None = None) -> Branch:
     """Follow a periodic orbit (a fixed point of ``P^k``) in a parameter, on any map.
 
     Parameters
@@ -493,10 +474,6 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
         Kinds to detect (a subset of :data:`EVENT_KINDS`).
     map_options : dict, optional
         Keyword arguments of :class:`SectionMap` (``t_max``, ``max_jumps``, ...).
-    **options
-        Only for the impact pair's call of earlier versions ``continue_orbit(P, s0,
-        parameter, stop, ...)`` (deprecated: it runs
-        :func:`hybridpd.pair.continuation.continue_pair_orbit`).
 
     Returns
     -------
@@ -525,21 +502,6 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
     >>> br.reason
     'reached the end value p = 0.82'
     """
-    if isinstance(p_end, str):
-        # the impact pair's form of earlier versions: continue_orbit(P, s0, "kv", stop)
-        warnings.warn(_message(f"{__name__}.continue_orbit(P, s0, parameter, stop)",
-                               "hybridpd.pair.continuation.continue_pair_orbit, or "
-                               "continue_orbit(P.family(parameter), p0, stop, s0)"),
-                      DeprecationWarning, stacklevel=2)
-        named = dict(period=period, section=section, method=method, step=step,
-                     max_step=max_step, min_step=min_step, max_steps=max_steps, tol=tol,
-                     fd_step=fd_step, locate=locate, event_tol=event_tol, events=events,
-                     map_options=map_options)
-        given = {k: v for k, v in named.items() if v is not continue_orbit.__kwdefaults__[k]}
-        pair = importlib.import_module("hybridpd.pair.continuation")
-        return pair.continue_pair_orbit(builder, p0, p_end, s0, **given, **options)
-    if options:
-        raise TypeError(f"continue_orbit() got unexpected keyword arguments {sorted(options)}")
     if not callable(builder):
         raise ValueError(f"builder must be a callable p -> PoincareMap (e.g. a map class), got "
                          f"{type(builder).__name__}")
@@ -710,38 +672,3 @@ class _Path:
         P = self.make(new.u[-1])
         if P.period is not None:
             new.u[0] = cur.u[0] + P.wrap(new.u[:-1] - cur.u[:-1])[0]
-
-
-def _continue_family(builder, s0, p0: float, p_end: float, **options) -> Branch:
-    # the argument order of earlier versions: the guess first
-    return continue_orbit(builder, p0, p_end, s0, **options)
-
-
-#: Names of earlier versions: here (renamed) or in the impact pair's continuation package.
-_OLD = {"continue_family": ("_continue_family", "continue_orbit (p0, p_end before s0)"),
-        "FamilyBranch": ("Branch", "Branch"), "FamilyEvent": ("BifurcationEvent",
-                                                              "BifurcationEvent"),
-        "FamilyPoint": ("BranchPoint", "BranchPoint"),
-        "FAMILY_EVENTS": ("EVENT_KINDS", "EVENT_KINDS")}
-#: The impact pair's names once at this path (the 0.2.0 package).
-_PAIR = ("PARAMETERS", "DESIGN_PARAMETERS", "SYMMETRIC_PARAMETERS", "ImpactStep", "MapTrace",
-         "BranchSwitch", "branch_map", "continue_symmetric", "design_xm", "load_branch",
-         "map_power_jacobian", "switch_branch", "trace_map")
-#: Submodules of that package: the import hook serves ``hybridpd.analysis.continuation.<x>``.
-__path__ = []
-
-
-def __getattr__(name):
-    if name in _OLD:
-        here, new = _OLD[name]
-        obj, where = globals()[here], f"{__name__}.{new}"
-    elif name == "plot_branch":
-        obj = importlib.import_module("hybridpd.plotting.branches").plot_branch
-        where = "hybridpd.plotting.branches.plot_branch"
-    elif name in _PAIR:
-        obj, where = getattr(importlib.import_module("hybridpd.pair.continuation"), name), \
-            f"hybridpd.pair.continuation.{name}"
-    else:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    warnings.warn(_message(f"{__name__}.{name}", where), DeprecationWarning, stacklevel=2)
-    return obj

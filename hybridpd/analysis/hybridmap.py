@@ -45,7 +45,6 @@ from scipy.linalg.lapack import dgeqrf as _geqrf
 from scipy.linalg.lapack import dgesdd as _gesdd
 from scipy.linalg.lapack import dorgqr as _orgqr
 
-from hybridpd._deprecated import moved_names
 from hybridpd._jit import njit
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
 from hybridpd.hybrid._kernel import (
@@ -818,5 +817,3 @@ def _accumulating(bufs, nb) -> np.ndarray:
 
 
 # the sections of the models, once defined here
-__getattr__ = moved_names(__name__, {"impact_pair_section": "hybridpd.pair.section",
-                                     "mechanical_section": "hybridpd.mechanics.sections"})

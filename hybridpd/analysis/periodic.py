@@ -28,7 +28,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._deprecated import moved_names
 from hybridpd._jit import njit
 from hybridpd._results import compact_repr
 from hybridpd.analysis.certify import BasinMapper, certify_ball
@@ -792,7 +791,3 @@ class SectionMapper(BasinMapper):
             return img, (lab != OFF_SECTION) & np.all(np.isfinite(img), axis=1)
 
         return certify_ball(DP, fp, self.criterion, images, self.map.section.wrap)
-
-
-__getattr__ = moved_names(__name__, {"section_basin": "hybridpd.sweeps.section_basins",
-                                     "orbit_from_model": "hybridpd.analysis.model_orbits"})

@@ -26,7 +26,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from hybridpd._deprecated import moved_names
 from hybridpd.analysis import basins as _basins
 from hybridpd.analysis.periodic import find_orbit
 from hybridpd.model import wrap_phase
@@ -247,9 +246,3 @@ def slice_points(attractor: _basins.Attractor, L: float) -> np.ndarray:
     """
     p = np.asarray(attractor.points, float).reshape(-1, 4)
     return np.stack([p[:, 1] + L, p[:, 2] + p[:, 3]], axis=-1)
-
-
-__getattr__ = moved_names(__name__, {
-    name: "hybridpd.analysis.basins"
-    for name in ("Attractor", "outcome", "DIVERGED", "INADMISSIBLE_LABEL", "NO_CONVERGENCE",
-                 "OFF_SECTION_LABEL", "OUTCOMES", "STICKING", "UNRESOLVED")})

@@ -52,7 +52,6 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from hybridpd._deprecated import moved_names
 from hybridpd.analysis import basins as _basins
 from hybridpd.analysis.certify import BasinMapper, certify_ball
 from hybridpd.analysis.labels import OFF_SECTION
@@ -407,12 +406,3 @@ def attractor_basin(mapper: ImpactMapper, x1, y1, *, max_period: int = 8,
     meta = dict(b.metadata, extend=bool(extend), max_extensions=int(max_extensions),
                 max_points=None if max_points is None else int(max_points))
     return replace(b, x=xs, y=ys, windows=tuple(windows), edges=edges, metadata=meta)
-
-
-__getattr__ = moved_names(__name__, {
-    "AttractorBasin": "hybridpd.analysis.basins:BasinResult",
-    "BasinMeasure": "hybridpd.analysis.basins", "format_percent": "hybridpd._format",
-    "load_attractor_basin": "hybridpd.analysis.basins:load_basin",
-    "BasinResult": "hybridpd.analysis.basins", "load_basin": "hybridpd.analysis.basins",
-    "basin_of_attraction": "hybridpd.analysis.basins",
-    "LABELS": "hybridpd.analysis.labels"})

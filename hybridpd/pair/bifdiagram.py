@@ -30,13 +30,10 @@ True
 """
 from __future__ import annotations
 
-import importlib
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._deprecated import REMOVAL
 from hybridpd.model import Case, ImpactPair, PDGains, Reference, check_finite
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbits
@@ -227,52 +224,3 @@ def _check_values(name, values):
     elif name == "xm" and np.any(v < 0):
         raise ValueError(f"xm must be >= 0, got values down to {v.min():g}")
     return v
-
-
-def _legacy_diagram(pair, gains, omega, parameter, values, *, case="collocated",
-                    x10=1.0, n=1, xm=None, initial=None, fd_step=None, tol=1e-13,
-                    max_impacts=1000, **settings):
-    """The call of hybridpd 0.2.0's ``bifurcation_diagram(pair, gains, omega, parameter,
-    values, ...)``, with its defaults."""
-    # deferred import: the pair's layer calls the generic one only when this runs
-    from hybridpd.analysis.diagrams import bifurcation_diagram
-
-    fam = ImpactMapFamily(pair, gains, omega, parameter, case, x10, n, xm, tol, max_impacts)
-    return bifurcation_diagram(fam, values, s0=initial, **dict(PAIR_SETTINGS, **settings))
-
-
-def _legacy_sweep(pair, gains, omega, parameter, values, *, executor="serial",
-                  max_workers=None, progress=False, case="collocated", x10=1.0, n=1, xm=None,
-                  initial=None, fd_step=None, tol=1e-13, max_impacts=1000, **settings):
-    """The call of hybridpd 0.2.0's ``pair_diagram``."""
-    # deferred import: the pair's layer calls the generic one only when this runs
-    from hybridpd.sweeps.diagrams import diagram_sweep
-
-    fam = ImpactMapFamily(pair, gains, omega, parameter, case, x10, n, xm, tol, max_impacts)
-    return diagram_sweep(fam, values, s0=initial, executor=executor, max_workers=max_workers,
-                         progress=progress, **dict(PAIR_SETTINGS, **settings))
-
-
-_MOVED = {"BifurcationDiagram": "hybridpd.analysis.diagrams",
-          "CLASSES": "hybridpd.analysis.diagrams",
-          "load_diagram": "hybridpd.analysis.diagrams"}
-_FAMILY = "hybridpd.pair.bifdiagram.ImpactMapFamily with "
-_CALLS = {"bifurcation_diagram": (_legacy_diagram, _FAMILY + "hybridpd.bifurcation_diagram"),
-          "pair_diagram": (_legacy_sweep, _FAMILY + "hybridpd.sweeps.diagrams.diagram_sweep")}
-
-
-def __getattr__(name):
-    # names of hybridpd 0.2.0: the diagram and its loader moved to the generic layer; the
-    # pair's call signatures are kept by the two wrappers above
-    if name in _MOVED:
-        new = _MOVED[name]
-        warnings.warn(f"{__name__}.{name} is deprecated and will be removed in hybridpd "
-                      f"{REMOVAL}; import it from {new} instead", DeprecationWarning,
-                      stacklevel=2)
-        return getattr(importlib.import_module(new), name)
-    if name in _CALLS:
-        func, new = _CALLS[name]
-        warnings.warn(f"{__name__}.{name} is deprecated and will be removed in hybridpd "
-                      f"{REMOVAL}; use {new}", DeprecationWarning, stacklevel=2)
-        return func
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -15,7 +15,6 @@ independent check.
 """
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -171,10 +170,6 @@ class ImpactMap(PoincareMap):
         ``DP^k`` is the chain of symbolic blocks when every return has the simple pattern,
         else central differences of the engine's ``P^k``.
         """
-        if np.ndim(s) == 2:             # the former batch call
-            warnings.warn("ImpactMap.apply of an (N, 4) array is deprecated: use apply_batch",
-                          DeprecationWarning, stacklevel=2)
-            return self.apply_batch(s)
         k = check_returns(k)
         cur = self._points(check_array("s", s, shape=(4,)))[0]
         T = self.period

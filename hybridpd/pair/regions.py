@@ -10,14 +10,11 @@ with rigorous viability, multipliers of ``DP``); with ``certify=True`` the inter
 """
 from __future__ import annotations
 
-import importlib
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from hybridpd._deprecated import REMOVAL
 from hybridpd.model import (
     Case,
     check_array,
@@ -235,27 +232,3 @@ def _certify(case, n, fixed, depth, xname, xs, yname, ys, es, *, executor, max_w
                                  "xname": xname, "yname": yname},
                     metadata={"kind": "certified_region_sweep", "version": 1}).outputs
     return np.asarray(out["certified"]).reshape(shape).astype(np.int8)
-
-
-def _legacy_region_map(case="collocated", *, x=("kp", 0.1, 50.0, 200),
-                       y=("kv", 0.1, 50.0, 200), e=(0.1, 0.5, 0.9), mu=None, omega=None,
-                       L=None, gamma=None, x10=1.0, m2=1.0, n=1, kp=None, kv=None, **options):
-    """The call of hybridpd 0.2.0's ``region_map(case, x=..., y=..., e=..., ...)``."""
-    fam = SymmetricFamily(case, e, mu, omega, L, gamma, x10, m2, n, kp, kv)
-    return fam.classify_grid(x, y, **options)
-
-
-def __getattr__(name):
-    # names of hybridpd 0.2.0: the region map moved to the generic layer; the pair's call
-    # signature is kept by the wrapper above
-    if name in ("RegionMap", "load_region_map"):
-        warnings.warn(f"{__name__}.{name} is deprecated and will be removed in hybridpd "
-                      f"{REMOVAL}; import it from hybridpd.sweeps.regions (or hybridpd)",
-                      DeprecationWarning, stacklevel=2)
-        return getattr(importlib.import_module("hybridpd.sweeps.regions"), name)
-    if name == "region_map":
-        warnings.warn(f"{__name__}.region_map is deprecated and will be removed in hybridpd "
-                      f"{REMOVAL}; use hybridpd.region_map(SymmetricFamily(case, e=..., ...), "
-                      "x=..., y=...)", DeprecationWarning, stacklevel=2)
-        return _legacy_region_map
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

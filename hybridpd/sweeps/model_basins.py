@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from hybridpd._deprecated import moved_names
 from hybridpd.analysis.basins import OUTCOMES, Attractor, BasinResult, from_criterion, outcome
 from hybridpd.analysis.model_orbits import STATUS, SectionSpec, solve_at
 from hybridpd.analysis.model_sections import DivergedRun, fix_section
@@ -179,7 +178,3 @@ def model_basin(model, x=None, y=None, *, values: dict | None = None, contact: i
             "inadmissible": int(b.metadata.get("inadmissible", 0))}
     return BasinResult(b.x, b.y, lab, tuple(atts), b.iterations, xn, yn, po.s.copy(),
                        tuple(names), crit, metadata=dict(meta, model=str(template.source)))
-
-
-__getattr__ = moved_names(__name__, {"ModelBasin": "hybridpd.analysis.basins:BasinResult",
-                                     "load_model_basin": "hybridpd.analysis.basins:load_basin"})

@@ -13,15 +13,12 @@ diverges is ``diverged``; a map that stops otherwise (no crossing, sticking for 
 """
 from __future__ import annotations
 
-import importlib
 import math
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from hybridpd._deprecated import REMOVAL
 from hybridpd.analysis.diagrams import BifurcationDiagram, StoppedMap
 from hybridpd.analysis.model_sections import (
     DivergedRun,
@@ -174,18 +171,3 @@ def model_diagram(model, param, *, contact: int = 0, wall: int | None = None,
     return BifurcationDiagram(d.parameter_name, d.values, d.points, d.code, d.periods,
                               d.status, d.spectrum, d.final, tuple(P.section.names), {},
                               dict(d.metadata, T=T))
-
-
-_MOVED = {"ModelDiagram": "BifurcationDiagram", "load_model_diagram": "load_diagram",
-          "DIAGRAM_CLASSES": "CLASSES"}
-
-
-def __getattr__(name):
-    # names of hybridpd 0.2.0: a model's diagram is the one diagram now
-    if name not in _MOVED:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    new = _MOVED[name]
-    warnings.warn(f"{__name__}.{name} is deprecated and will be removed in hybridpd "
-                  f"{REMOVAL}; use hybridpd.analysis.diagrams.{new}", DeprecationWarning,
-                  stacklevel=2)
-    return getattr(importlib.import_module("hybridpd.analysis.diagrams"), new)

@@ -40,15 +40,12 @@ for serial, process-pool and cluster runs, and a run resumes from its Zarr store
 """
 from __future__ import annotations
 
-import importlib
 import math
-import warnings
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from hybridpd._deprecated import REMOVAL
 from hybridpd.analysis.model_orbits import (
     STATUS,
     OrbitSearch,
@@ -583,28 +580,3 @@ def _region_map_of(template, spec, x_name, xs, y_name, ys, a, meta, P):
                      np.array([meta["restitution"]]), fixed, exists, grid["status"] == 0,
                      a["rho"].reshape(1, len(ys), len(xs)),
                      np.where(exists, 0, grid["status"]).astype(np.int64), grid, meta)
-
-
-def _legacy_model_region_map(model, x, y, *, contact=0, wall=None, event="impact",
-                             period="auto", periods=None, options=None, **kw):
-    """The call of hybridpd 0.2.0's ``model_region_map(model, x, y, ...)``."""
-    return ModelSearch(model, contact, wall, event, period, periods, options) \
-        .classify_grid(x, y, **kw)
-
-
-_MOVED = {"ModelRegionMap": "RegionMap", "load_model_region_map": "load_region_map"}
-
-
-def __getattr__(name):
-    # names of hybridpd 0.2.0: a model's region map is the one region map now
-    if name in _MOVED:
-        warnings.warn(f"{__name__}.{name} is deprecated and will be removed in hybridpd "
-                      f"{REMOVAL}; use hybridpd.sweeps.regions.{_MOVED[name]}",
-                      DeprecationWarning, stacklevel=2)
-        return getattr(importlib.import_module("hybridpd.sweeps.regions"), _MOVED[name])
-    if name == "model_region_map":
-        warnings.warn(f"{__name__}.model_region_map is deprecated and will be removed in "
-                      f"hybridpd {REMOVAL}; use hybridpd.region_map(ModelSearch(model, ...), "
-                      "x, y)", DeprecationWarning, stacklevel=2)
-        return _legacy_model_region_map
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -59,13 +59,7 @@ point, the motion reached past a grazing point); branches are drawn by
 """
 from __future__ import annotations
 
-import importlib
-import warnings
-
-from hybridpd._deprecated import _message
 from hybridpd.analysis.continuation import BifurcationEvent, Branch, load_branch
-from hybridpd.analysis.periodic import PeriodicOrbit as _PeriodicOrbit
-from hybridpd.analysis.periodic import find_orbit as _find_orbit
 from hybridpd.pair.continuation._common import (
     DESIGN_PARAMETERS,
     EVENT_KINDS,
@@ -83,33 +77,3 @@ __all__ = ["DESIGN_PARAMETERS", "EVENT_KINDS", "PARAMETERS", "SYMMETRIC_PARAMETE
            "BifurcationEvent", "Branch", "BranchSwitch", "ImpactStep", "MapTrace",
            "branch_map", "continue_pair_orbit", "continue_symmetric", "design_xm", "load_branch",
            "map_power_jacobian", "switch_branch", "trace_map"]
-
-
-def _find_periodic_orbit(impact_map_, s0, period: int = 1, *, tol: float = 1e-12,
-                         max_iter: int = 50, jacobian: str = "auto", fd_step: float = 1e-6,
-                         graze_tol: float = 1e-6, margin_samples: int = 256):
-    """The orbit search of earlier versions: :func:`hybridpd.analysis.periodic.find_orbit`
-    (``jacobian`` ``"auto"`` or ``"symbolic"`` is its ``"exact"``; ``fd_step`` is unused)."""
-    del fd_step
-    if jacobian not in ("auto", "symbolic", "fd"):
-        raise ValueError(f"jacobian must be 'auto', 'symbolic' or 'fd', got {jacobian!r}")
-    return _find_orbit(impact_map_, s0, period, tol=tol, max_iter=max_iter,
-                      jacobian="fd" if jacobian == "fd" else "exact", graze_tol=graze_tol,
-                      margin_samples=margin_samples)
-
-
-def __getattr__(name):
-    # names of earlier versions: the one orbit type and search of hybridpd.analysis.periodic
-    if name == "find_periodic_orbit":
-        obj, new = _find_periodic_orbit, "hybridpd.analysis.periodic.find_orbit"
-    elif name == "PeriodicOrbit":
-        obj, new = _PeriodicOrbit, "hybridpd.analysis.periodic.PeriodicOrbit"
-    elif name == "continue_orbit":  # the general name is the one engine's
-        obj, new = continue_pair_orbit, f"{__name__}.continue_pair_orbit"
-    elif name == "plot_branch":     # by name: the plotting layer sits above the pair
-        new = "hybridpd.plotting.branches.plot_branch"
-        obj = importlib.import_module("hybridpd.plotting.branches").plot_branch
-    else:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    warnings.warn(_message(f"{__name__}.{name}", new), DeprecationWarning, stacklevel=2)
-    return obj

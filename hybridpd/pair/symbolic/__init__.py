@@ -65,7 +65,6 @@ Impact map: :func:`impact_section_map`, :func:`impact_block`, :func:`flight_sect
 :func:`map_jacobian`, :func:`orbit_jacobian` (-> :class:`JacobianResult`).
 SymPy objects: :func:`derivation` (-> :class:`Derivation`), :func:`sympy_functions`.
 """
-from hybridpd._deprecated import moved_names
 from hybridpd.pair.symbolic.damped import dch, dsh
 from hybridpd.pair.symbolic.derive import Derivation, derivation, sympy_functions
 from hybridpd.pair.symbolic.existence import (
@@ -126,6 +125,3 @@ __all__ = [
 ]
 
 # the names of 0.2.0
-__getattr__ = moved_names(__name__, {
-    "impact_map": "hybridpd.pair.symbolic.section_map:closed_form_map",
-    "symmetric_orbit": "hybridpd.pair.symbolic.existence:solve_symmetric_orbit"})

@@ -10,7 +10,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridpd._deprecated import moved_names
 from hybridpd._results import compact_repr, short_repr
 from hybridpd.model import check_array, virtual_restitution
 from hybridpd.pair.symbolic._numeric import _as_float_arrays, _case, kernel
@@ -203,5 +202,3 @@ def solve_symmetric_orbit(*, kp, kv, m2=1.0, mu, e, L, w, x10, n=1,
 
 
 # the name of 0.2.0 (the flat hybridpd.symmetric_orbit is the pair-object form)
-__getattr__ = moved_names(__name__, {
-    "symmetric_orbit": "hybridpd.pair.symbolic.existence:solve_symmetric_orbit"})

@@ -12,7 +12,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridpd._deprecated import moved_names
 from hybridpd._results import compact_repr
 from hybridpd.pair.symbolic._numeric import _as_float_arrays, _case, _stack, kernel
 from hybridpd.pair.symbolic.existence import SymmetricOrbit
@@ -336,5 +335,3 @@ def orbit_jacobian(orbit: SymmetricOrbit) -> JacobianResult:
 
 
 # the name of 0.2.0 (hybridpd.pair.batch.impact_map is the compiled map of a batch)
-__getattr__ = moved_names(__name__, {
-    "impact_map": "hybridpd.pair.symbolic.section_map:closed_form_map"})
