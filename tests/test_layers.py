@@ -6,8 +6,9 @@ Layers, lowest first: the parameter modules (``model``, ``loop`` and the private
 impact pair: a client of the generic layers that supplies maps and hooks) -> ``plotting`` ->
 ``reproduce`` -> ``cli``. So no module of ``hybrid``, ``mechanics``, ``analysis`` or
 ``sweeps`` imports the pair: the general modules are every module of those packages, read from
-the tree. Imports under ``if TYPE_CHECKING:`` are for annotations only and are not arrows;
-the deprecated paths are served by an import hook that names its targets as strings.
+the tree. Every import is an arrow: at the top of a module, inside a function, and by name
+(a module-path string such as ``import_module`` or a lazy table takes, an f-string
+``import_module``); only imports under ``if TYPE_CHECKING:`` (annotations) are not.
 """
 from __future__ import annotations
 
