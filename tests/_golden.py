@@ -79,6 +79,8 @@ def check(path, arrays: dict, atol: dict | None = None) -> bool:
                                        if new.dtype.kind in "fc" else new == old))
                 raise AssertionError(f"{name}: {bad.size} of {new.size} entries differ "
                                      f"bitwise from the stored ones (first at {bad[:5]})")
+        elif old.dtype.kind == "U" and old.size == 1 and _json(str(old)) is not None:
+            _same_json(_json(str(new)), _json(str(old)), name)
         elif name in atol:
             np.testing.assert_allclose(new, old, rtol=0, atol=atol[name], equal_nan=True,
                                        err_msg=name)
@@ -89,3 +91,26 @@ def check(path, arrays: dict, atol: dict | None = None) -> bool:
             share = float(np.mean(new == old)) if old.size else 1.0
             assert share >= SHARE, f"{name}: {share:.4f} of entries equal, < {SHARE}"
     return exact
+
+
+def _json(text):
+    try:
+        return json.loads(text)
+    except ValueError:
+        return None
+
+
+def _same_json(new, old, where):
+    """A stored JSON object (metadata): the same keys and strings, numbers to ``RTOL``."""
+    if isinstance(old, dict):
+        assert isinstance(new, dict) and set(new) == set(old), f"{where}: keys differ"
+        for k in old:
+            _same_json(new[k], old[k], f"{where}.{k}")
+    elif isinstance(old, list):
+        assert isinstance(new, list) and len(new) == len(old), f"{where}: lengths differ"
+        for i, (a, b) in enumerate(zip(new, old)):
+            _same_json(a, b, f"{where}[{i}]")
+    elif isinstance(old, float) or isinstance(new, float):
+        np.testing.assert_allclose(new, old, rtol=RTOL, atol=ATOL, err_msg=where)
+    else:
+        assert new == old, f"{where}: {new!r} != stored {old!r}"

@@ -13,4 +13,7 @@ def test_basins_match_the_golden_results():
     # twice, a second attractor was found
     assert (arrays["mapper_early1.labels"] == arrays["mapper_early0.labels"]).all()
     assert arrays["pair.windows"].shape == (3, 4) and (arrays["pair.labels"] == 1).any()
-    _golden.check(PATH, arrays)
+    # iteration counts of the early exits depend on rounding (a point enters the certified
+    # ball one map application sooner or later): up to 3 apart under narrower SIMD
+    its = {k: 8 for k in arrays if k.endswith(".iterations")}
+    _golden.check(PATH, arrays, atol=its)
