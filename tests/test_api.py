@@ -207,20 +207,6 @@ def test_moved_and_renamed_names_are_gone_from_their_old_modules(old, name, new)
     importlib.import_module(new)             # the new home exists
 
 
-def test_only_the_root_namespace_has_a_module_getattr():
-    import ast
-
-    found = []
-    for f in sorted((ROOT / "hybridpd").rglob("*.py")):
-        tree = ast.parse(f.read_text())
-        for node in tree.body:
-            names = ([node.name] if isinstance(node, ast.FunctionDef) else
-                     [tg.id for tg in getattr(node, "targets", []) if isinstance(tg, ast.Name)])
-            if "__getattr__" in names or "__path__" in names:
-                found.append(str(f.relative_to(ROOT)))
-    assert found == ["hybridpd/__init__.py"], found
-
-
 def test_flat_names_have_docstrings_with_examples():
     missing = []
     for name in hp.__all__:
