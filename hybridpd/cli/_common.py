@@ -542,14 +542,14 @@ def check_out(path, flag: str = "--out", allowed=None):
     """Refuse (ValueError, before any computation) a result path whose suffix cannot be
     written (default: ``.nc``, ``.zarr``, ``.npz``)."""
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.labelled import SUFFIXES
+    from hybridpd._results import SUFFIXES
 
     return _check(path, flag, allowed or SUFFIXES)
 
 
 def _check(path, flag, allowed):
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.labelled import check_suffix
+    from hybridpd._results import check_suffix
 
     if path is None:
         return None
@@ -604,5 +604,5 @@ def check_model_command(args, pair_options, hint: str, axes: str | None = None) 
                          f"({hint})")
     if axes is not None and (args.x is None or args.y is None):
         raise UsageError(f"--model needs --x {axes} MIN MAX NUM and --y {axes} MIN MAX NUM")
-    check_out(args.out, allowed=(".nc", ".zarr"))
+    check_out(args.out)
     check_image(args.plot)

@@ -60,8 +60,7 @@ def register(sub):
                    help="window extensions while the symmetric orbit's basin touches the edge "
                         "(0: keep the window)")
     add_executor(p, default="serial")
-    add_output(p, out=(".npz", ".nc", ".zarr"), model_out=(".nc", ".zarr"),
-               plot="the basin (coloured by attractor)")
+    add_output(p, out=(".nc", ".zarr", ".npz"), plot="the basin (coloured by attractor)")
     p.set_defaults(func=run)
 
 

@@ -51,7 +51,7 @@ def register(sub):
                    help="--certify: bisections of an undecided cell (default auto: 3 for a "
                         "101 x 101 grid, one more for every factor 2 fewer cells)")
     cli.add_executor(p, default="serial")
-    cli.add_output(p, out=(".nc", ".zarr", ".npz"), model_out=(".nc", ".zarr"), store=True,
+    cli.add_output(p, out=(".nc", ".zarr", ".npz"), store=True,
                    plot="the region map (one panel per e)")
     p.set_defaults(func=run)
 
