@@ -5,6 +5,7 @@
   ``field(repr=False)`` are left out, arrays print as ``array(shape=(200, 200),
   dtype=float64)`` (0-d and one-element arrays print their value), floats with 6 significant
   digits, and anything long or multi-line as ``<TypeName>``.
+* :class:`Fields`: ``to_dict()`` from a dataclass's fields (below); :class:`Result` extends it.
 * :class:`Result`: the one way results become :class:`xarray.Dataset` objects
   (:meth:`~Result.to_dataset`, :meth:`~Result.from_dataset`), files (:meth:`~Result.save`,
   :meth:`~Result.load`: ``.nc`` netCDF-4, a ``.zarr`` store or an ``.npz`` archive, by
@@ -49,7 +50,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["SUFFIXES", "Result", "WithExtras", "check_suffix", "compact_repr", "decode_attrs",
+__all__ = ["SUFFIXES", "Fields", "Result", "WithExtras", "check_suffix", "compact_repr", "decode_attrs",
            "encode_attrs", "jsonable", "read_dataset", "read_npz", "short_repr", "write_dataset",
            "write_npz"]
 
@@ -149,7 +150,7 @@ def jsonable(v) -> Any:
     >>> jsonable({"a": np.array([1.0, np.nan]), "b": (1 + 2j, np.int64(3))})
     {'a': [1.0, None], 'b': [[1.0, 2.0], 3]}
     """
-    if isinstance(v, Result):
+    if isinstance(v, Fields):
         return v.to_dict()
     if isinstance(v, Mapping):
         return {str(k): jsonable(x) for k, x in v.items()}
@@ -351,7 +352,32 @@ def read_dataset(path: str | os.PathLike):
 # ----------------------------------------------------------------------------------------
 # the mixin
 # ----------------------------------------------------------------------------------------
-class Result:
+class Fields:
+    """Mixin of a dataclass whose JSON form is its fields: :meth:`to_dict`. :class:`Result`
+    adds datasets and files; a value that is not saved alone (an end point, a certificate)
+    takes only this.
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass, field
+    >>> @dataclass(frozen=True)
+    ... class End(Fields):
+    ...     m2: float
+    ...     residual: float = field(metadata={"dict_name": "rho_minus_1"})
+    ...     seconds: float = field(default=0.0, metadata={"dict_skip": True})
+    >>> End(0.5, float("nan"), 1.5).to_dict()
+    {'m2': 0.5, 'rho_minus_1': None}
+    """
+
+    def to_dict(self) -> dict:
+        """JSON-ready values of the fields (:func:`jsonable`), in their order: a field with
+        ``metadata={"dict_skip": True}`` is left out, one with ``metadata={"dict_name":
+        name}`` appears under that name."""
+        return {f.metadata.get("dict_name", f.name): jsonable(getattr(self, f.name))
+                for f in dataclasses.fields(self) if not f.metadata.get("dict_skip")}
+
+
+class Result(Fields):
     """Mixin of a dataclass result: datasets, files and JSON from its fields (module
     docstring).
 
@@ -369,11 +395,12 @@ class Result:
     ...     kind = "scan"
     ...     name: str
     ...     p: np.ndarray = field(metadata={"coord": "@name"})
-    ...     rho: np.ndarray = field(metadata={"dims": ("@name",)})
+    ...     rho: np.ndarray = field(metadata={"dims": ("@name",), "dict_name": "radius"})
     ...     note: dict = field(default_factory=dict)
+    ...     seconds: float = field(default=0.0, metadata={"dict_skip": True})
     >>> r = Scan("kv", np.array([1.0, 2.0]), np.array([0.5, np.nan]), {"k": (1, 2)})
     >>> r.to_dict()
-    {'name': 'kv', 'p': [1.0, 2.0], 'rho': [0.5, None], 'note': {'k': [1, 2]}}
+    {'name': 'kv', 'p': [1.0, 2.0], 'radius': [0.5, None], 'note': {'k': [1, 2]}}
     >>> list(r.to_dataset().rho.dims)
     ['kv']
     >>> back = Scan.load(r.save(tempfile.mkdtemp() + "/scan.nc"))
@@ -386,9 +413,6 @@ class Result:
     def _dim(self, name: str) -> str:
         return str(getattr(self, name[1:])) if name.startswith("@") else name
 
-    def to_dict(self) -> dict:
-        """JSON-ready values of every field (:func:`jsonable`)."""
-        return {f.name: jsonable(getattr(self, f.name)) for f in dataclasses.fields(self)}
 
     def to_dataset(self):
         """The result as an :class:`xarray.Dataset` (module docstring)."""

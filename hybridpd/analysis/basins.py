@@ -19,14 +19,13 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from hybridpd._format import format_percent
-from hybridpd._results import Result, check_suffix, compact_repr, decode_attrs, jsonable
-from hybridpd.analysis import _basin_files
+from hybridpd._results import Fields, Result, compact_repr, decode_attrs
 from hybridpd.analysis.labels import LABELS
 
 __all__ = ["DIVERGED", "INADMISSIBLE_LABEL", "NO_CONVERGENCE", "OFF_SECTION_LABEL", "OUTCOMES",
@@ -64,7 +63,7 @@ def from_criterion(labels) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class Attractor:
+class Attractor(Fields):
     """A periodic attractor of a basin (or an outcome, ``label < 0``).
 
     Attributes
@@ -114,10 +113,6 @@ class Attractor:
     def periodic(self) -> bool:
         """A periodic orbit (not an outcome)."""
         return self.label >= 0
-
-    def to_dict(self) -> dict:
-        """JSON-ready description (complex multipliers as ``[re, im]``)."""
-        return {f.name: jsonable(getattr(self, f.name)) for f in fields(self)}
 
     @classmethod
     def from_dict(cls, d: dict) -> Attractor:
@@ -421,23 +416,6 @@ class BasinResult(Result):
             raise ValueError(f"the dataset does not hold a basin (it holds a {kind!r}: "
                              "attribute kind)")
         return super().from_dataset(ds)
-
-    def save(self, path) -> Path:
-        """Write to ``.nc`` or ``.zarr`` (:meth:`to_dataset`), or ``.npz``, by suffix."""
-        if check_suffix(path) != ".npz":
-            return super().save(path)
-        return _basin_files.write_basin_npz(self, Path(path))
-
-    @classmethod
-    def load(cls, path) -> BasinResult:
-        """Read a basin written by :meth:`save`."""
-        if check_suffix(path) != ".npz":
-            return super().load(path)
-        kind, meta, arrays = _basin_files.read_basin_npz(Path(path))
-        if kind != "basin" or "attractors" not in meta:
-            raise ValueError(f"{path} does not hold a basin of this version (it holds a "
-                             f"{kind!r})")
-        return cls(**arrays, **meta)
 
 
 def load_basin(path) -> BasinResult:

@@ -19,7 +19,6 @@ cell by Newton from the neighbours' orbits, seeded by simulation, in tiles on an
 """
 from __future__ import annotations
 
-import dataclasses
 import re
 from dataclasses import dataclass, field
 
@@ -123,7 +122,7 @@ class RegionMap(WithExtras, Result):
     stable: np.ndarray
     spectral_radius: np.ndarray
     reason: np.ndarray
-    variables: dict = field(default_factory=dict, repr=False)
+    variables: dict = field(default_factory=dict, repr=False, metadata={"dict_skip": True})
     metadata: dict = field(default_factory=dict, repr=False)
     __repr__ = compact_repr
 
@@ -203,8 +202,7 @@ class RegionMap(WithExtras, Result):
     def to_dict(self) -> dict:
         """JSON-ready form (``regions --json``): every field, arrays ``[layer][iy][ix]``, the
         swept axes also under their names, ``counts``."""
-        d = {f.name: jsonable(getattr(self, f.name)) for f in dataclasses.fields(self)
-             if f.name != "variables"}
+        d = super().to_dict()
         d.update({k: jsonable(v) for k, v in self.variables.items()})
         d.update({self.x_name: d["x"], self.y_name: d["y"], "counts": self.counts()})
         return d
