@@ -1,5 +1,4 @@
 """Labelled results: xarray Datasets, netCDF/Zarr by suffix, files of earlier versions."""
-import re
 import subprocess
 import sys
 from pathlib import Path
@@ -10,10 +9,11 @@ from _regions import pair_region_map
 
 from hybridpd import ImpactPair, PDGains
 from hybridpd._results import check_suffix, decode_attrs, encode_attrs, write_dataset
-from hybridpd.analysis.basins import basin_of_attraction, load_basin
-from hybridpd.pair.basins import ImpactMapper
+from hybridpd.analysis.basins import load_basin
+from hybridpd.analysis.mappers import mapper
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
+from hybridpd.sweeps.basins import basin_of_attraction
 from hybridpd.sweeps.regions import load_region_map
 from hybridpd.sweeps.sweep import run_sweep
 
@@ -84,8 +84,8 @@ def certain_points(compute, fields):
 @pytest.fixture(scope="module")
 def basin():
     orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
-    m = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
-    return basin_of_attraction(m.map, (-3, 5, 6), (-2, 10, 5), criterion=m, max_period=0)
+    m = mapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
+    return basin_of_attraction(m, (-3, 5, 6), (-2, 10, 5), max_period=0)
 
 
 def assert_close_or_equal(actual, desired, err_msg, where=None):
@@ -198,30 +198,6 @@ def test_unknown_suffix_is_refused(rm, basin, tmp_path):
     rm.save(tmp_path / "m.nc")
     with pytest.raises(ValueError, match="does not hold a basin"):
         load_basin(tmp_path / "m.nc")
-
-
-def _assert_stored_basin(old, fresh, certain, err_msg):
-    """A stored basin against a fresh one: labels exactly and iterations within
-    :data:`ITER_ATOL` at the certain points, the converged share up to the uncertain ones."""
-    for f in ("labels", "criterion_labels"):
-        assert_close_or_equal(getattr(old, f), getattr(fresh, f), f"{err_msg}: {f}", certain)
-    # how many iterations a point takes to enter the criterion depends on rounding (the
-    # vectorised sin/cos of another CPU move the last digits): a few either way
-    np.testing.assert_allclose(old.iterations[certain], fresh.iterations[certain], rtol=0,
-                               atol=ITER_ATOL, err_msg=f"{err_msg}: iterations")
-    assert abs(old.converged_fraction - fresh.converged_fraction) <= \
-        (~certain).mean() + 1e-12, err_msg
-
-
-_NUMBER = re.compile(r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")
-
-
-def assert_same_text(old, new, rtol, atol=0.0):
-    """Two printed texts: the words equal, the numbers within ``rtol`` and ``atol``."""
-    assert _NUMBER.split(old) == _NUMBER.split(new), (old, new)
-    np.testing.assert_allclose([float(x) for x in _NUMBER.findall(old)],
-                               [float(x) for x in _NUMBER.findall(new)], rtol=rtol, atol=atol,
-                               err_msg=f"{old!r} against {new!r}")
 
 
 def test_sweep_store_and_result_as_datasets(tmp_path):
