@@ -7,7 +7,7 @@ from hybridpd.cli._common import (
     EXIT_DIVERGED,
     UsageError,
     add_executor,
-    add_grid_axes,
+    add_grid_axis,
     add_max_period,
     add_model,
     add_output,
@@ -17,6 +17,7 @@ from hybridpd.cli._common import (
     check_pair_command,
     command,
     executor_of,
+    grid_axis,
     print_json,
     progress_wanted,
     set_option_values,
@@ -46,10 +47,12 @@ def register(sub):
                       "search)")
     add_pair(p)
     add_model(p)
-    add_grid_axes(p, "COORD", "grid over this section coordinate: x1 or y1 for the pair (x1 "
-                  "-3 5 41 and y1 -2 10 41 times x10 by default: the reproduction's window); "
-                  "--model: a coordinate of the file's section (e.g. motor, motor_dot; "
-                  "default: the orbit's first two, around it)")
+    add_grid_axis(p, "--x", word="COORD",
+                  help="grid over this section coordinate: x1 or y1 for the pair (x1 -3 5 41 "
+                       "and y1 -2 10 41 times x10 by default: the reproduction's window); "
+                       "--model: a coordinate of the file's section (e.g. motor, motor_dot; "
+                       "default: the orbit's first two, around it)")
+    add_grid_axis(p, "--y", word="COORD", help="second axis, as --x (a different one)")
     p.add_argument("--iterations", type=int, default=None,
                    help="iterations of the impact map (default 1500, two impacts each; "
                         "--model: 300 of P^k)")
@@ -145,14 +148,8 @@ def _pair_axis(flag: str, given, name: str, default: tuple) -> tuple:
 
 def _axis(flag: str, given) -> tuple:
     """``(COORD, (MIN, MAX, NUM))`` of ``flag``'s ``COORD MIN MAX NUM``."""
-    name, lo, hi, num = given
-    try:
-        lo, hi, num = float(lo), float(hi), float(num)
-    except ValueError:
-        raise ValueError(f"{flag} {name} MIN MAX NUM: numbers, got {given[1:]}") from None
-    if num != int(num):
-        raise ValueError(f"{flag} NUM must be an integer, got {num:g}")
-    return name, (lo, hi, int(num))
+    name, lo, hi, num = grid_axis(flag, given)
+    return name, (lo, hi, num)
 
 
 def _run_model(args) -> int:
