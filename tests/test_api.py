@@ -77,7 +77,7 @@ OLD_MODULES = {
     """),
     "hybridpd.sweep": ("hybridpd.sweeps.sweep", """
         ChunkError EXECUTORS ExecutorSpec FORMAT SweepResult default_chunk_size
-        grid_points load_sweep resolve_executor run_sweep
+        grid_points load_npz load_sweep resolve_executor run_sweep save_npz
     """),
     "hybridpd.symbolic": ("hybridpd.pair.symbolic", """
         Derivation ImpactMapResult JacobianResult SymmetricOrbit dch derivation dsh
@@ -95,14 +95,11 @@ MOVED_NAMES = [
     ("hybridpd.pair.basins", "BasinResult", "hybridpd.analysis.basins"),
     ("hybridpd.pair.basins", "load_basin", "hybridpd.analysis.basins"),
     ("hybridpd.pair.basins", "LABELS", "hybridpd.analysis.labels"),
+    ("hybridpd.pair.attractors", "Attractor", "hybridpd.analysis.basins"),
+    ("hybridpd.pair.attractors", "OUTCOMES", "hybridpd.analysis.basins"),
+    ("hybridpd.pair.attractors", "outcome", "hybridpd.analysis.basins"),
     ("hybridpd.pair.basins", "BasinMeasure", "hybridpd.analysis.basins"),
-    ("hybridpd.analysis.periodic", "section_basin", "hybridpd.sweeps.basins"),
-    ("hybridpd.analysis.periodic", "SectionMapper", "hybridpd.analysis.mappers"),
-    ("hybridpd.analysis.certify", "BasinMapper", "hybridpd.analysis.mappers"),
-    ("hybridpd.pair.basins", "ImpactMapper", "hybridpd.analysis.mappers"),
-    ("hybridpd.pair.basins", "attractor_basin", "hybridpd.sweeps.basins"),
-    ("hybridpd.analysis.basins", "basin_of_attraction", "hybridpd.sweeps.basins"),
-    ("hybridpd.analysis.basins", "Catalogue", "hybridpd.analysis.mappers"),
+    ("hybridpd.analysis.periodic", "section_basin", "hybridpd.sweeps.section_basins"),
     ("hybridpd.analysis.periodic", "orbit_from_model", "hybridpd.analysis.model_orbits"),
     ("hybridpd.analysis.hybridmap", "impact_pair_section", "hybridpd.pair.section"),
     ("hybridpd.analysis.hybridmap", "mechanical_section", "hybridpd.mechanics.sections"),
@@ -134,8 +131,7 @@ def test_import_loads_no_heavy_library():
 
 
 @pytest.mark.parametrize("name", ["find_orbit", "SectionMap", "continue_orbit", "load_model",
-                                  "simulate", "HybridAutomaton", "stability", "basin_of_attraction",
-                                  "mapper"])
+                                  "simulate", "HybridAutomaton", "stability", "section_basin"])
 def test_general_names_load_no_pair_module(name):
     out = _probe(f"import sys, json, hybridpd as hp; hp.{name}; "
                  "print(json.dumps(sorted(m for m in sys.modules "
@@ -164,10 +160,6 @@ def test_flat_names_are_the_defining_objects():
 def test_unknown_name_is_an_attribute_error():
     with pytest.raises(AttributeError, match="no attribute 'nonexistent'"):
         hp.nonexistent  # noqa: B018
-    # the basin names of earlier versions: one mapper and one basin_of_attraction now
-    for old in ("ImpactMapper", "SectionMapper", "attractor_basin", "section_basin"):
-        with pytest.raises(AttributeError, match=f"no attribute '{old}'"):
-            getattr(hp, old)
 
 
 def test_reproduce_is_callable_as_name_and_as_package():
@@ -186,15 +178,16 @@ RENAMED = [
      "BasinResult"),
     ("hybridpd.pair.basins", "load_attractor_basin", "hybridpd.analysis.basins",
      "load_basin"),
+    ("hybridpd.sweeps.model_basins", "ModelBasin", "hybridpd.analysis.basins", "BasinResult"),
+    ("hybridpd.sweeps.model_basins", "load_model_basin", "hybridpd.analysis.basins",
+     "load_basin"),
     ("hybridpd", "load_attractor_basin", "hybridpd.analysis.basins", "load_basin"),
 ]
 
 
 def test_old_module_paths_are_gone():
     for old in sorted(OLD_MODULES) + ["hybridpd.design", "hybridpd.sweeps.basin_result",
-                                      "hybridpd.analysis.continuation.switching",
-                                      "hybridpd.pair.attractors", "hybridpd.sweeps.section_basins",
-                                      "hybridpd.sweeps.model_basins"]:
+                                      "hybridpd.analysis.continuation.switching"]:
         sys.modules.pop(old, None)
         with pytest.raises(ModuleNotFoundError):
             importlib.import_module(old)
@@ -212,6 +205,20 @@ def test_moved_and_renamed_names_are_gone_from_their_old_modules(old, name, new)
         with pytest.raises(AttributeError, match="no attribute"):
             getattr(mod, name)
     importlib.import_module(new)             # the new home exists
+
+
+def test_only_the_root_namespace_has_a_module_getattr():
+    import ast
+
+    found = []
+    for f in sorted((ROOT / "hybridpd").rglob("*.py")):
+        tree = ast.parse(f.read_text())
+        for node in tree.body:
+            names = ([node.name] if isinstance(node, ast.FunctionDef) else
+                     [tg.id for tg in getattr(node, "targets", []) if isinstance(tg, ast.Name)])
+            if "__getattr__" in names or "__path__" in names:
+                found.append(str(f.relative_to(ROOT)))
+    assert found == ["hybridpd/__init__.py"], found
 
 
 def test_flat_names_have_docstrings_with_examples():

