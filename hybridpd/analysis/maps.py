@@ -200,6 +200,12 @@ class PoincareMap(abc.ABC):
         raise ValueError(f"parameter: this map ({type(self).__name__}) names no parameters, "
                          f"got {parameter!r}; give continue_orbit a builder p -> map")
 
+    def labeller(self):
+        """The map's own basin labeller (a :class:`hybridpd.analysis.mappers.Labeller`: a
+        compiled labelling and what only the map has, e.g. its slice and metric), or None:
+        :func:`hybridpd.analysis.mappers.mapper` then labels by the general rules."""
+        return None
+
     def canonical(self, s) -> np.ndarray:
         """The representative of a section point (the phase reduced to ``[0, T)``)."""
         if self.period is not None:
@@ -381,6 +387,33 @@ def detect_period(points, wrap, max_period: int, tol: float = 1e-6) -> int:
         if float(np.max(np.abs(wrap(X[k:] - X[:-k])))) <= tol * scale:
             return k
     return 0
+
+
+def detect_periods(tails, wrap, max_period: int, tol: float, *, scale=None) -> tuple:
+    """Smallest repeating period of each of ``M`` tails (shape ``(M, K, dim)``): ``(period,
+    error)``, arrays of shape ``(M,)``, period 0 (error ``inf``) where none ``k <=
+    min(max_period, K - 2)`` gives ``|wrap(s_{j+k} - s_j)|_inf / scale <= tol`` along the
+    tail. ``scale`` (shape ``(M,)``) defaults to ``max(1, |s|)`` of each tail.
+
+    Examples
+    --------
+    >>> t = np.array([[[0.0], [1.0], [0.0], [1.0], [0.0]], [[0.0], [1.0], [2.0], [3.0], [4.0]]])
+    >>> detect_periods(t, np.asarray, 3, 1e-9)[0].tolist()
+    [2, 0]
+    """
+    tails = np.asarray(tails, float)
+    M, K = tails.shape[:2]
+    per = np.zeros(M, dtype=np.int64)
+    err = np.full(M, np.inf)
+    if scale is None:
+        scale = np.maximum(1.0, np.nanmax(np.abs(tails), axis=(1, 2)))
+    for k in range(min(int(max_period), K - 2), 0, -1):
+        e = np.max(np.abs(wrap(tails[:, k:] - tails[:, :-k])), axis=(1, 2)) / scale
+        hit = e <= tol
+        # descending k: a smaller period overwrites a multiple of it
+        per[hit] = k
+        err[hit] = e[hit]
+    return per, err
 
 
 def minimal_period(P: PoincareMap, s, k: int, rtol: float = 1e-7) -> int:
