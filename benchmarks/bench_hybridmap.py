@@ -85,8 +85,8 @@ def pair_rates():
 
 
 def drivetrain_basin(grid, iterations, workers):
-    from hybridpd.analysis.model_orbits import orbit_from_model
     from hybridpd.analysis.mappers import mapper
+    from hybridpd.analysis.model_orbits import orbit_from_model
     from hybridpd.mechanics.modelfile import load_model
     from hybridpd.sweeps.basins import basin_of_attraction
 
@@ -107,9 +107,10 @@ def drivetrain_basin(grid, iterations, workers):
                             max_workers=workers)
     el = time.perf_counter() - t0
     # the worst case: every point iterated to the end (no early exit), on a 10 x 10 grid
-    m0 = SectionMapper(P, orb.s, period=1, n_iter=iterations, early_exit=False)
+    m0 = mapper(P, orb.s, period=1, n_iter=iterations, early_exit=False)
     t0 = time.perf_counter()
-    b0 = section_basin(m0, "motor", "motor_dot", x[:2] + (10,), y[:2] + (10,))
+    b0 = basin_of_attraction(m0, x[:2] + (10,), y[:2] + (10,), axes=("motor", "motor_dot"),
+                             max_period=0)
     full = (time.perf_counter() - t0) / b0.iterations.sum()
     return el, t_cert, b, orb, full
 

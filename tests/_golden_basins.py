@@ -44,10 +44,11 @@ def _api() -> SimpleNamespace:
     try:
         from hybridpd.analysis.mappers import Growth, mapper
     except ImportError:     # the mapper classes and entry points of earlier versions
-        from hybridpd.analysis.periodic import SectionMapper
-        from hybridpd.pair.basins import ImpactMapper, attractor_basin
         from hybridpd.sweeps.model_basins import model_basin
         from hybridpd.sweeps.section_basins import section_basin
+
+        from hybridpd.analysis.periodic import SectionMapper
+        from hybridpd.pair.basins import ImpactMapper, attractor_basin
 
         return SimpleNamespace(
             pair_mapper=lambda orb, **kw: ImpactMapper.from_orbit(orb, **kw),

@@ -21,8 +21,6 @@ from hybridpd import ImpactPair, PDGains
 from hybridpd._format import pct
 from hybridpd.analysis.basins import OFF_SECTION_LABEL
 from hybridpd.analysis.mappers import Growth
-from hybridpd.reproduce.basins import orbit_mapper
-from hybridpd.sweeps.basins import basin_of_attraction
 from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.plotting.basins import plot_basin
 from hybridpd.plotting.regions import plot_region_panels
@@ -33,8 +31,10 @@ from hybridpd.plotting.studies import (
     plot_param_study,
     plot_scaled_regions,
 )
+from hybridpd.reproduce.basins import orbit_mapper
 from hybridpd.reproduce.figures import _basin_figure, _plain_figure, basin_share
 from hybridpd.reproduce.settings import PAPER
+from hybridpd.sweeps.basins import basin_of_attraction
 
 _MATH = re.compile(r"\$[^$]*\$")
 _PAR = dict(mu=0.1, gamma=0.75, omega=5.0, n=1, m2=1.0, x10=1.0)

@@ -12,8 +12,8 @@ import pytest
 from _chain_reference import ReferenceChain
 
 from hybridpd.analysis.hybridmap import Section, SectionMap
-from hybridpd.analysis.model_orbits import signature_table
 from hybridpd.analysis.mappers import mapper
+from hybridpd.analysis.model_orbits import signature_table
 from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode
 from hybridpd.mechanics.samples import chain_model_text, mass_chain
 from hybridpd.mechanics.sections import mechanical_section

@@ -24,8 +24,8 @@ import pytest
 
 from hybridpd import ImpactPair, PDGains
 from hybridpd.analysis.hybridmap import SectionMap
-from hybridpd.analysis.maps import MapResult, PoincareMap
 from hybridpd.analysis.mappers import mapper
+from hybridpd.analysis.maps import MapResult, PoincareMap
 from hybridpd.analysis.periodic import find_orbit
 from hybridpd.loop import pd_controller
 from hybridpd.pair.impactmap import ImpactMap

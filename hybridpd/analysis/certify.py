@@ -15,7 +15,6 @@ import math
 
 import numpy as np
 
-
 __all__ = ["certify_ball"]
 
 

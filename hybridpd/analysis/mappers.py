@@ -38,7 +38,7 @@ import numpy as np
 from hybridpd.analysis.basins import NO_CONVERGENCE, Attractor
 from hybridpd.analysis.certify import certify_ball
 from hybridpd.analysis.hybridmap import SectionMap
-from hybridpd.analysis.labels import INADMISSIBLE, LABELS, OFF_SECTION
+from hybridpd.analysis.labels import LABELS, OFF_SECTION
 from hybridpd.analysis.maps import PoincareMap, check_returns, detect_periods, minimal_period
 from hybridpd.analysis.periodic import (
     _CONVERGED,

@@ -204,7 +204,6 @@ class PoincareMap(abc.ABC):
         """The map's own basin labeller (a :class:`hybridpd.analysis.mappers.Labeller`: a
         compiled labelling and what only the map has, e.g. its slice and metric), or None:
         :func:`hybridpd.analysis.mappers.mapper` then labels by the general rules."""
-        return None
 
     def canonical(self, s) -> np.ndarray:
         """The representative of a section point (the phase reduced to ``[0, T)``)."""

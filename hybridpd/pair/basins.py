@@ -43,7 +43,7 @@ from hybridpd.analysis.periodic import LabelSpec
 from hybridpd.model import check_axis, wrap_phase
 from hybridpd.pair.batch import impact_map, map_labels
 
-__all__ = ["PaperMetric", "PairLabeller", "paper_distance2", "section_grid", "slice_points"]
+__all__ = ["PairLabeller", "PaperMetric", "paper_distance2", "section_grid", "slice_points"]
 
 # (dx1, dy1, dy2, dphi) = C (dphi, dz1, dz2, dz4): the paper's criterion coordinates
 _C = np.array([[0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 1, 0], [1, 0, 0, 0]], float)

@@ -60,8 +60,8 @@ def _label_tails(m: Mapper, S, tail, run) -> dict:
             got = run_sweep(_label_chunk, {f"s{i}": todo[:, i] for i in range(S.shape[1])},
                             func_kwargs={"spec": m.spec(), "tail": int(tail)},
                             metadata={"kind": "basin"}, label="basin", **run).outputs
-        for k in out:
-            out[k][ok] = got[k]
+        for k, v in out.items():
+            v[ok] = got[k]
     return out, int((~ok).sum())
 
 
