@@ -561,3 +561,26 @@ def test_a_mapper_with_only_labels_labels_any_slice_and_matches_iterating_the_ma
         basin_of_attraction(P, (0, 1, 2), (0, 1, 2), base=o.fixed_point, executor="processes")
     with pytest.raises(ValueError, match="grow"):
         basin_of_attraction(m, (0, 1, 2), (0, 1, 2), grow=3)
+
+
+def test_the_phase_wrap_and_its_kernel_twin_are_one_expression_bit_for_bit():
+    import inspect
+
+    from hybridpd._phase import wrap_phase, wrap_phase_kernel
+
+    def expr(f):
+        src = inspect.getsource(f.py_func if hasattr(f, "py_func") else f)
+        return [ln.strip() for ln in src.splitlines() if ln.strip().startswith("return")]
+
+    assert expr(wrap_phase) == expr(wrap_phase_kernel) == ["return (d + 0.5 * T) % T - 0.5 * T"]
+    rng = np.random.default_rng(5)
+    T = 2 * np.pi / 5.0
+    d = np.concatenate([rng.normal(0, 10, 2000), rng.normal(0, 1e-7, 2000),
+                        np.arange(-6, 7) * 0.5 * T, [0.0, -0.0, 1e-300, -1e-300]])
+    py = wrap_phase(d, T)
+    nb = np.array([wrap_phase_kernel(float(x), T) for x in d])
+    np.testing.assert_array_equal(py, nb)
+    # half-open [-T/2, T/2): +T/2 wraps to -T/2; the wrapped value differs from d by whole T
+    assert np.all((py >= -0.5 * T) & (py < 0.5 * T))
+    assert wrap_phase(0.5 * T, T) == -0.5 * T
+    np.testing.assert_allclose((d - py) / T, np.round((d - py) / T), rtol=0, atol=1e-6)

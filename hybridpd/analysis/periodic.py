@@ -30,6 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from hybridpd._jit import njit
+from hybridpd._phase import wrap_phase_kernel
 from hybridpd._results import compact_repr
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import (
@@ -558,7 +559,7 @@ def _dist(s, fp, T, Q):
     for i in range(dim):
         d[i] = s[i] - fp[i]
     if T > 0.0:
-        d[0] = (d[0] + 0.5 * T) - math.floor((d[0] + 0.5 * T) / T) * T - 0.5 * T
+        d[0] = wrap_phase_kernel(d[0], T)
     q = 0.0
     e = 0.0
     for i in range(dim):
