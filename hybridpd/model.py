@@ -41,6 +41,7 @@ __all__ = [
     "pd_values",
     "sine_reference",
     "virtual_restitution",
+    "wrap_phase",
 ]
 
 
