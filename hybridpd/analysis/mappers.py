@@ -633,9 +633,13 @@ class MapMapper(Mapper):
 
     def spec_of(self) -> LabelSpec:
         """The labelling's options by name (:class:`~hybridpd.analysis.periodic.LabelSpec`)."""
-        return LabelSpec(self.labeller.criterion_matrix(), self.map.period or 0.0, self.cycle,
-                         self.period, self.n_iter, self.criterion, self.cert_Q, self.cert_r2,
-                         self.escape, 1e-12 if self.early_exit else 0.0)
+        # the kernels' types: float and int scalars, contiguous float arrays
+        return LabelSpec(np.ascontiguousarray(self.labeller.criterion_matrix(), float),
+                         float(self.map.period or 0.0), np.ascontiguousarray(self.cycle, float),
+                         int(self.period), int(self.n_iter), float(self.criterion),
+                         np.ascontiguousarray(self.cert_Q, float),
+                         np.ascontiguousarray(self.cert_r2, float), float(self.escape),
+                         1e-12 if self.early_exit else 0.0)
 
     def labels(self, S) -> tuple:
         """Labels and iterations run of section points ``S`` of shape ``(N, dim)``."""
@@ -762,10 +766,8 @@ class SectionLabeller(Labeller):
         p = 0
         while p < N:   # bounded: each pass labels a point or builds one of max_modes modes
             p, code = _label_kernel(*P._kernel_args, W0, T0, sec.mode_index, sec.guard_index,
-                                    k, P._t_max(k), P.max_jumps, P.max_steps, spec.C, spec.T,
-                                    spec.FP, int(spec.n_iter), spec.criterion, spec.QS,
-                                    spec.R2, spec.escape, sub, lab, its, p,
-                                    sec.resolver is not None, bufs)
+                                    P._t_max(k), P.max_jumps, P.max_steps, spec, sub, lab, its,
+                                    p, sec.resolver is not None, bufs)
             if p < N and code == _TO_RESOLVER:
                 if self._resolved_step(p, W0, T0, its, lab, sub, spec):
                     p += 1

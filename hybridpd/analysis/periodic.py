@@ -570,12 +570,13 @@ def _dist(s, fp, T, Q):
 
 
 @njit(cache=True)
-def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, k, t_max, J_max, max_steps, C, T,
-                  FP, n_iter, criterion, QS, R2, escape, S_out, lab, its, p0, resolve, rb):
+def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, t_max, J_max, max_steps, spec, S_out,
+                  lab, its, p0, resolve, rb):
     """Label the points ``p0, p0 + 1, ...`` (rows of ``W0``, ``T0``) into ``lab``, ``its``.
 
     ``pk``, ``dt_min``, ``zf``, ``zi``: the map's tables and options
-    (``SectionMap._kernel_args``); ``rb``: the run's buffers (:mod:`hybridpd.hybrid._kernel`).
+    (``SectionMap._kernel_args``); ``spec``: the labelling's options (:class:`LabelSpec`);
+    ``rb``: the run's buffers (:mod:`hybridpd.hybrid._kernel`).
 
     Returns ``(p, code)``: ``p = N`` when every point is labelled; otherwise the run of
     point ``p`` handed back: ``ST_NEED_MODE`` (a mode not built yet, code ``code``, or a Zeno
@@ -585,6 +586,8 @@ def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, k, t_max, J_max, max_steps
     iterations so far in ``its[p]``, so that a call from ``p`` resumes it there.
     """
     w, fc, ic = rb.w, rb.fc, rb.ic
+    k, C, T, FP, QS, R2 = spec.period, spec.C, spec.T, spec.FP, spec.QS, spec.R2
+    n_iter, criterion, escape = spec.n_iter, spec.criterion, spec.escape
     N = W0.shape[0]
     N1 = W0.shape[1]
     w0 = np.empty(N1)

@@ -202,12 +202,16 @@ class _PairSpec:
         valid = np.isfinite(S).all(axis=1) & (S[:, 3] > 0)
         if np.any(valid):
             lv, iv, fv = map_labels(np.array(self.params), self._c, np.ascontiguousarray(S[valid]),
-                                    np.array(self.fixed_point), self.n_iter, self.criterion,
-                                    np.array(self.cert_Q).reshape(4, 4), self.cert_r2,
-                                    self.escape, self.tol, self.max_impacts, True,
-                                    self.cycle_tol)
+                                    self.label_spec(), self.tol, self.max_impacts, True)
             lab[valid], its[valid], final[valid] = lv, iv, fv
         return lab, its, final
+
+    def label_spec(self) -> LabelSpec:
+        """The options by name, as the kernel takes them."""
+        return LabelSpec(_C, 0.0, np.array(self.fixed_point, float)[None], 1, int(self.n_iter),
+                         float(self.criterion), np.array(self.cert_Q, float).reshape(1, 4, 4),
+                         np.array([self.cert_r2], float), float(self.escape),
+                         float(self.cycle_tol))
 
     @property
     def _c(self) -> int:

@@ -633,9 +633,14 @@ _CYCLE_MAX = 32
 
 
 @njit(cache=True)
-def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
-               tol=1e-13, max_impacts=1000, stick=True, cycle_tol=1e-12):
+def map_labels(params, case, S, spec, tol=1e-13, max_impacts=1000, stick=True):
     """Label section points by where P takes them (the basin mapper's kernel).
+
+    ``spec`` holds the labelling's options by name
+    (:class:`hybridpd.analysis.periodic.LabelSpec`): the fixed point ``FP[0]``, ``n_iter``,
+    the threshold ``criterion`` (``crit`` below), the certified ball ``QS[0]``, ``R2[0]``
+    (``cert_Q``, ``cert_r2``), ``escape`` and ``cycle_tol`` (its ``C``, ``T`` and
+    ``period`` are the pair's own here).
 
     Converged means the paper's criterion: after ``n_iter`` iterations,
     ``(x1*-x1)^2 + (y1*-y1)^2 + (y2*-y2)^2 + (phi*-phi)^2 < crit`` (``phi`` differences taken
@@ -654,6 +659,8 @@ def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
 
     Returns ``labels[N]`` (see :data:`LABELS`), ``iterations[N]`` and the final points.
     """
+    fixed, n_iter, crit, escape = spec.FP[0], spec.n_iter, spec.criterion, spec.escape
+    cert_Q, cert_r2, cycle_tol = spec.QS[0], spec.R2[0], spec.cycle_tol
     N = S.shape[0]
     T = 2.0 * math.pi / params[P.OMEGA]
     labels = np.empty(N, dtype=np.int64)
