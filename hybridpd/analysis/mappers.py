@@ -39,7 +39,7 @@ from hybridpd.analysis.basins import NO_CONVERGENCE, Attractor
 from hybridpd.analysis.certify import certify_ball
 from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.labels import LABELS, OFF_SECTION
-from hybridpd.analysis.maps import PoincareMap, check_returns, detect_periods, minimal_period
+from hybridpd.analysis.maps import PoincareMap, check_returns, detect_period, minimal_period
 from hybridpd.analysis.periodic import (
     _CONVERGED,
     _DIVERGED,
@@ -192,7 +192,7 @@ class Catalogue:
     cycle when each of its iterates lies within ``criterion`` (squared distance of
     ``metric``) of a point of the cycle. Of the others, the smallest period ``p <=
     max_period`` with which a tail repeats to ``detect_tol`` (relative, the phase wrapped:
-    :func:`~hybridpd.analysis.maps.detect_periods`) triggers Newton on ``P^(p k)``
+    :func:`~hybridpd.analysis.maps.detect_period`) triggers Newton on ``P^(p k)``
     (:func:`~hybridpd.analysis.periodic.find_orbit`, at most ``max_newton`` solves per call);
     a new cycle is kept if the tail lies on it and it is no known one up to a cyclic shift.
     Label 0 is ``orbit`` (an :class:`~hybridpd.analysis.basins.Attractor` as given, or a
@@ -345,8 +345,10 @@ class Catalogue:
         free = np.flatnonzero(finite & (lab == NO_CONVERGENCE))
         if free.size == 0:
             return lab
-        per, err = detect_periods(tails[free], self.metric.wrap, self.max_period,
-                                  self.detect_tol, scale=self.metric.scale(tails[free]))
+        # periods that repeat twice in a tail of K iterates: k <= K - 2
+        per, err = detect_period(tails[free], self.metric.wrap,
+                                 min(self.max_period, tails.shape[1] - 2), self.detect_tol,
+                                 scale=self.metric.scale(tails[free]))
         tried = 0
         for j in np.argsort(err, kind="stable"):   # bounded: one pass over the tails
             i = free[j]
