@@ -102,19 +102,18 @@ class Growth:
 def off_section_axis(what: str, name: str, sec) -> str:
     """The message refusing ``name`` as a slice axis of section `sec`: a state the section
     fixes (moving it would leave the section: the constraint is named) or no state at all."""
-    why = sec.fixed_by(name) if hasattr(sec, "fixed_by") else ""
+    why = sec.fixed_by(name)
     if why:
         return (f"{what}: {name!r} is no coordinate of this section ({why}); a slice along it "
                 f"would leave the section. The section's coordinates are {list(sec.names)}")
     return f"{what}: {name!r} is no section coordinate; they are {list(sec.names)}"
 
 
-def _axis_index(a, P) -> int:
+def _axis_index(a, P, refuse) -> int:
     names = P.names
     if isinstance(a, str):
         if a not in names:
-            sec = getattr(P, "section", None)
-            raise ValueError(off_section_axis("axes", a, sec) if sec is not None else
+            raise ValueError(refuse(a) if refuse is not None else
                              f"axes: {a!r} is no coordinate; they are {list(names)}")
         return names.index(a)
     if isinstance(a, (bool, np.bool_)) or not isinstance(a, (int, np.integer)) \
@@ -124,14 +123,14 @@ def _axis_index(a, P) -> int:
     return int(a)
 
 
-def grid_slice(P: PoincareMap, x, y, axes=None, base=None) -> Slice:
+def grid_slice(P: PoincareMap, x, y, axes=None, base=None, *, refuse=None) -> Slice:
     """The grid ``x`` times ``y`` over two coordinates ``axes`` of ``P`` (names or indices,
     default the first two), the other coordinates at ``base``'s values (required when the
-    map has more than two)."""
+    map has more than two); ``refuse(name)``: the message for a name that is no coordinate."""
     axes = P.names[:2] if axes is None else tuple(axes)
     if len(axes) != 2:
         raise ValueError(f"axes must name two coordinates of {P.names}, got {axes!r}")
-    idx = [_axis_index(a, P) for a in axes]
+    idx = [_axis_index(a, P, refuse) for a in axes]
     if idx[0] == idx[1]:
         raise ValueError("axes must be two different coordinates")
     if base is None:
@@ -606,6 +605,8 @@ class MapMapper(Mapper):
         self.map = P
         lab = P.labeller()
         if lab is None:
+            # the section kernel lives above the section map's module (it calls its run
+            # kernel), so the section maps cannot return it from their hook without a cycle
             lab = (SectionLabeller(P) if isinstance(P, (SectionMap, StroboscopicMap))
                    else IterateLabeller(P))
         self.labeller = lab
@@ -709,6 +710,11 @@ class SectionLabeller(Labeller):
 
     def criterion_matrix(self) -> np.ndarray:
         return np.ascontiguousarray(self.map.section.C)
+
+    def slice(self, m: MapMapper, x, y, axes) -> Slice:
+        sec = self.map.section
+        return grid_slice(self.map, x, y, axes, m.fixed_point,
+                          refuse=lambda a: off_section_axis("axes", a, sec))
 
     def admissible(self, S) -> np.ndarray:
         sec = self.map.section

@@ -39,9 +39,8 @@ def orbit_mapper(orbit, **options):
     >>> m.label_name(m(m.fixed_point + [0, 0.01, 0, 0])), m.metadata()["gamma"]
     ('converged', 0.75)
     """
-    if not getattr(orbit, "exists", False):
-        raise ValueError(f"orbit must be an existing symmetric orbit, got "
-                         f"{getattr(orbit, 'reason', orbit)!r}")
+    if not orbit.exists:
+        raise ValueError(f"orbit must be an existing symmetric orbit, got {orbit.reason!r}")
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.mappers import mapper
     from hybridpd.pair.impactmap import ImpactMap
