@@ -21,6 +21,7 @@ import json
 import math
 from dataclasses import dataclass, field, fields
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -28,10 +29,12 @@ from hybridpd._format import format_percent
 from hybridpd._results import Result, check_suffix, compact_repr, decode_attrs, jsonable
 from hybridpd.analysis import _basin_files
 from hybridpd.analysis.labels import LABELS
+from hybridpd.analysis.maps import PoincareMap
+from hybridpd.model import check_axis
 
 __all__ = ["DIVERGED", "INADMISSIBLE_LABEL", "NO_CONVERGENCE", "OFF_SECTION_LABEL", "OUTCOMES",
-           "STICKING", "UNRESOLVED", "Attractor", "BasinMeasure", "BasinResult",
-           "from_criterion", "load_basin", "outcome"]
+           "STICKING", "UNRESOLVED", "Attractor", "BasinMeasure", "BasinResult", "Slice",
+           "from_criterion", "grid_slice", "load_basin", "off_section_axis", "outcome"]
 
 NO_CONVERGENCE = -1
 DIVERGED = -2
@@ -466,3 +469,69 @@ def load_basin(path) -> BasinResult:
     [[0, 0], [0, 0]]
     """
     return BasinResult.load(path)
+
+
+# ----------------------------------------------------------------------------------------
+# the slice of a basin
+# ----------------------------------------------------------------------------------------
+class Slice(NamedTuple):
+    """A basin's grid: axes ``x``, ``y``, section points ``S`` (shape ``(len(x) len(y),
+    dim)``, row-major over ``(y, x)``), coordinate ``names``, their ``units`` (dataset
+    attributes by name), the ``base`` point whose other coordinates the slice holds and its
+    ``centre`` (the base in the slice's coordinates, where a growing window grows from)."""
+
+    x: np.ndarray
+    y: np.ndarray
+    S: np.ndarray
+    names: tuple
+    units: dict
+    base: np.ndarray
+    centre: tuple
+
+
+def off_section_axis(what: str, name: str, sec) -> str:
+    """The message refusing ``name`` as a slice axis of section `sec`: a state the section
+    fixes (moving it would leave the section: the constraint is named) or no state at all."""
+    why = sec.fixed_by(name)
+    if why:
+        return (f"{what}: {name!r} is no coordinate of this section ({why}); a slice along it "
+                f"would leave the section. The section's coordinates are {list(sec.names)}")
+    return f"{what}: {name!r} is no section coordinate; they are {list(sec.names)}"
+
+
+def _axis_index(a, P, refuse) -> int:
+    names = P.names
+    if isinstance(a, str):
+        if a not in names:
+            raise ValueError(refuse(a) if refuse is not None else
+                             f"axes: {a!r} is no coordinate; they are {list(names)}")
+        return names.index(a)
+    if isinstance(a, (bool, np.bool_)) or not isinstance(a, (int, np.integer)) \
+            or not 0 <= int(a) < P.dim:
+        raise ValueError(f"axes: {a!r} must be a coordinate name or an index in "
+                         f"[0, {P.dim})")
+    return int(a)
+
+
+def grid_slice(P: PoincareMap, x, y, axes=None, base=None, *, refuse=None) -> Slice:
+    """The grid ``x`` times ``y`` over two coordinates ``axes`` of ``P`` (names or indices,
+    default the first two), the other coordinates at ``base``'s values (required when the
+    map has more than two); ``refuse(name)``: the message for a name that is no coordinate."""
+    axes = P.names[:2] if axes is None else tuple(axes)
+    if len(axes) != 2:
+        raise ValueError(f"axes must name two coordinates of {P.names}, got {axes!r}")
+    idx = [_axis_index(a, P, refuse) for a in axes]
+    if idx[0] == idx[1]:
+        raise ValueError("axes must be two different coordinates")
+    if base is None:
+        if P.dim > 2:
+            raise ValueError(f"base: give the point whose other coordinates the slice holds "
+                             f"(the map has {P.dim} coordinates)")
+        base = np.zeros(P.dim)
+    base = P.check_point(base).copy()
+    xs, ys = check_axis("x", x), check_axis("y", y)
+    X, Y = np.meshgrid(xs, ys)
+    S = np.tile(base, (X.size, 1))
+    S[:, idx[0]], S[:, idx[1]] = X.ravel(), Y.ravel()
+    return Slice(xs, ys, S, tuple(P.names[i] for i in idx), {}, base,
+                 (float(base[idx[0]]), float(base[idx[1]])))

@@ -31,11 +31,16 @@ import abc
 import math
 import pickle
 from dataclasses import dataclass, replace
-from typing import NamedTuple
 
 import numpy as np
 
-from hybridpd.analysis.basins import NO_CONVERGENCE, Attractor
+from hybridpd.analysis.basins import (
+    NO_CONVERGENCE,
+    Attractor,
+    Slice,
+    grid_slice,
+    off_section_axis,
+)
 from hybridpd.analysis.certify import certify_ball
 from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.labels import LABELS, OFF_SECTION
@@ -54,25 +59,9 @@ from hybridpd.analysis.periodic import (
     find_orbit,
 )
 from hybridpd.analysis.strobe import StroboscopicMap
-from hybridpd.model import check_axis, check_int, check_positive
+from hybridpd.model import check_int, check_positive
 
-__all__ = ["Catalogue", "Growth", "Labeller", "MapMapper", "Mapper", "Metric", "Slice",
-           "grid_slice", "mapper", "off_section_axis"]
-
-
-class Slice(NamedTuple):
-    """A basin's grid: axes ``x``, ``y``, section points ``S`` (shape ``(len(x) len(y),
-    dim)``, row-major over ``(y, x)``), coordinate ``names``, their ``units`` (dataset
-    attributes by name), the ``base`` point whose other coordinates the slice holds and its
-    ``centre`` (the base in the slice's coordinates, where a growing window grows from)."""
-
-    x: np.ndarray
-    y: np.ndarray
-    S: np.ndarray
-    names: tuple
-    units: dict
-    base: np.ndarray
-    centre: tuple
+__all__ = ["Catalogue", "Growth", "Labeller", "MapMapper", "Mapper", "Metric", "mapper"]
 
 
 @dataclass(frozen=True)
@@ -97,54 +86,6 @@ class Growth:
         if isinstance(n, bool) or not (int(n) == n and n >= 0):
             raise ValueError(f"max_extensions must be an integer >= 0, got {n!r}")
         object.__setattr__(self, "max_extensions", int(n))
-
-
-def off_section_axis(what: str, name: str, sec) -> str:
-    """The message refusing ``name`` as a slice axis of section `sec`: a state the section
-    fixes (moving it would leave the section: the constraint is named) or no state at all."""
-    why = sec.fixed_by(name)
-    if why:
-        return (f"{what}: {name!r} is no coordinate of this section ({why}); a slice along it "
-                f"would leave the section. The section's coordinates are {list(sec.names)}")
-    return f"{what}: {name!r} is no section coordinate; they are {list(sec.names)}"
-
-
-def _axis_index(a, P, refuse) -> int:
-    names = P.names
-    if isinstance(a, str):
-        if a not in names:
-            raise ValueError(refuse(a) if refuse is not None else
-                             f"axes: {a!r} is no coordinate; they are {list(names)}")
-        return names.index(a)
-    if isinstance(a, (bool, np.bool_)) or not isinstance(a, (int, np.integer)) \
-            or not 0 <= int(a) < P.dim:
-        raise ValueError(f"axes: {a!r} must be a coordinate name or an index in "
-                         f"[0, {P.dim})")
-    return int(a)
-
-
-def grid_slice(P: PoincareMap, x, y, axes=None, base=None, *, refuse=None) -> Slice:
-    """The grid ``x`` times ``y`` over two coordinates ``axes`` of ``P`` (names or indices,
-    default the first two), the other coordinates at ``base``'s values (required when the
-    map has more than two); ``refuse(name)``: the message for a name that is no coordinate."""
-    axes = P.names[:2] if axes is None else tuple(axes)
-    if len(axes) != 2:
-        raise ValueError(f"axes must name two coordinates of {P.names}, got {axes!r}")
-    idx = [_axis_index(a, P, refuse) for a in axes]
-    if idx[0] == idx[1]:
-        raise ValueError("axes must be two different coordinates")
-    if base is None:
-        if P.dim > 2:
-            raise ValueError(f"base: give the point whose other coordinates the slice holds "
-                             f"(the map has {P.dim} coordinates)")
-        base = np.zeros(P.dim)
-    base = P.check_point(base).copy()
-    xs, ys = check_axis("x", x), check_axis("y", y)
-    X, Y = np.meshgrid(xs, ys)
-    S = np.tile(base, (X.size, 1))
-    S[:, idx[0]], S[:, idx[1]] = X.ravel(), Y.ravel()
-    return Slice(xs, ys, S, tuple(P.names[i] for i in idx), {}, base,
-                 (float(base[idx[0]]), float(base[idx[1]])))
 
 
 # ----------------------------------------------------------------------------------------

@@ -36,9 +36,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hybridpd.analysis.basins import Slice
 from hybridpd.analysis.certify import certify_ball
 from hybridpd.analysis.labels import OFF_SECTION
-from hybridpd.analysis.mappers import Labeller, MapMapper, Metric, Slice
+from hybridpd.analysis.mappers import Labeller, MapMapper, Metric
 from hybridpd.analysis.periodic import LabelSpec
 from hybridpd.model import check_axis, wrap_phase
 from hybridpd.pair.batch import impact_map, map_labels

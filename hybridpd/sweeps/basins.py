@@ -28,10 +28,11 @@ from hybridpd.analysis.basins import (
     Attractor,
     BasinResult,
     from_criterion,
+    grid_slice,
     outcome,
 )
 from hybridpd.analysis.labels import INADMISSIBLE
-from hybridpd.analysis.mappers import Catalogue, Growth, Mapper, grid_slice
+from hybridpd.analysis.mappers import Catalogue, Growth, Mapper
 from hybridpd.analysis.maps import PoincareMap, check_returns
 from hybridpd.sweeps.sweep import run_sweep
 
