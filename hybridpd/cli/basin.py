@@ -7,7 +7,7 @@ from hybridpd.cli._common import (
     EXIT_DIVERGED,
     UsageError,
     add_executor,
-    add_grid_axis,
+    add_grid_axes,
     add_max_period,
     add_model,
     add_output,
@@ -17,7 +17,6 @@ from hybridpd.cli._common import (
     check_pair_command,
     command,
     executor_of,
-    grid_axis,
     print_json,
     progress_wanted,
     set_option_values,
@@ -47,12 +46,10 @@ def register(sub):
                       "search)")
     add_pair(p)
     add_model(p)
-    add_grid_axis(p, "--x", word="COORD",
-                  help="grid over this section coordinate: x1 or y1 for the pair (x1 -3 5 41 "
-                       "and y1 -2 10 41 times x10 by default: the reproduction's window); "
-                       "--model: a coordinate of the file's section (e.g. motor, motor_dot; "
-                       "default: the orbit's first two, around it)")
-    add_grid_axis(p, "--y", word="COORD", help="second axis, as --x (a different one)")
+    add_grid_axes(p, "COORD", "grid over this section coordinate: x1 or y1 for the pair (x1 "
+                  "-3 5 41 and y1 -2 10 41 times x10 by default: the reproduction's window); "
+                  "--model: a coordinate of the file's section (e.g. motor, motor_dot; "
+                  "default: the orbit's first two, around it)")
     p.add_argument("--iterations", type=int, default=None,
                    help="iterations of the impact map (default 1500, two impacts each; "
                         "--model: 300 of P^k)")
@@ -63,7 +60,8 @@ def register(sub):
                    help="window extensions while the symmetric orbit's basin touches the edge "
                         "(0: keep the window)")
     add_executor(p, default="serial")
-    add_output(p, out=(".nc", ".zarr", ".npz"), plot="the basin (coloured by attractor)")
+    add_output(p, out=(".npz", ".nc", ".zarr"), model_out=(".nc", ".zarr"),
+               plot="the basin (coloured by attractor)")
     p.set_defaults(func=run)
 
 
@@ -139,11 +137,17 @@ def _pair_axis(flag: str, given, name: str, default: tuple) -> tuple:
     pair's slice is the plane (x1, y1): ``name`` is the only coordinate it takes there)."""
     if given is None:
         return default
-    coord = given[0]
+    coord, lo, hi, num = given
     if coord != name:
         raise ValueError(f"{flag}: the impact pair's slice is ({'x1, y1'}): {flag} takes "
                          f"{name}, got {coord!r} (other coordinates: --model)")
-    return grid_axis(flag, given)[1:]
+    try:
+        lo, hi, num = float(lo), float(hi), float(num)
+    except ValueError:
+        raise ValueError(f"{flag} {name} MIN MAX NUM: numbers, got {given[1:]}") from None
+    if num != int(num):
+        raise ValueError(f"{flag} NUM must be an integer, got {num:g}")
+    return lo, hi, int(num)
 
 
 def _run_model(args) -> int:

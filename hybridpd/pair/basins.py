@@ -58,7 +58,7 @@ from hybridpd.analysis.labels import OFF_SECTION
 from hybridpd.model import check_array, check_axis
 from hybridpd.pair.batch import impact_map, map_labels
 from hybridpd.pair.impactmap import ImpactMap
-from hybridpd.sweeps.regions import axis_attrs
+from hybridpd.sweeps.labelled import axis_attrs
 
 __all__ = ["ImpactMapper", "attractor_basin", "section_grid"]
 
