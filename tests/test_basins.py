@@ -584,3 +584,48 @@ def test_the_phase_wrap_and_its_kernel_twin_are_one_expression_bit_for_bit():
     assert np.all((py >= -0.5 * T) & (py < 0.5 * T))
     assert wrap_phase(0.5 * T, T) == -0.5 * T
     np.testing.assert_allclose((d - py) / T, np.round((d - py) / T), rtol=0, atol=1e-6)
+
+
+def test_the_mapper_of_any_map_labels_by_its_iterations():
+    """A map with no labeller of its own: labels read at iterate n_iter, checked in closed
+    form (x -> a x converges to 0 for |a| < 1, diverges beyond ``escape`` for |a| > 1)."""
+    import hybridpd as hp
+
+    class Linear(hp.PoincareMap):
+        names = ("x", "y")
+
+        def __init__(self, a):
+            self.a = a
+
+        def apply(self, s, k=1, jacobian=False):
+            return hp.MapResult(np.asarray(s, float) * self.a ** k)
+
+    m = mapper(Linear(0.5), [0.0, 0.0], n_iter=30, criterion=1e-6)
+    lab, its = m.labels(np.array([[1.0, -2.0], [1e3, 0.0], [0.0, 0.0]]))
+    # 1e3 * 0.5**30 = 9.3e-7 > sqrt(1e-6)? no: its square 8.7e-13 < 1e-6: converged
+    assert lab.tolist() == [0, 0, 0] and its.tolist() == [30, 30, 30]
+    far = mapper(Linear(0.5), [0.0, 0.0], n_iter=5, criterion=1e-6)
+    assert far.labels(np.array([[1.0, 0.0]]))[0].tolist() == [1]    # 1/32: not yet
+    up = mapper(Linear(2.0), [0.0, 0.0], n_iter=20, escape=1e3)
+    assert up.labels(np.array([[1.0, 0.0], [0.0, 0.0]]))[0].tolist() == [2, 0]
+    b = basin_of_attraction(m, (-1, 1, 3), (-1, 1, 2), max_period=0)
+    assert b.axes == ("x", "y") and (b.labels == 0).all() and b.attractors[0].period == 1
+
+
+def test_a_section_maps_window_grows_in_its_own_coordinates():
+    from hybridpd.analysis.hybridmap import SectionMap
+    from hybridpd.pair.section import impact_pair_section
+
+    o = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
+    P = SectionMap(impact_pair_section(o.system()))
+    m = mapper(P, o.fixed_point, n_iter=40)
+    fp = o.fixed_point
+    b = basin_of_attraction(m, (fp[1] - 0.05, fp[1] + 0.05, 3), (fp[3] - 0.05, fp[3] + 0.05, 3),
+                            axes=("z1", "z4"), max_period=0, grow=Growth(1))
+    assert len(b.windows) == 2 and b.metadata["max_extensions"] == 1
+    w0, w1 = b.windows
+    assert w1[0] < w0[0] and w1[1] > w0[1] and w1[2] < w0[2] and w1[3] > w0[3]
+    assert set(b.edges) <= {"z1 min", "z1 max", "z4 min", "z4 max"}
+    # the first window lies inside the orbit's basin: every side was pushed out
+    assert (basin_of_attraction(m, b.windows[0][:2] + (3,), b.windows[0][2:] + (3,),
+                                axes=("z1", "z4"), max_period=0).labels == 0).all()
