@@ -3,10 +3,11 @@
 For the collocated loop at kp = 10, kv = 20 (mu = 0.1, gamma = 0.75, omega = 5) and e = 0.1
 (symmetric orbit and period-2 motion) and e = 0.5 (the basin fills the window), times:
 
-* ``basin_of_attraction``: the paper's labels (certified ball and cycle early exits);
-* ``attractor_basin(extend=False)``: the same grid, plus the tails of unconverged points,
-  cycle detection and Newton on ``P^k`` (the overhead of attractor labelling);
-* ``attractor_basin(extend=True)``: with the automatic window extension (up to 3 more grids);
+* ``basin_of_attraction(max_period=0)``: the paper's labels (certified ball and cycle early
+  exits);
+* ``basin_of_attraction(grow=Growth(0))``: the same grid, plus the tails of unconverged
+  points, cycle detection and Newton on ``P^k`` (the overhead of attractor labelling);
+* ``basin_of_attraction(grow=Growth())``: with the window extension (up to 3 more grids);
 * the naive alternative without early exits (every trajectory runs 1500 iterations).
 
 Run: ``python benchmarks/bench_basins_attractors.py [--quick]`` (serial executor, one core).
@@ -18,19 +19,23 @@ from _common import best_of
 
 def main(quick=False):
     from hybridpd import ImpactPair, PDGains
-    from hybridpd.analysis.basins import basin_of_attraction
-    from hybridpd.pair.basins import ImpactMapper, attractor_basin
+    from hybridpd.analysis.mappers import Growth
     from hybridpd.pair.orbits import symmetric_orbit
+    from hybridpd.reproduce.basins import orbit_mapper
+    from hybridpd.sweeps.basins import basin_of_attraction
 
     def paper(m, x1, y1):
-        return basin_of_attraction(m.map, x1, y1, criterion=m, max_period=0)
+        return basin_of_attraction(m, x1, y1, max_period=0)
+
+    def attractor_basin(m, x1, y1, extend=True):
+        return basin_of_attraction(m, x1, y1, grow=Growth(3 if extend else 0))
 
     num = 40 if quick else 100
     win = ((-3, 5, num), (-2, 10, num))
     rep = 1 if quick else 2
     for e in (0.1, 0.5):
         orb = symmetric_orbit(ImpactPair(0.1, e, 0.75), PDGains(10, 20), 5.0)
-        mapper = ImpactMapper.from_orbit(orb)
+        mapper = orbit_mapper(orb)
         attractor_basin(mapper, (-3, 5, 4), (-2, 10, 4))          # compile / warm caches
         t_old, b = best_of(lambda m=mapper: paper(m, *win), rep)
         t_new, ab = best_of(lambda m=mapper: attractor_basin(m, *win, extend=False), rep)
@@ -44,7 +49,7 @@ def main(quick=False):
         for line in ab.summary()[1:]:
             print("   ", line)
         if not quick:
-            slow = ImpactMapper.from_orbit(orb, early_exit=False)
+            slow = orbit_mapper(orb, early_exit=False)
             t_slow, _ = best_of(lambda m=slow: paper(m, (-3, 5, 30), (-2, 10, 30)), 1)
             per_pt = t_slow / 900
             print(f"  without early exits: {per_pt * 1e3:.2f} ms/point -> "

@@ -4,7 +4,7 @@
    its fixed point: applications of ``P`` per second and ``DP`` per second through
 
    * the general path (:class:`hybridpd.analysis.hybridmap.SectionMap`, one point per call;
-     the compiled batch loop of :class:`hybridpd.analysis.periodic.SectionMapper`, one
+     the compiled batch loop of the section map's mapper (:func:`hybridpd.analysis.mappers.mapper`), one
      application per point, with the section embedding in Python; and its iterations of
      ``P`` inside the compiled loop, as a basin uses it),
    * the compiled closed-form engine (:class:`hybridpd.pair.impactmap.ImpactMap`, batch;
@@ -37,7 +37,7 @@ from _common import best_of, naive_per_impact
 def pair_rates():
     from hybridpd import ImpactPair, PDGains
     from hybridpd.analysis.hybridmap import SectionMap
-    from hybridpd.analysis.periodic import SectionMapper
+    from hybridpd.analysis.mappers import mapper
     from hybridpd.pair.impactmap import ImpactMap
     from hybridpd.pair.orbits import symmetric_orbit
     from hybridpd.pair.section import impact_pair_section
@@ -56,10 +56,10 @@ def pair_rates():
     n1 = 300
     t_gen, _ = best_of(lambda: [P(s) for s in S[:n1]])
     t_gen_dp, _ = best_of(lambda: [P.apply(s, jacobian=True) for s in S[:n1]])
-    m = SectionMapper(P, orb.fixed_point, n_iter=1, early_exit=False)
+    m = mapper(P, orb.fixed_point, n_iter=1, early_exit=False)
     m.labels(S[:10])
     t_batch, _ = best_of(lambda: m.labels(S))
-    mi = SectionMapper(P, orb.fixed_point, n_iter=200, early_exit=False)
+    mi = mapper(P, orb.fixed_point, n_iter=200, early_exit=False)
     mi.labels(S[:2])
     t_it, (_, its) = best_of(lambda: mi.labels(S[:50]))
     t_cf, _ = best_of(lambda: Q.apply_batch(S))
@@ -85,17 +85,17 @@ def pair_rates():
 
 
 def drivetrain_basin(grid, iterations, workers):
+    from hybridpd.analysis.mappers import mapper
     from hybridpd.analysis.model_orbits import orbit_from_model
-    from hybridpd.analysis.periodic import SectionMapper
     from hybridpd.mechanics.modelfile import load_model
-    from hybridpd.sweeps.section_basins import section_basin
+    from hybridpd.sweeps.basins import basin_of_attraction
 
     f = Path(__file__).resolve().parents[1] / "examples" / "models" / "drivetrain.toml"
     model = load_model(f)
     orb, P = orbit_from_model(model, 0, 1, 1, event="release")
     assert orb.converged and orb.stable
     t0 = time.perf_counter()
-    m = SectionMapper(P, orb.s, period=1, n_iter=iterations)
+    m = mapper(P, orb.s, period=1, n_iter=iterations)
     t_cert = time.perf_counter() - t0
     names = P.section.names
     i, j = names.index("motor"), names.index("motor_dot")
@@ -103,12 +103,14 @@ def drivetrain_basin(grid, iterations, workers):
     y = (orb.s[j] - 5.0, orb.s[j] + 5.0, grid)
     ex = "serial" if workers <= 1 else "processes"
     t0 = time.perf_counter()
-    b = section_basin(m, "motor", "motor_dot", x, y, executor=ex, max_workers=workers)
+    b = basin_of_attraction(m, x, y, axes=("motor", "motor_dot"), max_period=0, executor=ex,
+                            max_workers=workers)
     el = time.perf_counter() - t0
     # the worst case: every point iterated to the end (no early exit), on a 10 x 10 grid
-    m0 = SectionMapper(P, orb.s, period=1, n_iter=iterations, early_exit=False)
+    m0 = mapper(P, orb.s, period=1, n_iter=iterations, early_exit=False)
     t0 = time.perf_counter()
-    b0 = section_basin(m0, "motor", "motor_dot", x[:2] + (10,), y[:2] + (10,))
+    b0 = basin_of_attraction(m0, x[:2] + (10,), y[:2] + (10,), axes=("motor", "motor_dot"),
+                             max_period=0)
     full = (time.perf_counter() - t0) / b0.iterations.sum()
     return el, t_cert, b, orb, full
 

@@ -14,11 +14,11 @@ from _common import naive_per_impact, pair_region_map
 
 def main(quick=False):
     from hybridpd import ImpactPair, PDGains
-    from hybridpd.analysis.basins import basin_of_attraction
-    from hybridpd.pair.basins import ImpactMapper
+    from hybridpd.analysis.mappers import mapper as make_mapper
     from hybridpd.pair.batch import iterate_map, pack_params
     from hybridpd.pair.impactmap import ImpactMap
     from hybridpd.pair.orbits import symmetric_orbit
+    from hybridpd.sweeps.basins import basin_of_attraction
     region_map = pair_region_map()
 
     num = 60 if quick else 200
@@ -36,11 +36,11 @@ def main(quick=False):
     nb = 50 if quick else 200
     for e in (0.5, 0.1):
         orb = symmetric_orbit(ImpactPair(0.1, e, 0.75), PDGains(10, 20), 5.0)
-        mapper = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
+        mapper = make_mapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
         for executor in ("processes",):
             t0 = time.perf_counter()
-            b = basin_of_attraction(mapper.map, (-3, 5, nb), (-2, 10, nb), criterion=mapper,
-                                    max_period=0, executor=executor, progress=True)
+            b = basin_of_attraction(mapper, (-3, 5, nb), (-2, 10, nb), max_period=0,
+                                    executor=executor, progress=True)
             el = time.perf_counter() - t0
             print(f"basin collocated e = {e}: {nb} x {nb}, 1500 iterations, {executor}: "
                   f"{el:.2f} s (target <= 30 s, aim 10 s); converged "

@@ -37,14 +37,14 @@ def _store_runs(run, tmp: Path, repeat=3):
 def main(quick=False):
     import hybridpd
     from hybridpd import ImpactPair, PDGains
-    from hybridpd.analysis.basins import basin_of_attraction as basin
-    from hybridpd.pair.basins import ImpactMapper
+    from hybridpd.analysis.mappers import mapper as make_mapper
     from hybridpd.pair.impactmap import ImpactMap
     from hybridpd.pair.orbits import symmetric_orbit
+    from hybridpd.sweeps.basins import basin_of_attraction as basin
 
     def basin_of_attraction(m, x1, y1, **options):
-        # the paper's labels alone: the generic basin with the mapper as its criterion
-        return basin(m.map, x1, y1, criterion=m, max_period=0, **options)
+        # the paper's labels alone: no attractor search
+        return basin(m, x1, y1, max_period=0, **options)
     region_map = pair_region_map()
 
     print(f"hybridpd from {Path(hybridpd.__file__).parent}")
@@ -56,7 +56,7 @@ def main(quick=False):
         _store_runs(lambda st: region_map("collocated", x=("kp", 0.1, 50, num),
                                           y=("kv", 0.1, 50, num), store=st, **common), Path(d))
     orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
-    mapper = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
+    mapper = make_mapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
     basin_of_attraction(mapper, (-3, 5, 4), (-2, 10, 4), progress=False)  # warm-up (numba)
     for executor in ("serial", "processes"):
         with tempfile.TemporaryDirectory() as d:
@@ -66,7 +66,7 @@ def main(quick=False):
                 Path(d))
     # the slower basin (most points run all 1500 iterations): the store's share is smaller
     orb = symmetric_orbit(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0)
-    mapper = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
+    mapper = make_mapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
     with tempfile.TemporaryDirectory() as d:
         print(f"basin collocated e=0.1 {nb} x {nb}, processes (one run each):")
         _store_runs(lambda st: basin_of_attraction(

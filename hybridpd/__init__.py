@@ -19,8 +19,8 @@ mechanical systems    :class:`MechanicalSystem`, :class:`Contact`, :func:`load_m
                       :func:`simulate`
 continuation          :func:`continue_orbit`, :func:`switch_branch`,
                       :func:`boundary_curves`, :func:`bifurcation_diagram`
-sweeps                :func:`region_map`, :func:`basin_of_attraction`,
-                      :func:`attractor_basin`, :func:`section_basin`, :func:`run_sweep`
+sweeps                :func:`region_map`, :func:`basin_of_attraction` (of a :func:`mapper`),
+                      :func:`run_sweep`
 design, figures       :func:`design`, :func:`reproduce`, :func:`plot_file`
 the page              :func:`explore` (the region map as a page you click; Panel, Bokeh)
 ====================  =====================================================================
@@ -78,7 +78,7 @@ _NAMES = {
     "SectionMap": "hybridpd.analysis.hybridmap",
     "find_orbit": "hybridpd.analysis.periodic",
     "PeriodicOrbit": "hybridpd.analysis.periodic",
-    "SectionMapper": "hybridpd.analysis.periodic",
+    "mapper": "hybridpd.analysis.mappers",
     "stability": "hybridpd.analysis.floquet",
     "Stability": "hybridpd.analysis.floquet",
     # general mechanical systems
@@ -96,11 +96,8 @@ _NAMES = {
     "run_sweep": "hybridpd.sweeps.sweep",
     "region_map": "hybridpd.sweeps.regions",
     "load_region_map": "hybridpd.sweeps.regions",
-    "basin_of_attraction": "hybridpd.analysis.basins",
-    "ImpactMapper": "hybridpd.pair.basins",
+    "basin_of_attraction": "hybridpd.sweeps.basins",
     "load_basin": "hybridpd.analysis.basins",
-    "attractor_basin": "hybridpd.pair.basins",
-    "section_basin": "hybridpd.sweeps.section_basins",
     # design, figures, the paper
     "design": "hybridpd.pair.design",
     "plot_file": "hybridpd.plotting.files",
@@ -115,12 +112,12 @@ _SUBPACKAGES = ("analysis", "explore", "hybrid", "mechanics", "pair", "plotting"
 
 # the flat namespace: every name of _NAMES, the version and ``reproduce``
 __all__ = ["Case", "Contact", "ControlledImpactPair", "HybridAutomaton", "ImpactMap",
-           "ImpactMapper", "ImpactPair", "MapResult", "MechanicalSystem", "PDGains", "PairParams",
+           "ImpactPair", "MapResult", "MechanicalSystem", "PDGains", "PairParams",
            "PeriodicOrbit", "PoincareMap",
-           "Reference", "Section", "SectionMap", "SectionMapper", "Stability", "__version__",
-           "attractor_basin", "basin_of_attraction", "bifurcation_diagram", "boundary_curves",
+           "Reference", "Section", "SectionMap", "Stability", "__version__",
+           "basin_of_attraction", "bifurcation_diagram", "boundary_curves",
            "certified_map", "certify_orbit", "continue_orbit", "design", "explore", "find_orbit", "load_basin", "load_branch",
-           "load_certificate", "load_model", "load_region_map", "plot_file", "region_map", "reproduce", "run_sweep", "section_basin", "simulate", "stability", "switch_branch",
+           "load_certificate", "load_model", "load_region_map", "mapper", "plot_file", "region_map", "reproduce", "run_sweep", "simulate", "stability", "switch_branch",
            "symmetric_orbit", "symmetric_orbits", "verify_certificate", "virtual_restitution"]
 
 

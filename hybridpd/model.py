@@ -21,6 +21,8 @@ from enum import Enum
 
 import numpy as np
 
+from hybridpd._phase import wrap_phase
+
 __all__ = [
     "Case",
     "ImpactPair",
@@ -39,6 +41,7 @@ __all__ = [
     "pd_values",
     "sine_reference",
     "virtual_restitution",
+    "wrap_phase",
 ]
 
 
@@ -201,18 +204,6 @@ def check_named_axis(param: str, spec, names, *, min_num: int = 1, positive: boo
         return name, check_axis(name, tuple(spec[1:]), min_num=min_num, positive=positive)
     except ValueError as exc:
         raise ValueError(f"{param}: {exc}") from None
-
-
-def wrap_phase(d, T):
-    """A phase (difference) ``d`` taken to ``[-T/2, T/2)`` modulo the period ``T`` (scalars or
-    arrays): the package's one phase wrap.
-
-    Examples
-    --------
-    >>> float(wrap_phase(0.75, 1.0)), float(wrap_phase(-0.5, 1.0)), float(wrap_phase(2.25, 1.0))
-    (-0.25, -0.5, 0.25)
-    """
-    return (d + 0.5 * T) % T - 0.5 * T
 
 
 class Case(str, Enum):

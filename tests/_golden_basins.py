@@ -7,7 +7,8 @@ reproduction's shared-window basins of two orbits; a slice of the same orbit's s
 (``SectionMap`` of the pair's automaton, two section coordinates); and a model file's basin
 (the pair as a model file, its impact section). Recorded: labels, the mapper's labels against
 the orbit, iterations, attractors (names, periods, points, multipliers), windows, edges and
-the metadata (as JSON).
+the metadata (as JSON; without the growth options, whose spelling changed, and of a model
+basin the file, section and criterion).
 
 The calls go through :func:`_api`, which picks the basin functions of the version on the path
 (the mapper classes and entry points of earlier versions, or the one mapper and
@@ -43,10 +44,11 @@ def _api() -> SimpleNamespace:
     try:
         from hybridpd.analysis.mappers import Growth, mapper
     except ImportError:     # the mapper classes and entry points of earlier versions
-        from hybridpd.analysis.periodic import SectionMapper
-        from hybridpd.pair.basins import ImpactMapper, attractor_basin
         from hybridpd.sweeps.model_basins import model_basin
         from hybridpd.sweeps.section_basins import section_basin
+
+        from hybridpd.analysis.periodic import SectionMapper
+        from hybridpd.pair.basins import ImpactMapper, attractor_basin
 
         return SimpleNamespace(
             pair_mapper=lambda orb, **kw: ImpactMapper.from_orbit(orb, **kw),
@@ -57,8 +59,12 @@ def _api() -> SimpleNamespace:
             model_basin=lambda x, y, n: model_basin(PAIR, x, y, n_iter=n, event="impact"),
             shared=shared_window_basins, impact_map=ImpactMap,
             section=impact_pair_section, hp=hp)
-    from hybridpd.analysis.model_orbits import model_basin
-    from hybridpd.pair.basins import orbit_mapper
+    from hybridpd.analysis.model_orbits import model_map
+    from hybridpd.reproduce.basins import orbit_mapper
+
+    def model_basin(x, y, n):
+        m = model_map(PAIR, event="impact").mapper(n_iter=n)
+        return hp.basin_of_attraction(m, x[1:], y[1:], axes=(x[0], y[0]), max_period=4)
 
     return SimpleNamespace(
         pair_mapper=orbit_mapper,
@@ -66,8 +72,7 @@ def _api() -> SimpleNamespace:
             m, x, y, max_period=8, grow=Growth(max_extensions=n)),
         section_basin=lambda P, fp, ax, x, y, n: hp.basin_of_attraction(
             mapper(P, fp, n_iter=n), x, y, axes=ax, max_period=0),
-        model_basin=lambda x, y, n: model_basin(PAIR, x, y, n_iter=n, event="impact"),
-        shared=shared_window_basins, impact_map=ImpactMap,
+        model_basin=model_basin, shared=shared_window_basins, impact_map=ImpactMap,
         section=impact_pair_section, hp=hp)
 
 
@@ -76,7 +81,19 @@ def _orbit(api, e=0.1):
     return hp.symmetric_orbit(hp.ImpactPair(0.1, e, 0.75), hp.PDGains(10, 20), 5.0)
 
 
-def _basin_arrays(name, b) -> dict:
+#: Metadata left out: the window growth's options (``extend``, ``max_extensions``,
+#: ``max_points`` of earlier versions; a ``Growth`` now), recorded however the call spells them.
+GROWTH_KEYS = ("extend", "max_extensions", "max_points")
+#: A model basin's metadata compared: what the file, section and criterion were.
+MODEL_KEYS = ("criterion", "inadmissible", "model", "n_iter", "section_mode", "spec", "values")
+
+
+def _metadata(md: dict, keys=None) -> np.ndarray:
+    md = {k: v for k, v in md.items() if k not in GROWTH_KEYS and (keys is None or k in keys)}
+    return np.array(json.dumps(md, sort_keys=True, default=str))
+
+
+def _basin_arrays(name, b, keys=None) -> dict:
     atts = b.attractors
     out = {f"{name}.labels": b.labels, f"{name}.iterations": b.iterations,
            f"{name}.x": b.x, f"{name}.y": b.y, f"{name}.base": b.base,
@@ -85,7 +102,7 @@ def _basin_arrays(name, b) -> dict:
            f"{name}.periods": np.array([a.period for a in atts], np.int64),
            f"{name}.windows": np.array(b.windows, float).reshape(-1, 4),
            f"{name}.edges": np.array(list(b.edges), str),
-           f"{name}.metadata": np.array(json.dumps(b.metadata, sort_keys=True, default=str))}
+           f"{name}.metadata": _metadata(b.metadata, keys)}
     if b.criterion_labels is not None:
         out[f"{name}.criterion_labels"] = b.criterion_labels
     for a in atts:
@@ -129,7 +146,7 @@ def compute() -> dict:
     arrays.update(_basin_arrays("section", b))
     # a model file's basin (the pair as a model file, its impact section)
     b = api.model_basin(("x2", -1.0, 1.0, 5), ("x1_dot", -1.0, 3.0, 5), 150)
-    arrays.update(_basin_arrays("model", b))
+    arrays.update(_basin_arrays("model", b, MODEL_KEYS))
     return arrays
 
 

@@ -10,13 +10,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _basins import model_basin
 from _regions import model_region_map
 from scipy.integrate import solve_ivp
 
 import hybridpd as hp
 from hybridpd.analysis.model_orbits import SectionSpec, orbit_from_model, simulated_returns
 from hybridpd.mechanics.modelfile import model_from_dict
-from hybridpd.sweeps.model_basins import model_basin
 
 MODELS = Path(__file__).resolve().parents[1] / "examples" / "models"
 OMEGA, L, E, MU = 5.0, 0.75, 0.1, 0.1

@@ -95,11 +95,14 @@ MOVED_NAMES = [
     ("hybridpd.pair.basins", "BasinResult", "hybridpd.analysis.basins"),
     ("hybridpd.pair.basins", "load_basin", "hybridpd.analysis.basins"),
     ("hybridpd.pair.basins", "LABELS", "hybridpd.analysis.labels"),
-    ("hybridpd.pair.attractors", "Attractor", "hybridpd.analysis.basins"),
-    ("hybridpd.pair.attractors", "OUTCOMES", "hybridpd.analysis.basins"),
-    ("hybridpd.pair.attractors", "outcome", "hybridpd.analysis.basins"),
     ("hybridpd.pair.basins", "BasinMeasure", "hybridpd.analysis.basins"),
-    ("hybridpd.analysis.periodic", "section_basin", "hybridpd.sweeps.section_basins"),
+    ("hybridpd.analysis.periodic", "section_basin", "hybridpd.sweeps.basins"),
+    ("hybridpd.analysis.periodic", "SectionMapper", "hybridpd.analysis.mappers"),
+    ("hybridpd.analysis.certify", "BasinMapper", "hybridpd.analysis.mappers"),
+    ("hybridpd.pair.basins", "ImpactMapper", "hybridpd.analysis.mappers"),
+    ("hybridpd.pair.basins", "attractor_basin", "hybridpd.sweeps.basins"),
+    ("hybridpd.analysis.basins", "basin_of_attraction", "hybridpd.sweeps.basins"),
+    ("hybridpd.analysis.basins", "Catalogue", "hybridpd.analysis.mappers"),
     ("hybridpd.analysis.periodic", "orbit_from_model", "hybridpd.analysis.model_orbits"),
     ("hybridpd.analysis.hybridmap", "impact_pair_section", "hybridpd.pair.section"),
     ("hybridpd.analysis.hybridmap", "mechanical_section", "hybridpd.mechanics.sections"),
@@ -131,7 +134,8 @@ def test_import_loads_no_heavy_library():
 
 
 @pytest.mark.parametrize("name", ["find_orbit", "SectionMap", "continue_orbit", "load_model",
-                                  "simulate", "HybridAutomaton", "stability", "section_basin"])
+                                  "simulate", "HybridAutomaton", "stability", "basin_of_attraction",
+                                  "mapper"])
 def test_general_names_load_no_pair_module(name):
     out = _probe(f"import sys, json, hybridpd as hp; hp.{name}; "
                  "print(json.dumps(sorted(m for m in sys.modules "
@@ -160,6 +164,10 @@ def test_flat_names_are_the_defining_objects():
 def test_unknown_name_is_an_attribute_error():
     with pytest.raises(AttributeError, match="no attribute 'nonexistent'"):
         hp.nonexistent  # noqa: B018
+    # the basin names of earlier versions: one mapper and one basin_of_attraction now
+    for old in ("ImpactMapper", "SectionMapper", "attractor_basin", "section_basin"):
+        with pytest.raises(AttributeError, match=f"no attribute '{old}'"):
+            getattr(hp, old)
 
 
 def test_reproduce_is_callable_as_name_and_as_package():
@@ -178,16 +186,15 @@ RENAMED = [
      "BasinResult"),
     ("hybridpd.pair.basins", "load_attractor_basin", "hybridpd.analysis.basins",
      "load_basin"),
-    ("hybridpd.sweeps.model_basins", "ModelBasin", "hybridpd.analysis.basins", "BasinResult"),
-    ("hybridpd.sweeps.model_basins", "load_model_basin", "hybridpd.analysis.basins",
-     "load_basin"),
     ("hybridpd", "load_attractor_basin", "hybridpd.analysis.basins", "load_basin"),
 ]
 
 
 def test_old_module_paths_are_gone():
     for old in sorted(OLD_MODULES) + ["hybridpd.design", "hybridpd.sweeps.basin_result",
-                                      "hybridpd.analysis.continuation.switching"]:
+                                      "hybridpd.analysis.continuation.switching",
+                                      "hybridpd.pair.attractors", "hybridpd.sweeps.section_basins",
+                                      "hybridpd.sweeps.model_basins"]:
         sys.modules.pop(old, None)
         with pytest.raises(ModuleNotFoundError):
             importlib.import_module(old)

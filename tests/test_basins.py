@@ -7,17 +7,14 @@ from hypothesis import strategies as st
 
 from hybridpd import ImpactPair, PDGains
 from hybridpd._format import format_percent
-from hybridpd.analysis.basins import (
-    NO_CONVERGENCE,
-    OFF_SECTION_LABEL,
-    basin_of_attraction,
-    load_basin,
-)
+from hybridpd.analysis.basins import NO_CONVERGENCE, OFF_SECTION_LABEL, load_basin
 from hybridpd.analysis.labels import LABELS
-from hybridpd.pair.attractors import CycleCatalog, paper_distance2
-from hybridpd.pair.basins import ImpactMapper, attractor_basin, section_grid
+from hybridpd.analysis.mappers import Catalogue, Growth, Mapper, mapper
+from hybridpd.pair.basins import PaperMetric, paper_distance2, section_grid
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
+from hybridpd.reproduce.basins import orbit_mapper
+from hybridpd.sweeps.basins import basin_of_attraction
 
 CASES = [("collocated", 0.5, 10.0, 20.0), ("collocated", 0.1, 10.0, 20.0),
          ("noncollocated", 0.1, 5.4, 2.5), ("noncollocated", 0.5, 10.0, 20.0)]
@@ -26,12 +23,18 @@ CASES = [("collocated", 0.5, 10.0, 20.0), ("collocated", 0.1, 10.0, 20.0),
 def mapper_for(case, e, kp, kv, **kw):
     o = symmetric_orbit(ImpactPair(0.1, e, 0.75), PDGains(kp, kv), 5.0, case=case)
     assert o.exists
-    return o, ImpactMapper(ImpactMap(o.pair, o.gains, o.reference(), case), o.fixed_point, **kw)
+    return o, mapper(ImpactMap(o.pair, o.gains, o.reference(), case), o.fixed_point, **kw)
 
 
-def paper_basin(mapper, x1, y1, **options):
-    """The paper's labels alone: the generic basin with the mapper as its criterion."""
-    return basin_of_attraction(mapper.map, x1, y1, criterion=mapper, max_period=0, **options)
+def paper_basin(m, x1, y1, **options):
+    """The paper's labels alone: the basin of the pair's mapper without attractor search."""
+    return basin_of_attraction(m, x1, y1, max_period=0, **options)
+
+
+def attractor_basin(m, x1, y1, *, extend=True, max_extensions=3, max_points=None, **options):
+    """The basin by attractor, its window grown (``extend``) or kept."""
+    grow = Growth(max_extensions if extend else 0, max_points)
+    return basin_of_attraction(m, x1, y1, grow=grow, **options)
 
 
 @pytest.mark.parametrize("case,e,kp,kv", CASES)
@@ -75,7 +78,8 @@ def test_labels_agree_with_direct_long_simulation(case, e, kp, kv):
 def test_certified_ball_is_invariant_under_iteration():
     o, m = mapper_for("collocated", 0.5, 10.0, 20.0)
     assert m.certified_radius > 0
-    Lq = np.linalg.cholesky(m.cert_Q)
+    Q, r2 = m.cert_Q[0], m.cert_r2[0]
+    Lq = np.linalg.cholesky(Q)
     rng = np.random.default_rng(3)
     for _ in range(20):
         u = rng.normal(size=4)
@@ -83,8 +87,8 @@ def test_certified_ball_is_invariant_under_iteration():
         d = np.linalg.solve(Lq.T, u) * m.certified_radius * 0.99
         traj = m.map.iterate(o.fixed_point + d, 30)
         dev = traj - o.fixed_point
-        q = np.einsum("ij,jk,ik->i", dev, m.cert_Q, dev)
-        assert np.all(q <= m.cert_r2 * 1.0001)
+        q = np.einsum("ij,jk,ik->i", dev, Q, dev)
+        assert np.all(q <= r2 * 1.0001)
 
 
 def test_basin_save_load_and_executors_agree(tmp_path):
@@ -105,9 +109,9 @@ def test_bad_grids_and_mapper_input():
         with pytest.raises(ValueError, match="x1"):
             paper_basin(m, bad, (0, 1, 3))
     with pytest.raises(ValueError, match="fixed_point"):
-        ImpactMapper(m.map, [0, 1, 2])
+        mapper(m.map, [0, 1, 2])
     with pytest.raises(ValueError, match="n_iter"):
-        ImpactMapper(m.map, o.fixed_point, n_iter=0)
+        mapper(m.map, o.fixed_point, n_iter=0)
 
 
 # ----------------------------------------------------------------------------------------
@@ -122,7 +126,7 @@ def fig6_e01(num=30, extend=False):
     key = (num, extend)
     if key not in _AB_CACHE:
         o = symmetric_orbit(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0)
-        _AB_CACHE[key] = (o, attractor_basin(ImpactMapper.from_orbit(o), (-3, 5, num),
+        _AB_CACHE[key] = (o, attractor_basin(orbit_mapper(o), (-3, 5, num),
                                              (-2, 10, num), extend=extend))
     return _AB_CACHE[key]
 
@@ -200,7 +204,7 @@ def _check_label_by_simulation(P, ab, label, s, n_iter, criterion=1e-3):
 ])
 def test_attractor_labels_agree_with_direct_simulation(case, e, kp, kv, n_iter, periods):
     o = symmetric_orbit(ImpactPair(0.1, e, 0.75), PDGains(kp, kv), 5.0, case=case)
-    mapper = ImpactMapper.from_orbit(o, n_iter=n_iter)
+    mapper = orbit_mapper(o, n_iter=n_iter)
     ab = attractor_basin(mapper, (-3, 5, 16), (-2, 10, 16), extend=False)
     P = mapper.map
     grid = section_grid(o.fixed_point, 0.75, ab.x1, ab.y1)
@@ -229,7 +233,8 @@ def test_cycles_are_deduplicated_up_to_a_cyclic_shift():
     o, ab = fig6_e01()
     P = ImpactMap(o.pair, o.gains, o.reference())
     cyc = next(a for a in ab.attractors if a.label > 0)
-    cat = CycleCatalog(P, o.fixed_point)
+    cat = mapper(P, o.fixed_point).catalogue(8)
+    assert isinstance(cat.metric, PaperMetric)
     t0 = P.iterate(cyc.points[0], 10)
     t1 = P.iterate(cyc.points[1], 10)
     # entered at either point of the cycle, each on its own catalogue call
@@ -242,7 +247,7 @@ def test_cycles_are_deduplicated_up_to_a_cyclic_shift():
     with pytest.raises(ValueError, match="tails"):
         cat.assign(t0)
     with pytest.raises(ValueError, match="max_period"):
-        CycleCatalog(P, o.fixed_point, max_period=0)
+        Catalogue(P, PaperMetric(P), max_period=0)
 
 
 def test_format_percent_never_rounds_to_the_ends():
@@ -263,7 +268,7 @@ def test_window_extends_until_the_basin_boundary_is_inside():
     # e = 0.1: the symmetric orbit's basin is a thin streak; a window around the fixed point
     # cuts it, so the window grows until no basin point is on its edge
     o = symmetric_orbit(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0)
-    mapper = ImpactMapper.from_orbit(o)
+    mapper = orbit_mapper(o)
     ab = attractor_basin(mapper, (0.5, 1.5, 12), (2.5, 4.0, 12), max_extensions=6)
     assert len(ab.windows) > 1 and not ab.reaches_edge and ab.edges == ()
     for w0, w1 in zip(ab.windows, ab.windows[1:]):
@@ -277,7 +282,7 @@ def test_window_extends_until_the_basin_boundary_is_inside():
     assert set(ab0.edges) <= {"x1 min", "x1 max", "y1 min", "y1 max"}
     # e = 0.5: the basin fills every window; the bound on extensions stops it and says so
     o5 = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
-    ab5 = attractor_basin(ImpactMapper.from_orbit(o5), (-3, 5, 10), (-2, 10, 10),
+    ab5 = attractor_basin(orbit_mapper(o5), (-3, 5, 10), (-2, 10, 10),
                           max_extensions=2)
     assert len(ab5.windows) == 3 and ab5.reaches_edge
     assert any("reaches the window edge" in line for line in ab5.summary())
@@ -295,7 +300,7 @@ def test_window_extends_until_the_basin_boundary_is_inside():
 
 def test_attractor_basin_save_load_and_executors(tmp_path):
     o, ab = fig6_e01(num=12)
-    ab2 = attractor_basin(ImpactMapper.from_orbit(o), (-3, 5, 12), (-2, 10, 12), extend=False,
+    ab2 = attractor_basin(orbit_mapper(o), (-3, 5, 12), (-2, 10, 12), extend=False,
                           executor="processes", max_workers=2, chunk_size=40)
     np.testing.assert_array_equal(ab.labels, ab2.labels)
     ab.save(tmp_path / "ab.npz")
@@ -312,8 +317,8 @@ def test_attractor_basin_save_load_and_executors(tmp_path):
 
 def test_early_exits_give_identical_attractor_labels():
     o = symmetric_orbit(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0)
-    fast = attractor_basin(ImpactMapper.from_orbit(o), (-3, 5, 10), (-2, 10, 10), extend=False)
-    slow = attractor_basin(ImpactMapper.from_orbit(o, early_exit=False), (-3, 5, 10),
+    fast = attractor_basin(orbit_mapper(o), (-3, 5, 10), (-2, 10, 10), extend=False)
+    slow = attractor_basin(orbit_mapper(o, early_exit=False), (-3, 5, 10),
                            (-2, 10, 10), extend=False)
     np.testing.assert_array_equal(fast.labels, slow.labels)
     assert [a.name for a in fast.attractors] == [a.name for a in slow.attractors]
@@ -391,9 +396,9 @@ def test_basin_figures_keep_text_inside_and_legend_matches_drawing():
     from hybridpd.plotting import plot_basin
 
     o, ab = fig6_e01(num=20)
-    paper = paper_basin(ImpactMapper.from_orbit(o), (-3, 5, 20), (-2, 10, 20))
+    paper = paper_basin(orbit_mapper(o), (-3, 5, 20), (-2, 10, 20))
     o5 = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
-    ab5 = attractor_basin(ImpactMapper.from_orbit(o5), (-3, 5, 10), (-2, 10, 10),
+    ab5 = attractor_basin(orbit_mapper(o5), (-3, 5, 10), (-2, 10, 10),
                           max_extensions=1)
     for b in (ab, paper, ab5):
         fig = plot_basin(b)
@@ -452,7 +457,7 @@ def test_cli_basin_prints_attractors_and_measures(capsys):
                                           ("noncollocated", 0.5, 20.0, 2.0)])
 def test_attractor_labels_agree_with_direct_simulation_many_points(case, e, kp, kv):
     o = symmetric_orbit(ImpactPair(0.1, e, 0.75), PDGains(kp, kv), 5.0, case=case)
-    mapper = ImpactMapper.from_orbit(o)
+    mapper = orbit_mapper(o)
     ab = attractor_basin(mapper, (-3, 5, 50), (-2, 10, 50))
     grid = section_grid(o.fixed_point, 0.75, ab.x1, ab.y1).reshape(-1, 4)
     lab = ab.labels.ravel()
@@ -489,7 +494,7 @@ def test_format_percent_is_within_rounding_and_never_at_the_ends(whole, data, di
 
 def test_attractor_basin_round_trips_through_every_format(tmp_path):
     orb = symmetric_orbit(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, case="collocated")
-    ab = attractor_basin(ImpactMapper.from_orbit(orb, n_iter=300), (-3, 5, 10), (-2, 10, 9),
+    ab = attractor_basin(orbit_mapper(orb, n_iter=300), (-3, 5, 10), (-2, 10, 9),
                          max_points=20, progress=False)
     ds = ab.to_dataset()
     assert ds.labels.dims == ("y1", "x1") and ds.attrs["kind"] == "basin"
@@ -504,18 +509,28 @@ def test_attractor_basin_round_trips_through_every_format(tmp_path):
         assert [m.count for m in r.measures()] == [m.count for m in ab.measures()]
 
 
-def test_a_criterion_without_hooks_labels_any_slice_and_matches_iterating_the_map():
-    """The generic basin with a criterion that has only the mapper protocol (no slice,
-    label_tails or catalogue hooks): labels from its ``labels``, tails by iterating the map,
-    attractors by the generic catalogue; checked point by point by iterating ``P``."""
+class _OnlyLabels(Mapper):
+    """A mapper with only what the protocol requires: ``labels`` and its attributes."""
+
+    def __init__(self, m):
+        self.m, self.map, self.fixed_point = m, m.map, m.fixed_point
+        self.n_iter, self.criterion = m.n_iter, m.criterion
+
+    def labels(self, S):
+        return self.m.labels(S)
+
+
+def test_a_mapper_with_only_labels_labels_any_slice_and_matches_iterating_the_map():
+    """The basin of a mapper that gives only ``labels`` (every other hook the protocol's
+    default: the slice at its fixed point, tails by iterating the map, the general
+    catalogue); checked point by point by iterating ``P``."""
     from hybridpd.analysis.hybridmap import SectionMap
-    from hybridpd.analysis.periodic import SectionMapper
     from hybridpd.pair.section import impact_pair_section
 
     o, m = mapper_for("collocated", 0.1, 10.0, 20.0, n_iter=300)
     P = SectionMap(impact_pair_section(o.system()))
-    b = basin_of_attraction(P, (-0.5, 0.5, 4), (0.5, 3.0, 3), axes=("z1", "z4"),
-                            criterion=SectionMapper(P, o.fixed_point, n_iter=300), max_period=4)
+    b = basin_of_attraction(_OnlyLabels(mapper(P, o.fixed_point, n_iter=300)), (-0.5, 0.5, 4),
+                            (0.5, 3.0, 3), axes=("z1", "z4"), max_period=4)
     assert b.labels.shape == (3, 4) and b.axes == ("z1", "z4") and b.names == P.names
     assert b.criterion_labels is not None and set(np.unique(b.labels)) - {0} != set()
     T = P.period
@@ -536,11 +551,81 @@ def test_a_criterion_without_hooks_labels_any_slice_and_matches_iterating_the_ma
                                        atol=1e-5)
         else:
             assert lab == NO_CONVERGENCE and dist2 >= 1e-3
-    # the call form of earlier versions (the mapper first) is the pair's slice
-    old = basin_of_attraction(m, (-3, 5, 5), (-2, 10, 4), max_period=0)
-    new = basin_of_attraction(m.map, (-3, 5, 5), (-2, 10, 4), criterion=m, max_period=0)
-    np.testing.assert_array_equal(old.labels, new.labels)
-    with pytest.raises(ValueError, match="criterion"):
-        basin_of_attraction(P, (-3, 5, 5), (-2, 10, 4), criterion="m")
+    # the same slice by the section map's own mapper (compiled, with its hooks)
+    same = basin_of_attraction(mapper(P, o.fixed_point, n_iter=300), (-0.5, 0.5, 4),
+                               (0.5, 3.0, 3), axes=("z1", "z4"), max_period=4)
+    np.testing.assert_array_equal(same.criterion_labels, b.criterion_labels)
+    with pytest.raises(ValueError, match="mapper_or_map"):
+        basin_of_attraction("m", (-3, 5, 5), (-2, 10, 4))
     with pytest.raises(ValueError, match="executor"):
-        basin_of_attraction(P, (0, 1, 2), (0, 1, 2), base=o.fixed_point, executor="serial")
+        basin_of_attraction(P, (0, 1, 2), (0, 1, 2), base=o.fixed_point, executor="processes")
+    with pytest.raises(ValueError, match="grow"):
+        basin_of_attraction(m, (0, 1, 2), (0, 1, 2), grow=3)
+
+
+def test_the_phase_wrap_and_its_kernel_twin_are_one_expression_bit_for_bit():
+    import inspect
+
+    from hybridpd._phase import wrap_phase, wrap_phase_kernel
+
+    def expr(f):
+        src = inspect.getsource(f.py_func if hasattr(f, "py_func") else f)
+        return [ln.strip() for ln in src.splitlines() if ln.strip().startswith("return")]
+
+    assert expr(wrap_phase) == expr(wrap_phase_kernel) == ["return (d + 0.5 * T) % T - 0.5 * T"]
+    rng = np.random.default_rng(5)
+    T = 2 * np.pi / 5.0
+    d = np.concatenate([rng.normal(0, 10, 2000), rng.normal(0, 1e-7, 2000),
+                        np.arange(-6, 7) * 0.5 * T, [0.0, -0.0, 1e-300, -1e-300]])
+    py = wrap_phase(d, T)
+    nb = np.array([wrap_phase_kernel(float(x), T) for x in d])
+    np.testing.assert_array_equal(py, nb)
+    # half-open [-T/2, T/2): +T/2 wraps to -T/2; the wrapped value differs from d by whole T
+    assert np.all((py >= -0.5 * T) & (py < 0.5 * T))
+    assert wrap_phase(0.5 * T, T) == -0.5 * T
+    np.testing.assert_allclose((d - py) / T, np.round((d - py) / T), rtol=0, atol=1e-6)
+
+
+def test_the_mapper_of_any_map_labels_by_its_iterations():
+    """A map with no labeller of its own: labels read at iterate n_iter, checked in closed
+    form (x -> a x converges to 0 for |a| < 1, diverges beyond ``escape`` for |a| > 1)."""
+    import hybridpd as hp
+
+    class Linear(hp.PoincareMap):
+        names = ("x", "y")
+
+        def __init__(self, a):
+            self.a = a
+
+        def apply(self, s, k=1, jacobian=False):
+            return hp.MapResult(np.asarray(s, float) * self.a ** k)
+
+    m = mapper(Linear(0.5), [0.0, 0.0], n_iter=30, criterion=1e-6)
+    lab, its = m.labels(np.array([[1.0, -2.0], [1e3, 0.0], [0.0, 0.0]]))
+    # 1e3 * 0.5**30 = 9.3e-7 > sqrt(1e-6)? no: its square 8.7e-13 < 1e-6: converged
+    assert lab.tolist() == [0, 0, 0] and its.tolist() == [30, 30, 30]
+    far = mapper(Linear(0.5), [0.0, 0.0], n_iter=5, criterion=1e-6)
+    assert far.labels(np.array([[1.0, 0.0]]))[0].tolist() == [1]    # 1/32: not yet
+    up = mapper(Linear(2.0), [0.0, 0.0], n_iter=20, escape=1e3)
+    assert up.labels(np.array([[1.0, 0.0], [0.0, 0.0]]))[0].tolist() == [2, 0]
+    b = basin_of_attraction(m, (-1, 1, 3), (-1, 1, 2), max_period=0)
+    assert b.axes == ("x", "y") and (b.labels == 0).all() and b.attractors[0].period == 1
+
+
+def test_a_section_maps_window_grows_in_its_own_coordinates():
+    from hybridpd.analysis.hybridmap import SectionMap
+    from hybridpd.pair.section import impact_pair_section
+
+    o = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
+    P = SectionMap(impact_pair_section(o.system()))
+    m = mapper(P, o.fixed_point, n_iter=40)
+    fp = o.fixed_point
+    b = basin_of_attraction(m, (fp[1] - 0.05, fp[1] + 0.05, 3), (fp[3] - 0.05, fp[3] + 0.05, 3),
+                            axes=("z1", "z4"), max_period=0, grow=Growth(1))
+    assert len(b.windows) == 2 and b.metadata["max_extensions"] == 1
+    w0, w1 = b.windows
+    assert w1[0] < w0[0] and w1[1] > w0[1] and w1[2] < w0[2] and w1[3] > w0[3]
+    assert set(b.edges) <= {"z1 min", "z1 max", "z4 min", "z4 max"}
+    # the first window lies inside the orbit's basin: every side was pushed out
+    assert (basin_of_attraction(m, b.windows[0][:2] + (3,), b.windows[0][2:] + (3,),
+                                axes=("z1", "z4"), max_period=0).labels == 0).all()

@@ -46,13 +46,14 @@ def one_error_line(capsys):
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     """One small file of every kind hybridpd writes (in every format it writes it in)."""
-    from hybridpd.analysis.basins import basin_of_attraction
     from hybridpd.analysis.diagrams import CLASSES, bifurcation_diagram
-    from hybridpd.pair.basins import ImpactMapper, attractor_basin
+    from hybridpd.analysis.mappers import Growth
     from hybridpd.pair.bifdiagram import PAIR_SETTINGS, ImpactMapFamily
     from hybridpd.pair.continuation import continue_symmetric
     from hybridpd.pair.orbits import symmetric_orbit
     from hybridpd.pair.regions import SymmetricFamily
+    from hybridpd.reproduce.basins import orbit_mapper
+    from hybridpd.sweeps.basins import basin_of_attraction
     from hybridpd.sweeps.regions import region_map
 
     d = tmp_path_factory.mktemp("results")
@@ -63,12 +64,12 @@ def files(tmp_path_factory):
         out[f"region_map{suf}"] = rm.save(d / f"regions{suf}")
     pair = ImpactPair(0.1, 0.5, 0.75)
     orb = symmetric_orbit(pair, PDGains(10, 20), 5.0, x10=1.0)
-    mapper = ImpactMapper.from_orbit(orb, n_iter=100)
-    b = basin_of_attraction(mapper.map, (-3, 5, 6), (-2, 10, 5), criterion=mapper, max_period=0)
+    mapper = orbit_mapper(orb, n_iter=100)
+    b = basin_of_attraction(mapper, (-3, 5, 6), (-2, 10, 5), max_period=0)
     for suf in (".nc", ".zarr", ".npz"):
         b.save(d / f"basin{suf}")
         out[f"basin{suf}"] = d / f"basin{suf}"
-    ab = attractor_basin(mapper, (-3, 5, 6), (-2, 10, 5), extend=False)
+    ab = basin_of_attraction(mapper, (-3, 5, 6), (-2, 10, 5), grow=Growth(0))
     for suf in (".nc", ".zarr", ".npz"):
         ab.save(d / f"attractors{suf}")
         out[f"basin.attractors{suf}"] = d / f"attractors{suf}"
@@ -123,20 +124,6 @@ def test_every_kind_round_trips_through_plot(files, name, tmp_path, capsys):
     assert main(["plot", str(files[name]), "--out", str(img)]) == 0
     assert str(img) in capsys.readouterr().out
     assert_image(img)
-
-
-@pytest.mark.stored_data
-@pytest.mark.parametrize(("name", "kind"), [("attractor_basin_v02.nc", "attractor_basin"),
-                                           ("attractor_basin_v02.npz", "attractor_basin"),
-                                           ("basin_v02.nc", "basin"), ("basin_v0.npz", "basin"),
-                                           ("model_basin_v02.nc", "model_basin")])
-def test_basin_files_of_earlier_versions_plot(name, kind, tmp_path):
-    from hybridpd.plotting.files import file_kind
-
-    path = Path(__file__).parent / "data" / name
-    assert file_kind(path) == kind
-    assert main(["plot", str(path), "--out", str(tmp_path / "old.png")]) == 0
-    assert_image(tmp_path / "old.png")
 
 
 def test_default_output_replaces_the_suffix(files, tmp_path):

@@ -354,11 +354,11 @@ region_map(SymmetricFamily("collocated", e=(0.5,), mu=0.1, omega=5, L=0.75),
            x=("kp", 1, 20, 3), y=("kv", 1, 20, 3))
 out["regions"] = loaded()
 from hybridpd.pair.impactmap import ImpactMap
-from hybridpd.analysis.basins import basin_of_attraction
-from hybridpd.pair.basins import ImpactMapper
+from hybridpd.analysis.mappers import mapper
+from hybridpd.sweeps.basins import basin_of_attraction
 P = ImpactMap(orb.pair, orb.gains, orb.reference(), orb.case)
-basin_of_attraction(P, (-0.5, 0.5, 2), (-0.5, 0.5, 2),
-                    criterion=ImpactMapper(P, orb.fixed_point, n_iter=5), max_period=0)
+basin_of_attraction(mapper(P, orb.fixed_point, n_iter=5), (-0.5, 0.5, 2), (-0.5, 0.5, 2),
+                    max_period=0)
 out["basins"] = loaded()
 from hybridpd.pair.design import design
 design("collocated", mu=0.1, e=0.5, omega=5.0, L=0.75, grid=(4, 4), n_starts=1, maxiter=2)

@@ -103,16 +103,14 @@ def _entry_points():
         return region_map(SymmetricFamily(case, e=e, mu=mu, omega=omega, L=L, m2=m2, n=n),
                           x=x, y=y)
 
-    def mapper(impact_map, fixed_point, n_iter, criterion, escape):
-        from hybridpd.pair.basins import ImpactMapper
+    def mapper_(P, fixed_point, n_iter, criterion, escape):
+        return mapper(P, fixed_point, n_iter=n_iter, criterion=criterion, escape=escape,
+                      early_exit=False)
 
-        return ImpactMapper(impact_map, fixed_point, n_iter=n_iter, criterion=criterion,
-                            escape=escape, early_exit=False)
+    def basin(mapper_or_map, x, y):
+        from hybridpd.sweeps.basins import basin_of_attraction
 
-    def basin(P, x, y, criterion):
-        from hybridpd.analysis.basins import basin_of_attraction
-
-        return basin_of_attraction(P, x, y, criterion=criterion, max_period=0)
+        return basin_of_attraction(mapper_or_map, x, y, max_period=0)
 
     def design_(case, mu, e, omega, L, kp_range, kv_range, grid, n_starts, maxiter):
         from hybridpd.pair.design import design
@@ -159,7 +157,7 @@ def _entry_points():
         return robustness(case, kp, kv, xm, mu=mu, e=e, omega=omega, L=L,
                           e_range=(0.4, 0.6), uncertainty_grid=uncertainty_grid)
 
-    from hybridpd.pair.basins import ImpactMapper
+    from hybridpd.analysis.mappers import mapper
 
     orb = symmetric_orbit(PAIR, GAINS, 5.0)
     P = ImpactMap(PAIR, GAINS, orb.reference())
@@ -171,14 +169,13 @@ def _entry_points():
                                      L=0.75, m2=1.0, n=1),
                        dict(case="case", x="named_axis", y="named_axis", e="unit[]", mu=pos,
                             omega=pos, L=pos, m2=pos, n="odd")),
-        "ImpactMapper": (mapper, dict(impact_map=P, fixed_point=fp, n_iter=5, criterion=1e-3,
-                                      escape=1e3),
-                         dict(impact_map="map_obj", fixed_point="vec4", n_iter="count",
-                              criterion=pos, escape=pos)),
-        "basin_of_attraction": (basin, dict(P=P, x=(-0.5, 0.5, 2), y=(-0.5, 0.5, 2),
-                                            criterion=ImpactMapper(P, fp, n_iter=3,
-                                                                   early_exit=False)),
-                                dict(P="map_obj", x="axis", y="axis")),
+        "mapper": (mapper_, dict(P=P, fixed_point=fp, n_iter=5, criterion=1e-3, escape=1e3),
+                   dict(P="map_obj", fixed_point="vec4", n_iter="count", criterion=pos,
+                        escape=pos)),
+        "basin_of_attraction": (basin, dict(mapper_or_map=mapper(P, fp, n_iter=3,
+                                                                 early_exit=False),
+                                            x=(-0.5, 0.5, 2), y=(-0.5, 0.5, 2)),
+                                dict(mapper_or_map="map_obj", x="axis", y="axis")),
         "design": (design_, dict(case="collocated", mu=0.1, e=0.5, omega=5.0, L=0.75,
                                  kp_range=(1.0, 50.0), kv_range=(1.0, 50.0), grid=(4, 4),
                                  n_starts=1, maxiter=2),

@@ -291,7 +291,9 @@ def test_hp_explore_builds_the_page_and_checks_its_fields():
 
 
 def test_an_unstable_orbits_basin_runs_fewer_iterations_and_reports_its_progress():
-    from hybridpd.pair.basins import ImpactMapper, attractor_basin
+    from hybridpd.analysis.mappers import Growth
+    from hybridpd.reproduce.basins import orbit_mapper
+    from hybridpd.sweeps.basins import basin_of_attraction
 
     orb = S.pair_orbit(S.PairState(case="noncollocated", e=0.9, kp=30, kv=12))
     assert orb.exists and not orb.stable
@@ -302,8 +304,8 @@ def test_an_unstable_orbits_basin_runs_fewer_iterations_and_reports_its_progress
     assert all(a[0] <= c[0] for a, c in zip(calls, calls[1:]))
     # against the command line's 1500 iterations: no point converges to the orbit in either,
     # and the same points are off the section
-    full = attractor_basin(ImpactMapper.from_orbit(orb, n_iter=1500), (-3, 5, 21), (-2, 10, 21),
-                           extend=False)
+    full = basin_of_attraction(orbit_mapper(orb, n_iter=1500), (-3, 5, 21), (-2, 10, 21),
+                               grow=Growth(0))
     assert b.converged_fraction == full.converged_fraction == 0.0
     assert np.array_equal(b.labels < 0, full.labels < 0)
     stable = S.pair_orbit(S.PairState())

@@ -20,7 +20,7 @@ from matplotlib.text import Text
 from hybridpd import ImpactPair, PDGains
 from hybridpd._format import pct
 from hybridpd.analysis.basins import OFF_SECTION_LABEL
-from hybridpd.pair.basins import ImpactMapper, attractor_basin
+from hybridpd.analysis.mappers import Growth
 from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.plotting.basins import plot_basin
 from hybridpd.plotting.regions import plot_region_panels
@@ -31,8 +31,10 @@ from hybridpd.plotting.studies import (
     plot_param_study,
     plot_scaled_regions,
 )
+from hybridpd.reproduce.basins import orbit_mapper
 from hybridpd.reproduce.figures import _basin_figure, _plain_figure, basin_share
 from hybridpd.reproduce.settings import PAPER
+from hybridpd.sweeps.basins import basin_of_attraction
 
 _MATH = re.compile(r"\$[^$]*\$")
 _PAR = dict(mu=0.1, gamma=0.75, omega=5.0, n=1, m2=1.0, x10=1.0)
@@ -86,8 +88,8 @@ def _assert_star_on_top_and_inside(ax, name):
 @pytest.fixture(scope="module")
 def basin():
     o = symmetric_orbit(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0)
-    b = attractor_basin(ImpactMapper.from_orbit(o, n_iter=300), (-3, 5, 7), (-6, 10, 7),
-                        extend=False)
+    b = basin_of_attraction(orbit_mapper(o, n_iter=300), (-3, 5, 7), (-6, 10, 7),
+                            grow=Growth(0))
     assert (b.labels == OFF_SECTION_LABEL).any() and (b.labels == 1).any()
     return b
 

@@ -13,22 +13,19 @@ from hybridpd.analysis.hybridmap import (
     SectionMap,
     exosystem,
 )
-from hybridpd.analysis.periodic import (
-    SectionMapper,
-    find_orbit,
-    measured_contraction,
-)
+from hybridpd.analysis.mappers import mapper
+from hybridpd.analysis.periodic import find_orbit, measured_contraction
 from hybridpd.hybrid.samples import (
     ball_initial_state,
     bouncing_ball,
     impact_oscillator,
     oscillator_initial_state,
 )
-from hybridpd.pair.basins import ImpactMapper, section_grid
+from hybridpd.pair.basins import section_grid
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.pair.section import impact_pair_section
-from hybridpd.sweeps.section_basins import section_basin
+from hybridpd.sweeps.basins import basin_of_attraction
 
 PAIR = ImpactPair(0.1, 0.5, 0.75)
 
@@ -241,18 +238,17 @@ def test_section_round_trip_and_embedding():
 def test_section_mapper_agrees_with_pair_mapper():
     orb = symmetric_orbit(PAIR, PDGains(10, 20), 5.0)
     P = SectionMap(impact_pair_section(orb.system()))
-    m = SectionMapper(P, orb.fixed_point, n_iter=200)
-    m0 = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point,
-                      n_iter=200)
+    m = mapper(P, orb.fixed_point, n_iter=200)
+    m0 = mapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point, n_iter=200)
     pts = section_grid(orb.fixed_point, PAIR.L, np.linspace(-2, 2, 9),
                        np.linspace(-5, 5, 9)).reshape(-1, 4)
     lab, _its = m.labels(pts)
     lab0, _ = m0.labels(pts)
     assert np.array_equal(lab, lab0)
     assert m.certified_radius > 0
-    m_slow = SectionMapper(P, orb.fixed_point, n_iter=200, early_exit=False)
+    m_slow = mapper(P, orb.fixed_point, n_iter=200, early_exit=False)
     assert np.array_equal(m_slow.labels(pts)[0], lab)
-    b = section_basin(m, "z1", "z4", (-1.0, 1.0, 4), (0.5, 3.0, 3))
+    b = basin_of_attraction(m, (-1.0, 1.0, 4), (0.5, 3.0, 3), axes=("z1", "z4"), max_period=0)
     assert b.labels.shape == (3, 4) and b.axes == ("z1", "z4")
 
 

@@ -149,8 +149,8 @@ def test_pid_backlash_example_runs_and_writes_its_figure(tmp_path):
 
 @pytest.mark.slow
 def test_drivetrain_basin_early_exit_does_not_change_labels():
-    from hybridpd.analysis.periodic import SectionMapper
-    from hybridpd.sweeps.section_basins import section_basin
+    from hybridpd.analysis.mappers import mapper
+    from hybridpd.sweeps.basins import basin_of_attraction
 
     model = load_model(MODELS / "drivetrain.toml")
     po, P = orbit_from_model(model, 0, 1, 1, event="release")
@@ -159,13 +159,14 @@ def test_drivetrain_basin_early_exit_does_not_change_labels():
     i, j = names.index("motor"), names.index("motor_dot")
     x = (po.s[i] - 2.0, po.s[i] + 2.0, 6)
     y = (po.s[j] - 8.0, po.s[j] + 8.0, 6)
-    fast = section_basin(SectionMapper(P, po.s, n_iter=60), "motor", "motor_dot", x, y)
-    full = section_basin(SectionMapper(P, po.s, n_iter=60, early_exit=False),
-                         "motor", "motor_dot", x, y)
+    axes = ("motor", "motor_dot")
+    fast = basin_of_attraction(mapper(P, po.s, n_iter=60), x, y, axes=axes, max_period=0)
+    full = basin_of_attraction(mapper(P, po.s, n_iter=60, early_exit=False), x, y, axes=axes,
+                               max_period=0)
     assert np.array_equal(fast.labels, full.labels)
     assert fast.iterations.sum() < full.iterations.sum()
-    par = section_basin(SectionMapper(P, po.s, n_iter=60), "motor", "motor_dot", x,
-                        y, executor="processes", max_workers=2, chunk_size=9)
+    par = basin_of_attraction(mapper(P, po.s, n_iter=60), x, y, axes=axes, max_period=0,
+                              executor="processes", max_workers=2, chunk_size=9)
     assert np.array_equal(par.labels, fast.labels)
 
 

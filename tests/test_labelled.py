@@ -1,5 +1,4 @@
 """Labelled results: xarray Datasets, netCDF/Zarr by suffix, files of earlier versions."""
-import re
 import subprocess
 import sys
 from pathlib import Path
@@ -9,10 +8,11 @@ import pytest
 from _regions import pair_region_map
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.basins import basin_of_attraction, load_basin
-from hybridpd.pair.basins import ImpactMapper
+from hybridpd.analysis.basins import load_basin
+from hybridpd.analysis.mappers import mapper
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
+from hybridpd.sweeps.basins import basin_of_attraction
 from hybridpd.sweeps.labelled import check_suffix, decode_attrs, encode_attrs, write_dataset
 from hybridpd.sweeps.regions import load_region_map
 from hybridpd.sweeps.sweep import load_sweep, run_sweep
@@ -84,8 +84,8 @@ def certain_points(compute, fields):
 @pytest.fixture(scope="module")
 def basin():
     orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
-    m = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
-    return basin_of_attraction(m.map, (-3, 5, 6), (-2, 10, 5), criterion=m, max_period=0)
+    m = mapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
+    return basin_of_attraction(m, (-3, 5, 6), (-2, 10, 5), max_period=0)
 
 
 def assert_close_or_equal(actual, desired, err_msg, where=None):
@@ -200,30 +200,6 @@ def test_unknown_suffix_is_refused(rm, basin, tmp_path):
         load_basin(tmp_path / "m.nc")
 
 
-def _assert_stored_basin(old, fresh, certain, err_msg):
-    """A stored basin against a fresh one: labels exactly and iterations within
-    :data:`ITER_ATOL` at the certain points, the converged share up to the uncertain ones."""
-    for f in ("labels", "criterion_labels"):
-        assert_close_or_equal(getattr(old, f), getattr(fresh, f), f"{err_msg}: {f}", certain)
-    # how many iterations a point takes to enter the criterion depends on rounding (the
-    # vectorised sin/cos of another CPU move the last digits): a few either way
-    np.testing.assert_allclose(old.iterations[certain], fresh.iterations[certain], rtol=0,
-                               atol=ITER_ATOL, err_msg=f"{err_msg}: iterations")
-    assert abs(old.converged_fraction - fresh.converged_fraction) <= \
-        (~certain).mean() + 1e-12, err_msg
-
-
-_NUMBER = re.compile(r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")
-
-
-def assert_same_text(old, new, rtol, atol=0.0):
-    """Two printed texts: the words equal, the numbers within ``rtol`` and ``atol``."""
-    assert _NUMBER.split(old) == _NUMBER.split(new), (old, new)
-    np.testing.assert_allclose([float(x) for x in _NUMBER.findall(old)],
-                               [float(x) for x in _NUMBER.findall(new)], rtol=rtol, atol=atol,
-                               err_msg=f"{old!r} against {new!r}")
-
-
 @pytest.mark.stored_data
 def test_files_of_earlier_versions_stay_readable(rm):
     """``.npz`` files written by the previous version (tests/data) agree with a fresh
@@ -232,15 +208,6 @@ def test_files_of_earlier_versions_stay_readable(rm):
     new, certain = certain_points(lambda s: rm if s == 0 else _region_map(s),
                                   ("exists", "stable", "reason"))
     assert_same_map(old, new, exact=False, where=certain)
-    orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
-    m = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference()), orb.fixed_point)
-    new_b, certain = certain_points(
-        lambda s: basin_of_attraction(m.map, _shifted((-3, 5, 5), s), _shifted((-2, 10, 4), s),
-                                      criterion=m, max_period=0),
-        ("labels", "criterion_labels"))
-    old_b = load_basin(DATA / "basin_v0.npz")
-    _assert_stored_basin(old_b, new_b, certain, "basin_v0.npz")
-    assert old_b.metadata["kp"] == 10.0
     from hybridpd.pair.regions import _region_chunk
 
     s = load_sweep(DATA / "sweep_v0.npz")
@@ -257,62 +224,6 @@ def test_files_of_earlier_versions_stay_readable(rm):
     assert set(s.outputs) == set(fresh)
     for k, v in fresh.items():
         assert_close_or_equal(s.outputs[k], v, err_msg=k, where=certain)
-
-
-@pytest.mark.stored_data
-def test_basin_files_of_earlier_versions_read_as_the_one_basin_result():
-    """The pair's basins, attractor basins and model basins written by the previous version
-    (tests/data) read back as one :class:`BasinResult` that agrees with a fresh computation
-    (to the tolerances above)."""
-    from _pair_model import PAIR
-
-    from hybridpd.pair.basins import attractor_basin
-    from hybridpd.sweeps.model_basins import model_basin
-
-    orb = symmetric_orbit(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0)
-    mapper = ImpactMapper.from_orbit(orb, n_iter=300)
-    fresh, certain = certain_points(
-        lambda s: attractor_basin(mapper, _shifted((-3, 5, 6), s), _shifted((-2, 10, 5), s),
-                                  extend=False),
-        ("labels", "criterion_labels"))
-    for name in ("attractor_basin_v02.nc", "attractor_basin_v02.npz"):
-        old = load_basin(DATA / name)
-        assert old.axes == ("x1", "y1") and old.names == ("phi", "z1", "z2", "z4")
-        _assert_stored_basin(old, fresh, certain, name)
-        for f in ("x1", "y1", "fixed_point"):
-            np.testing.assert_allclose(getattr(old, f), getattr(fresh, f), rtol=STORED_RTOL,
-                                       atol=STORED_ATOL, err_msg=f)
-        assert [a.name for a in old.attractors] == [a.name for a in fresh.attractors]
-        for a, b in zip(old.attractors, fresh.attractors):
-            # points of a refined periodic orbit: Newton's tolerance, not rounding, limits them
-            np.testing.assert_allclose(a.points, b.points, rtol=1e-7, atol=1e-9)
-            # stable is exact only far from |multiplier| = 1; the wall sequence changes only
-            # at a grazing, which moves the points by far more than the tolerance above
-            assert abs(b.spectral_radius - 1) > 1e-6
-            assert a.walls == b.walls and a.stable == b.stable
-        assert old.metadata["kp"] == 10.0 and old.metadata["gamma"] == 0.75
-    orb5 = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
-    m5 = ImpactMapper.from_orbit(orb5, n_iter=100)
-    pb, certain = certain_points(
-        lambda s: basin_of_attraction(m5.map, _shifted((-3, 5, 5), s), _shifted((-2, 10, 4), s),
-                                      criterion=m5, max_period=0),
-        ("labels", "criterion_labels"))
-    old = load_basin(DATA / "basin_v02.nc")
-    _assert_stored_basin(old, pb, certain, "basin_v02.nc")
-    assert [a.label for a in old.attractors] == [a.label for a in pb.attractors]
-    mb, certain = certain_points(
-        lambda s: model_basin(PAIR, _shifted(("x2", -1.0, 1.0, 4), s),
-                              _shifted(("x1_dot", -1.0, 3.0, 3), s), n_iter=100, event="impact"),
-        ("labels", "criterion_labels"))
-    old = load_basin(DATA / "model_basin_v02.nc")
-    assert old.axes == mb.axes and old.names == mb.names and old.source == mb.source
-    _assert_stored_basin(old, mb, certain, "model_basin_v02.nc")
-    # the section's base point: a fixed point found by Newton, to its tolerance
-    np.testing.assert_allclose(old.base, mb.base, rtol=1e-7, atol=1e-9)
-    # a spectral radius printed to 4 digits (its last digit moves by one when the value lies
-    # at a rounding point); percentages of the grid, which the uncertain points may move
-    for a, b in zip(old.summary(), mb.summary(), strict=True):
-        assert_same_text(a, b, rtol=1e-3, atol=100 * (~certain).mean())
 
 
 def test_sweep_store_and_result_as_datasets(tmp_path):

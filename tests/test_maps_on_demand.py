@@ -12,8 +12,8 @@ import pytest
 from _chain_reference import ReferenceChain
 
 from hybridpd.analysis.hybridmap import Section, SectionMap
+from hybridpd.analysis.mappers import mapper
 from hybridpd.analysis.model_orbits import signature_table
-from hybridpd.analysis.periodic import SectionMapper
 from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode
 from hybridpd.mechanics.samples import chain_model_text, mass_chain
 from hybridpd.mechanics.sections import mechanical_section
@@ -95,9 +95,9 @@ def test_basin_labels_built_on_demand_equal_those_of_every_mode():
     lazy, full = mass_chain(4, restitution=0.5), mass_chain(4, restitution=0.5)
     full.automaton.materialize()
     sec_l, pts = _section_points(lazy)
-    M_l = SectionMapper(SectionMap(sec_l, t_max=5.0), pts[-1], n_iter=15, early_exit=False)
-    M_f = SectionMapper(SectionMap(mechanical_section(full), t_max=5.0), pts[-1], n_iter=15,
-                        early_exit=False)
+    M_l = mapper(SectionMap(sec_l, t_max=5.0), pts[-1], n_iter=15, early_exit=False)
+    M_f = mapper(SectionMap(mechanical_section(full), t_max=5.0), pts[-1], n_iter=15,
+                 early_exit=False)
     S = np.array(pts[:8])
     la, ia = M_l.labels(S)
     lb, ib = M_f.labels(S)

@@ -3,13 +3,13 @@
 import json
 
 import numpy as np
+from _basins import model_basin
 from _pair_model import PAIR, PAIR_TOML
 
 from hybridpd.analysis.basins import load_basin
 from hybridpd.analysis.model_orbits import SectionSpec
 from hybridpd.cli import main
 from hybridpd.mechanics.params import ModelTemplate
-from hybridpd.sweeps.model_basins import model_basin
 
 
 def test_pair_file_basin_labels_confirmed_by_iterating_the_map(tmp_path, capsys):
@@ -60,7 +60,7 @@ def test_basin_cli_with_a_model_file(tmp_path, capsys):
 def test_basin_cli_without_axes_takes_the_default_slice_through_the_orbit(tmp_path, capsys):
     from matplotlib.image import imread
 
-    from hybridpd.sweeps.model_basins import default_axes
+    from hybridpd.analysis.model_orbits import default_axes
 
     f = tmp_path / "pair.toml"
     f.write_text(PAIR_TOML)

@@ -13,7 +13,8 @@ import pytest
 
 from hybridpd.analysis.hybridmap import Section, SectionMap
 from hybridpd.analysis.labels import LABELS
-from hybridpd.analysis.periodic import SectionMapper, find_orbit
+from hybridpd.analysis.mappers import mapper
+from hybridpd.analysis.periodic import find_orbit
 from hybridpd.hybrid.automaton import Guard, HybridAutomaton, Mode
 from hybridpd.hybrid.modes import ZenoOptions
 from hybridpd.hybrid.samples import impact_oscillator, oscillator_initial_state
@@ -134,7 +135,7 @@ def test_the_stiff_lightly_damped_arm_has_its_orbit():
     # 1e-4 within the criterion, as the spectral radius 0.53 says
     ds = np.zeros((2, P.dim))
     ds[0, 1], ds[1, 2] = 1e-4, -1e-4
-    lab, its = SectionMapper(P, orb.s, n_iter=3, early_exit=False).labels(orb.s + ds)
+    lab, its = mapper(P, orb.s, n_iter=3, early_exit=False).labels(orb.s + ds)
     assert [LABELS[i] for i in lab] == ["converged"] * 2 and list(its) == [3, 3]
 
 
@@ -163,12 +164,12 @@ def test_basins_hand_runs_the_compiled_loop_cannot_finish_to_the_resolver():
     rng = np.random.default_rng(3)
     starts = orb.s + rng.uniform(-1, 1, (10, 2)) * [2.0, 1.0]
     starts = starts[[P1.section.fires(P1.section.to_state(s)[0]) > 0 for s in starts]]
-    lab1, _ = SectionMapper(P1, orb.s, n_iter=200).labels(starts)
+    lab1, _ = mapper(P1, orb.s, n_iter=200).labels(starts)
     in_step = np.array([_in_step(P2, *P1.section.to_state(s)) for s in starts])
-    lab2, its2 = SectionMapper(P2, fp2, n_iter=200).labels(in_step)
+    lab2, its2 = mapper(P2, fp2, n_iter=200).labels(in_step)
     assert len(starts) >= 5 and np.any(lab1 == LABELS.index("converged"))
     np.testing.assert_array_equal(lab2, lab1)
     assert len(calls) >= np.sum(its2)       # every application went to the resolver
     # without a resolver the compiled run's answer stays: an accumulation at one instant
-    lab0, _ = SectionMapper(twins(None), fp2, n_iter=200, early_exit=False).labels(in_step)
+    lab0, _ = mapper(twins(None), fp2, n_iter=200, early_exit=False).labels(in_step)
     assert np.all(lab0 == LABELS.index("zeno_sticking"))

@@ -24,10 +24,10 @@ import pytest
 
 from hybridpd import ImpactPair, PDGains
 from hybridpd.analysis.hybridmap import SectionMap
+from hybridpd.analysis.mappers import mapper
 from hybridpd.analysis.maps import MapResult, PoincareMap
-from hybridpd.analysis.periodic import SectionMapper, find_orbit
+from hybridpd.analysis.periodic import find_orbit
 from hybridpd.loop import pd_controller
-from hybridpd.pair.basins import ImpactMapper
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.lti import filtered_pd, filtered_pid, lead_lag, lti_symmetric_orbit
 from hybridpd.pair.orbits import symmetric_orbit
@@ -143,8 +143,8 @@ def test_basin_labels_agree(e):
     S = np.tile(orb.fixed_point, (d1.size, 1))
     S[:, 1] += d1.ravel()
     S[:, 2] += d2.ravel()
-    lab_q = ImpactMapper(Q, orb.fixed_point, n_iter=60, early_exit=False)
-    lab_g = SectionMapper(G, orb.fixed_point, n_iter=60, early_exit=False)
+    lab_q = mapper(Q, orb.fixed_point, n_iter=60, early_exit=False)
+    lab_g = mapper(G, orb.fixed_point, n_iter=60, early_exit=False)
     a = np.array([lab_q(s) for s in S])
     b, _ = lab_g.labels(S)[:2]
     assert np.any(a == 0), "no converged point: the comparison would be empty"

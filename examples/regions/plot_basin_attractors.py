@@ -13,10 +13,11 @@ Run: ``python examples/regions/plot_basin_attractors.py [--out DIR] [--quick]`` 
 import sys
 from pathlib import Path
 
-from hybridpd import ImpactPair, PDGains
-from hybridpd.pair.basins import ImpactMapper, attractor_basin
+from hybridpd import ImpactPair, PDGains, basin_of_attraction
+from hybridpd.analysis.mappers import Growth
 from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.plotting import plot_basin
+from hybridpd.reproduce.basins import orbit_mapper
 
 # sphinx_gallery_start_ignore
 sys.path.insert(0, str(Path(sys.argv[0]).resolve().parents[1]))  # examples/_out.py
@@ -27,8 +28,8 @@ ARGS = example_args(__doc__)
 NUM = 12 if ARGS.quick else 60
 orb = symmetric_orbit(ImpactPair(mu=0.1, e=0.1, L=0.75), PDGains(kp=10, kv=20), omega=5.0,
                       x10=1.0, n=1, case="collocated")
-mapper = ImpactMapper.from_orbit(orb)          # the paper's criterion, 1500 iterations
-ab = attractor_basin(mapper, (-3, 5, NUM), (-2, 10, NUM), max_points=2 * NUM)
+mapper = orbit_mapper(orb)          # the paper's criterion, 1500 iterations
+ab = basin_of_attraction(mapper, (-3, 5, NUM), (-2, 10, NUM), grow=Growth(max_points=2 * NUM))
 for line in ab.summary():
     print(line)
 for a in ab.attractors:

@@ -12,9 +12,7 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
-from hybridpd import ImpactPair, PDGains
-from hybridpd.analysis.basins import basin_of_attraction
-from hybridpd.pair.basins import ImpactMapper
+from hybridpd import ImpactPair, PDGains, basin_of_attraction, mapper
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.plotting import plot_basin
@@ -37,10 +35,10 @@ for row, case in enumerate(("collocated", "noncollocated")):
             ax.text(0.5, 0.5, f"{case}, e = {e}:\nno symmetric orbit", ha="center",
                     transform=ax.transAxes)
             continue
-        mapper = ImpactMapper(ImpactMap(orb.pair, orb.gains, orb.reference(), case),
-                              orb.fixed_point, n_iter=N_ITER)
-        b = basin_of_attraction(mapper.map, (-3, 5, NUM), (-2, 10, NUM), criterion=mapper,
-                                max_period=0, executor="serial" if ARGS.quick else "processes")
+        m = mapper(ImpactMap(orb.pair, orb.gains, orb.reference(), case), orb.fixed_point,
+                   n_iter=N_ITER)
+        b = basin_of_attraction(m, (-3, 5, NUM), (-2, 10, NUM), max_period=0,
+                                executor="serial" if ARGS.quick else "processes")
         print(f"{case} e={e}: spectral radius {orb.spectral_radius:.4g}, converged "
               f"{100 * b.converged_fraction:.1f}%")
         plot_basin(b, ax=ax)

@@ -1,25 +1,19 @@
-"""Basins of attraction of any map, labelled by the attractor each point reaches.
+"""Basin results of any map: the attractors and outcomes each point of a 2-D slice reaches.
 
-A basin is a thin layer over one question asked of every point of a 2-D slice: where does
-iterating the map take it? (Attractors.jl's "initial condition -> label" mapper.) Every grid
-point is iterated ``n_iter`` times (:meth:`~hybridpd.analysis.maps.PoincareMap.iterate_many`,
-which a map may compile); its tail is then either periodic, of period ``k <= max_period``
-(:func:`~hybridpd.analysis.maps.detect_period`), and its cycle is matched against the
-attractors found so far (a new one is refined by Newton on ``P^k``,
-:func:`~hybridpd.analysis.periodic.find_orbit`, and named by its period and stability), or
-one of the outcomes :data:`OUTCOMES`: no convergence within the iterations, divergence
-(non-finite, or beyond ``escape``), sticking, the map stopped for another reason
-(``unresolved``, its status kept), a start off the map's domain, or (slices of a section with
-an admissible set) an inadmissible start. Labels ``0, 1, ...`` are the attractors in the order
-found; outcomes are negative.
+A basin (:func:`hybridpd.sweeps.basins.basin_of_attraction`) asks every point of a 2-D slice
+where iterating the map takes it: a mapper (:mod:`hybridpd.analysis.mappers`) labels it
+against one orbit, and the points that did not converge are examined for other periodic
+attractors (:class:`~hybridpd.analysis.mappers.Catalogue`). Labels ``0, 1, ...`` are the
+attractors in the order found; negative labels are the outcomes :data:`OUTCOMES`: no
+convergence within the iterations, divergence (non-finite, or beyond ``escape``), sticking,
+the map stopped for another reason (``unresolved``), a start off the map's domain, or (slices
+of a section with an admissible set) an inadmissible start.
 
 :class:`BasinResult` is the one basin result: of any map, of the impact pair's slice
 ``(x1, y1)`` and of a model file's section alike, with the grid's coordinate names, the
 attractors (:class:`Attractor`), optionally the labels of a mapper's criterion against one
 orbit (:data:`~hybridpd.analysis.labels.LABELS`, ``criterion_labels``) and the windows tried.
-It is a :class:`hybridpd._results.Result` (``.nc``/``.zarr`` files, ``to_dict``); files of
-earlier versions (``basin``, ``attractor_basin`` and ``model_basin`` datasets, ``.npz``) read
-back as one.
+It is a :class:`hybridpd._results.Result` (``.nc``/``.zarr``/``.npz`` files, ``to_dict``).
 """
 from __future__ import annotations
 
@@ -27,6 +21,7 @@ import json
 import math
 from dataclasses import dataclass, field, fields
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -34,13 +29,12 @@ from hybridpd._format import format_percent
 from hybridpd._results import Result, check_suffix, compact_repr, decode_attrs, jsonable
 from hybridpd.analysis import _basin_files
 from hybridpd.analysis.labels import LABELS
-from hybridpd.analysis.maps import PoincareMap, check_returns, detect_period
-from hybridpd.analysis.periodic import find_orbit
+from hybridpd.analysis.maps import PoincareMap
 from hybridpd.model import check_axis
 
 __all__ = ["DIVERGED", "INADMISSIBLE_LABEL", "NO_CONVERGENCE", "OFF_SECTION_LABEL", "OUTCOMES",
-           "STICKING", "UNRESOLVED", "Attractor", "BasinMeasure", "BasinResult",
-           "basin_of_attraction", "from_criterion", "load_basin", "outcome"]
+           "STICKING", "UNRESOLVED", "Attractor", "BasinMeasure", "BasinResult", "Slice",
+           "from_criterion", "grid_slice", "load_basin", "off_section_axis", "outcome"]
 
 NO_CONVERGENCE = -1
 DIVERGED = -2
@@ -423,16 +417,13 @@ class BasinResult(Result):
 
     @classmethod
     def from_dataset(cls, ds) -> BasinResult:
-        """Inverse of :meth:`to_dataset`; datasets of earlier versions (kinds ``basin``,
-        ``attractor_basin``, ``model_basin``) read too."""
+        """Inverse of :meth:`to_dataset`."""
         a = decode_attrs(ds.attrs)
         kind = a.get("kind")
-        if kind == "basin" and "attractors" in a:
-            return super().from_dataset(ds)
-        if kind not in ("basin", "attractor_basin", "model_basin"):
+        if kind != "basin" or "attractors" not in a:
             raise ValueError(f"the dataset does not hold a basin (it holds a {kind!r}: "
                              "attribute kind)")
-        return _from_old(kind, a, {k: ds[k].values for k in ds.variables})
+        return super().from_dataset(ds)
 
     def save(self, path) -> Path:
         """Write to ``.nc`` or ``.zarr`` (:meth:`to_dataset`), or ``.npz``, by suffix."""
@@ -442,47 +433,14 @@ class BasinResult(Result):
 
     @classmethod
     def load(cls, path) -> BasinResult:
-        """Read a basin written by :meth:`save` (or by earlier versions)."""
+        """Read a basin written by :meth:`save`."""
         if check_suffix(path) != ".npz":
             return super().load(path)
         kind, meta, arrays = _basin_files.read_basin_npz(Path(path))
-        new = kind == "basin" and "attractors" in meta
-        return cls(**arrays, **meta) if new else _from_old(kind, meta, arrays)
-
-
-_PAIR_COORDS = ("phi", "z1", "z2", "z4")
-
-
-def _from_old(kind: str, a: dict, v: dict) -> BasinResult:
-    """A basin of an earlier version's file: attributes (or ``.npz`` metadata) ``a`` and
-    arrays ``v``."""
-    if kind == "model_basin":
-        xn, yn = a["x_name"], a["y_name"]
-        return BasinResult(v[xn], v[yn], v["attractor"], a["attractors"], v["iterations"],
-                           xn, yn, a["fixed_point"], a["section_coordinates"],
-                           v["criterion_label"], metadata=dict(a.get("metadata") or {},
-                                                               model=a["model"]))
-    x, y = v.get("x1"), v.get("y1")
-    fp = a.get("fixed_point", v.get("fixed_point"))
-    if kind == "basin":
-        crit = np.asarray(v["labels"], np.int64)
-        lab = from_criterion(crit)
-        drop = ("fixed_point", "converged_fraction", "fixed_point_coordinates", "label_names")
-        meta = {k: w for k, w in a.items() if k not in drop}
-        sym = Attractor(0, "converged to the symmetric orbit", 1,
-                        np.asarray(fp, float).reshape(1, -1), kind="symmetric")
-        atts = (sym,) + tuple(outcome(k, meta.get("n_iter")) for k in sorted(OUTCOMES)[::-1]
-                              if np.any(lab == k))
-        return BasinResult(x, y, lab, atts, v["iterations"], "x1", "y1", fp, _PAIR_COORDS,
-                           crit, metadata=meta)
-    crit = v["criterion_label"] if "criterion_label" in v else v["criterion_labels"]
-    lab = v["attractor"] if "attractor" in v else v["labels"]
-    skip = ("attractors", "windows", "edges", "fixed_point", "converged_fraction",
-            "basin_metadata", "metadata", "kind")
-    meta = dict(a.get("basin_metadata") or {}, **(a.get("metadata") or {}),
-                **{k: w for k, w in a.items() if k not in skip})
-    return BasinResult(x, y, lab, a["attractors"], v["iterations"], "x1", "y1", fp,
-                       _PAIR_COORDS, crit, a.get("windows", ()), a.get("edges", ()), meta)
+        if kind != "basin" or "attractors" not in meta:
+            raise ValueError(f"{path} does not hold a basin of this version (it holds a "
+                             f"{kind!r})")
+        return cls(**arrays, **meta)
 
 
 def load_basin(path) -> BasinResult:
@@ -491,8 +449,7 @@ def load_basin(path) -> BasinResult:
     Parameters
     ----------
     path : str or path
-        A ``.nc``, ``.zarr`` or ``.npz`` file; files of earlier versions (the pair's basins,
-        attractor basins and model basins) read too.
+        A ``.nc``, ``.zarr`` or ``.npz`` file.
 
     Returns
     -------
@@ -515,115 +472,55 @@ def load_basin(path) -> BasinResult:
 
 
 # ----------------------------------------------------------------------------------------
-# the catalogue of cycles and the generic basin
+# the slice of a basin
 # ----------------------------------------------------------------------------------------
-class Catalogue:
-    """The periodic attractors found in the tails of trajectories, with integer labels.
+class Slice(NamedTuple):
+    """A basin's grid: axes ``x``, ``y``, section points ``S`` (shape ``(len(x) len(y),
+    dim)``, row-major over ``(y, x)``), coordinate ``names``, their ``units`` (dataset
+    attributes by name), the ``base`` point whose other coordinates the slice holds and its
+    ``centre`` (the base in the slice's coordinates, where a growing window grows from)."""
 
-    The one catalogue interface of basins: :attr:`attractors`, :attr:`tail_length` and
-    :meth:`assign`. A tail (the last iterates of one trajectory) is periodic of period ``p <=
-    max_period`` (:func:`~hybridpd.analysis.maps.detect_period`); its cycle is matched against
-    the attractors found so far (to ``1e3 tol`` relative), else refined by Newton on ``P^p``
-    (:func:`~hybridpd.analysis.periodic.find_orbit`) and added. A map with its own metric
-    (the impact pair's criterion: :class:`hybridpd.pair.attractors.CycleCatalog`) supplies its
-    own catalogue with this interface.
-
-    Parameters
-    ----------
-    P : PoincareMap
-    period : int
-        ``k``: the tails are iterates of ``P^k``.
-    max_period : int
-        Largest period searched (in applications of ``P^k``).
-    tol : float
-        Relative tolerance of the period test.
-    orbit : array_like, shape (dim,), optional
-        A point of a known orbit, label 0 (a criterion's fixed point).
-
-    Examples
-    --------
-    >>> import hybridpd as hp
-    >>> class Logistic(hp.PoincareMap):
-    ...     names = ("x",)
-    ...     def apply(self, s, k=1, jacobian=False):
-    ...         x = np.asarray(s, float)
-    ...         for _ in range(k):
-    ...             x = 3.2 * x * (1 - x)
-    ...         return hp.MapResult(x)
-    >>> P = Logistic()
-    >>> cat = Catalogue(P, max_period=4)
-    >>> cat.assign(P.iterate([0.3], 300)[None, -cat.tail_length:]).tolist()
-    [0]
-    >>> cat.attractors[0].name, cat.attractors[0].period
-    ('period-2 orbit (stable)', 2)
-    """
-
-    def __init__(self, P: PoincareMap, *, period: int = 1, max_period: int = 8,
-                 tol: float = 1e-6, orbit=None):
-        self.P, self.k = P, check_returns(period)
-        self.max_period, self.tol = int(max_period), float(tol)
-        self.attractors: list = []
-        if orbit is not None:
-            s = P.check_point(orbit)
-            self.attractors.append(Attractor(0, f"period-{self.k} orbit", 1, s.reshape(1, -1)))
-
-    @property
-    def tail_length(self) -> int:
-        """Iterates per tail that show ``max_period`` twice: ``2 max_period + 1``."""
-        return 2 * self.max_period + 1
-
-    def assign(self, tails) -> np.ndarray:
-        """Labels of tails of shape ``(M, K, dim)``: an attractor's, or ``NO_CONVERGENCE``
-        (new cycles are added to :attr:`attractors`)."""
-        tails = np.asarray(tails, float)
-        lab = np.full(len(tails), NO_CONVERGENCE, np.int64)
-        for i, tail in enumerate(tails):
-            if np.all(np.isfinite(tail)):
-                lab[i] = self._label(tail)
-        return lab
-
-    def _label(self, tail) -> int:
-        p = detect_period(tail, self.P.wrap, self.max_period, self.tol)
-        if not p:
-            return NO_CONVERGENCE
-        cycle = tail[-p:]
-        for a in self.attractors:
-            if a.period == p and self._on(cycle[-1], a.points):
-                return a.label
-        return self._add(cycle, p)
-
-    def _on(self, s, points) -> bool:
-        d = np.max(np.abs(self.P.wrap(points - s)), axis=1)
-        return bool(np.min(d) <= 1e3 * self.tol * max(1.0, float(np.max(np.abs(s)))))
-
-    def _add(self, cycle, p) -> int:
-        po = find_orbit(self.P, cycle[-1], p * self.k, max_iter=30)
-        pts = cycle if not po.converged else self.P.iterate(po.s, p - 1, self.k)
-        pts = pts[np.argsort(pts[:, 0])]
-        label = len(self.attractors)
-        stab = "stable" if po.converged and po.stable else "unstable"
-        name = f"period-{p} orbit ({stab})" if po.converged else f"period-{p} cycle"
-        self.attractors.append(Attractor(label, name, p, pts, po.multipliers,
-                                         po.spectral_radius, bool(po.converged and po.stable)))
-        return label
+    x: np.ndarray
+    y: np.ndarray
+    S: np.ndarray
+    names: tuple
+    units: dict
+    base: np.ndarray
+    centre: tuple
 
 
-def _grid(P, x, y, axes, base):
+def off_section_axis(what: str, name: str, sec) -> str:
+    """The message refusing ``name`` as a slice axis of section `sec`: a state the section
+    fixes (moving it would leave the section: the constraint is named) or no state at all."""
+    why = sec.fixed_by(name)
+    if why:
+        return (f"{what}: {name!r} is no coordinate of this section ({why}); a slice along it "
+                f"would leave the section. The section's coordinates are {list(sec.names)}")
+    return f"{what}: {name!r} is no section coordinate; they are {list(sec.names)}"
+
+
+def _axis_index(a, P, refuse) -> int:
     names = P.names
-    if axes is None:
-        axes = names[:2]
+    if isinstance(a, str):
+        if a not in names:
+            raise ValueError(refuse(a) if refuse is not None else
+                             f"axes: {a!r} is no coordinate; they are {list(names)}")
+        return names.index(a)
+    if isinstance(a, (bool, np.bool_)) or not isinstance(a, (int, np.integer)) \
+            or not 0 <= int(a) < P.dim:
+        raise ValueError(f"axes: {a!r} must be a coordinate name or an index in "
+                         f"[0, {P.dim})")
+    return int(a)
+
+
+def grid_slice(P: PoincareMap, x, y, axes=None, base=None, *, refuse=None) -> Slice:
+    """The grid ``x`` times ``y`` over two coordinates ``axes`` of ``P`` (names or indices,
+    default the first two), the other coordinates at ``base``'s values (required when the
+    map has more than two); ``refuse(name)``: the message for a name that is no coordinate."""
+    axes = P.names[:2] if axes is None else tuple(axes)
     if len(axes) != 2:
-        raise ValueError(f"axes must name two coordinates of {names}, got {axes!r}")
-    idx = []
-    for a in axes:
-        if isinstance(a, str):
-            if a not in names:
-                raise ValueError(f"axes: {a!r} is no coordinate; they are {list(names)}")
-            idx.append(names.index(a))
-        elif isinstance(a, (int, np.integer)) and 0 <= int(a) < P.dim:
-            idx.append(int(a))
-        else:
-            raise ValueError(f"axes: {a!r} must be a coordinate name or index")
+        raise ValueError(f"axes must name two coordinates of {P.names}, got {axes!r}")
+    idx = [_axis_index(a, P, refuse) for a in axes]
     if idx[0] == idx[1]:
         raise ValueError("axes must be two different coordinates")
     if base is None:
@@ -636,177 +533,5 @@ def _grid(P, x, y, axes, base):
     X, Y = np.meshgrid(xs, ys)
     S = np.tile(base, (X.size, 1))
     S[:, idx[0]], S[:, idx[1]] = X.ravel(), Y.ravel()
-    return xs, ys, S, tuple(names[i] for i in idx), base
-
-
-def basin_of_attraction(P: PoincareMap, x, y, *, axes=None, base=None, period: int = 1,
-                        n_iter: int = 500, max_period: int = 8, tol: float = 1e-6,
-                        escape: float = 1e6, criterion=None, catalogue=None,
-                        **options) -> BasinResult:
-    """Label a 2-D slice of a map's section by the attractor each point reaches.
-
-    Without ``criterion`` every point is iterated ``n_iter`` times
-    (:meth:`~hybridpd.analysis.maps.PoincareMap.iterate_many`, which a map may compile) and
-    its tail is labelled by the :class:`Catalogue`. With a ``criterion`` (a basin mapper, e.g.
-    :class:`~hybridpd.analysis.periodic.SectionMapper` or the impact pair's
-    :class:`~hybridpd.pair.basins.ImpactMapper`: ``labels(S)``, ``fixed_point``, ``n_iter``)
-    the points are first labelled against its orbit (label 0: the criterion holds after its
-    iterations; the others its outcomes, :func:`from_criterion`), and only the points that did
-    not converge are examined for other attractors (``max_period = 0``: not at all). The
-    criterion's hooks, where it has them, supply the speed and what only its map has:
-    ``slice(x, y, axes)`` (the slice's section points, coordinate names and units, e.g. the
-    pair's ``(x1, y1)``), ``label_tails(S, tail, **options)`` (labels, iterations and the tails
-    of the unconverged points in one compiled sweep; ``options`` are its executor, store and
-    progress), ``catalogue(max_period)`` (the attractor catalogue of its metric), ``basin_metadata()``
-    and ``orbit_name`` (label 0's name when no attractor is searched).
-
-    Parameters
-    ----------
-    P : PoincareMap
-    x, y : (min, max, num)
-        The grid of the two coordinates ``axes``.
-    axes : (str or int, str or int), optional
-        The coordinates the grid spans (default the first two, or the criterion's slice).
-    base : array_like, shape (dim,), optional
-        The other coordinates (required when the map has more than two; with a criterion,
-        its fixed point).
-    period : int
-        ``k``: iterate ``P^k`` (without a criterion).
-    n_iter : int
-        Iterations per point (without a criterion; a criterion has its own).
-    max_period : int
-        Largest period of an attractor (in applications of ``P^k``); 0: no search beyond the
-        criterion's orbit.
-    tol : float
-        Relative tolerance of the period test.
-    escape : float
-        Bound on the coordinates (the phase excepted): diverged beyond.
-    criterion : basin mapper, optional
-        Labels the points against one orbit first (see above).
-    catalogue : Catalogue, optional
-        The attractors found so far (shared between calls, e.g. over growing windows).
-    **options
-        Passed to the criterion's ``label_tails`` hook (e.g. ``executor``, ``chunk_size``,
-        ``store``, ``progress``, ``max_workers`` of :func:`hybridpd.sweeps.sweep.run_sweep`).
-
-    Returns
-    -------
-    BasinResult
-
-    Examples
-    --------
-    A contraction toward the origin: every point reaches it.
-
-    >>> import hybridpd as hp
-    >>> class Half(hp.PoincareMap):
-    ...     names = ("x", "y")
-    ...     def apply(self, s, k=1, jacobian=False):
-    ...         return hp.MapResult(np.asarray(s, float) * 0.5 ** k)
-    >>> b = hp.basin_of_attraction(Half(), x=(-1, 1, 5), y=(-1, 1, 3), n_iter=80)
-    >>> b.labels.tolist(), b.attractors[0].name
-    ([[0, 0, 0, 0, 0], [0, 0, 0, 0, 0], [0, 0, 0, 0, 0]], 'period-1 orbit (stable)')
-    """
-    if criterion is None and not isinstance(P, PoincareMap) and hasattr(P, "labels"):
-        # the call form of earlier versions: basin_of_attraction(mapper, x1, y1)
-        criterion, P = P, getattr(P, "map", None)
-    if not isinstance(P, PoincareMap):
-        raise ValueError(f"P must be a PoincareMap, got {type(P).__name__}")
-    max_period = int(max_period)
-    if criterion is not None:
-        if not (callable(getattr(criterion, "labels", None)) and hasattr(criterion, "n_iter")
-                and hasattr(criterion, "fixed_point")):
-            raise ValueError(f"criterion must be a basin mapper (labels(S), fixed_point, "
-                             f"n_iter), got {type(criterion).__name__}")
-        if max_period < 0:
-            raise ValueError(f"max_period must be >= 0, got {max_period}")
-        return _criterion_basin(P, criterion, x, y, axes, max_period, tol, catalogue, options)
-    if options:
-        raise ValueError(f"{', '.join(sorted(options))}: options of a criterion's labeller; "
-                         "give criterion=")
-    k = check_returns(period)
-    n_iter = int(n_iter)
-    if n_iter < 4 * max_period or max_period < 1:
-        raise ValueError(f"n_iter must be >= 4 max_period (got {n_iter}, {max_period})")
-    xs, ys, S, names, base = _grid(P, x, y, axes, base)
-    cat = catalogue or Catalogue(P, period=k, max_period=max_period, tol=tol)
-    tails, status, its = P.iterate_many(S, n_iter, k, cat.tail_length)
-    lab = np.full(len(S), NO_CONVERGENCE, np.int64)
-    off = 1 if P.period is not None else 0
-    for i in range(len(S)):
-        st = status[i]
-        if st:
-            lab[i] = {"off_section": OFF_SECTION_LABEL, "nonfinite": DIVERGED,
-                      "sticking": STICKING}.get(st, UNRESOLVED)
-        elif np.any(np.abs(tails[i][:, off:]) > escape):
-            lab[i] = DIVERGED
-        else:
-            lab[i] = cat.assign(tails[i][None])[0]
-    stops = sorted({status[i] for i in range(len(S)) if lab[i] == UNRESOLVED})
-    outcomes = tuple(Attractor(c, OUTCOMES[c][1] + (f" ({', '.join(stops)})"
-                                                    if c == UNRESOLVED else ""),
-                               kind=OUTCOMES[c][0])
-                     for c in sorted(OUTCOMES, reverse=True) if np.any(lab == c))
-    shape = (len(ys), len(xs))
-    meta = {"n_iter": n_iter, "period": k, "max_period": max_period, "tol": float(tol)}
-    return BasinResult(xs, ys, lab.reshape(shape), tuple(cat.attractors) + outcomes,
-                       its.reshape(shape), names[0], names[1], base, tuple(P.names),
-                       metadata=meta)
-
-
-def _criterion_basin(P, crit, x, y, axes, max_period, tol, catalogue, options):
-    """:func:`basin_of_attraction` with a criterion's labels first (its docstring)."""
-    hook = getattr(crit, "slice", None)
-    if hook is not None:
-        xs, ys, S, names, units = hook(x, y, axes)
-    else:
-        xs, ys, S, names, _ = _grid(P, x, y, axes, crit.fixed_point)
-        units = {}
-    cat = catalogue
-    if cat is None and max_period:
-        make = getattr(crit, "catalogue", None)
-        cat = make(max_period) if make is not None else Catalogue(
-            P, period=getattr(crit, "period", 1), max_period=max_period, tol=tol,
-            orbit=crit.fixed_point)
-    tail = cat.tail_length if max_period else 0
-    hook = getattr(crit, "label_tails", None)
-    out = hook(S, tail, **options) if hook is not None else _label_tails(P, crit, S, tail,
-                                                                         options)
-    shape = (len(ys), len(xs))
-    crit_lab = np.asarray(out["label"], np.int64).reshape(shape)
-    lab = from_criterion(crit_lab)
-    if tail:
-        nc = crit_lab == 1
-        lab[nc] = cat.assign(np.asarray(out["tail"]).reshape(shape + (tail + 1, -1))[nc])
-    present = set(np.unique(lab).tolist())
-    if cat is not None:
-        entries = [a for a in cat.attractors if a.label == 0 or a.label in present]
-    else:   # no search: the criterion's orbit as the criterion names it
-        k = getattr(crit, "period", 1)
-        entries = [Attractor(0, getattr(crit, "orbit_name", f"period-{k} orbit"), k,
-                             np.asarray(crit.fixed_point, float).reshape(1, -1),
-                             kind=getattr(crit, "orbit_kind", "periodic"))]
-    entries += [outcome(c, crit.n_iter) for c in sorted(OUTCOMES, reverse=True) if c in present]
-    meta = {"n_iter": int(crit.n_iter), "criterion": float(crit.criterion),
-            "max_period": max_period}
-    meta.update(getattr(crit, "basin_metadata", dict)())
-    return BasinResult(xs, ys, lab, tuple(entries), np.asarray(out["iterations"]).reshape(shape),
-                       names[0], names[1], np.asarray(crit.fixed_point, float).copy(),
-                       tuple(P.names), crit_lab, metadata=meta, axis_attrs=units)
-
-
-def _label_tails(P, crit, S, tail, options) -> dict:
-    """Labels and iterations of a criterion without hooks; the tails (iterates ``n_iter ..
-    n_iter + tail``) of the points that did not converge by iterating ``P`` again."""
-    if options:
-        raise ValueError(f"{', '.join(sorted(options))}: this criterion has no label_tails "
-                         "hook to take them")
-    lab, its = crit.labels(S)
-    out = {"label": lab, "iterations": its}
-    if tail:
-        tails = np.full((len(S), tail + 1, P.dim), np.nan)
-        nc = np.flatnonzero(np.asarray(lab) == 1)
-        if nc.size:
-            k = getattr(crit, "period", 1)
-            tails[nc] = P.iterate_many(S[nc], int(crit.n_iter) + tail, k, tail + 1)[0]
-        out["tail"] = tails
-    return out
+    return Slice(xs, ys, S, tuple(P.names[i] for i in idx), {}, base,
+                 (float(base[idx[0]]), float(base[idx[1]])))

@@ -1,9 +1,4 @@
-"""Basin mappers' common part: validation, labels and the one early-exit certification.
-
-:class:`BasinMapper` is the base of the two mappers (an initial condition on the section ->
-a label of :data:`hybridpd.analysis.labels.LABELS`):
-:class:`hybridpd.analysis.periodic.SectionMapper` (any automaton, the reference) and the
-pair's :class:`hybridpd.pair.basins.ImpactMapper` (the compiled closed-form engine).
+"""The one early-exit certification of the basin mappers (:mod:`hybridpd.analysis.mappers`).
 
 For a stable fixed point ``s*`` of a map with Jacobian ``DP`` (spectral radius ``rho < 1``),
 ``Q`` solving the Lyapunov equation of ``DP / rho_t`` (``rho_t = (1 + rho) / 2``) defines a
@@ -20,33 +15,7 @@ import math
 
 import numpy as np
 
-from hybridpd.analysis.labels import LABELS
-from hybridpd.model import check_int, check_positive
-
-__all__ = ["BasinMapper", "certify_ball"]
-
-
-class BasinMapper:
-    """Base of the basin mappers: ``labels(S)`` (subclasses), one point's label, names."""
-
-    def _limits(self, n_iter, criterion, escape):
-        self.n_iter = check_int("n_iter", n_iter, 1)
-        self.criterion = check_positive("criterion", criterion)
-        self.escape = check_positive("escape", escape)
-
-    @staticmethod
-    def label_name(label: int) -> str:
-        """Name of an integer label."""
-        return LABELS[int(label)]
-
-    @property
-    def certified_radius(self) -> float:
-        """Radius (``Q``-norm) of the early-exit ball at the fixed point (0 without)."""
-        return math.sqrt(float(np.ravel(self.cert_r2)[0]))
-
-    def __call__(self, s) -> int:
-        """Label of one section point."""
-        return int(self.labels(np.asarray(s, float).reshape(1, -1))[0][0])
+__all__ = ["certify_ball"]
 
 
 def certify_ball(DP, fixed_point, criterion: float, images, wrap, *, C=None,

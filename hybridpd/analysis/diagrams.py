@@ -376,7 +376,9 @@ def _classify(P, tail, period, settings, lyapunov):
     nan = np.full(tail.shape[1], np.nan)
     if np.any(np.abs(tail[:, 1:] if P.period is not None else tail) > settings["escape"]):
         return CLASSES.index("diverged"), 0, nan
-    k = detect_period(tail, P.wrap, settings["max_period"], settings["period_tol"])
+    # a period shows when the window holds it twice: k <= K / 2
+    k = detect_period(tail, P.wrap, min(settings["max_period"], len(tail) // 2),
+                      settings["period_tol"])[0]
     ex = nan
     if lyapunov:
         try:

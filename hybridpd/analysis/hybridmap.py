@@ -31,7 +31,7 @@ A map builds the modes its runs enter, as a simulation does: the compiled return
 back when a run enters a mode not built yet (or takes a Zeno switch whose reset is not packed
 yet), the tables are completed and the run is made again (each mode is built once, so this is
 bounded by the automaton's ``max_modes``). :class:`SectionMap`, its Jacobian, ``apply_many``
-and the basin labeller of :class:`~hybridpd.analysis.periodic.SectionMapper` read only the
+and the basin labeller of :class:`~hybridpd.analysis.mappers.MapMapper` read only the
 modes built so far; the exosystem is found over those and every mode built later is checked
 against it.
 """

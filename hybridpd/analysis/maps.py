@@ -200,6 +200,11 @@ class PoincareMap(abc.ABC):
         raise ValueError(f"parameter: this map ({type(self).__name__}) names no parameters, "
                          f"got {parameter!r}; give continue_orbit a builder p -> map")
 
+    def labeller(self):
+        """The map's own basin labeller (a :class:`hybridpd.analysis.mappers.Labeller`: a
+        compiled labelling and what only the map has, e.g. its slice and metric), or None:
+        :func:`hybridpd.analysis.mappers.mapper` then labels by the general rules."""
+
     def canonical(self, s) -> np.ndarray:
         """The representative of a section point (the phase reduced to ``[0, T)``)."""
         if self.period is not None:
@@ -365,34 +370,58 @@ class PoincareMap(abc.ABC):
         return np.array([self.jacobian(s, k) for s in np.atleast_2d(S)])
 
 
-def detect_period(points, wrap, max_period: int, tol: float = 1e-6) -> int:
-    """Smallest ``k <= max_period`` with ``points[i] = points[i - k]`` over the whole window
-    (differences through ``wrap``, e.g. :meth:`PoincareMap.wrap`; relative to ``max(1,
-    |points|)``), or 0. The one period detector of a sequence of iterates.
+def detect_period(points, wrap, max_period: int, tol: float = 1e-6, *, scale=None):
+    """Smallest ``k <= max_period`` with ``points[i] = points[i - k]`` over the whole window,
+    or 0: the one period detector of sequences of iterates (basins' tails, diagrams' windows,
+    fixed points of ``P^k``).
+
+    ``points`` of shape ``(K, dim)``, or ``(M, K, dim)`` for ``M`` windows at once; ``k``
+    repeats when ``max|wrap(s_{j+k} - s_j)| / scale <= tol`` (``k < K``; differences through
+    ``wrap``, e.g. :meth:`PoincareMap.wrap`); ``scale`` (one per window) defaults to ``max(1,
+    |points|)``. Returns ``(period, error)``: ints and floats for one window, arrays of
+    shape ``(M,)`` for several (error ``inf`` where no period repeats).
 
     Examples
     --------
     >>> detect_period(np.array([[0.0], [1.0], [0.0], [1.0], [0.0], [1.0]]), np.asarray, 4)
-    2
+    (2, 0.0)
+    >>> t = np.array([[[0.0], [1.0], [0.0], [1.0]], [[0.0], [1.0], [2.0], [3.0]]])
+    >>> detect_period(t, np.asarray, 2, 1e-9)[0].tolist()
+    [2, 0]
     """
     X = np.asarray(points, float)
-    scale = max(1.0, float(np.max(np.abs(X)))) if X.size else 1.0
-    for k in range(1, min(int(max_period), X.shape[0] // 2) + 1):
-        if float(np.max(np.abs(wrap(X[k:] - X[:-k])))) <= tol * scale:
-            return k
-    return 0
+    one = X.ndim == 2
+    if one:
+        X = X[None]
+    M, K = X.shape[:2]
+    per = np.zeros(M, dtype=np.int64)
+    err = np.full(M, np.inf)
+    if scale is None:
+        scale = np.maximum(1.0, np.max(np.abs(X), axis=(1, 2))) if X.size else np.ones(M)
+    for k in range(min(int(max_period), K - 1), 0, -1):
+        if one:   # wrap sees the shape of one window's differences
+            e = np.max(np.abs(wrap(X[0, k:] - X[0, :-k])))[None] / scale
+        else:
+            e = np.max(np.abs(wrap(X[:, k:] - X[:, :-k])), axis=(1, 2)) / scale
+        hit = e <= tol
+        # descending k: a smaller period overwrites a multiple of it
+        per[hit] = k
+        err[hit] = e[hit]
+    return (int(per[0]), float(err[0])) if one else (per, err)
 
 
 def minimal_period(P: PoincareMap, s, k: int, rtol: float = 1e-7) -> int:
     """Smallest ``d`` dividing ``k`` with ``P^d(s) = s`` to ``rtol`` (relative to ``max(1, |s|)``).
 
-    The one period detector of a fixed point of ``P^k`` (e.g. 1 when a period-2 search landed
-    on a fixed point of ``P``).
+    :func:`detect_period` on ``[s, P^d(s)]`` (e.g. 1 when a period-2 search landed on a fixed
+    point of ``P``).
     """
     s = np.asarray(s, float)
-    for d in range(1, k):
+    scale = np.array([max(1.0, float(np.max(np.abs(s))))])
+    for d in range(1, k):   # bounded: the divisors of k
         if k % d == 0:
             img, ok = P.apply_many(s[None, :], d)
-            if ok[0] and np.max(np.abs(P.wrap(img[0] - s))) <= rtol * max(1.0, np.max(np.abs(s))):
+            if ok[0] and detect_period(np.stack([s, img[0]]), P.wrap, 1, rtol,
+                                       scale=scale)[0] == 1:
                 return d
     return k

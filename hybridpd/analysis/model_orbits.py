@@ -17,11 +17,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 
 from hybridpd._results import compact_repr
+from hybridpd.analysis.basins import Attractor
 from hybridpd.analysis.hybridmap import SectionMap
+from hybridpd.analysis.mappers import Mapper, mapper
 from hybridpd.analysis.maps import minimal_period
 from hybridpd.analysis.model_sections import (
     EVENTS,
@@ -36,15 +39,20 @@ from hybridpd.analysis.model_sections import (
 )
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
 from hybridpd.analysis.strobe import StroboscopicMap
+from hybridpd.mechanics.params import ModelTemplate
 
 __all__ = [
+    "DEFAULT_NUM",
     "EVENTS",
     "FAMILY_DISTANCE",
     "STATUS",
+    "ModelSection",
     "OrbitSearch",
     "SectionSpec",
     "Seed",
     "SimulatedReturns",
+    "default_axes",
+    "model_map",
     "orbit_from_model",
     "orbit_record",
     "orbit_status",
@@ -629,3 +637,107 @@ def orbit_record(model, orb, P) -> dict:
               "jacobian_error": orb.quantities.get("jacobian_error"),
               "pre": mech(z), "post": mech(zp)})
     return d
+
+
+#: Points per axis of a model basin's default slice (a run of the section map each).
+DEFAULT_NUM = 21
+
+
+def default_axes(s, names, num: int = DEFAULT_NUM) -> tuple:
+    """The default slice of a basin through the section point ``s``: its first two section
+    coordinates, each over ``s_i +- r`` with ``r = max(|s_0|, |s_1|)`` (at least 1e-6),
+    ``num`` points each, as ``((name, min, max, num), (name, min, max, num))``.
+
+    Examples
+    --------
+    >>> default_axes([0.5, -2.0, 7.0], ("link", "link_dot", "h0"), 5)
+    (('link', -1.5, 2.5, 5), ('link_dot', -4.0, 0.0, 5))
+    """
+    r = max(float(abs(s[0])), float(abs(s[1])), 1e-6)
+    return tuple((names[i], float(s[i]) - r, float(s[i]) + r, int(num)) for i in (0, 1))
+
+
+@dataclass(frozen=True, eq=False)
+class ModelSection:
+    """A model file's section map with a periodic orbit on it (:func:`model_map`).
+
+    Attributes
+    ----------
+    map : SectionMap or StroboscopicMap
+    orbit : PeriodicOrbit
+    metadata : dict
+        The file, the values set, the section and its mode (for a basin's metadata).
+    """
+
+    map: object
+    orbit: PeriodicOrbit
+    metadata: dict
+    __repr__ = compact_repr
+
+    @property
+    def fixed_point(self) -> np.ndarray:
+        """The orbit's section point."""
+        return self.orbit.s
+
+    def entry(self) -> Attractor:
+        """The orbit as a basin's attractor 0 (named by its period and reference periods)."""
+        po = self.orbit
+        return Attractor(0, f"the period-{po.period} orbit ({po.n_periods} T)", int(po.period),
+                         np.asarray(po.s, float).reshape(1, -1), po.multipliers,
+                         float(po.spectral_radius), bool(po.stable))
+
+    def mapper(self, *, n_iter: int = 300, criterion: float = 1e-3, **options) -> Mapper:
+        """The basin mapper of the orbit (:func:`hybridpd.analysis.mappers.mapper`; its
+        ``n_iter`` iterations of ``P^k``)."""
+        return mapper(self.map, self.orbit.s, period=self.orbit.period, n_iter=n_iter,
+                      criterion=criterion, orbit=self.entry(), metadata=self.metadata,
+                      **options)
+
+
+def model_map(model, *, values: dict | None = None, contact: int = 0, wall: int | None = None,
+              event: str = "auto", period="auto", periods: int | None = None,
+              mode: str | None = None, phase: float | None = None) -> ModelSection:
+    """The section map of a model file and a periodic orbit on it (the first found, as
+    :class:`~hybridpd.sweeps.model_regions.ModelSearch` finds one per cell): what a model
+    file's basin is taken of.
+
+    Parameters
+    ----------
+    model : str, Path, dict or ModelTemplate
+    values : dict, optional
+        ``{dotted path: value}`` set in the file first (e.g. ``{"controller.kp": 30}``).
+    contact, wall, event, period, periods, mode, phase
+        The section and the orbit (:class:`~hybridpd.analysis.model_sections.SectionSpec`).
+
+    Returns
+    -------
+    ModelSection
+
+    Raises
+    ------
+    ValueError
+        Bad paths or section, or no periodic orbit found (:class:`DivergedRun` where the
+        motion diverges).
+    """
+    if isinstance(model, (str, Path)):
+        template = ModelTemplate.load(model)
+    elif isinstance(model, (dict, ModelTemplate)):
+        template = model if isinstance(model, ModelTemplate) else ModelTemplate(model)
+    else:
+        raise ValueError(f"model must be a model file path, a parsed dict or a ModelTemplate, "
+                         f"got {type(model).__name__}")
+    m = template.model(values)
+    spec = SectionSpec(contact=contact, wall=wall, event=event, period=period, periods=periods,
+                       mode=mode, phase=phase)
+    spec = fix_section(m, spec)[0]
+    res = solve_at(m, spec)
+    if not res.orbits:
+        # a motion that diverges is said to (DivergedRun), not only that no orbit was found
+        err = DivergedRun if STATUS[res.status] == "diverged" else ValueError
+        raise err(f"no periodic orbit of this section to take the basin of ({res.detail})")
+    po = res.orbits[0]
+    meta = {"values": dict(values or {}),
+            "spec": {f: getattr(spec, f) for f in ("contact", "wall", "event", "period",
+                                                    "periods", "phase")},
+            "section_mode": po.mode, "model": str(template.source)}
+    return ModelSection(spec.section_map(m, po.mode), po, meta)

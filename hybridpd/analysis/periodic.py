@@ -14,9 +14,9 @@ with ``DP`` from exact flows and saltation matrices):
   (eigenvalues of ``DP^k``), the spectral radius and the stability verdict;
   :func:`measured_contraction` estimates the spectral radius independently, from iterated
   small perturbations of the simulated map.
-* :class:`SectionMapper` labels section points by iterating ``P`` in one compiled loop (an
-  "initial condition -> label" mapper with the labels of :mod:`hybridpd.analysis.labels`);
-  :func:`hybridpd.sweeps.section_basins.section_basin` applies it over a 2-D slice.
+* :func:`_label_kernel` labels section points by iterating ``P`` in one compiled loop under
+  a :class:`LabelSpec` (the kernel of a section map's basin mapper,
+  :class:`hybridpd.analysis.mappers.MapMapper`).
 
 Stability: stable iff every multiplier has modulus < 1; hyperbolic iff none is within
 ``1e-9`` of the unit circle (the convention of :mod:`hybridpd.pair.impactmap`).
@@ -25,12 +25,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
 from hybridpd._jit import njit
+from hybridpd._phase import wrap_phase_kernel
 from hybridpd._results import compact_repr
-from hybridpd.analysis.certify import BasinMapper, certify_ball
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.hybridmap import (
     ST_NEED_MODE,
@@ -38,16 +39,14 @@ from hybridpd.analysis.hybridmap import (
     SectionMap,
     _to_return,
 )
-from hybridpd.analysis.labels import OFF_SECTION
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
 from hybridpd.analysis.pathfollow import newton
-from hybridpd.analysis.strobe import StroboscopicMap
 from hybridpd.hybrid._kernel import FC_T, IC_MODE
 
 __all__ = [
     "ORBIT_REFUSALS",
+    "LabelSpec",
     "PeriodicOrbit",
-    "SectionMapper",
     "find_orbit",
     "measured_contraction",
 ]
@@ -490,6 +489,44 @@ def measured_contraction(P: SectionMap, s, period: int = 1, *, n_iter: int = 40,
 # ----------------------------------------------------------------------------------------
 # basins: a compiled mapper
 # ----------------------------------------------------------------------------------------
+class LabelSpec(NamedTuple):
+    """What a basin's labelling needs besides the map, by name (one pack for the section
+    kernel and the impact pair's).
+
+    Attributes
+    ----------
+    C : ndarray, shape (m, dim)
+        Criterion coordinates of a deviation (the phase apart, when ``T > 0``).
+    T : float
+        The phase's period (0: no phase).
+    FP : ndarray, shape (K, dim)
+        The cycle's points (each a fixed point of ``P^k``).
+    period : int
+        ``k``: applications of ``P`` per iteration.
+    n_iter : int
+        Iterations per point.
+    criterion : float
+        Squared distance below which a point has converged.
+    QS, R2 : ndarray, shapes (K, dim, dim) and (K,)
+        The early-exit balls ``d^T Q d < r2`` (``r2 = 0``: none).
+    escape : float
+        Bound on the coordinates.
+    cycle_tol : float
+        Relative tolerance of the cycle early exit where a labeller has one (0: off).
+    """
+
+    C: np.ndarray
+    T: float
+    FP: np.ndarray
+    period: int
+    n_iter: int
+    criterion: float
+    QS: np.ndarray
+    R2: np.ndarray
+    escape: float
+    cycle_tol: float
+
+
 _CONVERGED, _NOT_CONVERGED, _DIVERGED, _ZENO_STICKING, _UNRESOLVED = 0, 1, 2, 3, 4
 _TO_RESOLVER = 1 << 60      # the labeller's code of a run handed to the resolver
 
@@ -522,7 +559,7 @@ def _dist(s, fp, T, Q):
     for i in range(dim):
         d[i] = s[i] - fp[i]
     if T > 0.0:
-        d[0] = (d[0] + 0.5 * T) - math.floor((d[0] + 0.5 * T) / T) * T - 0.5 * T
+        d[0] = wrap_phase_kernel(d[0], T)
     q = 0.0
     e = 0.0
     for i in range(dim):
@@ -533,12 +570,13 @@ def _dist(s, fp, T, Q):
 
 
 @njit(cache=True)
-def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, k, t_max, J_max, max_steps, C, T,
-                  FP, n_iter, criterion, QS, R2, escape, S_out, lab, its, p0, resolve, rb):
+def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, t_max, J_max, max_steps, spec, S_out,
+                  lab, its, p0, resolve, rb):
     """Label the points ``p0, p0 + 1, ...`` (rows of ``W0``, ``T0``) into ``lab``, ``its``.
 
     ``pk``, ``dt_min``, ``zf``, ``zi``: the map's tables and options
-    (``SectionMap._kernel_args``); ``rb``: the run's buffers (:mod:`hybridpd.hybrid._kernel`).
+    (``SectionMap._kernel_args``); ``spec``: the labelling's options (:class:`LabelSpec`);
+    ``rb``: the run's buffers (:mod:`hybridpd.hybrid._kernel`).
 
     Returns ``(p, code)``: ``p = N`` when every point is labelled; otherwise the run of
     point ``p`` handed back: ``ST_NEED_MODE`` (a mode not built yet, code ``code``, or a Zeno
@@ -548,6 +586,8 @@ def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, k, t_max, J_max, max_steps
     iterations so far in ``its[p]``, so that a call from ``p`` resumes it there.
     """
     w, fc, ic = rb.w, rb.fc, rb.ic
+    k, C, T, FP, QS, R2 = spec.period, spec.C, spec.T, spec.FP, spec.QS, spec.R2
+    n_iter, criterion, escape = spec.n_iter, spec.criterion, spec.escape
     N = W0.shape[0]
     N1 = W0.shape[1]
     w0 = np.empty(N1)
@@ -613,181 +653,3 @@ def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, k, t_max, J_max, max_steps
             label = _CONVERGED if e2 < criterion else _NOT_CONVERGED
         lab[p] = label
     return N, 0
-
-
-class SectionMapper(BasinMapper):
-    """Map a section point to a label by iterating ``P^k`` (an "initial condition -> label" mapper).
-
-    Labels are those of :data:`hybridpd.analysis.labels.LABELS`: ``converged`` when, after
-    ``n_iter`` iterations, the squared distance in section coordinates (phase wrapped) to the
-    cycle is below ``criterion`` (for ``period = k > 1`` the cycle's ``k`` section points
-    ``P^j(fixed_point)`` are all fixed points of ``P^k``; the nearest counts); ``diverged`` (non-finite, beyond ``escape``, or no
-    further return in the section's mode within ``t_max``); ``zeno_sticking`` (accumulation
-    without sticking mode, or still in another mode, e.g. stuck, at ``t_max``);
-    ``unresolved`` (jump or step bound); ``off_section`` (the flow does not fire the guard at
-    the point).
-
-    **Early exit** as in :mod:`hybridpd.pair.basins`: an iterate inside the certified
-    contraction ball of a cycle point (:func:`hybridpd.analysis.certify.certify_ball`, one
-    ball per cycle point; numerical, sampled) is labelled ``converged`` at once.
-
-    Parameters
-    ----------
-    P : SectionMap
-    fixed_point : array_like, shape (dim,)
-    period : int
-        ``k``: the mapper iterates ``P^k``.
-    n_iter : int
-    criterion : float
-    early_exit : bool
-    escape : float
-        Bound on ``|s_i|``.
-
-    Examples
-    --------
-    >>> from hybridpd import ImpactPair, PDGains
-    >>> from hybridpd.pair.orbits import symmetric_orbit
-    >>> from hybridpd.pair.section import impact_pair_section
-    >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
-    >>> m = SectionMapper(SectionMap(impact_pair_section(orb.system())), orb.fixed_point)
-    >>> m.label_name(m(orb.fixed_point + [0, 0.01, 0, 0]))
-    'converged'
-    """
-
-    def __init__(self, P: SectionMap, fixed_point, *, period: int = 1, n_iter: int = 1500,
-                 criterion: float = 1e-3, early_exit: bool = True, escape: float = 1e3):
-        if not isinstance(P, (SectionMap, StroboscopicMap)):
-            raise ValueError(f"P must be a SectionMap or a StroboscopicMap, got "
-                             f"{type(P).__name__}")
-        self.map = P
-        self.fixed_point = P.section.check_point(fixed_point).copy()
-        if isinstance(period, bool) or int(period) != period or period < 1:
-            raise ValueError(f"period must be an int >= 1, got {period!r}")
-        self.period = int(period)
-        self._limits(n_iter, criterion, escape)
-        # the cycle's points on the section: P^k fixes each of them (k returns per period)
-        cyc = P.iterate(self.fixed_point, self.period - 1)
-        self.cycle = np.ascontiguousarray(cyc[:_n_finite(cyc)])
-        K = len(cyc)
-        self.cert_Q = np.tile(np.eye(P.dim), (K, 1, 1))
-        self.cert_r2 = np.zeros(K)
-        if early_exit:
-            for c in range(K):
-                self.cert_Q[c], self.cert_r2[c] = self._certify(self.cycle[c])
-
-    def _run(self, S, n_iter, Qs, r2s, targets=None):
-        P = self.map
-        targets = self.cycle if targets is None else targets
-        sec = P.section
-        S = np.asarray(S, float).reshape(-1, P.dim)
-        N = S.shape[0]
-        n = sec.automaton.n_states
-        lab = np.full(N, OFF_SECTION, np.int64)
-        its = np.zeros(N, np.int64)
-        out = np.full((N, P.dim), np.nan)
-        W0 = np.zeros((N, n + 1))
-        T0 = np.zeros(N)
-        valid = np.zeros(N, bool)
-        for i in range(N):
-            if not np.all(np.isfinite(S[i])):
-                continue
-            z, t = sec.to_state(S[i])
-            if sec.fires(z) > 0:
-                W0[i, :n], W0[i, n], T0[i], valid[i] = z, 1.0, t, True
-        if np.any(valid):
-            lab[valid], its[valid], out[valid] = self._label(
-                np.ascontiguousarray(W0[valid]), T0[valid], n_iter, Qs, r2s, targets)
-        return lab, its, out
-
-    def _label(self, W0, T0, n_iter, Qs, r2s, targets):
-        """Labels, iterations and last section points of the valid start states ``W0``.
-
-        Modes on demand: where a point's run enters a mode not built yet, the kernel hands
-        back; the mode is built and the labelling resumes at that point's iterate (each
-        mode is built once, so this repeats at most ``max_modes`` times).
-        """
-        P = self.map
-        sec = P.section
-        N = W0.shape[0]
-        lab = np.empty(N, np.int64)
-        its = np.zeros(N, np.int64)
-        sub = np.full((N, P.dim), np.nan)
-        if not isinstance(P, SectionMap):
-            # a map without compiled labeller (the stroboscopic map): its own applications,
-            # under the same rules; each step counts an iteration, so n_iter bounds the loop
-            for p in range(N):
-                while not self._resolved_step(p, W0, T0, its, lab, sub, n_iter, Qs, r2s,
-                                              targets):
-                    pass
-            return lab, its, sub
-        bufs = P._buffers()
-        p = 0
-        while p < N:
-            p, code = _label_kernel(*P._kernel_args, W0, T0, sec.mode_index, sec.guard_index,
-                                    self.period, P._t_max(self.period), P.max_jumps,
-                                    P.max_steps, np.ascontiguousarray(sec.C),
-                                    sec.period or 0.0, targets, int(n_iter), self.criterion,
-                                    Qs, r2s, self.escape, sub, lab, its, p,
-                                    sec.resolver is not None, bufs)
-            if p < N and code == _TO_RESOLVER:
-                if self._resolved_step(p, W0, T0, its, lab, sub, n_iter, Qs, r2s, targets):
-                    p += 1
-            elif p < N and not P._complete(bufs.ic):
-                lab[p] = _UNRESOLVED        # its run needs a mode beyond the tables' bound
-                its[p] += 1
-                p += 1
-        return lab, its, sub
-
-    def _resolved_step(self, p, W0, T0, its, lab, sub, n_iter, Qs, r2s, targets) -> bool:
-        """One application of ``P^k`` to point ``p``'s iterate by the map's own ``apply``
-        (the compiled run stopped at contacts refiring at one instant: ``apply`` hands it to
-        the section's resolver, as a simulation does). Labels ``p`` and returns True where
-        this ends its run (the same rules as the compiled labeller); otherwise leaves the
-        image as its iterate for the compiled labeller to resume."""
-        P = self.map
-        sec = P.section
-        n = sec.automaton.n_states
-        its[p] += 1
-        try:
-            # apply repeats the compiled run that stopped (a tenth of the resolver's cost on
-            # the arm), so that the labeller follows the map's one rule for joint jumps
-            r = P.apply(sec.from_state(W0[p, :n], float(T0[p])), self.period)
-        except ValueError:            # the iterate is no longer a point of the section
-            lab[p] = _UNRESOLVED
-            return True
-        if not r.ok:
-            lab[p] = {"zeno": _ZENO_STICKING, "nonfinite": _DIVERGED,
-                      "diverged": _DIVERGED}.get(r.status, _UNRESOLVED)
-            if r.status == "end_time":
-                lab[p] = _ZENO_STICKING if r.mode_final != sec.mode else _DIVERGED
-            return True
-        sub[p] = r.s
-        T = sec.period or 0.0
-        dist = [_dist(r.s, targets[c], T, Qs[c]) for c in range(len(targets))]
-        if not np.all(np.abs(r.s) <= self.escape):
-            lab[p] = _DIVERGED
-        elif any(q < r2s[c] for c, (q, _e) in enumerate(dist)):
-            lab[p] = _CONVERGED
-        elif its[p] >= n_iter:
-            lab[p] = _CONVERGED if min(e for _q, e in dist) < self.criterion else _NOT_CONVERGED
-        else:
-            W0[p, :n], W0[p, n], T0[p] = r.z_hit, 1.0, r.t_hit
-            return False
-        return True
-
-    def labels(self, S) -> tuple:
-        """Labels and iterations used for section points ``S`` of shape ``(N, dim)``."""
-        lab, its, _ = self._run(S, self.n_iter, self.cert_Q, self.cert_r2)
-        return lab, its
-
-    def _certify(self, fp):
-        try:
-            DP = self.map.jacobian(fp, self.period)
-        except RuntimeError:
-            return np.eye(self.map.dim), 0.0
-
-        def images(pts):
-            lab, _, img = self._run(pts, 1, np.eye(self.map.dim)[None], np.zeros(1), fp[None])
-            return img, (lab != OFF_SECTION) & np.all(np.isfinite(img), axis=1)
-
-        return certify_ball(DP, fp, self.criterion, images, self.map.section.wrap)

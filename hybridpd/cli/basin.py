@@ -68,9 +68,11 @@ def register(sub):
 def run(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.analysis.labels import LABELS
+    from hybridpd.analysis.mappers import Growth
     from hybridpd.model import ImpactPair, PDGains
-    from hybridpd.pair.basins import ImpactMapper, attractor_basin
     from hybridpd.pair.orbits import symmetric_orbit
+    from hybridpd.reproduce.basins import orbit_mapper
+    from hybridpd.sweeps.basins import basin_of_attraction
 
     if args.model is not None:
         return _run_model(args)
@@ -94,12 +96,10 @@ def run(args) -> int:
     check_max_period(args)
     if args.max_extensions < 0:
         raise ValueError(f"--max-extensions must be >= 0, got {args.max_extensions}")
-    mapper = ImpactMapper.from_orbit(orb, n_iter=args.iterations,
-                                     early_exit=not args.no_early_exit)
-    ab = attractor_basin(mapper, x1, y1, max_period=args.max_period,
-                         extend=args.max_extensions > 0, max_extensions=args.max_extensions,
-                         executor=executor_of(args), max_workers=args.workers,
-                         progress=progress_wanted(args))
+    mapper = orbit_mapper(orb, n_iter=args.iterations, early_exit=not args.no_early_exit)
+    ab = basin_of_attraction(mapper, x1, y1, max_period=args.max_period,
+                             grow=Growth(args.max_extensions), executor=executor_of(args),
+                             max_workers=args.workers, progress=progress_wanted(args))
     if args.out:
         ab.save(args.out)
     if args.plot:
@@ -137,23 +137,30 @@ def _pair_axis(flag: str, given, name: str, default: tuple) -> tuple:
     pair's slice is the plane (x1, y1): ``name`` is the only coordinate it takes there)."""
     if given is None:
         return default
-    coord, lo, hi, num = given
+    coord = given[0]
     if coord != name:
         raise ValueError(f"{flag}: the impact pair's slice is ({'x1, y1'}): {flag} takes "
                          f"{name}, got {coord!r} (other coordinates: --model)")
+    return _axis(flag, given)[1]
+
+
+def _axis(flag: str, given) -> tuple:
+    """``(COORD, (MIN, MAX, NUM))`` of ``flag``'s ``COORD MIN MAX NUM``."""
+    name, lo, hi, num = given
     try:
         lo, hi, num = float(lo), float(hi), float(num)
     except ValueError:
         raise ValueError(f"{flag} {name} MIN MAX NUM: numbers, got {given[1:]}") from None
     if num != int(num):
         raise ValueError(f"{flag} NUM must be an integer, got {num:g}")
-    return lo, hi, int(num)
+    return name, (lo, hi, int(num))
 
 
 def _run_model(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.analysis.model_orbits import default_axes, model_map
     from hybridpd.analysis.model_sections import DivergedRun
-    from hybridpd.sweeps.model_basins import model_basin
+    from hybridpd.sweeps.basins import basin_of_attraction
 
     check_model_command(args, _PAIR, "set the file's entries with --set KEY VALUE")
     if (args.x is None) != (args.y is None):
@@ -167,14 +174,18 @@ def _run_model(args) -> int:
 
         template_of(args.model).check(*values)
     try:
-        mb = model_basin(args.model, args.x and tuple(args.x), args.y and tuple(args.y),
-                         values=values,
-                         contact=args.contact, wall=args.wall, event=args.event,
-                         period=args.period, periods=args.periods, mode=args.mode,
-                         phase=args.phase,
-                         n_iter=300 if args.iterations is None else args.iterations,
-                         max_period=args.max_period, executor=executor_of(args),
-                         max_workers=args.workers, progress=progress_wanted(args))
+        ms = model_map(args.model, values=values, contact=args.contact, wall=args.wall,
+                       event=args.event, period=args.period, periods=args.periods,
+                       mode=args.mode, phase=args.phase)
+        gx, gy = (args.x, args.y) if args.x is not None else default_axes(ms.fixed_point,
+                                                                          ms.map.names)
+        (xn, x), (yn, y) = _axis("--x", gx), _axis("--y", gy)
+        if xn == yn:
+            raise ValueError(f"--x and --y must be different coordinates, both are {xn!r}")
+        mb = basin_of_attraction(
+            ms.mapper(n_iter=300 if args.iterations is None else args.iterations), x, y,
+            axes=(xn, yn), max_period=args.max_period, executor=executor_of(args),
+            max_workers=args.workers, progress=progress_wanted(args))
     except DivergedRun as exc:
         print(f"hybridpd basin: the run diverged: {exc}", file=sys.stderr)
         return EXIT_DIVERGED

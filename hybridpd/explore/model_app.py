@@ -6,8 +6,9 @@ periodic orbit exists and is stable over two numeric entries of the file with
 a cell finds that cell's orbit on the default (stroboscopic) section with
 :func:`~hybridpd.analysis.model_orbits.orbit_from_model` (``hybridpd orbit --model``) and
 shows its multipliers, and on demand the basin slice through it in its first two section
-coordinates (:func:`~hybridpd.sweeps.model_basins.model_basin`). Everything is computed on a
-worker thread with a progress indicator; the page stays live.
+coordinates (:func:`~hybridpd.analysis.model_orbits.model_map`,
+:func:`~hybridpd.sweeps.basins.basin_of_attraction`). Everything is computed on a worker
+thread with a progress indicator; the page stays live.
 """
 from __future__ import annotations
 
@@ -248,16 +249,19 @@ class ModelExplorer:
 
     async def _run_basin(self, gen, orb, values):
         # deferred import: loaded only when a model's page is built
-        from hybridpd.sweeps.model_basins import default_axes, model_basin
+        from hybridpd.analysis.model_orbits import default_axes, model_map
+        from hybridpd.sweeps.basins import basin_of_attraction
 
         s = self.section
-        axes = default_axes(orb.s, orb.names, check_int("basin points", BASIN_NUM, 2))
+        (xn, *x), (yn, *y) = default_axes(orb.s, orb.names,
+                                           check_int("basin points", BASIN_NUM, 2))
 
         def run():
-            return model_basin(self.path, axes[0], axes[1], values=values,
-                               contact=s["contact"], wall=s["wall"], event=s["event"],
-                               period=s["period"], periods=s["periods"], mode=s["mode"],
-                               phase=s["phase"], n_iter=300, progress=False)
+            ms = model_map(self.path, values=values, contact=s["contact"], wall=s["wall"],
+                           event=s["event"], period=s["period"], periods=s["periods"],
+                           mode=s["mode"], phase=s["phase"])
+            return basin_of_attraction(ms.mapper(n_iter=300), x, y, axes=(xn, yn),
+                                       max_period=4)
         try:
             mb = await self._off_loop(run)
         except Exception as exc:   # noqa: BLE001 - the panel says why

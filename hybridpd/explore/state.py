@@ -11,7 +11,7 @@ value gives their ``ValueError`` message, naming the parameter and its allowed r
 The computations call the package's APIs and nothing else: the region map is
 :class:`hybridpd.pair.regions.SymmetricFamily` (vectorised closed form), the orbit
 :func:`hybridpd.pair.orbits.symmetric_orbit` (what ``hybridpd orbit`` prints), the basin
-:func:`hybridpd.pair.basins.attractor_basin` on the window of ``hybridpd basin``, the branch
+:func:`hybridpd.sweeps.basins.basin_of_attraction` on the window of ``hybridpd basin``, the branch
 :func:`hybridpd.pair.continuation.continue_symmetric`.
 """
 from __future__ import annotations
@@ -363,15 +363,18 @@ def pair_basin(orb, num: int = 101, progress=False):
         raise ValueError(f"no symmetric orbit at these parameters: {orb.reason}")
     num = check_int("basin_num", num, 2, MAX_BASIN_NUM)
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.basins import ImpactMapper, attractor_basin
+    from hybridpd.analysis.mappers import Growth
+    from hybridpd.reproduce.basins import orbit_mapper
     from hybridpd.reproduce.settings import Settings
+    from hybridpd.sweeps.basins import basin_of_attraction
 
     win = Settings.__dataclass_fields__["basin_window"].default
     n_iter = 1500 if orb.stable else UNSTABLE_ITERATIONS
-    mapper = ImpactMapper.from_orbit(orb, n_iter=n_iter)
-    return attractor_basin(mapper, (win[0] * orb.x10, win[1] * orb.x10, num),
-                           (win[2] * orb.x10, win[3] * orb.x10, num), extend=False,
-                           progress=progress)
+    # Growth(0): the one window, the edges its orbit's basin touches reported
+    return basin_of_attraction(orbit_mapper(orb, n_iter=n_iter),
+                               (win[0] * orb.x10, win[1] * orb.x10, num),
+                               (win[2] * orb.x10, win[3] * orb.x10, num), grow=Growth(0),
+                               progress=progress)
 
 
 def pair_branch(state: PairState):

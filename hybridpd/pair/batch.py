@@ -47,6 +47,7 @@ import math
 import numpy as np
 
 from hybridpd._jit import njit
+from hybridpd._phase import wrap_phase_kernel
 from hybridpd.pair import params as P
 
 __all__ = ["KIND_GRAZING", "KIND_IMPACT", "KIND_STICKING", "LABELS", "N_REC", "REC_KIND",
@@ -602,14 +603,6 @@ def impact_map(params, case, S, tol=1e-13, max_impacts=1000, stick=True):
 
 
 @njit(cache=True)
-def _phase_diff(a, b, T):
-    d = (a - b) % T
-    if d > 0.5 * T:
-        d -= T
-    return d
-
-
-@njit(cache=True)
 def iterate_map(params, case, s0, n_iter, tol=1e-13, max_impacts=1000, stick=True):
     """Iterate P ``n_iter`` times from ``s0``; returns ``(orbit[n_iter + 1, 4], n_done, status)``."""
     orbit = np.full((n_iter + 1, 4), np.nan)
@@ -629,7 +622,7 @@ def iterate_map(params, case, s0, n_iter, tol=1e-13, max_impacts=1000, stick=Tru
 @njit(cache=True)
 def _criterion(cur, fixed, T):
     """The paper's squared distance in (x1, y1, y2, phi): x1 = z1 + L, y1 = z2 + z4, y2 = z2."""
-    dphi = _phase_diff(cur[0], fixed[0], T)
+    dphi = wrap_phase_kernel(cur[0] - fixed[0], T)
     dx1 = cur[1] - fixed[1]
     dy1 = (cur[2] + cur[3]) - (fixed[2] + fixed[3])
     dy2 = cur[2] - fixed[2]
@@ -640,9 +633,14 @@ _CYCLE_MAX = 32
 
 
 @njit(cache=True)
-def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
-               tol=1e-13, max_impacts=1000, stick=True, cycle_tol=1e-12):
+def map_labels(params, case, S, spec, tol=1e-13, max_impacts=1000, stick=True):
     """Label section points by where P takes them (the basin mapper's kernel).
+
+    ``spec`` holds the labelling's options by name
+    (:class:`hybridpd.analysis.periodic.LabelSpec`): the fixed point ``FP[0]``, ``n_iter``,
+    the threshold ``criterion`` (``crit`` below), the certified ball ``QS[0]``, ``R2[0]``
+    (``cert_Q``, ``cert_r2``), ``escape`` and ``cycle_tol`` (its ``C``, ``T`` and
+    ``period`` are the pair's own here).
 
     Converged means the paper's criterion: after ``n_iter`` iterations,
     ``(x1*-x1)^2 + (y1*-y1)^2 + (y2*-y2)^2 + (phi*-phi)^2 < crit`` (``phi`` differences taken
@@ -661,6 +659,8 @@ def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
 
     Returns ``labels[N]`` (see :data:`LABELS`), ``iterations[N]`` and the final points.
     """
+    fixed, n_iter, crit, escape = spec.FP[0], spec.n_iter, spec.criterion, spec.escape
+    cert_Q, cert_r2, cycle_tol = spec.QS[0], spec.R2[0], spec.cycle_tol
     N = S.shape[0]
     T = 2.0 * math.pi / params[P.OMEGA]
     labels = np.empty(N, dtype=np.int64)
@@ -690,7 +690,7 @@ def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
                 lab = 2
                 break
             if cert_r2 > 0.0:
-                d[0] = _phase_diff(cur[0], fixed[0], T)
+                d[0] = wrap_phase_kernel(cur[0] - fixed[0], T)
                 d[1] = cur[1] - fixed[1]
                 d[2] = cur[2] - fixed[2]
                 d[3] = cur[3] - fixed[3]
@@ -705,7 +705,7 @@ def map_labels(params, case, S, fixed, n_iter, crit, cert_Q, cert_r2, escape,
                 period = 0
                 for kk in range(1, min(it - 1, _CYCLE_MAX) + 1):
                     r = ring[(it - kk) % _CYCLE_MAX]
-                    same = abs(_phase_diff(cur[0], r[0], T)) <= cycle_tol * T
+                    same = abs(wrap_phase_kernel(cur[0] - r[0], T)) <= cycle_tol * T
                     for a in range(1, 4):
                         same = same and abs(cur[a] - r[a]) <= cycle_tol * (1.0 + abs(cur[a]))
                     if same:

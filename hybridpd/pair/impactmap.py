@@ -208,6 +208,14 @@ class ImpactMap(PoincareMap):
         return MapResult(cur.copy(), True, "returned", float(jumps[0][0]), t_abs, z, "free",
                          tuple(jumps), bool(grazing), DP)
 
+    def labeller(self):
+        """The pair's basin labelling: compiled, its ``(x1, y1)`` slice and the paper's
+        metric (:class:`hybridpd.pair.basins.PairLabeller`)."""
+        # deferred import: the basin code loads only when a basin is labelled
+        from hybridpd.pair.basins import PairLabeller
+
+        return PairLabeller(self)
+
     def point_quantities(self, s, k: int, result: MapResult, *, graze_tol: float = 1e-6,
                          margin_samples: int = 256, **options) -> dict:
         """The pair's walls, flight margins and contact pattern along ``s, ..., P^{k-1}(s)``

@@ -94,9 +94,8 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     Parameters
     ----------
     basin : BasinResult
-        The impact pair's slice ``(x1, y1)`` (:func:`hybridpd.pair.basins.
-        attractor_basin`, :func:`hybridpd.pair.basins.basin_of_attraction`); a basin of any
-        other map or model file is drawn by
+        The impact pair's slice ``(x1, y1)`` (:func:`hybridpd.sweeps.basins.
+        basin_of_attraction` of its mapper); a basin of any other map or model file is drawn by
         :func:`plot_model_basin`.
     ax : matplotlib Axes, optional
         Draw there (legend below the axes); else a new figure 7.2 in wide in the house style
@@ -128,7 +127,7 @@ def plot_basin(basin, ax=None, title=None, *, legend: bool = True):
     if not _pair_slice(basin):
         return plot_model_basin(basin, ax=ax, title=title)
     # deferred import: only the pair's slice needs the pair
-    from hybridpd.pair.attractors import slice_points
+    from hybridpd.pair.basins import slice_points
 
     lab, entries, pb, edges = basin.labels, list(basin.attractors), basin, basin.edges
     if ax is None:
@@ -261,7 +260,7 @@ def plot_model_basin(basin, ax=None, title=None):
     Parameters
     ----------
     basin : BasinResult
-        Of a model file (:func:`hybridpd.sweeps.model_basins.model_basin`) or any map.
+        Of a model file (:func:`hybridpd.analysis.model_orbits.model_map`) or any map.
     ax : matplotlib Axes, optional
     title : str, optional
 

@@ -20,7 +20,35 @@ import numpy as np
 
 from hybridpd._results import compact_repr
 
-__all__ = ["SharedWindowBasins", "boundary_distance", "shared_window_basins"]
+__all__ = ["SharedWindowBasins", "boundary_distance", "orbit_mapper", "shared_window_basins"]
+
+
+def orbit_mapper(orbit, **options):
+    """The basin mapper of a :class:`~hybridpd.pair.orbits.SymmetricOrbitResult`'s fixed
+    point: :func:`hybridpd.analysis.mappers.mapper` of its impact map (the paper's criterion,
+    slice and early exits, :class:`hybridpd.pair.basins.PairLabeller`).
+
+    ``options`` go to the mapper (``n_iter``, ``criterion``, ``early_exit``, ``escape``);
+    the orbit's ``n``, ``x10`` and ``gamma = L / x10`` reach the basin's metadata.
+
+    Examples
+    --------
+    >>> from hybridpd import ImpactPair, PDGains
+    >>> from hybridpd.pair.orbits import symmetric_orbit
+    >>> m = orbit_mapper(symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0))
+    >>> m.label_name(m(m.fixed_point + [0, 0.01, 0, 0])), m.metadata()["gamma"]
+    ('converged', 0.75)
+    """
+    if not orbit.exists:
+        raise ValueError(f"orbit must be an existing symmetric orbit, got {orbit.reason!r}")
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.analysis.mappers import mapper
+    from hybridpd.pair.impactmap import ImpactMap
+
+    conventions = {"n": int(orbit.n), "x10": float(orbit.x10),
+                   "gamma": float(orbit.pair.L / orbit.x10)}
+    return mapper(ImpactMap(orbit.pair, orbit.gains, orbit.reference(), orbit.case),
+                  orbit.fixed_point, metadata=conventions, **options)
 
 
 @dataclass
@@ -51,12 +79,14 @@ class SharedWindowBasins:
 
 def _label_all(mappers, window, grid, **kw):
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.basins import attractor_basin
+    from hybridpd.analysis.mappers import Growth
+    from hybridpd.sweeps.basins import basin_of_attraction
 
     x0, x1, y0, y1 = window
     nx, ny = grid
-    return {k: None if m is None else attractor_basin(m, (x0, x1, nx), (y0, y1, ny),
-                                                      extend=False, **kw)
+    # Growth(0): one window, its edges reported (the shared window grows here, not per orbit)
+    return {k: None if m is None else basin_of_attraction(m, (x0, x1, nx), (y0, y1, ny),
+                                                          grow=Growth(0), **kw)
             for k, m in mappers.items()}
 
 
@@ -78,7 +108,7 @@ def shared_window_basins(orbits: dict, window, grid, *, n_iter=1500, max_growths
     max_growths : int
         The cap: times the window may grow.
     executor, max_workers, progress
-        As in :func:`hybridpd.pair.basins.attractor_basin`.
+        As in :func:`hybridpd.sweeps.basins.basin_of_attraction`.
     log : callable, optional
         Receives a line per growth.
 
@@ -87,11 +117,11 @@ def shared_window_basins(orbits: dict, window, grid, *, n_iter=1500, max_growths
     SharedWindowBasins
     """
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.basins import ImpactMapper, _grow
+    from hybridpd.sweeps.basins import grow_window
 
     if not (int(max_growths) == max_growths and max_growths >= 0):
         raise ValueError(f"max_growths must be an integer >= 0, got {max_growths!r}")
-    mappers = {k: ImpactMapper.from_orbit(o, n_iter=n_iter) if o.exists and o.stable else None
+    mappers = {k: orbit_mapper(o, n_iter=n_iter) if o.exists and o.stable else None
                for k, o in orbits.items()}
     w = tuple(float(v) for v in window)
     windows = []
@@ -102,7 +132,7 @@ def shared_window_basins(orbits: dict, window, grid, *, n_iter=1500, max_growths
         touching = {k: b for k, b in basins.items() if b is not None and b.reaches_edge}
         if not touching or len(windows) > max_growths:
             break
-        grown = [_grow(w, _centre(b), b.edges) for b in touching.values()]
+        grown = [grow_window(w, _centre(b), b.edges, b.axes) for b in touching.values()]
         w = (min(g[0] for g in grown), max(g[1] for g in grown),
              min(g[2] for g in grown), max(g[3] for g in grown))
         if log is not None:
@@ -120,10 +150,7 @@ def _centre(b):
 def relabel(orbits: dict, window, grid, *, n_iter=1500, **kw) -> dict:
     """Every orbit's basin on ``window`` with ``grid`` points (no growth): the resolution
     check of a :class:`SharedWindowBasins`."""
-    # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.basins import ImpactMapper
-
-    mappers = {k: ImpactMapper.from_orbit(o, n_iter=n_iter) if o.exists and o.stable else None
+    mappers = {k: orbit_mapper(o, n_iter=n_iter) if o.exists and o.stable else None
                for k, o in orbits.items()}
     return _label_all(mappers, window, grid, **kw)
 
@@ -155,9 +182,9 @@ def boundary_distance(basin, *, x10, omega) -> dict:
     --------
     >>> from hybridpd import ImpactPair, PDGains
     >>> from hybridpd.pair.orbits import symmetric_orbit
-    >>> from hybridpd.pair.basins import ImpactMapper, attractor_basin
+    >>> from hybridpd import basin_of_attraction
     >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
-    >>> b = attractor_basin(ImpactMapper.from_orbit(orb, n_iter=200), (-3, 5, 9), (-2, 10, 9))
+    >>> b = basin_of_attraction(orbit_mapper(orb, n_iter=200), (-3, 5, 9), (-2, 10, 9))
     >>> d = boundary_distance(b, x10=1.0, omega=5.0)
     >>> d["distance"] > 0
     True
