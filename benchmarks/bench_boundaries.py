@@ -18,8 +18,8 @@ import time
 import numpy as np
 
 from hybridpd.pair.boundaries import boundary_curves
-from hybridpd.pair.testcurve import TestCurve
 from hybridpd.pair.boundarymask import compare_with_mask, region_status
+from hybridpd.pair.testcurve import TestCurve
 
 BOXES = [("noncollocated", 0.5, ("kp", 0.1, 20.0), ("kv", 0.1, 6.0)),
          ("collocated", 0.1, ("kp", 0.1, 50.0), ("kv", 0.1, 50.0))]

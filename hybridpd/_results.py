@@ -5,14 +5,19 @@
   ``field(repr=False)`` are left out, arrays print as ``array(shape=(200, 200),
   dtype=float64)`` (0-d and one-element arrays print their value), floats with 6 significant
   digits, and anything long or multi-line as ``<TypeName>``.
+* :class:`Fields`: ``to_dict()`` from a dataclass's fields (below); :class:`Result` extends it.
 * :class:`Result`: the one way results become :class:`xarray.Dataset` objects
   (:meth:`~Result.to_dataset`, :meth:`~Result.from_dataset`), files (:meth:`~Result.save`,
-  :meth:`~Result.load`: ``.nc`` netCDF-4 or a ``.zarr`` store, by suffix) and JSON
-  (:meth:`~Result.to_dict`), derived from the dataclass's fields: a field with
-  ``metadata={"dims": (...)}`` is a data variable, one with ``metadata={"coord": name}`` the
-  coordinate of a dimension, every other field an attribute (JSON-encoded where netCDF cannot
-  hold it). A dimension name ``"@field"`` is the value of that field (e.g. a swept parameter's
-  name).
+  :meth:`~Result.load`: ``.nc`` netCDF-4, a ``.zarr`` store or an ``.npz`` archive, by
+  suffix) and JSON (:meth:`~Result.to_dict`), derived from the dataclass's fields: a field
+  with ``metadata={"dims": (...)}`` is a data variable, one with ``metadata={"coord": name}``
+  the coordinate of a dimension, every other field an attribute (JSON-encoded where netCDF
+  cannot hold it). A dimension name ``"@field"`` is the value of that field (e.g. a swept
+  parameter's name). In :meth:`~Result.to_dict` a field with ``metadata={"dict_skip": True}``
+  is left out and one with ``metadata={"dict_name": name}`` appears under that name.
+* :func:`write_npz`, :func:`read_npz`: the one ``.npz`` codec, from and to the dataset (one
+  array per variable, the attributes and dimensions as JSON), read by :func:`numpy.load`
+  without pickle.
 
 xarray is imported only inside the functions that build or read a Dataset, so importing
 hybridpd stays fast.
@@ -45,8 +50,9 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["SUFFIXES", "Result", "WithExtras", "check_suffix", "compact_repr", "decode_attrs",
-           "encode_attrs", "jsonable", "read_dataset", "short_repr", "write_dataset"]
+__all__ = ["SUFFIXES", "Fields", "Result", "WithExtras", "check_suffix", "compact_repr", "decode_attrs",
+           "encode_attrs", "jsonable", "read_dataset", "read_npz", "short_repr", "write_dataset",
+           "write_npz"]
 
 _MAX_ITEM = 60  # characters of one field's value before it is abbreviated
 _MAX_SEQ = 4    # a list/tuple with more items prints as its length
@@ -106,9 +112,11 @@ def compact_repr(self) -> str:
 # ----------------------------------------------------------------------------------------
 # labelled files
 # ----------------------------------------------------------------------------------------
-#: Suffixes of the result files hybridpd writes and reads (``.npz``: earlier versions).
+#: Suffixes of the result files hybridpd writes and reads.
 SUFFIXES = (".nc", ".zarr", ".npz")
 _JSON = "json:"
+_NPZ_META = "__metadata__"      # the .npz entry holding the JSON document
+_NPZ_FORMAT = "hybridpd.dataset/1"
 
 
 def check_suffix(path: str | os.PathLike, name: str = "path",
@@ -142,7 +150,7 @@ def jsonable(v) -> Any:
     >>> jsonable({"a": np.array([1.0, np.nan]), "b": (1 + 2j, np.int64(3))})
     {'a': [1.0, None], 'b': [[1.0, 2.0], 3]}
     """
-    if isinstance(v, Result):
+    if isinstance(v, Fields):
         return v.to_dict()
     if isinstance(v, Mapping):
         return {str(k): jsonable(x) for k, x in v.items()}
@@ -199,14 +207,98 @@ def _zarr2() -> dict:
     return {"zarr_format": 2} if int(zarr.__version__.split(".")[0]) >= 3 else {}
 
 
-def write_dataset(ds, path: str | os.PathLike) -> Path:
-    """Write `ds` to ``.nc`` or ``.zarr`` (by suffix), replacing an earlier result atomically.
+def write_npz(ds, path: str | os.PathLike) -> Path:
+    """Write dataset `ds` to an ``.npz`` archive, replacing an earlier file atomically.
 
-    The data go to a temporary name beside `path` first, so a reader never sees half a file.
-    An existing `path` is replaced only if it is a file (``.nc``) or a Zarr directory.
+    One array per variable (coordinates too) under its name, and the entry
+    ``__metadata__``: a JSON document with the dataset's ``kind``, its attributes and each
+    variable's dimensions and attributes (as a netCDF file holds them: numbers, strings and
+    lists of numbers; anything else encoded by :func:`encode_attrs`).
+    :func:`numpy.load` reads the file without pickle; :func:`read_npz` gives the dataset back.
+
+    Examples
+    --------
+    >>> import tempfile, xarray as xr
+    >>> ds = xr.Dataset({"rho": (("kv",), [0.5, 2.0])}, coords={"kv": [1.0, 2.0]},
+    ...                 attrs={"kind": "scan", "fixed": {"e": 0.5}})
+    >>> back = read_npz(write_npz(ds, tempfile.mkdtemp() + "/scan.npz"))
+    >>> back.rho.dims, back.kv.values.tolist(), decode_attrs(back.attrs)["fixed"]
+    (('kv',), [1.0, 2.0], {'e': 0.5})
     """
     p = Path(path)
-    suffix = check_suffix(p, "path", (".nc", ".zarr"))
+    check_suffix(p, "path", (".npz",))
+    arrays, layout = {}, {}
+    for name, v in ds.variables.items():
+        a = np.asarray(v.values)
+        if a.dtype.hasobject:       # strings held as objects; anything else needs pickle
+            a = a.astype(str)
+        arrays[str(name)] = a
+        layout[str(name)] = {"dims": [str(d) for d in v.dims], "attrs": _plain_attrs(v.attrs),
+                             "coord": name in ds.coords}
+    if _NPZ_META in arrays:
+        raise ValueError(f"a variable of the dataset is named {_NPZ_META!r}, the entry "
+                         "holding the metadata")
+    attrs = _plain_attrs(ds.attrs)
+    meta = {"kind": attrs.get("kind"), "format": _NPZ_FORMAT, "attrs": attrs,
+            "variables": layout}
+    arrays[_NPZ_META] = np.array(json.dumps(meta, sort_keys=True))
+    p.parent.mkdir(parents=True, exist_ok=True)
+    tmp = p.with_name(f".{p.name}.{uuid.uuid4().hex[:12]}.tmp.npz")
+    try:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **arrays)
+        os.replace(tmp, p)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return p
+
+
+def _plain_attrs(attrs: Mapping[str, Any]) -> dict[str, Any]:
+    """Attributes as JSON holds them: numpy scalars and arrays as numbers and lists; values
+    netCDF could not hold either (dicts, None, bools) encoded by :func:`encode_attrs`."""
+    out = {}
+    for k, v in attrs.items():
+        v = v.item() if isinstance(v, np.generic) else v
+        v = v.tolist() if isinstance(v, np.ndarray) else v
+        plain = isinstance(v, (str, int, float)) and not isinstance(v, bool) or (
+            isinstance(v, list) and all(isinstance(x, (int, float, str)) for x in v))
+        out[str(k)] = v if plain else encode_attrs({k: v})[k]
+    return out
+
+
+def read_npz(path: str | os.PathLike):
+    """The :class:`xarray.Dataset` of an ``.npz`` archive written by :func:`write_npz`
+    (``ValueError`` for any other archive)."""
+    import xarray as xr
+
+    p = Path(path)
+    check_suffix(p, "path", (".npz",))
+    if not p.exists():
+        raise ValueError(f"path {str(p)!r} does not exist")
+    with np.load(p, allow_pickle=False) as z:
+        meta = json.loads(str(z[_NPZ_META][()])) if _NPZ_META in z.files else {}
+        if meta.get("format") != _NPZ_FORMAT:
+            raise ValueError(f"{str(p)!r} is not a result archive of this version of hybridpd "
+                             f"(no {_NPZ_FORMAT!r} metadata)")
+        data, coords = {}, {}
+        for name, v in meta["variables"].items():
+            (coords if v["coord"] else data)[name] = (tuple(v["dims"]), z[name], v["attrs"])
+    return xr.Dataset(data, coords=coords, attrs=meta["attrs"])
+
+
+def write_dataset(ds, path: str | os.PathLike) -> Path:
+    """Write `ds` to ``.nc``, ``.zarr`` or ``.npz`` (by suffix; :func:`write_npz`), replacing
+    an earlier result atomically.
+
+    The data go to a temporary name beside `path` first, so a reader never sees half a file.
+    An existing `path` is replaced only if it is a file (``.nc``, ``.npz``) or a Zarr
+    directory.
+    """
+    p = Path(path)
+    suffix = check_suffix(p, "path")
+    if suffix == ".npz":
+        return write_npz(ds, p)
     p.parent.mkdir(parents=True, exist_ok=True)
     tmp = p.with_name(f".{p.name}.{uuid.uuid4().hex[:12]}.tmp{suffix}")
     try:
@@ -235,11 +327,14 @@ def write_dataset(ds, path: str | os.PathLike) -> Path:
 
 
 def read_dataset(path: str | os.PathLike):
-    """Read a ``.nc`` file or ``.zarr`` store into memory as an :class:`xarray.Dataset`."""
+    """Read a ``.nc`` file, ``.zarr`` store or ``.npz`` archive (:func:`read_npz`) into
+    memory as an :class:`xarray.Dataset`."""
     import xarray as xr
 
     p = Path(path)
-    suffix = check_suffix(p, "path", (".nc", ".zarr"))
+    suffix = check_suffix(p, "path")
+    if suffix == ".npz":
+        return read_npz(p)
     if not p.exists():
         raise ValueError(f"path {str(p)!r} does not exist")
     if suffix == ".nc":
@@ -257,7 +352,32 @@ def read_dataset(path: str | os.PathLike):
 # ----------------------------------------------------------------------------------------
 # the mixin
 # ----------------------------------------------------------------------------------------
-class Result:
+class Fields:
+    """Mixin of a dataclass whose JSON form is its fields: :meth:`to_dict`. :class:`Result`
+    adds datasets and files; a value that is not saved alone (an end point, a certificate)
+    takes only this.
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass, field
+    >>> @dataclass(frozen=True)
+    ... class End(Fields):
+    ...     m2: float
+    ...     residual: float = field(metadata={"dict_name": "rho_minus_1"})
+    ...     seconds: float = field(default=0.0, metadata={"dict_skip": True})
+    >>> End(0.5, float("nan"), 1.5).to_dict()
+    {'m2': 0.5, 'rho_minus_1': None}
+    """
+
+    def to_dict(self) -> dict:
+        """JSON-ready values of the fields (:func:`jsonable`), in their order: a field with
+        ``metadata={"dict_skip": True}`` is left out, one with ``metadata={"dict_name":
+        name}`` appears under that name."""
+        return {f.metadata.get("dict_name", f.name): jsonable(getattr(self, f.name))
+                for f in dataclasses.fields(self) if not f.metadata.get("dict_skip")}
+
+
+class Result(Fields):
     """Mixin of a dataclass result: datasets, files and JSON from its fields (module
     docstring).
 
@@ -275,11 +395,12 @@ class Result:
     ...     kind = "scan"
     ...     name: str
     ...     p: np.ndarray = field(metadata={"coord": "@name"})
-    ...     rho: np.ndarray = field(metadata={"dims": ("@name",)})
+    ...     rho: np.ndarray = field(metadata={"dims": ("@name",), "dict_name": "radius"})
     ...     note: dict = field(default_factory=dict)
+    ...     seconds: float = field(default=0.0, metadata={"dict_skip": True})
     >>> r = Scan("kv", np.array([1.0, 2.0]), np.array([0.5, np.nan]), {"k": (1, 2)})
     >>> r.to_dict()
-    {'name': 'kv', 'p': [1.0, 2.0], 'rho': [0.5, None], 'note': {'k': [1, 2]}}
+    {'name': 'kv', 'p': [1.0, 2.0], 'radius': [0.5, None], 'note': {'k': [1, 2]}}
     >>> list(r.to_dataset().rho.dims)
     ['kv']
     >>> back = Scan.load(r.save(tempfile.mkdtemp() + "/scan.nc"))
@@ -292,9 +413,6 @@ class Result:
     def _dim(self, name: str) -> str:
         return str(getattr(self, name[1:])) if name.startswith("@") else name
 
-    def to_dict(self) -> dict:
-        """JSON-ready values of every field (:func:`jsonable`)."""
-        return {f.name: jsonable(getattr(self, f.name)) for f in dataclasses.fields(self)}
 
     def to_dataset(self):
         """The result as an :class:`xarray.Dataset` (module docstring)."""
@@ -330,7 +448,7 @@ class Result:
         return cls(**kw)
 
     def save(self, path: str | os.PathLike) -> Path:
-        """Write to ``.nc`` or ``.zarr`` (by suffix); returns the path."""
+        """Write to ``.nc``, ``.zarr`` or ``.npz`` (by suffix); returns the path."""
         return write_dataset(self.to_dataset(), path)
 
     @classmethod

@@ -77,7 +77,7 @@ OLD_MODULES = {
     """),
     "hybridpd.sweep": ("hybridpd.sweeps.sweep", """
         ChunkError EXECUTORS ExecutorSpec FORMAT SweepResult default_chunk_size
-        grid_points load_npz load_sweep resolve_executor run_sweep save_npz
+        grid_points load_sweep resolve_executor run_sweep
     """),
     "hybridpd.symbolic": ("hybridpd.pair.symbolic", """
         Derivation ImpactMapResult JacobianResult SymmetricOrbit dch derivation dsh

@@ -206,23 +206,19 @@ def test_period_detection_finds_the_minimal_period(k, n, seed, shift):
     assert detect_period(X, wrap, min(16, n // 2), 1e-8)[0] == want
 
 
-def test_a_file_of_the_earlier_layout_reads_as_the_same_diagram(tmp_path):
-    """The 0.2.0 ``.npz`` file of the pair's diagram (its old call is gone)."""
-    import hybridpd.pair.bifdiagram as bd
-
-    with pytest.raises(AttributeError):
-        bd.pair_diagram  # noqa: B018
+def test_the_npz_file_reads_as_the_same_diagram_and_the_earlier_layout_is_refused(tmp_path):
+    """``.npz`` is one suffix of the one result writer; the 0.2.0 layout is not read."""
     d = bifurcation_diagram(PAIR01, PDGains(10, 20), W, "kv", [20.0, 23.0], iterations=100,
                             keep=16)
-    # the 0.2.0 .npz layout, written here by hand from the arrays of that version
-    meta = {"parameter_name": "kv", "iterations": 100, "keep": 16, "follow": False,
-            "case": "collocated", "fixed": d.fixed, "design": True, "settings": {},
-            "classes": list(CLASSES)}
-    np.savez_compressed(tmp_path / "d.npz", values=d.values, points=d.points, code=d.code,
-                        period=d.periods, lyapunov=d.lyapunov, lyapunov_spectrum=d.spectrum,
-                        xm=d.xm, L=d.L, final=d.final, status=np.array([0, 12]),
-                        initial=np.asarray(d.initial), meta=np.array(json.dumps(meta)))
-    r = load_diagram(tmp_path / "d.npz")
-    np.testing.assert_allclose(r.points, d.points, rtol=0, atol=0)
-    np.testing.assert_allclose(r.xm, d.xm, rtol=0, atol=0)
-    assert r.status == ("", "sticking") and r.fixed == d.fixed and r.names == d.names
+    r = load_diagram(d.save(tmp_path / "d.npz"))
+    for k in ("values", "points", "code", "periods", "spectrum", "final", "xm", "L"):
+        a, b = np.asarray(getattr(r, k)), np.asarray(getattr(d, k))
+        assert a.dtype == b.dtype and np.array_equal(a, b, equal_nan=True), k
+    assert r.status == d.status and r.fixed == d.fixed and r.names == d.names
+    assert r.to_dict() == d.to_dict()
+    # the 0.2.0 .npz layout (arrays and a JSON "meta"), written here by hand
+    meta = {"parameter_name": "kv", "iterations": 100, "keep": 16, "classes": list(CLASSES)}
+    np.savez_compressed(tmp_path / "old.npz", values=d.values, points=d.points,
+                        meta=np.array(json.dumps(meta)))
+    with pytest.raises(ValueError, match="old.npz.*not a result archive"):
+        load_diagram(tmp_path / "old.npz")

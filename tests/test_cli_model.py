@@ -76,7 +76,7 @@ def test_help_says_where_the_parameters_are_and_what_is_written(name):
     assert "--list-params" in text and "controller.kp" in text
     if name in ("regions", "basin", "bifurcation"):
         flat = " ".join(text.split())
-        assert "--model: .nc or .zarr" in flat or "--model .nc or .zarr" in flat
+        assert "by suffix (.nc, .zarr or .npz)" in flat
     if name == "bifurcation":
         assert "with --model a dotted path" in " ".join(text.split())
 

@@ -122,7 +122,7 @@ def test_grid_axes_and_max_period_have_one_shape_in_every_command(capsys):
     parser = build_parser()
     sub = next(a for a in parser._actions if a.dest == "command").choices
     for name, word, nargs in (("regions", "KEY", 4), ("basin", "COORD", 4),
-                              ("boundaries", "NAME", 3)):
+                              ("boundaries", "NAME", 3), ("explore", "KEY", 4)):
         acts = {a.dest: a for a in sub[name]._actions}
         for ax in ("x", "y"):
             assert acts[ax].nargs == nargs and acts[ax].metavar[0] == word

@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains
-from hybridpd._results import jsonable
 from hybridpd.cli import main
 
 PAIR = ["--case", "collocated", "--mu", "0.1", "--e", "0.5", "--omega", "5"]
@@ -46,7 +45,7 @@ def one_error_line(capsys):
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     """One small file of every kind hybridpd writes (in every format it writes it in)."""
-    from hybridpd.analysis.diagrams import CLASSES, bifurcation_diagram
+    from hybridpd.analysis.diagrams import bifurcation_diagram
     from hybridpd.analysis.mappers import Growth
     from hybridpd.pair.bifdiagram import PAIR_SETTINGS, ImpactMapFamily
     from hybridpd.pair.continuation import continue_symmetric
@@ -77,28 +76,10 @@ def files(tmp_path_factory):
     diag = bifurcation_diagram(fam, [20.0, 22.0, 24.0], **dict(PAIR_SETTINGS, iterations=60,
                                                                 keep=16))
     out["bifurcation_diagram.nc"] = diag.save(d / "diagram.nc")
-    # the layout hybridpd 0.2.0 wrote (arrays and a JSON "meta"), built here by hand
-    meta = {"parameter_name": "kv", "iterations": 60, "keep": 16, "follow": False,
-            "case": "collocated", "fixed": diag.fixed, "design": True, "settings": {},
-            "classes": list(CLASSES)}
-    np.savez_compressed(d / "diagram.npz", values=diag.values, points=diag.points,
-                        code=diag.code, period=diag.periods, lyapunov=diag.lyapunov,
-                        lyapunov_spectrum=diag.spectrum, xm=diag.xm, L=diag.L,
-                        final=diag.final, status=np.zeros(3, np.int64),
-                        initial=np.asarray(diag.initial), meta=np.array(json.dumps(meta)))
-    out["bifurcation_diagram.npz"] = d / "diagram.npz"
+    out["bifurcation_diagram.npz"] = diag.save(d / "diagram.npz")
     br = continue_symmetric(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv", 23.0)
     out["branch.nc"] = br.save(d / "branch.nc")
-    # the .npz branch file of earlier versions, in its layout
-    arrays = {k: np.asarray(getattr(br, k)) for k in (
-        "parameter", "points", "multipliers", "spectral_radius", "stable", "viable", "margin",
-        "min_impact_speed", "xm", "newton_iterations")}
-    meta = {"kind": "branch", "parameter_name": "kv", "period": 1,
-            "patterns": jsonable(br.patterns), "events": [e.to_dict() for e in br.events],
-            "termination": br.termination, "family": "symmetric", "method": br.method,
-            "case": "collocated", "fixed": br.fixed, "n_rejected": br.n_rejected}
-    np.savez_compressed(d / "branch.npz", **arrays, __metadata__=np.array(json.dumps(meta)))
-    out["branch.npz"] = d / "branch.npz"
+    out["branch.npz"] = br.save(d / "branch.npz")
     assert main(["simulate", *SIM, "--out", str(d / "pair.json")]) == 0
     out["trajectory.json"] = d / "pair.json"
     assert main(["simulate", "--model", MODEL, "--t-end", "3", "--samples", "400",
@@ -170,9 +151,7 @@ def test_unknown_or_unreadable_files_exit_2_with_one_line(files, tmp_path, capsy
     broken = tmp_path / "broken.nc"
     broken.write_bytes(b"\x89HDF\r\n\x1a\n" + b"\0" * 64)
     sweep = tmp_path / "sweep.npz"
-    from hybridpd.sweeps.npz import save_npz
-
-    save_npz(sweep, {"x": np.arange(3)}, {"kind": "something_else"})
+    np.savez(sweep, x=np.arange(3), __metadata__=np.array(json.dumps({"kind": "something_else"})))
     for path, why in ((text, "neither"), (plain, "no hybridpd metadata"),
                       (nokind, "no hybridpd metadata"), (broken, "not a result file"),
                       (sweep, "something_else"), (tmp_path / "missing.nc", "does not exist")):
@@ -264,7 +243,7 @@ def test_branch_save_load_round_trip(files):
     from hybridpd.pair.continuation import continue_symmetric, load_branch
 
     br = continue_symmetric(ImpactPair(0.1, 0.1, 0.75), PDGains(10, 20), 5.0, "kv", 23.0)
-    for name in ("branch.nc", "branch.npz"):      # this version's file and the earlier one
+    for name in ("branch.nc", "branch.npz"):
         back = load_branch(files[name])
         for var in ("parameter", "points", "multipliers", "spectral_radius", "stable",
                     "viable", "margin", "min_impact_speed", "xm", "newton_iterations"):
@@ -273,4 +252,4 @@ def test_branch_save_load_round_trip(files):
         assert back.patterns == br.patterns and back.case == br.case
         assert [e.kind for e in back.events] == [e.kind for e in br.events]
     with pytest.raises(ValueError, match="path"):
-        br.save(Path(files["branch.nc"]).with_suffix(".npz"))
+        br.save(Path(files["branch.nc"]).with_suffix(".csv"))

@@ -248,12 +248,14 @@ def test_a_failing_computation_says_why_in_its_panel(page):
 def test_model_axes_read_as_hybridpd_regions_takes_them():
     from hybridpd.cli.explore import model_axis
 
-    assert model_axis("x", ["a.b,c.d,1,2,3"]) == ("a.b,c.d", 1.0, 2.0, 3)
+    assert model_axis("x", ["a.b,c.d", "1", "2", "3"]) == ("a.b,c.d", 1.0, 2.0, 3)
     assert model_axis("y", ["controller.kv", "1", "20", "8"]) == ("controller.kv", 1.0, 20.0, 8)
     with pytest.raises(ValueError, match="--x NUM must be an integer"):
-        model_axis("x", ["controller.kp,5,60,1"])
-    with pytest.raises(ValueError, match="--y must be KEY,MIN,MAX,NUM"):
-        model_axis("y", ["controller.kp,5"])
+        model_axis("x", ["controller.kp", "5", "60", "1"])
+    with pytest.raises(ValueError, match="--y MIN and MAX must be numbers"):
+        model_axis("y", ["controller.kp", "5", "x", "3"])
+    with pytest.raises(ValueError, match="--y must be NAME MIN MAX NUM"):
+        model_axis("y", ["controller.kp,5,60,8"])       # the comma form of earlier versions
 
 
 def test_a_model_file_that_fails_says_what_hybridpd_orbit_says(tmp_path, capsys):
@@ -263,8 +265,8 @@ def test_a_model_file_that_fails_says_what_hybridpd_orbit_says(tmp_path, capsys)
     bad.write_text("[system]\nmasses = [1.0, -2.0]\n")
     assert main(["orbit", "--model", str(bad)]) == 2
     want = capsys.readouterr().err
-    assert main(["explore", "--no-browser", "--model", str(bad), "--x", "controller.kp,1,2,3",
-                 "--y", "controller.kv,1,2,3"]) == 2
+    assert main(["explore", "--no-browser", "--model", str(bad), "--x", "controller.kp", "1", "2",
+                 "3", "--y", "controller.kv", "1", "2", "3"]) == 2
     got = capsys.readouterr().err
     assert got == want and got.count("\n") == 1 and got.startswith("hybridpd: error: ")
 

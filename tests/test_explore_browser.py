@@ -214,7 +214,8 @@ def test_a_model_files_cell_shows_hybridpd_orbits_multipliers(browser, tmp_path)
     port = free_port()
     proc = subprocess.Popen([sys.executable, "-m", "hybridpd", "explore", "--no-browser",
                              "--port", str(port), "--model", str(model), "--x",
-                             "controller.kp,5,60,4", "--y", "controller.kv,1,20,4"],
+                             "controller.kp", "5", "60", "4", "--y", "controller.kv", "1", "20",
+                             "4"],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             env=dict(os.environ, PYTHONPATH=str(ROOT)))
     ctx = browser.new_context(viewport={"width": 1300, "height": 1200})

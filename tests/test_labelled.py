@@ -8,14 +8,14 @@ import pytest
 from _regions import pair_region_map
 
 from hybridpd import ImpactPair, PDGains
+from hybridpd._results import check_suffix, decode_attrs, encode_attrs, write_dataset
 from hybridpd.analysis.basins import load_basin
 from hybridpd.analysis.mappers import mapper
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.sweeps.basins import basin_of_attraction
-from hybridpd.sweeps.labelled import check_suffix, decode_attrs, encode_attrs, write_dataset
 from hybridpd.sweeps.regions import load_region_map
-from hybridpd.sweeps.sweep import load_sweep, run_sweep
+from hybridpd.sweeps.sweep import run_sweep
 
 xr = pytest.importorskip("xarray")
 DATA = Path(__file__).parent / "data"
@@ -200,32 +200,6 @@ def test_unknown_suffix_is_refused(rm, basin, tmp_path):
         load_basin(tmp_path / "m.nc")
 
 
-@pytest.mark.stored_data
-def test_files_of_earlier_versions_stay_readable(rm):
-    """``.npz`` files written by the previous version (tests/data) agree with a fresh
-    computation (to the tolerances above)."""
-    old = load_region_map(DATA / "regions_v0.npz")
-    new, certain = certain_points(lambda s: rm if s == 0 else _region_map(s),
-                                  ("exists", "stable", "reason"))
-    assert_same_map(old, new, exact=False, where=certain)
-    from hybridpd.pair.regions import _region_chunk
-
-    s = load_sweep(DATA / "sweep_v0.npz")
-    fixed = {"mu": 0.1, "omega": 5.0, "L": 0.75, "x10": 1.0, "m2": 1.0}
-
-    def sweep(shift):
-        pts = {"kp": np.linspace(1, 5, 6) * (1 + shift), "kv": np.linspace(1, 8, 6) * (1 + shift),
-               "e": np.full(6, 0.5)}
-        return run_sweep(_region_chunk, pts, executor="serial", chunk_size=4, progress=False,
-                         func_kwargs={"case": "collocated", "n": 1, "fixed": fixed}).outputs
-
-    fresh, certain = certain_points(sweep, ("exists", "stable", "reason"))
-    assert s.metadata == {"kind": "region_sweep"} and s.n_chunks == 2
-    assert set(s.outputs) == set(fresh)
-    for k, v in fresh.items():
-        assert_close_or_equal(s.outputs[k], v, err_msg=k, where=certain)
-
-
 def test_sweep_store_and_result_as_datasets(tmp_path):
     from hybridpd.sweeps.sweep import grid_points
 
@@ -274,7 +248,7 @@ def test_docstring_examples_run():
     import doctest
 
     import hybridpd._results as res
-    import hybridpd.sweeps.labelled as mod
+    import hybridpd.sweeps.regions as mod
 
     failures, tried = doctest.testmod(mod, optionflags=doctest.ELLIPSIS)
     f2, t2 = doctest.testmod(res, optionflags=doctest.ELLIPSIS, extraglobs={"np": np})

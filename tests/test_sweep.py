@@ -7,7 +7,6 @@ from __future__ import annotations
 import concurrent.futures as cf
 import doctest
 import functools
-import json
 import subprocess
 import sys
 import time
@@ -41,11 +40,9 @@ from hybridpd.sweeps.sweep import (
     ChunkError,
     default_chunk_size,
     grid_points,
-    load_npz,
     load_sweep,
     resolve_executor,
     run_sweep,
-    save_npz,
 )
 
 # --------------------------------------------------------------------------
@@ -76,47 +73,6 @@ def test_grid_points_c_order():
     )
     with pytest.raises(ValueError, match="axes"):
         grid_points({})
-
-
-def test_save_load_npz_roundtrip_and_deterministic(tmp_path):
-    arrays = {
-        "b": np.array([True, False, True]),
-        "f": np.arange(12.0).reshape(3, 2, 2),
-        "i": np.array([-1, 2, 3], dtype=np.int16),
-        "c": np.array([1 + 2j]),
-        "big": np.arange(3, dtype=">f8"),
-    }
-    meta = {
-        "e": 0.5,
-        "n": np.int64(3),
-        "v": np.array([1.0, 2.0]),
-        "s": "x",
-        "nested": {"t": (1, 2)},
-    }
-    p1 = save_npz(tmp_path / "a.npz", arrays, meta)
-    p2 = save_npz(tmp_path / "b.npz", arrays, meta)
-    assert p1.read_bytes() == p2.read_bytes()  # fixed zip timestamps
-    got, m = load_npz(p1)
-    assert list(got) == list(arrays)
-    for k, v in arrays.items():
-        assert got[k].dtype == v.dtype and np.array_equal(got[k], v)
-    assert m == {"e": 0.5, "n": 3, "v": [1.0, 2.0], "s": "x", "nested": {"t": [1, 2]}}
-    # Standard numpy archive, readable without pickle.
-    with np.load(p1, allow_pickle=False) as z:
-        assert json.loads(str(z["__metadata__"][()]))["e"] == 0.5
-    # Compressed variant, and no temporary files left behind.
-    save_npz(tmp_path / "c.npz", arrays, meta, compress=True)
-    assert np.array_equal(load_npz(tmp_path / "c.npz")[0]["f"], arrays["f"])
-    assert not list(tmp_path.glob(".*.tmp"))
-    # Plain numpy files load with empty metadata.
-    np.savez(tmp_path / "plain.npz", x=np.arange(3))
-    assert load_npz(tmp_path / "plain.npz")[1] == {}
-    with pytest.raises(ValueError, match="__metadata__"):
-        save_npz(tmp_path / "d.npz", {"__metadata__": np.zeros(1)})
-    with pytest.raises(ValueError, match="object dtype"):
-        save_npz(tmp_path / "d.npz", {"o": np.array([object()])})
-    with pytest.raises(ValueError, match="metadata"):
-        save_npz(tmp_path / "d.npz", {"x": np.zeros(1)}, {"bad": object()})
 
 
 # --------------------------------------------------------------------------

@@ -19,15 +19,14 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
 from hybridpd._format import format_percent
-from hybridpd._results import Result, check_suffix, compact_repr, decode_attrs, jsonable
-from hybridpd.analysis import _basin_files
+from hybridpd._results import Fields, Result, compact_repr, decode_attrs
 from hybridpd.analysis.labels import LABELS
 from hybridpd.analysis.maps import PoincareMap
 from hybridpd.model import check_axis
@@ -67,7 +66,7 @@ def from_criterion(labels) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class Attractor:
+class Attractor(Fields):
     """A periodic attractor of a basin (or an outcome, ``label < 0``).
 
     Attributes
@@ -118,13 +117,9 @@ class Attractor:
         """A periodic orbit (not an outcome)."""
         return self.label >= 0
 
-    def to_dict(self) -> dict:
-        """JSON-ready description (complex multipliers as ``[re, im]``)."""
-        return {f.name: jsonable(getattr(self, f.name)) for f in fields(self)}
-
     @classmethod
     def from_dict(cls, d: dict) -> Attractor:
-        """Inverse of :meth:`to_dict` (also reads the dictionaries of earlier versions)."""
+        """Inverse of :meth:`to_dict` (optional keys left out read as unknown)."""
         mult = d.get("multipliers")
         pts = np.asarray(d.get("points") or [], float)
         stable = d.get("stable")
@@ -424,23 +419,6 @@ class BasinResult(Result):
             raise ValueError(f"the dataset does not hold a basin (it holds a {kind!r}: "
                              "attribute kind)")
         return super().from_dataset(ds)
-
-    def save(self, path) -> Path:
-        """Write to ``.nc`` or ``.zarr`` (:meth:`to_dataset`), or ``.npz``, by suffix."""
-        if check_suffix(path) != ".npz":
-            return super().save(path)
-        return _basin_files.write_basin_npz(self, Path(path))
-
-    @classmethod
-    def load(cls, path) -> BasinResult:
-        """Read a basin written by :meth:`save`."""
-        if check_suffix(path) != ".npz":
-            return super().load(path)
-        kind, meta, arrays = _basin_files.read_basin_npz(Path(path))
-        if kind != "basin" or "attractors" not in meta:
-            raise ValueError(f"{path} does not hold a basin of this version (it holds a "
-                             f"{kind!r})")
-        return cls(**arrays, **meta)
 
 
 def load_basin(path) -> BasinResult:

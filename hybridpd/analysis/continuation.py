@@ -37,7 +37,6 @@ quantities in ``variables`` and ``metadata``. Branches are saved as ``.nc`` or `
 """
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field, fields
 
@@ -46,7 +45,6 @@ import numpy as np
 from hybridpd._results import (
     Result,
     WithExtras,
-    check_suffix,
     compact_repr,
     decode_attrs,
     encode_attrs,
@@ -304,8 +302,7 @@ class Branch(WithExtras, Result):
 
 
 def load_branch(path) -> Branch:
-    """Read a :class:`Branch` written by :meth:`Branch.save` (``.nc`` or ``.zarr``; the
-    ``.npz`` branch files of earlier versions too).
+    """Read a :class:`Branch` written by :meth:`Branch.save` (``.nc``, ``.zarr`` or ``.npz``).
 
     Examples
     --------
@@ -327,20 +324,7 @@ def load_branch(path) -> Branch:
     >>> [(e.kind, round(e.parameter, 6)) for e in back.events]
     [('period_doubling', 3.0), ('stability_change', 3.0)]
     """
-    if check_suffix(path, "path") != ".npz":
-        return Branch.load(path)
-    with np.load(path, allow_pickle=False) as z:
-        a = {k: z[k] for k in z.files}
-    meta = json.loads(str(a.pop("__metadata__", np.array("{}"))[()]))
-    if meta.get("kind") != "branch":
-        raise ValueError(f"{path} does not hold a continued branch")
-    columns = ("parameter", *_COLUMNS)
-    return Branch(meta.pop("parameter_name"), *(a.pop(k) for k in columns),
-                  int(meta.pop("period")),
-                  [BifurcationEvent.from_dict(d) for d in meta.pop("events")],
-                  meta.pop("termination"), meta.pop("method"), "",
-                  _tuples(meta.pop("patterns")), a,
-                  {k: v for k, v in meta.items() if k != "kind"})
+    return Branch.load(path)
 
 
 def _map_factory(builder, section, map_options):

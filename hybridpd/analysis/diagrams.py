@@ -39,7 +39,6 @@ recorded coordinates of a map's points, when maps of different values use differ
 """
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -50,11 +49,9 @@ from hybridpd._jit import njit
 from hybridpd._results import (
     Result,
     WithExtras,
-    check_suffix,
     compact_repr,
     decode_attrs,
     encode_attrs,
-    read_dataset,
 )
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns, detect_period
 
@@ -67,8 +64,6 @@ CLASSES = ("periodic", "quasiperiodic", "chaotic", "diverged", "sticking", "no_i
 #: The classes that say what the motion does at a value (the others say that the map could not
 #: tell: it diverged, stopped inside a flight or was undefined).
 ANSWERS = ("periodic", "quasiperiodic", "chaotic", "sticking", "no_impact")
-#: Classes of the model diagrams written by hybridpd 0.2.0, and their codes now.
-_MODEL_020 = {"periodic": 0, "not_periodic": 1, "undefined": 7}
 
 
 @dataclass(frozen=True, eq=False)
@@ -223,10 +218,8 @@ class BifurcationDiagram(WithExtras, Result):
 
     @classmethod
     def from_dataset(cls, ds) -> BifurcationDiagram:
-        """Inverse of :meth:`to_dataset`; also reads the model diagrams of hybridpd 0.2.0."""
+        """Inverse of :meth:`to_dataset`."""
         a = decode_attrs(ds.attrs)
-        if a.get("kind") == "model_diagram":
-            return _from_model_020(cls, ds, a)
         if a.get("kind") != cls.kind:
             raise ValueError(f"the dataset holds a {a.get('kind')!r}, not a {cls.kind!r}")
         meanings = str(ds["code"].attrs.get("flag_meanings", " ".join(CLASSES))).split()
@@ -240,42 +233,10 @@ class BifurcationDiagram(WithExtras, Result):
                    tuple(a.get("names") or ()), var, dict(a.get("metadata") or {}))
 
 
-def _from_model_020(cls, ds, a):
-    """A model diagram written by hybridpd 0.2.0 (classes periodic/not_periodic/undefined)."""
-    meanings = str(ds["code"].attrs.get("flag_meanings")).split()
-    code = np.array([_MODEL_020[meanings[int(c)]] for c in ds["code"].values], np.int64)
-    pts = ds["points"].transpose("value", "iterate", "coordinate").values
-    meta = dict(a.get("metadata") or {}, source=a.get("model", ""))
-    return cls(a["parameter_name"], ds["value"].values, pts, code,
-               ds["period"].values.astype(np.int64), ("",) * len(code), None, pts[:, -1],
-               tuple(str(c) for c in ds["coordinate"].values), {}, meta)
-
-
-def _from_npz_020(path) -> BifurcationDiagram:
-    """An impact-pair diagram written by hybridpd 0.2.0 (``.npz``, engine status codes)."""
-    with np.load(path, allow_pickle=False) as z:
-        meta = json.loads(str(z["meta"]))
-        old = tuple(meta.get("classes", ()))
-        if not set(old) <= set(CLASSES):
-            raise ValueError(f"{path}: unknown class table {old}")
-        code = np.array([CLASSES.index(old[int(c)]) for c in z["code"]], np.int64)
-        names = {0: "", 11: "end_time", 12: "sticking", 13: "unresolved", 14: "nonfinite"}
-        status = tuple(names.get(int(s), str(int(s))) for s in z["status"])
-        md = {k: meta[k] for k in ("iterations", "keep", "follow", "case", "fixed", "design",
-                                   "settings")}
-        md.update(initial=z["initial"].tolist(), period=1)
-        return BifurcationDiagram(meta["parameter_name"], z["values"], z["points"], code,
-                                  z["period"].astype(np.int64), status,
-                                  z["lyapunov_spectrum"], z["final"],
-                                  ("phi", "z1", "z2", "z4"), {"xm": z["xm"], "L": z["L"]}, md)
-
-
 def load_diagram(path) -> BifurcationDiagram:
-    """Read a diagram written by :meth:`BifurcationDiagram.save` (``.nc``, ``.zarr``), or by
-    hybridpd 0.2.0 (the impact pair's ``.npz``, a model's ``.nc``/``.zarr``)."""
-    if check_suffix(path) == ".npz":
-        return _from_npz_020(path)
-    return BifurcationDiagram.from_dataset(read_dataset(path))
+    """Read a diagram written by :meth:`BifurcationDiagram.save` (``.nc``, ``.zarr`` or
+    ``.npz``)."""
+    return BifurcationDiagram.load(path)
 
 
 def lyapunov_exponents(J) -> np.ndarray:

@@ -450,16 +450,52 @@ def _either(suffixes) -> str:
         ", ".join(suffixes[:-1]) + " or " + suffixes[-1])
 
 
-def add_grid_axes(p, word: str, help_x: str, *, num: bool = True,
-                  required: bool = False) -> None:
-    """``--x`` and ``--y`` in the one shape every command uses: ``WORD MIN MAX NUM`` (``NUM``
-    left out where the command chooses the points itself, ``num=False``); ``--y`` as ``--x``.
+def add_grid_axis(p, flag: str, *, names: bool = True, num: bool = True, word: str = "NAME",
+                  help: str | None = None, required: bool = False) -> None:
+    """One grid axis in the one shape every command uses: ``flag NAME MIN MAX NUM``, without
+    ``NAME`` where the command knows the axis (``names=False``) and without ``NUM`` where it
+    chooses the points itself (``num=False``). ``word`` names ``NAME`` in the help (``KEY``
+    for a model file's entry); :func:`grid_axis` reads the tokens back.
+
+    Examples
+    --------
+    >>> p = Parser(prog="demo")
+    >>> add_grid_axis(p, "--x", word="KEY")
+    >>> add_grid_axis(p, "--y", word="KEY")
+    >>> args = p.parse_args(["--x", "controller.kp", "5", "60", "8", "--y", "a.b", "1", "2", "3"])
+    >>> grid_axis("--x", args.x), grid_axis("--y", args.y)
+    (('controller.kp', 5.0, 60.0, 8), ('a.b', 1.0, 2.0, 3))
     """
-    mv = (word, "MIN", "MAX", "NUM") if num else (word, "MIN", "MAX")
-    p.add_argument("--x", nargs=len(mv), default=None, required=required, metavar=mv,
-                   help=help_x)
-    p.add_argument("--y", nargs=len(mv), default=None, required=required, metavar=mv,
-                   help="second axis, as --x (a different one)")
+    mv = ((word,) if names else ()) + ("MIN", "MAX") + (("NUM",) if num else ())
+    p.add_argument(flag, nargs=len(mv), default=None, required=required, metavar=mv,
+                   help=help)
+
+
+def grid_axis(flag: str, tokens, *, names: bool = True, num: bool = True) -> tuple:
+    """``(NAME, MIN, MAX, NUM)`` (``NAME`` left out with ``names=False``, ``NUM`` with
+    ``num=False``) of the tokens of a flag declared by :func:`add_grid_axis`: ``MIN`` and
+    ``MAX`` as floats, ``NUM`` as an int (``ValueError`` naming the flag otherwise; the range
+    itself is checked by the analysis that takes it)."""
+    tokens = list(tokens)
+    head, rest = (tokens[:1], tokens[1:]) if names else ([], tokens)
+    want = 3 if num else 2
+    if len(rest) != want:
+        shape = " ".join((("NAME",) if names else ()) + ("MIN", "MAX") + (("NUM",) if num else ()))
+        raise ValueError(f"{flag} must be {shape}, got {' '.join(map(str, tokens))!r}")
+    try:
+        lo, hi = float(rest[0]), float(rest[1])
+    except ValueError:
+        raise ValueError(f"{flag} MIN and MAX must be numbers, got {rest[0]!r} {rest[1]!r}") \
+            from None
+    if not num:
+        return (*head, lo, hi)
+    try:
+        n = float(rest[2])
+    except ValueError:
+        n = math.nan
+    if not (math.isfinite(n) and n == int(n)):
+        raise ValueError(f"{flag} NUM must be an integer, got {rest[2]!r}")
+    return (*head, lo, hi, int(n))
 
 
 def add_max_period(p, default: int, what: str = "largest period of P detected") -> None:
@@ -542,14 +578,14 @@ def check_out(path, flag: str = "--out", allowed=None):
     """Refuse (ValueError, before any computation) a result path whose suffix cannot be
     written (default: ``.nc``, ``.zarr``, ``.npz``)."""
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.labelled import SUFFIXES
+    from hybridpd._results import SUFFIXES
 
     return _check(path, flag, allowed or SUFFIXES)
 
 
 def _check(path, flag, allowed):
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.sweeps.labelled import check_suffix
+    from hybridpd._results import check_suffix
 
     if path is None:
         return None
@@ -604,5 +640,5 @@ def check_model_command(args, pair_options, hint: str, axes: str | None = None) 
                          f"({hint})")
     if axes is not None and (args.x is None or args.y is None):
         raise UsageError(f"--model needs --x {axes} MIN MAX NUM and --y {axes} MIN MAX NUM")
-    check_out(args.out, allowed=(".nc", ".zarr"))
+    check_out(args.out)
     check_image(args.plot)

@@ -7,7 +7,7 @@ from hybridpd.cli._common import (
     EXIT_DIVERGED,
     UsageError,
     add_executor,
-    add_grid_axes,
+    add_grid_axis,
     add_max_period,
     add_model,
     add_output,
@@ -17,6 +17,7 @@ from hybridpd.cli._common import (
     check_pair_command,
     command,
     executor_of,
+    grid_axis,
     print_json,
     progress_wanted,
     set_option_values,
@@ -46,10 +47,12 @@ def register(sub):
                       "search)")
     add_pair(p)
     add_model(p)
-    add_grid_axes(p, "COORD", "grid over this section coordinate: x1 or y1 for the pair (x1 "
-                  "-3 5 41 and y1 -2 10 41 times x10 by default: the reproduction's window); "
-                  "--model: a coordinate of the file's section (e.g. motor, motor_dot; "
-                  "default: the orbit's first two, around it)")
+    add_grid_axis(p, "--x", word="COORD",
+                  help="grid over this section coordinate: x1 or y1 for the pair (x1 -3 5 41 "
+                       "and y1 -2 10 41 times x10 by default: the reproduction's window); "
+                       "--model: a coordinate of the file's section (e.g. motor, motor_dot; "
+                       "default: the orbit's first two, around it)")
+    add_grid_axis(p, "--y", word="COORD", help="second axis, as --x (a different one)")
     p.add_argument("--iterations", type=int, default=None,
                    help="iterations of the impact map (default 1500, two impacts each; "
                         "--model: 300 of P^k)")
@@ -60,8 +63,7 @@ def register(sub):
                    help="window extensions while the symmetric orbit's basin touches the edge "
                         "(0: keep the window)")
     add_executor(p, default="serial")
-    add_output(p, out=(".npz", ".nc", ".zarr"), model_out=(".nc", ".zarr"),
-               plot="the basin (coloured by attractor)")
+    add_output(p, out=(".nc", ".zarr", ".npz"), plot="the basin (coloured by attractor)")
     p.set_defaults(func=run)
 
 
@@ -141,19 +143,7 @@ def _pair_axis(flag: str, given, name: str, default: tuple) -> tuple:
     if coord != name:
         raise ValueError(f"{flag}: the impact pair's slice is ({'x1, y1'}): {flag} takes "
                          f"{name}, got {coord!r} (other coordinates: --model)")
-    return _axis(flag, given)[1]
-
-
-def _axis(flag: str, given) -> tuple:
-    """``(COORD, (MIN, MAX, NUM))`` of ``flag``'s ``COORD MIN MAX NUM``."""
-    name, lo, hi, num = given
-    try:
-        lo, hi, num = float(lo), float(hi), float(num)
-    except ValueError:
-        raise ValueError(f"{flag} {name} MIN MAX NUM: numbers, got {given[1:]}") from None
-    if num != int(num):
-        raise ValueError(f"{flag} NUM must be an integer, got {num:g}")
-    return name, (lo, hi, int(num))
+    return grid_axis(flag, given)[1:]
 
 
 def _run_model(args) -> int:
@@ -179,7 +169,7 @@ def _run_model(args) -> int:
                        mode=args.mode, phase=args.phase)
         gx, gy = (args.x, args.y) if args.x is not None else default_axes(ms.fixed_point,
                                                                           ms.map.names)
-        (xn, x), (yn, y) = _axis("--x", gx), _axis("--y", gy)
+        (xn, *x), (yn, *y) = grid_axis("--x", gx), grid_axis("--y", gy)
         if xn == yn:
             raise ValueError(f"--x and --y must be different coordinates, both are {xn!r}")
         mb = basin_of_attraction(

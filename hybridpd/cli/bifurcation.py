@@ -82,7 +82,7 @@ def register(sub):
                    help="initial section point (default: the symmetric fixed point at MIN, "
                    "displaced by 1e-3 in z1)")
     add_max_period(p, 32)
-    add_output(p, out=(".nc", ".zarr"), model_out=(".nc", ".zarr"), what="the diagram (required)",
+    add_output(p, out=(".nc", ".zarr", ".npz"), what="the diagram (required)",
                plot="the diagram")
     p.add_argument("--coordinate", default="z1",
                    choices=["phi", "z1", "z2", "z4", "x1", "y1", "x2", "y2"],
@@ -135,7 +135,7 @@ def run(args) -> int:
     if args.keep > args.iterations:
         raise ValueError(f"--keep ({args.keep}) must not exceed --iterations "
                          f"({args.iterations})")
-    check_out(args.out, allowed=(".nc", ".zarr"))
+    check_out(args.out)
     check_image(args.plot)
     values = np.linspace(lo, hi, num)
     v0 = {k: getattr(args, k) for k in ("e", "mu", "gamma", "omega", "kp", "kv", "m2")}
@@ -226,7 +226,7 @@ def _run_model(args) -> int:
     if given:
         raise UsageError(f"{', '.join(given)}: impact-pair options, not used with --model "
                          "(sweep the file's entry with --param KEY MIN MAX NUM)")
-    check_out(args.out, allowed=(".nc", ".zarr"))
+    check_out(args.out)
     check_image(args.plot)
     d = model_diagram(args.model, tuple(args.param), contact=args.contact, wall=args.wall,
                       event=args.event, period=args.period, iterations=args.iterations,

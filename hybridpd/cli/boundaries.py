@@ -1,7 +1,7 @@
 """``hybridpd boundaries``: traced boundary curves of the symmetric orbit in a parameter box."""
 from __future__ import annotations
 
-from hybridpd.cli._common import add_grid_axes, add_output, add_pair, print_json
+from hybridpd.cli._common import add_grid_axis, add_output, add_pair, grid_axis, print_json
 from hybridpd.pair.testfunctions import PARAMETERS
 
 _EPILOG = """\
@@ -31,9 +31,11 @@ def register(sub):
     # m2 defaults to None: boundary_curves then takes the pair's own default
     add_pair(p, names=("case", "mu", "m2", "omega", "gamma", "x10", "e", "kp", "kv", "n"),
              required=("case",), m2=None)
-    add_grid_axes(p, "NAME", f"horizontal axis: a parameter among {', '.join(PARAMETERS)} "
-                  "and its range (MIN < MAX; the curves are traced, not gridded)", num=False,
-                  required=True)
+    add_grid_axis(p, "--x", num=False, required=True,
+                  help=f"horizontal axis: a parameter among {', '.join(PARAMETERS)} and its "
+                       "range (MIN < MAX; the curves are traced, not gridded)")
+    add_grid_axis(p, "--y", num=False, required=True,
+                  help="second axis, as --x (a different one)")
     p.add_argument("--seed-grid", type=int, default=41,
                    help="points per axis of the coarse seeding map (>= 3), default 41")
     p.add_argument("--max-step", type=float, default=0.02,
@@ -42,20 +44,12 @@ def register(sub):
     p.set_defaults(func=run)
 
 
-def _parse_axis(which, spec):
-    name, lo, hi = spec
-    try:
-        return name, float(lo), float(hi)
-    except ValueError:
-        raise ValueError(f"--{which} MIN and MAX must be numbers, got {lo!r} {hi!r}") from None
-
-
 def run(args) -> int:
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.pair.boundaries import boundary_curves
 
-    x = _parse_axis("x", args.x)
-    y = _parse_axis("y", args.y)
+    x = grid_axis("--x", args.x, num=False)
+    y = grid_axis("--y", args.y, num=False)
     fixed = {k: getattr(args, k) for k in ("kp", "kv", "e", "mu", "gamma", "omega")}
     res = boundary_curves(args.case, x=x, y=y, m2=args.m2, x10=args.x10, n=args.n,
                           seed_grid=args.seed_grid, max_step=args.max_step, **fixed)

@@ -28,7 +28,7 @@ def register(sub):
                 example=("hybridpd explore --case noncollocated --e 0.1 --kp 12 --kv 25\n"
                          "  hybridpd explore --no-browser --port 5006\n"
                          "  hybridpd explore --model examples/models/robot_joint_pd.toml "
-                         "--x controller.kp,5,60,8 --y controller.kv,1,20,8"),
+                         "--x controller.kp 5 60 8 --y controller.kv 1 20 8"),
                 notes=NOTES)
     p.add_argument("--port", type=int, default=0,
                    help="TCP port on 127.0.0.1 (default 0: a free one, printed)")
@@ -44,36 +44,28 @@ def register(sub):
     p.add_argument("--num", type=int, default=None,
                    help="grid points per axis of the map, 2 to 401 (default 201)")
     cli.add_model(p, set_option=False)
-    for axis in ("x", "y"):
-        p.add_argument(f"--{axis}", nargs="+", default=None, metavar="KEY,MIN,MAX,NUM",
-                       help=f"--model: {'first' if axis == 'x' else 'second'} axis of the map, "
-                            "a numeric entry of the file (dotted path, as hybridpd regions "
-                            "--model takes it) on NUM points from MIN to MAX; written "
-                            "KEY,MIN,MAX,NUM or KEY MIN MAX NUM")
+    cli.add_grid_axis(p, "--x", word="KEY",
+                      help="--model: first axis of the map, a numeric entry of the file (dotted "
+                           "path, as hybridpd regions --model takes it) on NUM points from MIN "
+                           "to MAX")
+    cli.add_grid_axis(p, "--y", word="KEY", help="--model: second axis of the map, as --x")
     p.set_defaults(func=run)
 
 
 def model_axis(name: str, tokens) -> tuple:
-    """``--x``/``--y``: ``(KEY, MIN, MAX, NUM)`` from ``KEY,MIN,MAX,NUM`` or four tokens.
+    """``--x``/``--y``: ``(KEY, MIN, MAX, NUM)`` from ``KEY MIN MAX NUM`` (at least 2 points).
 
     Examples
     --------
-    >>> model_axis("x", ["controller.kp,5,60,8"])
+    >>> model_axis("x", ["controller.kp", "5", "60", "8"])
     ('controller.kp', 5.0, 60.0, 8)
     """
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.model import check_axis
 
-    parts = tokens[0].rsplit(",", 3) if len(tokens) == 1 else list(tokens)
-    if len(parts) != 4:
-        raise ValueError(f"--{name} must be KEY,MIN,MAX,NUM (or KEY MIN MAX NUM), got "
-                         f"{' '.join(tokens)!r}")
-    try:
-        lo, hi, num = float(parts[1]), float(parts[2]), float(parts[3])
-    except ValueError:
-        raise ValueError(f"--{name} MIN MAX NUM must be numbers, got {parts[1:]}") from None
+    key, lo, hi, num = cli.grid_axis(f"--{name}", tokens)
     xs = check_axis(f"--{name}", (lo, hi, num), min_num=2)
-    return (parts[0], float(xs[0]), float(xs[-1]), len(xs))
+    return (key, float(xs[0]), float(xs[-1]), len(xs))
 
 
 def _run_model(args) -> int:
@@ -84,7 +76,7 @@ def _run_model(args) -> int:
         raise UsageError(f"{', '.join(pair)}: impact-pair options, not used with --model "
                          "(map the file's entries with --x and --y)")
     if args.x is None or args.y is None:
-        raise UsageError("--model needs --x KEY,MIN,MAX,NUM and --y KEY,MIN,MAX,NUM")
+        raise UsageError("--model needs --x KEY MIN MAX NUM and --y KEY MIN MAX NUM")
     x, y = model_axis("x", args.x), model_axis("y", args.y)
     # deferred import: loaded only when this runs, for start-up time
     from hybridpd.sweeps.model_regions import template_of

@@ -36,10 +36,11 @@ def register(sub):
                 notes=NOTES)
     cli.add_pair(p, grid=("kp", "kv"), many=("e",))
     cli.add_model(p, set_option=False)
-    cli.add_grid_axes(p, "KEY", "--model: grid axis over the file's entry KEY (a dotted path "
-                      "such as controller.kp, contact.0.restitution, system.masses.2; a "
-                      "pattern controller.*.kp or a list a.b,c.d sets every entry it matches; "
-                      "--list-params lists them)")
+    cli.add_grid_axis(p, "--x", word="KEY", help="--model: grid axis over the file's entry KEY "
+                      "(a dotted path such as controller.kp, contact.0.restitution, "
+                      "system.masses.2; a pattern controller.*.kp or a list a.b,c.d sets every "
+                      "entry it matches; --list-params lists them)")
+    cli.add_grid_axis(p, "--y", word="KEY", help="second axis, as --x (a different one)")
     p.add_argument("--tile", type=int, default=8,
                    help="--model: side of the square tiles of cells (one task each)")
     p.add_argument("--certify", action="store_true",
@@ -51,7 +52,7 @@ def register(sub):
                    help="--certify: bisections of an undecided cell (default auto: 3 for a "
                         "101 x 101 grid, one more for every factor 2 fewer cells)")
     cli.add_executor(p, default="serial")
-    cli.add_output(p, out=(".nc", ".zarr", ".npz"), model_out=(".nc", ".zarr"), store=True,
+    cli.add_output(p, out=(".nc", ".zarr", ".npz"), store=True,
                    plot="the region map (one panel per e)")
     p.set_defaults(func=run)
 

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridpd._results import compact_repr
+from hybridpd._results import Fields, compact_repr
 from hybridpd.model import (
     Case,
     ImpactPair,
@@ -230,7 +230,7 @@ def _pair(lo, hi):
 
 
 @dataclass(frozen=True)
-class BoxCertificate:
+class BoxCertificate(Fields):
     """The certified class of one box of parameters (see the module docstring).
 
     Attributes
@@ -264,13 +264,6 @@ class BoxCertificate:
     depth: int
     boxes_evaluated: int
     stop: str
-
-    def to_dict(self) -> dict:
-        """JSON-ready form."""
-        return {"verdict": self.verdict, "flag": self.flag, "reason": self.reason,
-                "case": self.case, "n": self.n,
-                "box": {k: list(v) for k, v in self.box.items()}, "depth": self.depth,
-                "boxes_evaluated": self.boxes_evaluated, "stop": self.stop}
 
 
 def certify_box(case="collocated", *, kp, kv, mu, e, gamma, omega, m2=1.0, n=1,

@@ -3,9 +3,8 @@
 The kind of a file is read from the file itself, never from its name:
 
 * ``.nc`` / ``.zarr`` datasets: their ``kind`` attribute (``region_map``, ``basin``);
-* ``.npz`` archives: the ``kind`` of their JSON metadata (``region_map``, ``basin``,
-  ``attractor_basin``, ``branch``; see :mod:`hybridpd.sweeps.npz`), or the ``meta`` entry of
-  a bifurcation diagram (:meth:`~hybridpd.analysis.diagrams.BifurcationDiagram.save`);
+* ``.npz`` archives: the ``kind`` of their JSON metadata (the same kinds; see
+  :func:`hybridpd._results.write_npz`);
 * ``.json`` documents: their ``kind`` key (``trajectory``, written by
   ``hybridpd simulate --out``).
 
@@ -65,7 +64,7 @@ def _read_kind(p: Path):
         # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
-        from hybridpd.sweeps.labelled import decode_attrs
+        from hybridpd._results import decode_attrs
 
         engine = "zarr" if p.is_dir() else "netcdf4"
         with xr.open_dataset(p, engine=engine) as ds:
@@ -74,10 +73,6 @@ def _read_kind(p: Path):
         with np.load(p, allow_pickle=False) as z:
             if "__metadata__" in z.files:
                 return json.loads(str(z["__metadata__"][()])).get("kind")
-            if "meta" in z.files:
-                meta = json.loads(str(z["meta"][()]))
-                if "parameter_name" in meta and "classes" in meta:
-                    return "bifurcation_diagram"
         return None
     try:
         with open(p, encoding="utf-8") as fh:
@@ -99,8 +94,8 @@ def plot_file(path: str | os.PathLike, **options):
     Parameters
     ----------
     path : str or os.PathLike
-        A region map, basin or attractor basin (``.nc``, ``.zarr``, ``.npz``), a bifurcation
-        diagram or a continued branch (``.npz``), or a trajectory (``.json`` from
+        A region map, basin, bifurcation diagram or continued branch (``.nc``, ``.zarr``,
+        ``.npz``), or a trajectory (``.json`` from
         ``hybridpd simulate --out``).
     **options
         ``title`` (any kind); ``coordinate`` (bifurcation diagrams: ``phi, z1, z2, z4, x1,

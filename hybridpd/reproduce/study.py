@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from hybridpd._results import compact_repr
+from hybridpd._results import Fields, compact_repr
 from hybridpd.model import Case, check_positive
 from hybridpd.pair.orbits import REASONS, symmetric_orbits
 
@@ -36,7 +36,7 @@ _VERIFY_TOL = 1e-6
 
 
 @dataclass(frozen=True)
-class EndPoint:
+class EndPoint(Fields):
     """One end of an ``m2`` interval.
 
     Attributes
@@ -64,14 +64,9 @@ class EndPoint:
     verified: bool
     reason: str = ""
 
-    def to_dict(self) -> dict:
-        return {"m2": self.m2, "kind": self.kind,
-                "residual": None if not math.isfinite(self.residual) else self.residual,
-                "verified": self.verified, "reason": self.reason}
-
 
 @dataclass(frozen=True)
-class StableInterval:
+class StableInterval(Fields):
     """An interval ``[lo.m2, hi.m2]`` of ``m2`` on which the orbit exists and is stable."""
 
     lo: EndPoint
@@ -80,9 +75,6 @@ class StableInterval:
 
     def bounds(self) -> list:
         return [self.lo.m2, self.hi.m2]
-
-    def to_dict(self) -> dict:
-        return {"lo": self.lo.to_dict(), "hi": self.hi.to_dict()}
 
 
 def _orbit_fn(case, kp, kv, params):

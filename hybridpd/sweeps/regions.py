@@ -19,17 +19,47 @@ cell by Newton from the neighbours' orbits, seeded by simulation, in tiles on an
 """
 from __future__ import annotations
 
-import dataclasses
 import re
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from hybridpd._results import Result, WithExtras, compact_repr, decode_attrs, encode_attrs, jsonable
-from hybridpd.sweeps.labelled import axis_attrs, load_result, save_result
 
-__all__ = ["RegionMap", "load_region_map", "region_map"]
+__all__ = ["UNITS", "RegionMap", "axis_attrs", "load_region_map", "region_map"]
+
+#: Units and long names of parameters, coordinates and variables of the datasets. The model is
+#: written in consistent but unspecified units (CONVENTIONS.md), so units name dimensions
+#: (``"length/time"``); ``"1"`` means dimensionless.
+UNITS: dict[str, tuple[str, str]] = {
+    "kp": ("mass/time^2", "proportional gain"),
+    "kv": ("mass/time", "derivative gain"),
+    "e": ("1", "coefficient of restitution"),
+    "mu": ("1", "mass ratio m1/m2"),
+    "L": ("length", "half clearance"),
+    "x10": ("length", "amplitude of the desired motion of the primary mass"),
+    "gamma": ("1", "clearance ratio L/x10"),
+    "m2": ("mass", "secondary mass"),
+    "omega": ("rad/time", "angular frequency of the reference"),
+    "n": ("1", "impacts per period / 2 (orbit order)"),
+    "xm": ("length", "amplitude of the reference xd = xm cos(omega t)"),
+    "x1": ("length", "primary-mass position at the impact"),
+    "y1": ("length/time", "primary-mass velocity at the impact"),
+    "spectral_radius": ("1", "largest modulus of the eigenvalues of DP")}
+
+
+def axis_attrs(name: str) -> dict[str, str]:
+    """``{"units", "long_name"}`` of a known parameter or variable (empty if unknown).
+
+    Examples
+    --------
+    >>> axis_attrs("kv")
+    {'units': 'mass/time', 'long_name': 'derivative gain kv'}
+    """
+    if name not in UNITS:
+        return {}
+    units, long_name = UNITS[name]
+    return {"units": units, "long_name": f"{long_name} {name}"}
 
 #: Names of the trailing dimensions of the variables that have one.
 _TRAILING = {"section_point": "coordinate", "section_point2": "coordinate",
@@ -92,7 +122,7 @@ class RegionMap(WithExtras, Result):
     stable: np.ndarray
     spectral_radius: np.ndarray
     reason: np.ndarray
-    variables: dict = field(default_factory=dict, repr=False)
+    variables: dict = field(default_factory=dict, repr=False, metadata={"dict_skip": True})
     metadata: dict = field(default_factory=dict, repr=False)
     __repr__ = compact_repr
 
@@ -172,8 +202,7 @@ class RegionMap(WithExtras, Result):
     def to_dict(self) -> dict:
         """JSON-ready form (``regions --json``): every field, arrays ``[layer][iy][ix]``, the
         swept axes also under their names, ``counts``."""
-        d = {f.name: jsonable(getattr(self, f.name)) for f in dataclasses.fields(self)
-             if f.name != "variables"}
+        d = super().to_dict()
         d.update({k: jsonable(v) for k, v in self.variables.items()})
         d.update({self.x_name: d["x"], self.y_name: d["y"], "counts": self.counts()})
         return d
@@ -217,52 +246,27 @@ class RegionMap(WithExtras, Result):
 
     @classmethod
     def from_dataset(cls, ds) -> RegionMap:
-        """Inverse of :meth:`to_dataset`; also reads the region maps of hybridpd 0.2.0 (the
-        pair's and a model file's)."""
+        """Inverse of :meth:`to_dataset`."""
         a = decode_attrs(ds.attrs)
         if a.get("kind") != "region_map":
             raise ValueError("the dataset does not hold a region map (attribute kind)")
         ds = ds.transpose("e", a["y_name"], a["x_name"], ...)
-        meta = dict(a.get("metadata") or {})
-        if a.get("model_kind") == "model_region_map":      # written by hybridpd 0.2.0
-            meta = _model_020_metadata(ds, a, meta)
         fixed = {k: a[k] for k in a["fixed_names"].split()}
         var = {k: ds[k].values for k in ds.data_vars if k not in _CORE}
         return cls(a["case"], a["x_name"], a["y_name"], ds[a["x_name"]].values,
                    ds[a["y_name"]].values, ds["e"].values, fixed,
                    ds["exists"].values.astype(bool), ds["stable"].values.astype(bool),
                    ds["spectral_radius"].values, ds["reason"].values.astype(np.int64), var,
-                   meta)
-
-    def save(self, path) -> Path:
-        """Write to ``.nc`` or ``.zarr`` (:meth:`to_dataset`), or the ``.npz`` archive of
-        earlier versions, by suffix."""
-        return save_result(self, path, lambda: (
-            {"x": self.x, "y": self.y, "e": self.e, "exists": self.exists,
-             "stable": self.stable, "spectral_radius": self.spectral_radius,
-             "reason": self.reason, **self.variables},
-            {"kind": "region_map", "case": self.case, "x_name": self.x_name,
-             "y_name": self.y_name, "fixed": self.fixed, **self.metadata}))
-
-
-def _model_020_metadata(ds, a, meta):
-    """The metadata of a model's region map as hybridpd 0.2.0 wrote it."""
-    from_status = ds["status"].attrs
-    meta = dict(meta, spec=a.get("spec"), sig_table=a.get("sig_table"),
-                coords=[str(c) for c in ds["coordinate"].values])
-    meta.setdefault("reasons", dict(zip(
-        (str(v) for v in np.ravel(from_status["flag_values"])),
-        str(from_status["flag_meanings"]).split())))
-    return meta
+                   dict(a.get("metadata") or {}))
 
 
 def load_region_map(path) -> RegionMap:
-    """Read a :class:`RegionMap` written by :meth:`RegionMap.save` (or by hybridpd 0.2.0).
+    """Read a :class:`RegionMap` written by :meth:`RegionMap.save`.
 
     Parameters
     ----------
     path : str or path
-        A ``.nc``, ``.zarr`` or (earlier versions) ``.npz`` file.
+        A ``.nc``, ``.zarr`` or ``.npz`` file.
 
     Returns
     -------
@@ -284,22 +288,7 @@ def load_region_map(path) -> RegionMap:
     >>> back.stable.shape, bool((back.stable == rm.stable).all())
     ((1, 3, 4), True)
     """
-
-    def from_npz(arr, meta):
-        if meta.get("kind") != "region_map":
-            raise ValueError(f"{path} does not hold a region map")
-        extra = {k: v for k, v in meta.items()
-                 if k not in ("kind", "case", "x_name", "y_name", "fixed")}
-        var = {k: v for k, v in arr.items()
-               if k not in ("x", "y", "e", "exists", "stable", "spectral_radius", "reason")}
-        if "certified" in var:
-            var["certified"] = var["certified"].astype(np.int8)
-        return RegionMap(meta["case"], meta["x_name"], meta["y_name"], arr["x"], arr["y"],
-                         arr["e"], meta["fixed"], arr["exists"].astype(bool),
-                         arr["stable"].astype(bool), arr["spectral_radius"],
-                         arr["reason"].astype(np.int64), var, extra)
-
-    return load_result(RegionMap, path, from_npz)
+    return RegionMap.load(path)
 
 
 def region_map(family, x=None, y=None, **options) -> RegionMap:

@@ -38,6 +38,7 @@ workers (defined at module level, not a lambda or a closure).
 from __future__ import annotations
 
 import concurrent.futures as cf
+import dataclasses
 import json
 import math
 import os
@@ -49,6 +50,7 @@ from typing import Any
 
 import numpy as np
 
+from hybridpd._results import Result, check_suffix, decode_attrs, encode_attrs, write_dataset
 from hybridpd.sweeps.executors import (
     EXECUTORS,
     ChunkError,
@@ -58,12 +60,11 @@ from hybridpd.sweeps.executors import (
     compute,
     resolve_executor,
 )
-from hybridpd.sweeps.npz import load_npz, save_npz
 from hybridpd.sweeps.progress import Progress
 from hybridpd.sweeps.store import FORMAT, ZarrStore, check_store_path, read_store, sweep_identity
 
 __all__ = ["EXECUTORS", "FORMAT", "ChunkError", "ExecutorSpec", "SweepResult", "default_chunk_size",
-           "grid_points", "load_npz", "load_sweep", "resolve_executor", "run_sweep", "save_npz"]
+           "grid_points", "load_sweep", "resolve_executor", "run_sweep"]
 
 # Default chunking: aim at ~256 chunks (enough for load balancing on a few
 # dozen workers, few enough that per-chunk overhead stays negligible), but
@@ -72,8 +73,6 @@ _TARGET_CHUNKS = 256
 _MIN_CHUNK = 64
 _MAX_CHUNK = 1 << 20
 _NUMERIC_KINDS = "biufc"
-# Final files of the earlier .npz format (still readable by load_sweep).
-_LEGACY_FORMAT = "hybridpd.sweeps.sweep/1"
 
 
 def _check_bool(value: Any, name: str) -> bool:
@@ -267,8 +266,9 @@ class _Assembler:
 
 
 @dataclass
-class SweepResult:
-    """Outcome of :func:`run_sweep`.
+class SweepResult(Result):
+    """Outcome of :func:`run_sweep`; a result (:class:`~hybridpd._results.Result`) whose
+    dataset lays the points along one dimension ``point`` (or a grid, see :meth:`to_dataset`).
 
     Attributes
     ----------
@@ -315,6 +315,7 @@ class SweepResult:
     wall_time: float = 0.0
     compute_time: float = 0.0
     executor: str = ""
+    kind = "sweep"
 
     @property
     def n_points(self) -> int:
@@ -355,7 +356,6 @@ class SweepResult:
         # deferred import: loaded only when this runs, for start-up time
         import xarray as xr
 
-        from hybridpd.sweeps.labelled import encode_attrs
         from hybridpd.sweeps.store import canonical_json
 
         if grid is None:
@@ -380,21 +380,28 @@ class SweepResult:
                  "hybridpd_sweep": canonical_json(info)}
         return xr.Dataset(data, coords=coords, attrs=attrs)
 
+    @classmethod
+    def from_dataset(cls, ds) -> SweepResult:
+        """Inverse of :meth:`to_dataset` (without `grid`); ``ValueError`` for another dataset."""
+        if ds.attrs.get("kind") != cls.kind or "hybridpd_sweep" not in ds.attrs \
+                or "point" not in ds.dims:
+            raise ValueError("the dataset does not hold a hybridpd sweep result laid out by "
+                             "point (attributes kind and hybridpd_sweep)")
+        info = json.loads(ds.attrs["hybridpd_sweep"])
+        points = {k: ds[k].values for k in info["identity"]["points"]["names"]}
+        meta = decode_attrs({k: v for k, v in ds.attrs.items()
+                             if k not in ("kind", "hybridpd_sweep")})
+        return _loaded(points, {k: ds[k].values for k in ds.data_vars}, info, meta, None)
+
     def save(self, path: str | os.PathLike) -> Path:
         """Write this result; the format follows the suffix of `path`.
 
-        ``.zarr``: a complete sweep store (the layout :func:`run_sweep` writes); ``.nc``:
-        netCDF of :meth:`to_dataset`; ``.npz``: the format of earlier versions. All three
-        are read back by :func:`load_sweep`.
+        ``.zarr``: a complete sweep store (the layout :func:`run_sweep` writes); ``.nc`` and
+        ``.npz``: :meth:`to_dataset` (the one writer of results). All three are read back by
+        :func:`load_sweep`.
         """
-        # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.sweeps.labelled import check_suffix, write_dataset
-
         p = Path(path)
-        suffix = check_suffix(p, "path")
-        if suffix == ".npz":
-            return save_npz(p, *_legacy_payload(self))
-        if suffix == ".nc":
+        if check_suffix(p, "path") != ".zarr":
             return write_dataset(self.to_dataset(), p)
         if p.exists():
             raise ValueError(f"path {str(p)!r} exists; remove it or choose another name")
@@ -408,26 +415,23 @@ class SweepResult:
         return p
 
 
-def _legacy_payload(res: SweepResult):
-    arrays = {f"points/{k}": v for k, v in res.points.items()}
-    arrays.update({f"outputs/{k}": v for k, v in res.outputs.items()})
-    meta = {"hybridpd_sweep": {
-        "format": _LEGACY_FORMAT, "identity": res.identity, "identity_hash": res.identity_hash,
-        "n_points": res.n_points, "n_chunks": res.n_chunks, "chunk_size": res.chunk_size,
-        "point_names": list(res.points), "output_names": list(res.outputs)},
-        "metadata": res.metadata}
-    return arrays, meta
+def _loaded(points, outputs, info, meta, path) -> SweepResult:
+    for a in points.values():
+        a.flags.writeable = False
+    return SweepResult(outputs=outputs, points=points, metadata=meta,
+                       n_chunks=int(info["n_chunks"]), n_resumed=int(info["n_chunks"]),
+                       chunk_size=int(info["chunk_size"]), identity_hash=info["identity_hash"],
+                       identity=info["identity"], path=path, executor="")
 
 
 def load_sweep(path: str | os.PathLike) -> SweepResult:
-    """Load a finished sweep: a Zarr store, a ``.nc`` file, or an ``.npz`` of earlier versions.
+    """Load a finished sweep: a Zarr store, or a ``.nc`` or ``.npz`` file.
 
     Parameters
     ----------
     path : str or os.PathLike
-        A store written by :func:`run_sweep` (or :meth:`SweepResult.save` to ``.zarr``), a
-        netCDF file written by :meth:`SweepResult.save`, or an ``.npz`` final file (or the
-        store directory holding ``result.npz``) of earlier versions.
+        A store written by :func:`run_sweep` (or :meth:`SweepResult.save` to ``.zarr``), or
+        a ``.nc`` or ``.npz`` file written by :meth:`SweepResult.save`.
 
     Returns
     -------
@@ -435,36 +439,9 @@ def load_sweep(path: str | os.PathLike) -> SweepResult:
         With ``n_resumed == n_chunks`` and zero timings.
     """
     p = Path(path)
-    if p.is_dir() and (p / "result.npz").is_file():
-        p = p / "result.npz"
-    if p.suffix == ".nc":
-        # deferred import: loaded only when this runs, for start-up time
-        from hybridpd.sweeps.labelled import decode_attrs, read_dataset
-
-        ds = read_dataset(p)
-        if "hybridpd_sweep" not in ds.attrs or "point" not in ds.dims:
-            raise ValueError(f"{p} is not a hybridpd sweep result")
-        info = json.loads(ds.attrs["hybridpd_sweep"])
-        points = {k: ds[k].values for k in info["identity"]["points"]["names"]}
-        outputs = {k: ds[k].values for k in ds.data_vars}
-        meta = decode_attrs({k: v for k, v in ds.attrs.items()
-                             if k not in ("kind", "hybridpd_sweep")})
-    elif p.suffix == ".npz":
-        arrays, m = load_npz(p)
-        info = m.get("hybridpd_sweep")
-        if not isinstance(info, dict) or info.get("format") != _LEGACY_FORMAT:
-            raise ValueError(f"{p} is not a hybridpd sweep result (format {_LEGACY_FORMAT!r})")
-        points = {k: arrays[f"points/{k}"] for k in info["point_names"]}
-        outputs = {k: arrays[f"outputs/{k}"] for k in info["output_names"]}
-        meta = m.get("metadata", {})
-    else:
-        points, outputs, info, meta = read_store(p)
-    for a in points.values():
-        a.flags.writeable = False
-    return SweepResult(outputs=outputs, points=points, metadata=meta,
-                       n_chunks=int(info["n_chunks"]), n_resumed=int(info["n_chunks"]),
-                       chunk_size=int(info["chunk_size"]), identity_hash=info["identity_hash"],
-                       identity=info["identity"], path=p, executor="")
+    if p.suffix in (".nc", ".npz"):
+        return dataclasses.replace(SweepResult.load(p), path=p)
+    return _loaded(*read_store(p), p)
 
 
 def run_sweep(func: Callable[..., Mapping[str, Any]], points: Mapping[str, Any] | np.ndarray, *,
