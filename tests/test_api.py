@@ -60,7 +60,7 @@ OLD_MODULES = {
         ControlledImpactPair ImpactPairTrajectory
     """),
     "hybridpd.lti": ("hybridpd.pair.lti", """
-        LTIImpactMap LTIJacobian LTIMapResult LTIOrbitResult LTI_REASONS filtered_pd
+        LTIJacobian LTIOrbitResult LTI_REASONS filtered_pd
         filtered_pid lead_lag lti_symmetric_orbit
     """),
     "hybridpd.naive": ("hybridpd.pair.naive", """

@@ -12,12 +12,13 @@ from hybridpd import ImpactPair, PDGains
 from hybridpd.loop import pd_controller
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.lti import (
-    LTIImpactMap,
+    _chain_jacobian,
     filtered_pd,
     filtered_pid,
     lead_lag,
     lti_symmetric_orbit,
 )
+from hybridpd.pair.lti.flight import _FreeFlight, _full_state, _impact_full
 from hybridpd.pair.orbits import symmetric_orbit, symmetric_orbits
 
 CASES = ("collocated", "noncollocated")
@@ -128,26 +129,30 @@ def test_DP_against_finite_differences_of_simulated_map(case, name):
     assert o.exists
     assert o.DP.shape == (4 + o.n_controller_states,) * 2
     assert o.DP_fd_error < 1e-6, o.DP_fd_error
-    # the map's own Jacobian (located flight times) agrees with the orbit's (exact tau)
-    P = o.impact_map()
-    J = P.jacobian(o.fixed_point)
-    assert J.walls == (-1, 1) and np.allclose(J.taus, o.tau, rtol=1e-12)
+    # the general map's saltation Jacobian agrees with the orbit's (implicit differentiation)
+    J = o.section_map().jacobian(o.fixed_point)
     sc = o.coordinate_scale()
     scaled = lambda M: M * sc[None, :] / sc[:, None]
-    assert np.abs(scaled(J.DP - o.DP)).max() <= 1e-9 * np.abs(scaled(o.DP)).max()
+    assert np.abs(scaled(J - o.DP)).max() <= 1e-7 * np.abs(scaled(o.DP)).max()
 
 
 @pytest.mark.parametrize("case", CASES)
 def test_DP_off_the_orbit_against_finite_differences(case):
-    """Implicit differentiation at a general section point (flight times != n T / 2)."""
+    """Implicit differentiation at a general section point (flight times != n T / 2), along
+    the contacts the general map locates, against finite differences of that map."""
     o = lti_symmetric_orbit(PAIR, filtered_pd(10, 20, 0.05), W, case=case)
-    P = o.impact_map()
+    P = o.section_map()
     sc = o.coordinate_scale()
     rng = np.random.default_rng(3)
     s = o.fixed_point + 0.02 * sc * rng.normal(size=sc.size)
     r = P.apply(s)
-    assert r.ok and not np.allclose(r.taus, o.tau)
-    J = P.jacobian(s).DP
+    assert r.ok and r.signature == (("wall+", "crossing"), ("wall-", "crossing"))
+    taus = np.diff([r.jumps[0][0], r.jumps[1][0], r.t_hit])
+    assert not np.allclose(taus, o.tau)
+    z0 = _full_state(s, 1, PAIR.L, o.xm, o.omega)
+    flight = _FreeFlight(o.loop, 10_000)
+    J = _chain_jacobian(o.loop.A, _impact_full(PAIR, o.loop.n_states), flight.gap, z0, (-1, 1),
+                        taus, o.omega).DP
     Jfd = P.jacobian_fd(s, h=1e-5, scale=sc, richardson=True)
     scaled = lambda M: M * sc[None, :] / sc[:, None]
     assert np.abs(scaled(J - Jfd)).max() <= 1e-6 * np.abs(scaled(J)).max()
@@ -171,23 +176,25 @@ def test_jacobian_blocks_compose():
 @pytest.mark.parametrize("name", sorted(CONTROLLERS))
 def test_fixed_point_returns_under_simulated_map(case, name):
     o = lti_symmetric_orbit(PAIR, CONTROLLERS[name], W, case=case)
-    P = o.impact_map()
+    P = o.section_map()
     r = P.apply(o.fixed_point)
-    assert r.ok and r.walls == (-1, 1) and not r.grazing
+    assert r.ok and r.signature == (("wall+", "crossing"), ("wall-", "crossing"))
+    assert not r.grazing
     # rounding of the fixed point (~1e-16) is amplified by the unstable non-collocated
     # multipliers (~3e3) before the second flight ends
-    np.testing.assert_allclose(r.taus, [o.tau, o.tau], rtol=1e-10)
+    np.testing.assert_allclose(np.diff([r.jumps[0][0], r.jumps[1][0], r.t_hit]),
+                               [o.tau, o.tau], rtol=1e-10)
     d = phase_diff(r.s, o.fixed_point, o.T) / np.maximum(1.0, np.abs(o.fixed_point))
     assert np.abs(d).max() < 1e-10
-    # the pre-impact state on the -L wall is minus the +L one (symmetry, incl. controller)
-    np.testing.assert_allclose(r.pre[0], -o.state_plus, rtol=0, atol=1e-10)
+    # the state at the return is the +L pre-impact state: the orbit closes (incl. controller)
+    np.testing.assert_allclose(r.z_hit, o.state_plus, rtol=0, atol=1e-9)
 
 
 def test_pd_fixed_point_agrees_with_batch_impact_map():
     o = lti_symmetric_orbit(PAIR, pd_controller(10, 20), W)
     Pb = ImpactMap(PAIR, PDGains(10, 20), o.reference())
     s = o.fixed_point + np.array([1e-3, 2e-3, -1e-2, 3e-2])
-    np.testing.assert_allclose(o.impact_map()(s), Pb(s), rtol=0, atol=1e-11)
+    np.testing.assert_allclose(o.section_map()(s), Pb(s), rtol=0, atol=1e-11)
 
 
 def test_simulation_with_controlled_impact_pair_stays_on_stable_orbit():
@@ -212,7 +219,7 @@ def test_spectral_radius_against_iterated_perturbations():
     o = lti_symmetric_orbit(PAIR, CONTROLLERS["filtered_pd"], W)
     assert o.stable and abs(o.multipliers[0].imag) == 0      # a real dominant multiplier
     sc = o.coordinate_scale()
-    P = o.impact_map()
+    P = o.section_map()
     rng = np.random.default_rng(5)
     traj = P.iterate(o.fixed_point + 1e-4 * sc * rng.normal(size=sc.size), 20)
     d = traj - o.fixed_point
@@ -240,7 +247,7 @@ def test_lead_lag_stabilises_noncollocated_orbit_in_simulation():
 def test_unstable_noncollocated_multiplier_measured():
     o = lti_symmetric_orbit(PAIR, CONTROLLERS["lead"], W, case="noncollocated")
     assert o.exists and not o.stable
-    P = o.impact_map()
+    P = o.section_map()
     sc = o.coordinate_scale()
     d0 = 1e-12 * sc
     traj = P.iterate(o.fixed_point + d0, 3)
@@ -298,18 +305,16 @@ def test_bad_input_raises_value_error_naming_it(make, match):
         make()
 
 
-def test_impact_map_validation():
+def test_section_map_validation():
     o = lti_symmetric_orbit(PAIR, filtered_pd(10, 20, 0.01), W)
-    P = o.impact_map()
+    P = o.section_map()
     assert P.dim == 5
     with pytest.raises(ValueError, match="shape"):
         P(o.fixed_point[:4])
-    with pytest.raises(ValueError, match="z4"):
-        P(o.fixed_point * np.array([1, 1, 1, -1, 1]))
     with pytest.raises(ValueError, match="finite"):
         P(np.full(5, np.nan))
-    with pytest.raises(ValueError, match="max_impacts"):
-        LTIImpactMap(PAIR, filtered_pd(10, 20, 0.01), o.reference(), max_impacts=0)
+    with pytest.raises(ValueError, match="max_jumps"):
+        o.section_map(max_jumps=0)
     with pytest.raises(ValueError, match="scale"):
         P.jacobian_fd(o.fixed_point, scale=np.ones(4))
 
@@ -336,7 +341,7 @@ def test_result_helpers_and_json():
 def test_module_doctests():
     mods = [lti_mod] + [importlib.import_module(f"{lti_mod.__name__}.{m.name}")
                         for m in pkgutil.iter_modules(lti_mod.__path__)]
-    assert len(mods) >= 5
+    assert len(mods) >= 4
     res = [doctest.testmod(m, optionflags=doctest.ELLIPSIS) for m in mods]
     assert sum(r.failed for r in res) == 0 and sum(r.attempted for r in res) > 5
 

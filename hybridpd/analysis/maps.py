@@ -11,11 +11,10 @@ derives everything else once: ``__call__``, :meth:`~PoincareMap.jacobian`,
 :meth:`~PoincareMap.iterate`.
 
 The reference implementation is :class:`hybridpd.analysis.hybridmap.SectionMap` (any hybrid
-automaton, ``DP`` from saltation matrices). The named specialisations for the impact pair
+automaton, ``DP`` from saltation matrices). The named specialisation for the impact pair
 (:class:`hybridpd.pair.impactmap.ImpactMap`, the compiled closed-form engine with the
-symbolic ``DP``; :class:`hybridpd.pair.lti.LTIImpactMap`, exact flights under any LTI
-controller) implement the same protocol; each states its measured speed-up over the general
-path in its docstring and is compared with it in ``tests/test_specialisations.py``.
+symbolic ``DP``) implements the same protocol; it states its measured speed-up over the
+general path in its docstring and is compared with it in ``tests/test_specialisations.py``.
 """
 from __future__ import annotations
 

@@ -91,7 +91,7 @@ class ImpactMap(PoincareMap):
     general path; the symbolic ``DP`` per point is 0.3-0.6 times as fast as the general
     saltation ``DP`` (it is kept for its named blocks and the vectorised orbit grids of
     :mod:`hybridpd.pair.symbolic`, not for speed). Limits: PD controllers only (any LTI
-    controller: :class:`~hybridpd.pair.lti.LTIImpactMap`); a sticking phase is one
+    controller: :meth:`hybridpd.pair.lti.LTIOrbitResult.section_map`); a sticking phase is one
     ``"zeno"`` jump and its release, not the accumulating impacts the general path resolves
     one by one.
 

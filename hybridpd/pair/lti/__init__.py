@@ -56,16 +56,18 @@ Jacobian by implicit differentiation. Work with ``(t, z)``. An impact is ``z -> 
 
 Each block is mapped back to the reduced coordinates of its wall (``phi_out = phi_in + tau``),
 giving ``DP = DP43 DP32 DP21 DP10`` (24) for the simple pattern, or the product over any
-pattern of transversal impacts. :meth:`LTIImpactMap.jacobian_fd` gives central differences of
-the simulated map as the independent check. Stability: :func:`hybridpd.pair.impactmap.stability`.
+pattern of transversal impacts (:class:`LTIJacobian`, its blocks named). The map itself is the
+general :class:`~hybridpd.analysis.hybridmap.SectionMap` of the controlled pair
+(:meth:`LTIOrbitResult.section_map`), whose ``jacobian_fd`` gives central differences of the
+simulated map as the independent check. Stability: :func:`hybridpd.analysis.floquet.stability`.
 
 Modules, by concept
 -------------------
 :mod:`~hybridpd.pair.lti.controllers` (filtered PD, filtered PID, lead-lag as
 python-control objects), :mod:`~hybridpd.pair.lti.flight` (exact free flight, contact
 location, section coordinates, impact and flight Jacobian blocks),
-:mod:`~hybridpd.pair.lti.section_map` (:class:`LTIImpactMap`, :class:`LTIJacobian`),
-:mod:`~hybridpd.pair.lti.orbit` (:func:`lti_symmetric_orbit`, :class:`LTIOrbitResult`).
+:mod:`~hybridpd.pair.lti.orbit` (:func:`lti_symmetric_orbit`, :class:`LTIOrbitResult`,
+:class:`LTIJacobian`).
 Everything public is re-exported here.
 
 Examples
@@ -93,16 +95,12 @@ from hybridpd.pair.lti.flight import (  # noqa: F401
 )
 from hybridpd.pair.lti.orbit import (  # noqa: F401
     LTI_REASONS,
+    LTIJacobian,
     LTIOrbitResult,
+    _chain_jacobian,
     _viability_margin,
     lti_symmetric_orbit,
 )
-from hybridpd.pair.lti.section_map import (  # noqa: F401
-    LTIImpactMap,
-    LTIJacobian,
-    LTIMapResult,
-    _chain_jacobian,
-)
 
-__all__ = ["LTI_REASONS", "LTIImpactMap", "LTIJacobian", "LTIMapResult", "LTIOrbitResult",
-           "filtered_pd", "filtered_pid", "lead_lag", "lti_symmetric_orbit"]
+__all__ = ["LTI_REASONS", "LTIJacobian", "LTIOrbitResult", "filtered_pd", "filtered_pid",
+           "lead_lag", "lti_symmetric_orbit"]

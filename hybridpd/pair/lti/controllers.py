@@ -1,8 +1,8 @@
 """Common controllers as python-control objects: filtered PD, filtered PID, lead-lag.
 
 Each constructor returns a 1-input (``err = xd - x``), 1-output (``u_fb``)
-``control.TransferFunction`` for :func:`hybridpd.pair.lti.lti_symmetric_orbit` and
-:class:`hybridpd.pair.lti.LTIImpactMap` (signal conventions: :mod:`hybridpd.pair.lti`).
+``control.TransferFunction`` for :func:`hybridpd.pair.lti.lti_symmetric_orbit` and the
+controlled pair's general section map (signal conventions: :mod:`hybridpd.pair.lti`).
 python-control is imported only when a controller is built.
 """
 from __future__ import annotations

@@ -17,14 +17,54 @@ from hybridpd.analysis.floquet import stability
 from hybridpd.hybrid.events import EV_CROSSING, EV_GRAZING, EV_START, lti_flow
 from hybridpd.loop import ClosedLoop, closed_loop
 from hybridpd.model import Case, ImpactPair, Reference, check_int, check_odd_order, check_positive
-from hybridpd.pair.lti.flight import _WALL_PLUS, _FreeFlight, _impact_full
-from hybridpd.pair.lti.section_map import LTIImpactMap, _chain_jacobian
+from hybridpd.pair.lti.flight import (
+    _WALL_PLUS,
+    _flight_block,
+    _FreeFlight,
+    _impact_block,
+    _impact_full,
+)
 from hybridpd.pair.orbits import _END_RTOL, _HYPERBOLIC_TOL, REASONS
 
 __all__ = ["LTI_REASONS", "LTIOrbitResult", "lti_symmetric_orbit"]
 
 #: Reason codes of :attr:`LTIOrbitResult.code`: the same as for the PD fast path.
 LTI_REASONS = REASONS
+
+
+@dataclass(frozen=True)
+class LTIJacobian:
+    """Jacobian of the impact map on the extended section, by implicit differentiation.
+
+    Attributes
+    ----------
+    DP : ndarray, shape (m, m)
+        ``d P / d s`` with ``s = (phi, z1, z2, z4, c1..ck)``, ``m = 4 + k``; the phase is
+        unwrapped (``phi_out = phi_in + sum(taus)``).
+    blocks : tuple of ndarray, each (m, m)
+        Impact and flight blocks in application order (``DP10, DP21, DP32, DP43`` for the
+        simple pattern); ``DP`` is their product in reverse order.
+    names : tuple of str
+        Names of the blocks (``"impact+"``, ``"flight->-"``, ...).
+    walls : tuple of int
+        Walls of the contacts after the initial impact.
+    taus : ndarray
+        Flight times used.
+    """
+
+    __repr__ = compact_repr
+
+    DP: np.ndarray
+    blocks: tuple
+    names: tuple
+    walls: tuple
+    taus: np.ndarray
+
+    def as_dict(self) -> dict:
+        """``{"DP10", "DP21", "DP32", "DP43"}`` for the simple pattern (``ValueError`` otherwise)."""
+        if tuple(self.walls) != (-1, 1):
+            raise ValueError(f"the named blocks need the pattern (-1, +1), got {self.walls}")
+        return dict(zip(("DP10", "DP21", "DP32", "DP43"), self.blocks))
 
 
 @dataclass(frozen=True)
@@ -67,7 +107,7 @@ class LTIOrbitResult:
     state_plus : ndarray, shape (n_states,)
         Full closed-loop state just before the ``+L`` impact (``-state_plus`` before ``-L``).
     fixed_point : ndarray, shape (4 + k,)
-        ``(phi0, x20, y2-, v - y2-, c0)``: the fixed point of :class:`LTIImpactMap`.
+        ``(phi0, x20, y2-, v - y2-, c0)``: the fixed point of :meth:`section_map`.
     condition : float
         2-norm condition number of the ``(2 + k)`` linear symmetry conditions after row and
         column equilibration (so independent of the units of the controller states).
@@ -158,20 +198,30 @@ class LTIOrbitResult:
         """Scaled distance between ``DP`` and finite differences of the simulated map.
 
         ``max |D^-1 (DP_fd - DP) D| / max |D^-1 DP D|`` with ``D = diag(coordinate_scale())``
-        and ``DP_fd`` from :meth:`LTIImpactMap.jacobian_fd` (relative step ``h``, Richardson
+        and ``DP_fd`` from :meth:`section_map`'s ``jacobian_fd`` (relative step ``h``, Richardson
         extrapolation by default, which the strongly expanding non-collocated maps need).
         """
         if self.DP is None:
             raise ValueError("the orbit does not exist: no DP")
         sc = self.coordinate_scale()
-        J = self.impact_map().jacobian_fd(self.fixed_point, h=h, scale=sc, richardson=richardson)
+        J = self.section_map().jacobian_fd(self.fixed_point, h=h, scale=sc, richardson=richardson)
         Ds = self.DP * sc[None, :] / sc[:, None]
         err = (J - self.DP) * sc[None, :] / sc[:, None]
         return float(np.abs(err).max() / np.abs(Ds).max())
 
-    def impact_map(self, **kwargs) -> LTIImpactMap:
-        """The :class:`LTIImpactMap` with this orbit's reference (``kwargs`` passed on)."""
-        return LTIImpactMap(self.pair, self.controller, self.reference(), self.case, **kwargs)
+    def section_map(self, **options):
+        """The impact map of :meth:`system` on the pre-impact section ``z3 = +L``, ``z4 > 0``.
+
+        The general :class:`~hybridpd.analysis.hybridmap.SectionMap` of
+        :func:`~hybridpd.pair.section.impact_pair_section` (``options`` passed on to it):
+        coordinates ``s = (phi, z1, z2, z4, c1..ck)``, whose fixed point is
+        :attr:`fixed_point`.
+        """
+        # deferred import: loaded only when this runs, for start-up time
+        from hybridpd.analysis.hybridmap import SectionMap
+        from hybridpd.pair.section import impact_pair_section
+
+        return SectionMap(impact_pair_section(self.system()), **options)
 
     def system(self):
         """The :class:`~hybridpd.pair.impactpair.ControlledImpactPair` with this orbit's reference.
@@ -435,3 +485,23 @@ def _check_first_contact(flight, z0, tau, x10):
         reason += (f" (contact on wall {violation['wall']:+d} at t0 + {violation['t']:.6g}, "
                    f"x1 = {violation['x1']:.6g})")
     return code, reason, violation
+
+
+def _chain_jacobian(A, E, gap, z_pre0, walls, taus, w) -> LTIJacobian:
+    """Product of impact and flight blocks along a contact sequence from ``z_pre0`` (wall +L)."""
+    blocks, names = [], []
+    z = np.asarray(z_pre0, float)
+    wall = 1
+    for wall_next, tau in zip(walls, taus):
+        sign = "+" if wall == 1 else "-"
+        blocks.append(_impact_block(E, z, w))
+        names.append(f"impact{sign}")
+        F, z = _flight_block(A, gap, E @ z, float(tau), w)
+        blocks.append(F)
+        names.append(f"flight->{'+' if wall_next == 1 else '-'}")
+        wall = wall_next
+    DP = np.eye(blocks[0].shape[0])
+    for B in blocks:
+        DP = B @ DP
+    return LTIJacobian(DP=DP, blocks=tuple(blocks), names=tuple(names), walls=tuple(walls),
+                       taus=np.asarray(taus, float))
