@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 import hybridpd as hp
 from hybridpd.pair import arbcheck as ac
-from hybridpd.pair import proofs
+from hybridpd.pair import arbforms, proofs
 from hybridpd.pair.certificate import Certificate, load_certificate, verify_certificate
 from hybridpd.pair.certified import R_ARB, REASONS, cell_edges, certified_map
 from hybridpd.pair.interval_kernels import interval_kernel
@@ -170,7 +170,7 @@ def test_arb_forms_enclose_the_closed_forms_at_points_of_the_box(kp, kv, h, e, c
 
 @pytest.mark.parametrize("name", ["ball_cu", "ball_su", "ball_emq"])
 def test_entire_functions_on_balls_enclose_their_points(name):
-    f = getattr(ac, name)
+    f = getattr(arbforms, name)
     rng = np.random.default_rng(7)
     with flint.ctx.workprec(64):
         for mid in (-30.0, -9.0, -3.5, -0.2, 0.0, 0.7, 2.0, 3.9, 4.5, 12.0):

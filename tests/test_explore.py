@@ -3,6 +3,7 @@ the package's own answers, and the page's callbacks driven directly (no server).
 from __future__ import annotations
 
 import io
+import itertools
 import json
 import math
 
@@ -303,7 +304,7 @@ def test_an_unstable_orbits_basin_runs_fewer_iterations_and_reports_its_progress
     b = S.pair_basin(orb, 21, lambda done, total: calls.append((done, total)))
     assert b.metadata["n_iter"] == S.UNSTABLE_ITERATIONS < 1500
     assert calls[0] == (0, 441) and calls[-1] == (441, 441)
-    assert all(a[0] <= c[0] for a, c in zip(calls, calls[1:]))
+    assert all(a[0] <= c[0] for a, c in itertools.pairwise(calls))
     # against the command line's 1500 iterations: no point converges to the orbit in either,
     # and the same points are off the section
     full = basin_of_attraction(orbit_mapper(orb, n_iter=1500), (-3, 5, 21), (-2, 10, 21),
