@@ -64,7 +64,7 @@ _NAMES = {
     "ControlledImpactPair": "hybridpd.pair.impactpair",
     "symmetric_orbit": "hybridpd.pair.orbits",
     "symmetric_orbits": "hybridpd.pair.orbits",
-    "certify_orbit": "hybridpd.pair.certified",
+    "certify_orbit": "hybridpd.pair.certified_orbit",
     "certified_map": "hybridpd.pair.certified",
     "verify_certificate": "hybridpd.pair.certificate",
     "load_certificate": "hybridpd.pair.certificate",
