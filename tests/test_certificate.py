@@ -20,8 +20,8 @@ from hybridpd.pair import arbcheck as ac
 from hybridpd.pair import arbforms, proofs
 from hybridpd.pair.certificate import Certificate, load_certificate, verify_certificate
 from hybridpd.pair.certified import R_ARB, REASONS, cell_edges, certified_map
+from hybridpd.pair.flowintervals import FLOAT_OPS
 from hybridpd.pair.interval_kernels import interval_kernel
-from hybridpd.pair.intervals import FLOAT_OPS
 from hybridpd.pair.prooftree import prove_cells
 
 flint = pytest.importorskip("flint")

@@ -18,6 +18,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import hybridpd as hp
+from hybridpd.pair import flowintervals as fi
 from hybridpd.pair import intervals as iv
 from hybridpd.pair import proofs
 from hybridpd.pair.centred import INTERVAL_OPS, Box
@@ -31,8 +32,9 @@ from hybridpd.pair.certified import (
     certify_orbit,
     class_shares,
 )
+from hybridpd.pair.flowintervals import FLOAT_OPS, arb_ops
 from hybridpd.pair.interval_kernels import KERNEL_ARGS, interval_kernel
-from hybridpd.pair.intervals import FLOAT_OPS, Interval, arb_ops
+from hybridpd.pair.intervals import Interval
 
 flint = pytest.importorskip("flint")
 arb = flint.arb
@@ -64,9 +66,9 @@ _ARB_FUNCS = {
     "exp": (iv.exp, lambda x: x.exp()),
     "sin": (iv.sin, lambda x: x.sin()),
     "cos": (iv.cos, lambda x: x.cos()),
-    "cu": (iv.cu, lambda x: arb_ops().DCH(arb(0), x, arb(1))),
-    "su": (iv.su, lambda x: arb_ops().DSH(arb(0), x, arb(1))),
-    "emq": (iv.emq, lambda x: -(-x).expm1() / x if x != 0 else arb(1)),
+    "cu": (fi.cu, lambda x: arb_ops().DCH(arb(0), x, arb(1))),
+    "su": (fi.su, lambda x: arb_ops().DSH(arb(0), x, arb(1))),
+    "emq": (fi.emq, lambda x: -(-x).expm1() / x if x != 0 else arb(1)),
 }
 
 
@@ -109,7 +111,7 @@ def test_arithmetic_encloses_arb_values(a, wa, b, wb, op):
 def test_series_derivatives_enclose_finite_differences(lo, width, which):
     # su' and su'' against arb's derivative of sinh(sqrt(u))/sqrt(u) by a tiny-step quotient
     hi = lo + width
-    out = (iv.su1 if which == 1 else iv.su2)(Interval(lo, hi))
+    out = (fi.su1 if which == 1 else fi.su2)(Interval(lo, hi))
     for p in _points(lo, hi)[:4]:
         h = arb(2) ** -30
         with flint.ctx.workprec(200):

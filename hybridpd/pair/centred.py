@@ -33,6 +33,7 @@ import types
 
 import numpy as np
 
+from hybridpd.pair import flowintervals as fi
 from hybridpd.pair import intervals as iv
 from hybridpd.pair.intervals import Interval
 
@@ -265,16 +266,16 @@ class CForm:
         return self._unary(lambda x: iv.ipow(x, k), lambda r: iv.ipow(self.r, k - 1) * k)
 
     def cu(self):
-        """:func:`hybridpd.pair.intervals.cu` (derivative ``su / 2``)."""
-        return self._unary(iv.cu, lambda r: iv.su(self.r) * 0.5)
+        """:func:`hybridpd.pair.flowintervals.cu` (derivative ``su / 2``)."""
+        return self._unary(fi.cu, lambda r: fi.su(self.r) * 0.5)
 
     def su(self):
-        """:func:`hybridpd.pair.intervals.su` (derivative :func:`~hybridpd.pair.intervals.su1`)."""
-        return self._unary(iv.su, lambda r: iv.su1(self.r))
+        """:func:`hybridpd.pair.flowintervals.su` (derivative :func:`~hybridpd.pair.flowintervals.su1`)."""
+        return self._unary(fi.su, lambda r: fi.su1(self.r))
 
     def emq(self):
-        """:func:`hybridpd.pair.intervals.emq`."""
-        return self._unary(iv.emq, lambda r: iv.emq1(self.r))
+        """:func:`hybridpd.pair.flowintervals.emq`."""
+        return self._unary(fi.emq, lambda r: fi.emq1(self.r))
 
 
 # ----------------------------------------------------------------------------------------
@@ -288,9 +289,9 @@ _FUNCS = {
     "cos": (iv.cos, lambda x: -iv.sin(x), lambda x: -iv.cos(x)),
     "sqrt": (iv.sqrt, lambda x: 0.5 / iv.sqrt(x), lambda x: -0.25 / (x * iv.sqrt(x))),
     "recip": (lambda x: 1 / x, lambda x: -1 / iv.ipow(x, 2), lambda x: 2 / iv.ipow(x, 3)),
-    "cu": (iv.cu, lambda x: iv.su(x) * 0.5, lambda x: iv.su1(x) * 0.5),
-    "su": (iv.su, iv.su1, iv.su2),
-    "emq": (iv.emq, iv.emq1, iv.emq2),
+    "cu": (fi.cu, lambda x: fi.su(x) * 0.5, lambda x: fi.su1(x) * 0.5),
+    "su": (fi.su, fi.su1, fi.su2),
+    "emq": (fi.emq, fi.emq1, fi.emq2),
 }
 
 
@@ -465,15 +466,15 @@ class CForm2:
         return self._unary("cos")
 
     def cu(self):
-        """:func:`hybridpd.pair.intervals.cu`."""
+        """:func:`hybridpd.pair.flowintervals.cu`."""
         return self._unary("cu")
 
     def su(self):
-        """:func:`hybridpd.pair.intervals.su`."""
+        """:func:`hybridpd.pair.flowintervals.su`."""
         return self._unary("su")
 
     def emq(self):
-        """:func:`hybridpd.pair.intervals.emq`."""
+        """:func:`hybridpd.pair.flowintervals.emq`."""
         return self._unary("emq")
 
     def pow(self, k):
@@ -541,7 +542,8 @@ def _call(name, x, *args):
     m = getattr(x, name, None)
     if m is not None and not isinstance(x, Interval):
         return m(*args)
-    return getattr(iv, {"pow": "ipow"}.get(name, name))(_as_iv(x), *args)
+    fn = {"pow": iv.ipow, "exp": iv.exp, "sqrt": iv.sqrt, "sin": iv.sin, "cos": iv.cos}.get(name)
+    return (fn or getattr(fi, name))(_as_iv(x), *args)
 
 
 def _overdamped(D):

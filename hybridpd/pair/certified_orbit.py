@@ -116,8 +116,8 @@ def _arb_orbit_at(case, n, kp, kv, mu, e, L, m2, omega, x10):
     from flint import acb_mat, arb, arb_mat
 
     # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.pair.flowintervals import arb_ops
     from hybridpd.pair.interval_kernels import interval_kernel
-    from hybridpd.pair.intervals import arb_ops
 
     ops = arb_ops()
     a = [arb(kp) / arb(m2), arb(kv) / arb(m2), arb(mu), arb(e), arb(L) / arb(x10), arb(omega),

@@ -310,7 +310,7 @@ def interval_kernel(name: str, case: str):
     Examples
     --------
     >>> from hybridpd.pair.interval_kernels import interval_kernel
-    >>> from hybridpd.pair.intervals import FLOAT_OPS
+    >>> from hybridpd.pair.flowintervals import FLOAT_OPS
     >>> C, S, det = interval_kernel("existence", "collocated")(FLOAT_OPS, 10.0, 20.0, 0.1, 0.5,
     ...                                               0.75, 5.0, 1)
     >>> round((C * C + S * S) ** 0.5, 6)    # xm of the paper's collocated orbit
