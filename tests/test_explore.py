@@ -195,6 +195,26 @@ def test_the_page_starts_with_its_map_and_orbit(page):
     assert _testid(page.status, "status") == "ready"
 
 
+def test_the_warm_up_map_is_drawn_in_the_first_page_of_its_box_only():
+    """A page whose box is the warm-up's draws the warm-up's map as it is built (no
+    computation scheduled); another box, or a warm-up not finished, computes its own."""
+    from hybridpd.explore.app import PairExplorer, _ready_map, warm_up
+
+    base = S.PairState(e=0.5, kp=10, kv=20, num=21)
+    warm = warm_up(base)
+    done, rm, ms = warm.result(timeout=60)
+    assert done is base and ms > 0
+    ready = _ready_map(warm, S.PairState(e=0.5, kp=3, kv=4, num=21))   # another selection
+    assert ready == (rm, ms)
+    assert _ready_map(warm, S.PairState(e=0.3, num=21)) is None
+    assert _ready_map(None, base) is None
+    p = PairExplorer(S.PairState(e=0.5, kp=3, kv=4, num=21), url=False, ready=ready)
+    assert p.rm is rm and p._gen["map"] == 0          # nothing computed for the page
+    assert _testid(p.map_info, "map-e") == "0.5"
+    fresh = PairExplorer(S.PairState(e=0.5, kp=3, kv=4, num=21), url=False)
+    np.testing.assert_array_equal(S.map_classes(fresh.rm), S.map_classes(p.rm))
+
+
 def test_a_tap_selects_the_nearest_cell(page):
     class Tap:
         x, y = 31.3, 7.9

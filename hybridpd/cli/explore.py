@@ -129,6 +129,6 @@ def run(args) -> int:
     from hybridpd.explore.app import pair_app, warm_up
     from hybridpd.explore.server import serve
 
-    warm_up(base)       # while the server starts and the browser loads the page
-    serve(args.port, open_browser=not args.no_browser, app=lambda: pair_app(base))
+    warm = warm_up(base)    # while the server starts and the browser loads the page
+    serve(args.port, open_browser=not args.no_browser, app=lambda: pair_app(base, warm))
     return 0

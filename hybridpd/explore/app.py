@@ -85,9 +85,13 @@ class PairExplorer:
         Messages for fields refused in the URL, shown beside their controls.
     url : bool
         Keep the page's URL in step with the state (on a server; off in a notebook).
+    ready : (RegionMap, float), optional
+        The state's region map, already computed, and the milliseconds it took: drawn at
+        once instead of computed after the page loads.
     """
 
-    def __init__(self, state: S.PairState, errors: dict | None = None, url: bool = True):
+    def __init__(self, state: S.PairState, errors: dict | None = None, url: bool = True,
+                 ready: tuple | None = None):
         self.state = state
         self.url = url
         self._doc = pn.state.curdoc
@@ -105,7 +109,10 @@ class PairExplorer:
         self.layout = self._layout()
         if self.url and self._doc is not None and self._doc.session_context is not None:
             pn.state.onload(self._push_url)   # the URL states every field from the start
-        self._schedule(self._refresh_map)
+        if ready is None:
+            self._schedule(self._refresh_map)
+        else:   # drawn in the page's first document: no round trip after it loads
+            self._show_map(ready[0], state, ready[1])
 
     # ---- controls -----------------------------------------------------------------------
     def _build_controls(self):
@@ -607,15 +614,34 @@ def _sorted(p, v):
 def warm_up(state: S.PairState):
     """Start computing ``state``'s map and orbit on a worker thread (numba's kernels and the
     closed forms' cached code load on their first call): run when a server starts, so the
-    first page does not wait for them."""
-    return _POOL.submit(lambda: (S.pair_map(state), S.orbit_series(S.pair_orbit(state))
-                                 if S.pair_orbit(state).exists else None))
+    first page does not wait for them.
+
+    Returns a future of ``(state, map, milliseconds)``; :func:`pair_app` given it draws the
+    map in the page it builds when the page's box is the same and the map is ready."""
+    def work():
+        t0 = time.perf_counter()
+        rm = S.pair_map(state)
+        ms = 1000 * (time.perf_counter() - t0)
+        orb = S.pair_orbit(state)
+        if orb.exists:
+            S.orbit_series(orb)
+        return state, rm, ms
+    return _POOL.submit(work)
 
 
-def pair_app(base: S.PairState | None = None):
+def pair_app(base: S.PairState | None = None, warm=None):
     """A new page for the session that asks: the state read from its URL, fields not given
     from ``base`` (refused fields keep ``base``'s values and say why beside their
-    controls)."""
+    controls). ``warm``: the future of :func:`warm_up`, whose map a page of the same box
+    shows from the start."""
     args = dict(pn.state.session_args or {}) if pn.state.curdoc is not None else {}
     state, errors = S.parse_query(args, base)
-    return PairExplorer(state, errors, url=True).layout
+    return PairExplorer(state, errors, url=True, ready=_ready_map(warm, state)).layout
+
+
+def _ready_map(warm, state: S.PairState):
+    """``(map, ms)`` of the warm-up when it has finished for ``state``'s box, else None."""
+    if warm is None or not warm.done() or warm.exception() is not None:
+        return None
+    done, rm, ms = warm.result()
+    return (rm, ms) if S.same_map(done, state) else None

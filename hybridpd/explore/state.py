@@ -33,9 +33,9 @@ from hybridpd.model import (
     check_positive,
 )
 
-__all__ = ["FIELDS", "MAX_BASIN_NUM", "MAX_NUM", "PairState", "check_field", "finite_or_none",
-           "map_classes", "orbit_series", "pair_basin", "pair_branch", "pair_map", "pair_orbit",
-           "parse_query", "snap", "to_query"]
+__all__ = ["FIELDS", "MAP_FIELDS", "MAX_BASIN_NUM", "MAX_NUM", "PairState", "check_field",
+           "finite_or_none", "map_classes", "orbit_series", "pair_basin", "pair_branch",
+           "pair_map", "pair_orbit", "parse_query", "same_map", "snap", "to_query"]
 
 #: Largest points per axis of the page's region map: 401 x 401 cells classify in about a
 #: second, beyond that a control change would keep the page waiting.
@@ -275,6 +275,21 @@ def pair_map(state: PairState):
                           gamma=state.gamma, x10=1.0, m2=state.m2, n=state.n)
     return fam.classify_grid(("kp", state.kp_min, state.kp_max, state.num),
                              ("kv", state.kv_min, state.kv_max, state.num), progress=False)
+
+
+#: The fields a region map depends on (the selection and the other panels' fields do not).
+MAP_FIELDS = FIELDS[:12]
+
+
+def same_map(a: PairState, b: PairState) -> bool:
+    """Whether two states draw the same region map (:data:`MAP_FIELDS` equal).
+
+    Examples
+    --------
+    >>> same_map(PairState(kp=3.0), PairState(kp=4.0)), same_map(PairState(e=0.1), PairState())
+    (True, False)
+    """
+    return all(getattr(a, f) == getattr(b, f) for f in MAP_FIELDS)
 
 
 def map_classes(rm) -> np.ndarray:
