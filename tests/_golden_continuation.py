@@ -96,17 +96,20 @@ def cases():
     }
 
 
-def compute(follow=None) -> dict:
-    """The golden arrays; ``follow(P, s0, parameter, stop, **options)`` continues a case
-    (default: the pair's :func:`continue_pair_orbit`)."""
+def follow(P, s0, name, stop, *, x10=None, n=1, **options):
+    """A case continued on the one engine with the pair's family of ``P``."""
+    from hybridpd.analysis.continuation import continue_orbit
+
+    fam = P.family(name, x10=x10, n=n)
+    return continue_orbit(fam, fam.value, stop, s0, **options)
+
+
+def compute() -> dict:
+    """The golden arrays (recorded with the pair's own continuation engine of the time, which
+    the one engine with the pair's family replaced)."""
     from hybridpd import ImpactPair, PDGains
     from hybridpd.pair.continuation import continue_symmetric, switch_branch
 
-    if follow is None:
-        from hybridpd.pair.continuation import continue_pair_orbit
-
-        def follow(P, s0, name, stop, **kw):
-            return continue_pair_orbit(P, s0, name, stop, **kw)
     arrays, branches = {}, {}
     for name, (P, s0, par, stop, kw) in cases().items():
         branches[name] = follow(P, s0, par, stop, **kw)

@@ -7,18 +7,17 @@ import math
 import numpy as np
 
 from hybridpd.model import check_finite, check_int
-from hybridpd.pair.impactmap import (  # noqa: F401 (the continuation package's names)
+from hybridpd.pair.family import (  # noqa: F401 (the continuation package's names)
     DESIGN_PARAMETERS,
     PARAMETERS,
-    ImpactMap,
     _check_parameter,
     _Design,
     _fixed_parameters,
     _map_with,
     _min,
-    _section_point,
     design_xm,
 )
+from hybridpd.pair.impactmap import ImpactMap, _section_point  # noqa: F401
 
 #: Parameters :func:`continue_symmetric` can follow (``xm`` is an output there; ``gamma`` moves
 #: ``L = gamma * x10`` with ``x10`` fixed; ``m2`` moves both masses, ``m1 = mu m2``).

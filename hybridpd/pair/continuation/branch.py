@@ -15,8 +15,8 @@ from hybridpd.analysis.continuation import (
     BifurcationEvent,
     Branch,
     follow_branch,
-    sequence_change,
 )
+from hybridpd.analysis.family import sequence_change
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.maps import minimal_period
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
