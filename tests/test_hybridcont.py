@@ -11,7 +11,6 @@ from hybridpd.analysis.continuation import continue_orbit as continue_any
 from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.periodic import find_orbit
 from hybridpd.hybrid.samples import impact_oscillator, oscillator_initial_state
-from hybridpd.pair.continuation import continue_pair_orbit
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.impactpair import ControlledImpactPair
 from hybridpd.pair.orbits import symmetric_orbit
@@ -40,7 +39,7 @@ def test_fold_of_the_period2_cycle_matches_the_pair_engine():
     xm = symmetric_orbit(pair, PDGains(10, 20), W).xm
     P = ImpactMap(pair, PDGains(10, 20), Reference(xm, W))
     orb = find_orbit(P, P.iterate(np.array([0.3, -2.1, -2.3, 0.5]), 200)[-1], period=2)
-    ref = continue_pair_orbit(P, orb, "kv", 5.0, period=2).events_of("fold")[0].parameter
+    ref = continue_any(P.family("kv"), 20.0, 5.0, orb, period=2).events_of("fold")[0].parameter
     br = continue_any(_kv_builder(pair, xm), 18.5, 5.0, orb.s, period=2, step=0.3,
                        max_step=0.5)
     assert br.termination.startswith("turned back")

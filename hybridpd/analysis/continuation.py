@@ -21,13 +21,15 @@ real multiplier crosses +1 while the branch goes on), period doublings, Neimark-
 points and stability changes by sign changes of test functions, and locates them by Illinois
 (safeguarded regula falsi) iterations along the branch (points on hyperplanes normal to the
 chord, corrected like arclength steps); a ``sequence_change`` (the jump sequence of one
-period changes: grazing, sticking, ...) is located by bisection on the sequence. The
-engine (:func:`follow_branch`) is the impact pair's too: its map continuation gives it its
-own map, points and grazing events as hooks.
+period changes: grazing, sticking, ...) is located by bisection on the sequence.
 
-A map knows its named parameters through its hook ``family``: e.g. the impact pair's
-``ImpactMap.family("kv")`` is a builder of the map at other damping gains, so
-``continue_orbit(P.family("kv"), 20.0, 23.0, s0)`` follows the pair's orbits on this engine.
+A map knows its named parameters through its hook ``family``, which returns a
+:class:`~hybridpd.analysis.family.ParameterFamily`: the maps along the parameter and the
+rules in which its continuation differs from the general one (domain, step sizes, Newton
+scale, ``dF/dp``, what a point carries, its own events, its branch's variables). The impact
+pair's ``ImpactMap.family("kv")`` carries the pair's rules (grazing events, flight margins,
+the design path), so ``continue_orbit(P.family("kv"), 20.0, 23.0, s0)`` follows the pair's
+orbits on this engine; a plain builder ``p -> map`` gets the general rules.
 
 The result is the package's one :class:`Branch` (per-point arrays; ``branch[i]`` is a
 :class:`BranchPoint`) with :class:`BifurcationEvent` (``kind``, ``index``, ``parameter``,

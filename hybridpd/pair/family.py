@@ -302,7 +302,10 @@ class PairFamily(ParameterFamily):
         return span / 50, span / 10, span * 1e-7
 
     def check_range(self, p0, p_end):
-        _check_stop(self.name, p0, p_end)
+        if not (_in_domain(self.name, p0) and _in_domain(self.name, p_end)):
+            lo, hi, _ = _domain(self.name)
+            raise ValueError(f"p0 = {p0!r}, p_end = {p_end!r}: outside the domain of "
+                             f"{self.name} ({lo:g}, {hi:g})")
 
     def start(self, P, s0, k, tol, max_iter):
         s0 = check_array("s0", s0, shape=(4,))
