@@ -123,8 +123,8 @@ def test_design_gains_for_a_desired_amplitude_matches_the_symmetric_orbit():
 
 
 def test_the_pair_on_the_one_engine_through_its_family_hook():
-    # the collocated orbit at e = 0.1, kp = 10 grazes at kv = 21.938: on the generic engine
-    # (the pair's map built by ImpactMap.family) the impact sequence changes there
+    # the collocated orbit at e = 0.1, kp = 10 grazes at kv = 21.938: on the one engine with
+    # the pair's family (ImpactMap.family: the pair's rules) the branch ends there
     pair = ImpactPair(0.1, 0.1, 0.75)
     orb = symmetric_orbit(pair, PDGains(10, 20), W)
     P = ImpactMap(pair, orb.gains, orb.reference())
@@ -134,7 +134,8 @@ def test_the_pair_on_the_one_engine_through_its_family_hook():
         Q = ImpactMap(pair, PDGains(10, pt.p), Reference(orb.xm, W))
         np.testing.assert_allclose(Q(pt.s), pt.s, rtol=0, atol=1e-9)
     last = br[-1].p
-    assert 21.5 < last < 21.95, br.reason     # the orbit ends at grazing (kv = 21.938)
+    assert 21.5 < last < 21.95, br.termination    # the orbit ends at grazing (kv = 21.938)
+    assert "ends at grazing" in br.termination and br.events_of("grazing")
     # next to grazing the tangent bends without a multiplier at +1: not a fold
     assert not br.events_of("fold"), br.events
     with pytest.raises(ValueError, match="parameter"):
