@@ -7,6 +7,7 @@ end of a branch at grazing), and the pair's branch points and :class:`Branch` (t
 type with the pair's variables), which its closed-form symmetric family shares."""
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
@@ -289,11 +290,6 @@ class PairFamily(ParameterFamily):
     dp_in_residual = False
     explains = False
 
-    def at(self, p):
-        if not _in_domain(self.name, p):
-            return None
-        return _map_with(self.base, self.name, float(p), self.design)
-
     def value_of(self, P, p):
         del p
         return _map_value(P, self.name, self.design)
@@ -422,6 +418,14 @@ class PairFamily(ParameterFamily):
         return out
 
 
+def _map_in_domain(base, name, design, p):
+    """The map at ``p`` on the family of ``base`` (None out of the parameter's domain or
+    where the design has no amplitude)."""
+    if not _in_domain(name, p):
+        return None
+    return _map_with(base, name, float(p), design)
+
+
 def pair_family(P: ImpactMap, parameter: str, *, x10=None, n=1, fd_step=1e-6,
                 graze_tol=1e-6, margin_samples=128) -> PairFamily:
     """The :class:`PairFamily` of ``P`` in ``parameter`` (:meth:`ImpactMap.family`)."""
@@ -436,6 +440,7 @@ def pair_family(P: ImpactMap, parameter: str, *, x10=None, n=1, fd_step=1e-6,
         if base is None:
             raise ValueError(f"the design path has no reference amplitude at {name} = "
                              f"{value:g} (x10 = {design.x10:g}, n = {design.n})")
-    return PairFamily(name, value, None, _positive_float("fd_step", fd_step), base=base,
+    build = functools.partial(_map_in_domain, base, name, design)
+    return PairFamily(name, value, build, _positive_float("fd_step", fd_step), base=base,
                       design=design, graze_tol=_positive_float("graze_tol", graze_tol),
                       margin_samples=_positive_int("margin_samples", margin_samples))
