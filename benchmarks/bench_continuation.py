@@ -10,8 +10,9 @@ import numpy as np
 from _common import best_of
 
 from hybridpd import ImpactPair, PDGains
+from hybridpd.analysis.continuation import continue_orbit
 from hybridpd.analysis.periodic import find_orbit
-from hybridpd.pair.continuation import continue_pair_orbit, continue_symmetric
+from hybridpd.pair.continuation import continue_symmetric
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
 
@@ -37,7 +38,7 @@ def main():
               f"({t / len(br) * 1e3:.1f} ms/point incl. location), events "
               f"{[(ev.kind, round(ev.parameter, 4)) for ev in br.events]}")
 
-    t, br = best_of(lambda: continue_pair_orbit(P, c, "kv", 5.0, period=2), repeat=2)
+    t, br = best_of(lambda: continue_orbit(P.family("kv"), 20.0, 5.0, c, period=2), repeat=2)
     print(f"period-2 cycle in kv to its fold: {t:.2f} s, {len(br)} points, events "
           f"{[(ev.kind, round(ev.parameter, 4)) for ev in br.events]}")
 
@@ -45,7 +46,7 @@ def main():
     o = symmetric_orbit(pa, PDGains(60, 0.5), 5.0)
     Q = ImpactMap(pa, o.gains, o.reference())
     a = find_orbit(Q, Q.iterate(o.fixed_point + 1e-3, 3000)[-1])
-    t, br = best_of(lambda: continue_pair_orbit(Q, a, "kp", 99.3), repeat=2)
+    t, br = best_of(lambda: continue_orbit(Q.family("kp"), 60.0, 99.3, a), repeat=2)
     print(f"non-symmetric orbit in kp 60 -> 99.3: {t:.2f} s, {len(br)} points "
           f"({t / len(br) * 1e3:.1f} ms/point incl. location), events "
           f"{[(ev.kind, round(ev.parameter, 4)) for ev in br.events]}")

@@ -17,8 +17,9 @@ any hybrid automaton  :class:`HybridAutomaton`, :class:`Section`, :class:`Sectio
                       :func:`find_orbit`, :class:`PeriodicOrbit`, :func:`stability`
 mechanical systems    :class:`MechanicalSystem`, :class:`Contact`, :func:`load_model`,
                       :func:`simulate`
-continuation          :func:`continue_orbit`, :func:`switch_branch`,
-                      :func:`boundary_curves`, :func:`bifurcation_diagram`
+continuation          :func:`continue_orbit` (of a :class:`ParameterFamily`),
+                      :func:`switch_branch`, :func:`boundary_curves`,
+                      :func:`bifurcation_diagram`
 sweeps                :func:`region_map`, :func:`basin_of_attraction` (of a :func:`mapper`),
                       :func:`run_sweep`
 design, figures       :func:`design`, :func:`reproduce`, :func:`plot_file`
@@ -88,6 +89,7 @@ _NAMES = {
     "simulate": "hybridpd.mechanics.simulate",
     # continuation, boundaries, diagrams
     "continue_orbit": "hybridpd.analysis.continuation",
+    "ParameterFamily": "hybridpd.analysis.family",
     "switch_branch": "hybridpd.pair.continuation",
     "load_branch": "hybridpd.analysis.continuation",
     "boundary_curves": "hybridpd.pair.boundaries",
@@ -113,6 +115,7 @@ _SUBPACKAGES = ("analysis", "explore", "hybrid", "mechanics", "pair", "plotting"
 # the flat namespace: every name of _NAMES, the version and ``reproduce``
 __all__ = ["Case", "Contact", "ControlledImpactPair", "HybridAutomaton", "ImpactMap",
            "ImpactPair", "MapResult", "MechanicalSystem", "PDGains", "PairParams",
+           "ParameterFamily",
            "PeriodicOrbit", "PoincareMap",
            "Reference", "Section", "SectionMap", "Stability", "__version__",
            "basin_of_attraction", "bifurcation_diagram", "boundary_curves",

@@ -187,6 +187,10 @@ RENAMED = [
     ("hybridpd.pair.basins", "load_attractor_basin", "hybridpd.analysis.basins",
      "load_basin"),
     ("hybridpd", "load_attractor_basin", "hybridpd.analysis.basins", "load_basin"),
+    ("hybridpd.pair.continuation", "continue_pair_orbit", "hybridpd.analysis.continuation",
+     "continue_orbit"),
+    ("hybridpd.pair.continuation", "map_power_jacobian", "hybridpd.pair.impactmap",
+     "ImpactMap"),
 ]
 
 
@@ -194,7 +198,11 @@ def test_old_module_paths_are_gone():
     for old in sorted(OLD_MODULES) + ["hybridpd.design", "hybridpd.sweeps.basin_result",
                                       "hybridpd.analysis.continuation.switching",
                                       "hybridpd.pair.attractors", "hybridpd.sweeps.section_basins",
-                                      "hybridpd.sweeps.model_basins"]:
+                                      "hybridpd.sweeps.model_basins",
+                                      "hybridpd.pair.continuation.branch",
+                                      "hybridpd.pair.continuation.newton",
+                                      "hybridpd.pair.continuation._common",
+                                      "hybridpd.pair.continuation.events"]:
         sys.modules.pop(old, None)
         with pytest.raises(ModuleNotFoundError):
             importlib.import_module(old)

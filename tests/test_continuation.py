@@ -10,13 +10,12 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains, Reference
+from hybridpd.analysis.continuation import continue_orbit
 from hybridpd.analysis.periodic import find_orbit
 from hybridpd.pair.continuation import (
     EVENT_KINDS,
     Branch,
-    continue_pair_orbit,
     continue_symmetric,
-    map_power_jacobian,
     trace_map,
 )
 from hybridpd.pair.impactmap import ImpactMap
@@ -113,7 +112,7 @@ def test_period2_cycle_of_the_paper_parameters(period2):
     assert sorted(orb.walls) == [(-1, -1, 1), (1,)]
     assert orb.n_impacts == 4 and not orb.grazing
     # the jacobian of P^2 against finite differences of P^2
-    J, _method, _ = map_power_jacobian(P, orb.s, 2, method="fd", fd_step=1e-7)
+    J = P.jacobian_fd(orb.s, 2, h=1e-7, scale=np.maximum(1.0, np.abs(orb.s)), one_sided=True)
     assert np.max(np.abs(J - orb.DP)) < 1e-5 * np.max(np.abs(orb.DP))
     # multipliers against the measured contraction of a perturbation iterated by P
     rho = orb.spectral_radius
@@ -198,7 +197,7 @@ def test_map_continuation_agrees_with_the_symmetric_family(colloc_kv):
         assert np.max(np.abs(r.multipliers - br.multipliers[i])) < 1e-8
     g = br.events_of("grazing")[0]
     P = pmap(10, 21.5, 0.1, g.xm)
-    mb = continue_pair_orbit(P, sym(kv=21.5, e=0.1).fixed_point, "kv", 23.0)
+    mb = continue_orbit(P.family("kv"), 21.5, 23.0, sym(kv=21.5, e=0.1).fixed_point)
     assert "ends at grazing" in mb.termination
     ge = mb.events_of("grazing")[-1]
     assert abs(ge.parameter - g.parameter) < 1e-6
@@ -211,7 +210,7 @@ def test_map_continuation_in_xm_meets_the_symmetric_orbit_of_another_x10():
     o1, o2 = sym(e=0.5), sym(e=0.5, x10=1.2)
     assert o2.exists
     P = ImpactMap(o1.pair, o1.gains, o1.reference())
-    br = continue_pair_orbit(P, o1.fixed_point, "xm", o2.xm)
+    br = continue_orbit(P.family("xm"), o1.xm, o2.xm, o1.fixed_point)
     assert br.termination == "reached stop"
     assert br.parameter[-1] == o2.xm
     assert np.max(np.abs(br.points[-1] - o2.fixed_point)) < 1e-10
@@ -281,7 +280,7 @@ def test_period_doubling_located_and_verified_by_iteration(asym60):
     (where the fixed point is unstable) iterating P settles on a 2-cycle whose squared size
     is linear in the distance to the located point (supercritical flip)."""
     o, P, r = asym60
-    br = continue_pair_orbit(P, r, "kp", 99.3)
+    br = continue_orbit(P.family("kp"), 60.0, 99.3, r)
     pds = br.events_of("period_doubling")
     assert len(pds) >= 2 and all(ev.located for ev in pds)
     pd = min(pds, key=lambda ev: abs(ev.parameter - 99.24))
@@ -316,7 +315,7 @@ def test_fold_of_the_period2_cycle(period2):
     fold iterating P settles on a 2-cycle at a distance ~ sqrt(kv - kv_f) from the fold point,
     below it the same start goes to the period-1 symmetric orbit."""
     P, orb = period2
-    br = continue_pair_orbit(P, orb, "kv", 5.0, period=2)
+    br = continue_orbit(P.family("kv"), 20.0, 5.0, orb, period=2)
     assert "turned back" in br.termination
     folds = br.events_of("fold")
     assert len(folds) == 1 and "turns back" in folds[0].detail and folds[0].located
@@ -339,8 +338,9 @@ def test_fold_of_the_period2_cycle(period2):
 
 def test_natural_continuation_stops_at_the_fold_and_agrees_before_it(period2):
     P, orb = period2
-    nat = continue_pair_orbit(P, orb, "kv", 5.0, period=2, method="natural", step=0.5)
-    arc = continue_pair_orbit(P, orb, "kv", 5.0, period=2)
+    nat = continue_orbit(P.family("kv"), 20.0, 5.0, orb, period=2, method="natural",
+                         step=0.5)
+    arc = continue_orbit(P.family("kv"), 20.0, 5.0, orb, period=2)
     kf = arc.events_of("fold")[0].parameter
     assert "min_step" in nat.termination
     assert abs(nat.parameter[-1] - kf) < 1e-3
@@ -373,33 +373,33 @@ def test_branch_to_dict_and_plot(colloc_kv):
 
 def test_loops_are_bounded_and_report_why(period2):
     P, orb = period2
-    br = continue_pair_orbit(P, orb, "kv", 25.0, period=2, max_steps=3)
-    assert len(br) == 4 and br.termination.startswith("max_steps")
+    br = continue_orbit(P.family("kv"), 20.0, 25.0, orb, period=2, max_steps=3)
+    assert len(br) == 3 and br.termination.startswith("max_steps")
     br = continue_symmetric(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), W, "e", 0.9,
                             max_steps=2)
     assert len(br) == 3 and "max_steps" in br.termination
-    bad = continue_pair_orbit(P, np.array([0.1, 50.0, 0.0, 1e-3]), "kv", 25.0, period=2,
-                         max_newton=2)
+    bad = continue_orbit(P.family("kv"), 20.0, 25.0, np.array([0.1, 50.0, 0.0, 1e-3]),
+                         period=2, max_iter=2)
     assert len(bad) == 0 and "initial Newton failed" in bad.termination
 
 
 def test_bad_input_names_the_culprit(period2):
     P, orb = period2
     with pytest.raises(ValueError, match="parameter"):
-        continue_pair_orbit(P, orb.s, "kd", 25.0)
+        continue_orbit(P.family("kd"), 20.0, 25.0, orb.s)
     with pytest.raises(ValueError, match="parameter"):
         continue_symmetric(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), W, "xm", 1.0)
     with pytest.raises(ValueError, match="step"):
-        continue_pair_orbit(P, orb.s, "kv", 25.0, step=0.0)
+        continue_orbit(P.family("kv"), 20.0, 25.0, orb.s, step=0.0)
     with pytest.raises(ValueError, match="step"):
         continue_symmetric(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), W, "kv", 25.0,
                            step=0.0)
-    with pytest.raises(ValueError, match="stop"):
-        continue_pair_orbit(P, orb.s, "kv", float("nan"))
-    with pytest.raises(ValueError, match="stop"):
-        continue_pair_orbit(P, orb.s, "e", 1.5)
-    with pytest.raises(ValueError, match="stop"):
-        continue_pair_orbit(P, orb.s, "kv", 20.0)
+    with pytest.raises(ValueError, match="p_end"):
+        continue_orbit(P.family("kv"), 20.0, float("nan"), orb.s)
+    with pytest.raises(ValueError, match="p_end"):
+        continue_orbit(P.family("e"), 0.1, 1.5, orb.s)
+    with pytest.raises(ValueError, match="p_end"):
+        continue_orbit(P.family("kv"), 20.0, 20.0, orb.s)
     with pytest.raises(ValueError, match="finite"):
         find_orbit(P, [np.nan, 0, 0, 1])
     with pytest.raises(ValueError, match="z4"):
@@ -411,9 +411,9 @@ def test_bad_input_names_the_culprit(period2):
     with pytest.raises(ValueError, match="jacobian"):
         find_orbit(P, orb.s, jacobian="symbolic")
     with pytest.raises(ValueError, match="method"):
-        continue_pair_orbit(P, orb.s, "kv", 25.0, method="newton")
+        continue_orbit(P.family("kv"), 20.0, 25.0, orb.s, method="newton")
     with pytest.raises(ValueError, match="events"):
-        continue_pair_orbit(P, orb.s, "kv", 25.0, events=("hopf",))
+        continue_orbit(P.family("kv"), 20.0, 25.0, orb.s, events=("hopf",))
 
 
 @pytest.mark.parametrize("name,stop", [("kp", 11.0), ("kv", 19.0), ("e", 0.6), ("mu", 0.12),
@@ -423,7 +423,8 @@ def test_every_parameter_can_be_continued(name, stop):
     is a fixed point of the simulated map built independently at the stop value."""
     o = sym(e=0.5)
     P = ImpactMap(o.pair, o.gains, o.reference())
-    br = continue_pair_orbit(P, o.fixed_point, name, stop)
+    fam = P.family(name)
+    br = continue_orbit(fam, fam.value, stop, o.fixed_point)
     assert br.termination == "reached stop" and br.parameter[-1] == stop
     v = {"kp": 10.0, "kv": 20.0, "e": 0.5, "mu": 0.1, "xm": o.xm, "omega": W, "L": 0.75}
     v[name] = stop

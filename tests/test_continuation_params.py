@@ -7,11 +7,8 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains, Reference
-from hybridpd.pair.continuation import (
-    SYMMETRIC_PARAMETERS,
-    continue_pair_orbit,
-    continue_symmetric,
-)
+from hybridpd.analysis.continuation import continue_orbit
+from hybridpd.pair.continuation import SYMMETRIC_PARAMETERS, continue_symmetric
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
 
@@ -66,14 +63,14 @@ def test_bad_parameter_names_the_allowed_ones():
 
 
 def test_map_continuation_on_the_design_path_meets_the_closed_form_grazing():
-    """continue_pair_orbit with x10 (xm follows the design) is continue_symmetric's path: Newton on
-    the simulated P finds the closed-form points and ends at the same grazing value."""
+    """The map's family with x10 (xm follows the design) is continue_symmetric's path: Newton
+    on the simulated P finds the closed-form points and ends at the same grazing value."""
     pair = ImpactPair(0.1, 0.1, 0.75)
     fam = continue_symmetric(pair, PDGains(10, 21.5), W, "kv", 22.5)
     kg = fam.events_of("grazing")[0].parameter
     o = symmetric_orbit(pair, PDGains(10, 21.5), W)
     P = ImpactMap(pair, PDGains(10, 21.5), Reference(0.5, W))     # xm replaced by the design
-    br = continue_pair_orbit(P, o.fixed_point, "kv", 22.5, x10=1.0, step=0.1)
+    br = continue_orbit(P.family("kv", x10=1.0), 21.5, 22.5, o.fixed_point, step=0.1)
     assert abs(br.xm[0] - o.xm) < 1e-12 and br.fixed["x10"] == 1.0 and "xm" not in br.fixed
     ev = br.events_of("grazing")
     assert ev and "ends at grazing" in br.termination
@@ -83,14 +80,14 @@ def test_map_continuation_on_the_design_path_meets_the_closed_form_grazing():
         assert abs(ref.xm - br.xm[i]) < 1e-12
         assert np.max(np.abs(ref.fixed_point - br.points[i])) < 1e-9
     with pytest.raises(ValueError, match="parameter must be one of"):
-        continue_pair_orbit(P, o.fixed_point, "xm", 0.7, x10=1.0)
+        P.family("xm", x10=1.0)
 
 
 def test_map_continuation_in_m2_on_the_design_path_matches_the_closed_form():
     pair = ImpactPair(0.1, 0.5, 0.75)
     o = symmetric_orbit(pair, PDGains(10, 20), W)
     P = ImpactMap(pair, PDGains(10, 20), o.reference())
-    br = continue_pair_orbit(P, o.fixed_point, "m2", 1.6, x10=1.0, step=0.2)
+    br = continue_orbit(P.family("m2", x10=1.0), 1.0, 1.6, o.fixed_point, step=0.2)
     assert br.termination == "reached stop" and br.parameter[-1] == 1.6
     for i in (len(br) // 2, len(br) - 1):
         ref = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75, br.parameter[i]), PDGains(10, 20), W)

@@ -141,11 +141,6 @@ def _entry_points():
 
         return trace_map(impact_map_, s, margin_samples=margin_samples)
 
-    def power_jacobian(impact_map_, s, period):
-        from hybridpd.pair.continuation import map_power_jacobian
-
-        return map_power_jacobian(impact_map_, s, period)
-
     def shifted(pair, gains, xm, omega, x10_nominal, n):
         from hybridpd.pair.design import shifted_orbit
 
@@ -193,8 +188,6 @@ def _entry_points():
                                     stop="real", x10=pos, n="odd", max_steps="count")),
         "trace_map": (trace, dict(impact_map_=P, s=fp, margin_samples=16),
                       dict(impact_map_="map_obj", s="vec4", margin_samples="count")),
-        "map_power_jacobian": (power_jacobian, dict(impact_map_=P, s=fp, period=1),
-                               dict(impact_map_="map_obj", s="vec4", period="count")),
         "shifted_orbit": (shifted, dict(pair=PAIR, gains=GAINS, xm=orb.xm, omega=5.0,
                                         x10_nominal=1.0, n=1),
                           dict(pair="pair_obj", gains="gains", xm=pos, omega=pos,

@@ -11,7 +11,6 @@ from hybridpd.analysis.continuation import continue_orbit as continue_any
 from hybridpd.analysis.hybridmap import SectionMap
 from hybridpd.analysis.periodic import find_orbit
 from hybridpd.hybrid.samples import impact_oscillator, oscillator_initial_state
-from hybridpd.pair.continuation import continue_pair_orbit
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.impactpair import ControlledImpactPair
 from hybridpd.pair.orbits import symmetric_orbit
@@ -40,7 +39,7 @@ def test_fold_of_the_period2_cycle_matches_the_pair_engine():
     xm = symmetric_orbit(pair, PDGains(10, 20), W).xm
     P = ImpactMap(pair, PDGains(10, 20), Reference(xm, W))
     orb = find_orbit(P, P.iterate(np.array([0.3, -2.1, -2.3, 0.5]), 200)[-1], period=2)
-    ref = continue_pair_orbit(P, orb, "kv", 5.0, period=2).events_of("fold")[0].parameter
+    ref = continue_any(P.family("kv"), 20.0, 5.0, orb, period=2).events_of("fold")[0].parameter
     br = continue_any(_kv_builder(pair, xm), 18.5, 5.0, orb.s, period=2, step=0.3,
                        max_step=0.5)
     assert br.termination.startswith("turned back")
@@ -124,8 +123,8 @@ def test_design_gains_for_a_desired_amplitude_matches_the_symmetric_orbit():
 
 
 def test_the_pair_on_the_one_engine_through_its_family_hook():
-    # the collocated orbit at e = 0.1, kp = 10 grazes at kv = 21.938: on the generic engine
-    # (the pair's map built by ImpactMap.family) the impact sequence changes there
+    # the collocated orbit at e = 0.1, kp = 10 grazes at kv = 21.938: on the one engine with
+    # the pair's family (ImpactMap.family: the pair's rules) the branch ends there
     pair = ImpactPair(0.1, 0.1, 0.75)
     orb = symmetric_orbit(pair, PDGains(10, 20), W)
     P = ImpactMap(pair, orb.gains, orb.reference())
@@ -135,7 +134,8 @@ def test_the_pair_on_the_one_engine_through_its_family_hook():
         Q = ImpactMap(pair, PDGains(10, pt.p), Reference(orb.xm, W))
         np.testing.assert_allclose(Q(pt.s), pt.s, rtol=0, atol=1e-9)
     last = br[-1].p
-    assert 21.5 < last < 21.95, br.reason     # the orbit ends at grazing (kv = 21.938)
+    assert 21.5 < last < 21.95, br.termination    # the orbit ends at grazing (kv = 21.938)
+    assert "ends at grazing" in br.termination and br.events_of("grazing")
     # next to grazing the tangent bends without a multiplier at +1: not a fold
     assert not br.events_of("fold"), br.events
     with pytest.raises(ValueError, match="parameter"):

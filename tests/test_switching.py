@@ -12,13 +12,9 @@ import numpy as np
 import pytest
 
 from hybridpd import ImpactPair, PDGains, Reference
+from hybridpd.analysis.continuation import continue_orbit
 from hybridpd.analysis.periodic import find_orbit
-from hybridpd.pair.continuation import (
-    branch_map,
-    continue_pair_orbit,
-    continue_symmetric,
-    switch_branch,
-)
+from hybridpd.pair.continuation import branch_map, continue_symmetric, switch_branch
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
 
@@ -90,7 +86,7 @@ def flip():
     o = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(60, 0.5), W)
     P = ImpactMap(o.pair, o.gains, o.reference())
     r = find_orbit(P, P.iterate(o.fixed_point + np.array([0, 1e-3, 0, 0]), 3000)[-1])
-    br = continue_pair_orbit(P, r, "kp", 99.3)
+    br = continue_orbit(P.family("kp"), 60.0, 99.3, r)
     pd = min(br.events_of("period_doubling"), key=lambda ev: abs(ev.parameter - 99.24))
     return br, pd
 

@@ -30,14 +30,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from hybridpd import ImpactPair, PDGains, bifurcation_diagram
+from hybridpd import ImpactPair, PDGains, bifurcation_diagram, continue_orbit
 from hybridpd.pair.bifdiagram import PAIR_SETTINGS, ImpactMapFamily
-from hybridpd.pair.continuation import (
-    branch_map,
-    continue_pair_orbit,
-    continue_symmetric,
-    switch_branch,
-)
+from hybridpd.pair.continuation import branch_map, continue_symmetric, switch_branch
 from hybridpd.plotting.bifurcation import bifurcation_legend, plot_bifurcation
 
 MU, E, GAMMA, X10, OMEGA, KP = 0.1, 0.1, 0.75, 1.0, 5.0, 10.0
@@ -86,14 +81,14 @@ def branches(pair, kv_lo, kv_hi):
     up = sw.branches[0]
     report("  period-2 branch, upwards", up)
     # downwards: through the fold onto the unstable partner, then along it
-    P0 = branch_map(sym, sw.start_parameters[0])
-    down = continue_pair_orbit(P0, sw.starts[0], "kv", kv_lo, period=2, x10=X10)
+    fam = branch_map(sym, sw.start_parameters[0]).family("kv", x10=X10)
+    down = continue_orbit(fam, fam.value, kv_lo, sw.starts[0], period=2)
     report("  period-2 branch, downwards", down)
     out = [(sym, "symmetric period-1"), (up, "period-2 (double impact)"),
            (down, "period-2 (double impact)")]
     if "turned back" in down.termination:
-        Pf = branch_map(down, down.parameter[-1])
-        partner = continue_pair_orbit(Pf, down.points[-1], "kv", kv_hi, period=2, x10=X10)
+        fam = branch_map(down, down.parameter[-1]).family("kv", x10=X10)
+        partner = continue_orbit(fam, fam.value, kv_hi, down.points[-1], period=2)
         report("  unstable partner after the fold", partner)
         out.append((partner, "period-2 (double impact)"))
     at20 = [b for b, _ in out[1:] if b.stable.any()]

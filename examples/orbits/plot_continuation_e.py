@@ -24,12 +24,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from hybridpd import ImpactPair, PDGains, Reference
+from hybridpd import ImpactPair, PDGains, Reference, continue_orbit
 from hybridpd.analysis.periodic import find_orbit
-from hybridpd.pair.continuation import (
-    continue_pair_orbit,
-    continue_symmetric,
-)
+from hybridpd.pair.continuation import continue_symmetric
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.orbits import symmetric_orbit
 from hybridpd.plotting.branches import plot_branch
@@ -79,7 +76,7 @@ print(f"\nperiod-2 cycle at kv = 20 (xm = {xm:.6f}): converged {cyc.converged}, 
       f"{cyc.walls}, multipliers {np.round(np.abs(cyc.multipliers), 6)}")
 for s in cyc.orbit:
     print("  ", np.round(s, 6))
-br2 = continue_pair_orbit(P, cyc, "kv", 5.0, period=2)
+br2 = continue_orbit(P.family("kv"), 20.0, 5.0, cyc, period=2)
 report("period-2 cycle continued in kv (xm fixed)", br2)
 
 print(f"\ntotal {time.perf_counter() - t0:.1f} s")

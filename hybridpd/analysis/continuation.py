@@ -21,13 +21,15 @@ real multiplier crosses +1 while the branch goes on), period doublings, Neimark-
 points and stability changes by sign changes of test functions, and locates them by Illinois
 (safeguarded regula falsi) iterations along the branch (points on hyperplanes normal to the
 chord, corrected like arclength steps); a ``sequence_change`` (the jump sequence of one
-period changes: grazing, sticking, ...) is located by bisection on the sequence. The
-engine (:func:`follow_branch`) is the impact pair's too: its map continuation gives it its
-own map, points and grazing events as hooks.
+period changes: grazing, sticking, ...) is located by bisection on the sequence.
 
-A map knows its named parameters through its hook ``family``: e.g. the impact pair's
-``ImpactMap.family("kv")`` is a builder of the map at other damping gains, so
-``continue_orbit(P.family("kv"), 20.0, 23.0, s0)`` follows the pair's orbits on this engine.
+A map knows its named parameters through its hook ``family``, which returns a
+:class:`~hybridpd.analysis.family.ParameterFamily`: the maps along the parameter and the
+rules in which its continuation differs from the general one (domain, step sizes, Newton
+scale, ``dF/dp``, what a point carries, its own events, its branch's variables). The impact
+pair's ``ImpactMap.family("kv")`` carries the pair's rules (grazing events, flight margins,
+the design path), so ``continue_orbit(P.family("kv"), 20.0, 23.0, s0)`` follows the pair's
+orbits on this engine; a plain builder ``p -> map`` gets the general rules.
 
 The result is the package's one :class:`Branch` (per-point arrays; ``branch[i]`` is a
 :class:`BranchPoint`) with :class:`BifurcationEvent` (``kind``, ``index``, ``parameter``,
@@ -38,32 +40,26 @@ quantities in ``variables`` and ``metadata``. Branches are saved as ``.nc`` or `
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import replace
 
 import numpy as np
 
-from hybridpd._results import (
-    Result,
-    WithExtras,
-    compact_repr,
-    decode_attrs,
-    encode_attrs,
-    jsonable,
-)
 from hybridpd.analysis.bifevents import EventTracker, turn_test
-from hybridpd.analysis.floquet import stability
+from hybridpd.analysis.branch import (
+    EVENT_KINDS,
+    BifurcationEvent,
+    Branch,
+    BranchPoint,
+    load_branch,
+)
+from hybridpd.analysis.family import ParameterFamily, PathRun, map_residual
 from hybridpd.analysis.hybridmap import Section, SectionMap
 from hybridpd.analysis.maps import PoincareMap, minimal_period
-from hybridpd.analysis.pathfollow import bisect_predicate, corrector, follow_path
-from hybridpd.analysis.periodic import find_orbit
+from hybridpd.analysis.pathfollow import corrector, follow_path
 
 __all__ = ["EVENT_KINDS", "BifurcationEvent", "Branch", "BranchPoint", "continue_orbit",
            "load_branch"]
 
-#: Kinds of :class:`BifurcationEvent`.
-EVENT_KINDS = ("fold", "period_doubling", "neimark_sacker", "stability_change",
-                 "sequence_change")
-_NONREAL = 1e-9
 #: What a :data:`~hybridpd.analysis.hybridmap.MAP_STATUS` means where the map is undefined.
 _UNDEFINED = {
     "bad_start": "the flow does not cross the section at the trial point",
@@ -73,258 +69,6 @@ _UNDEFINED = {
     "nonfinite": "the state overflowed on the way",
     "step_limit": "more than max_steps flow steps before the return",
     "simultaneous": "a joint impact of several contacts on the way"}
-
-
-@dataclass(frozen=True, eq=False)
-class BranchPoint:
-    """One point of a family: parameter ``p``, fixed point ``s`` and its stability (what
-    ``branch[i]`` returns; ``DP`` is kept only while the branch is followed)."""
-
-    p: float
-    s: np.ndarray
-    DP: np.ndarray | None = field(repr=False)
-    multipliers: np.ndarray
-    spectral_radius: float
-    stable: bool
-    signature: tuple
-    t_period: float = math.nan
-    __repr__ = compact_repr
-
-
-@dataclass(frozen=True, eq=False)
-class BifurcationEvent(WithExtras):
-    """An event between branch points ``index`` and ``index + 1``, located at ``parameter``.
-
-    Attributes
-    ----------
-    kind : str
-        One of :data:`EVENT_KINDS` (or an extra kind of a map's family, e.g. the impact
-        pair's ``grazing`` and ``existence``).
-    index : int
-    parameter : float
-        Parameter value of the located event (or of the nearer bracketing point when location
-        failed).
-    detail : str
-        What changed, and how it was located; starts with ``"uncertain"`` when only a sign
-        change between two points is known.
-    point : ndarray, shape (dim,), optional
-        Fixed point at the event (the phase in ``[0, T)``).
-    multipliers : ndarray, shape (dim,), complex, optional
-        Multipliers at the event.
-    test_value : float
-        Test function at the reported point (0 at an exact event).
-    located : bool
-        The location converged.
-    viable : bool
-        The orbit at the event is a genuine orbit (a stability change of a "virtual",
-        non-viable orbit of a closed-form family is reported with ``False``).
-    variables : dict
-        The family's own quantities at the event (the impact pair's reference amplitude
-        ``xm``); also readable as attributes (``ev.xm``).
-    """
-
-    kind: str
-    index: int
-    parameter: float
-    detail: str = ""
-    point: np.ndarray | None = field(default=None, repr=False)
-    multipliers: np.ndarray | None = field(default=None, repr=False)
-    test_value: float = math.nan
-    located: bool = False
-    viable: bool = True
-    variables: dict = field(default_factory=dict, repr=False)
-    __repr__ = compact_repr
-
-    @property
-    def p(self) -> float:
-        """The parameter value of the event (the name of earlier versions)."""
-        return self.parameter
-
-    def to_dict(self) -> dict:
-        """JSON-ready values (complex numbers as ``[re, im]``, the variables inline)."""
-        out = {f.name: jsonable(getattr(self, f.name)) for f in fields(self)
-               if f.name != "variables"}
-        return {**out, **jsonable(self.variables)}
-
-    @classmethod
-    def from_dict(cls, d: dict) -> BifurcationEvent:
-        """Inverse of :meth:`to_dict`."""
-        names = {f.name for f in fields(cls)} - {"variables"}
-        kw = {k: v for k, v in d.items() if k in names}
-        for k in ("point", "multipliers"):
-            if kw.get(k) is not None:
-                kw[k] = _array(kw[k])
-        for k in ("test_value", "parameter"):
-            kw[k] = math.nan if kw.get(k) is None else float(kw[k])
-        return cls(**kw, variables={k: (math.nan if v is None else v) for k, v in d.items()
-                                    if k not in names and k != "p"})
-
-
-def _array(values) -> np.ndarray:
-    """A list read from JSON as an array: ``[re, im]`` pairs as complex, ``None`` as NaN."""
-    nan = lambda v: math.nan if v is None else v
-    if values and isinstance(values[0], list):
-        return np.array([complex(nan(re), nan(im)) for re, im in values])
-    return np.array([nan(v) for v in values], float)
-
-
-def _tuples(obj):
-    return tuple(_tuples(o) for o in obj) if isinstance(obj, list) else obj
-
-
-#: Per-point fields of a branch and their dimensions in its dataset.
-_COLUMNS = {"points": ("point", "coordinate"), "multipliers": ("point", "coordinate"),
-            "spectral_radius": ("point",), "stable": ("point",)}
-
-
-@dataclass(frozen=True, eq=False)
-class Branch(WithExtras, Result):
-    """A continued family of periodic orbits, one row per accepted point.
-
-    The same class holds a family of any map (:func:`continue_orbit`) and the impact pair's
-    (map continuation, or its closed-form symmetric family); what only a family has lives in
-    ``variables`` and ``metadata``.
-
-    Attributes
-    ----------
-    parameter_name : str
-    parameter : ndarray, shape (N,)
-    points : ndarray, shape (N, dim)
-        Fixed points of ``P^k`` (a phase coordinate in ``[0, T)``).
-    multipliers : ndarray, shape (N, dim), complex
-        Floquet multipliers (NaN where undefined).
-    spectral_radius : ndarray, shape (N,)
-    stable : ndarray of bool, shape (N,)
-        Spectral radius below 1 (and, where the family says, viable).
-    period : int
-        ``k`` of ``P^k``.
-    events : list of BifurcationEvent
-        In branch order.
-    termination : str
-        ``"reached"``, ``"max_steps"``, ``"min_step"``, ``"turned back: ..."`` or ``"start
-        failed: <reason>"`` (the impact pair's engine says it in words).
-    method : str
-        ``"arclength"``, ``"natural"`` or ``"closed_form"``.
-    reason : str
-        Why it stopped, in words, with the parameter value.
-    patterns : tuple
-        Per point, the jump (impact) signature of one period.
-    variables : dict of str to ndarray (N,)
-        Per-point quantities of the family: ``t_period`` (time of one period of ``P^k``); the
-        impact pair's ``viable``, ``margin``, ``min_impact_speed``, ``xm`` and
-        ``newton_iterations``. Also readable as attributes (``br.margin``).
-    metadata : dict
-        The family's settings (the pair's ``family``, ``case``, ``fixed``, ``n_rejected``);
-        also readable as attributes.
-    """
-
-    kind = "branch"
-    parameter_name: str
-    parameter: np.ndarray
-    points: np.ndarray = field(repr=False)
-    multipliers: np.ndarray = field(repr=False)
-    spectral_radius: np.ndarray = field(repr=False)
-    stable: np.ndarray = field(repr=False)
-    period: int
-    events: list
-    termination: str
-    method: str
-    reason: str = ""
-    patterns: tuple = field(default=(), repr=False)
-    variables: dict = field(default_factory=dict, repr=False)
-    metadata: dict = field(default_factory=dict, repr=False)
-    __repr__ = compact_repr
-
-    @classmethod
-    def from_points(cls, points, events, termination, method, period, reason="", *,
-                    parameter_name="p", dim=0, variables=None, metadata=None) -> Branch:
-        """A branch from its points (:class:`BranchPoint`), in order."""
-        pts = list(points)
-        col = lambda name, shape, dtype=float: (np.array([getattr(q, name) for q in pts],
-                                                         dtype) if pts else np.zeros(shape, dtype))
-        return cls(parameter_name, col("p", 0), col("s", (0, dim)),
-                   col("multipliers", (0, dim), complex), col("spectral_radius", 0),
-                   col("stable", 0, bool), int(period), list(events), termination, method,
-                   reason, tuple(q.signature for q in pts),
-                   {"t_period": col("t_period", 0), **(variables or {})}, dict(metadata or {}))
-
-    def __len__(self) -> int:
-        return int(np.size(self.parameter))
-
-    def __getitem__(self, i) -> BranchPoint:
-        """Point ``i`` of the branch."""
-        return BranchPoint(float(self.parameter[i]), self.points[i], None, self.multipliers[i],
-                           float(self.spectral_radius[i]), bool(self.stable[i]),
-                           self.patterns[i] if self.patterns else (),
-                           float(self.variables.get("t_period", [math.nan] * len(self))[i]))
-
-    def __iter__(self):
-        return (self[i] for i in range(len(self)))
-
-    def events_of(self, kind: str) -> list:
-        """The events of one kind."""
-        return [e for e in self.events if e.kind == kind]
-
-    def to_dict(self) -> dict:
-        """JSON-ready values (complex numbers as ``[re, im]``; the variables and metadata
-        inline)."""
-        out = {f.name: jsonable(getattr(self, f.name)) for f in fields(self)
-               if f.name not in ("variables", "metadata")}
-        return {**out, **jsonable(self.variables), **jsonable(self.metadata)}
-
-    def to_dataset(self):
-        """The branch as an :class:`xarray.Dataset`: per-point variables over ``point``, the
-        events, patterns and metadata as JSON attributes."""
-        import xarray as xr
-
-        data = {k: (dims, np.asarray(getattr(self, k))) for k, dims in _COLUMNS.items()}
-        data.update({k: ("point", np.asarray(v)) for k, v in self.variables.items()})
-        attrs = {"kind": self.kind, "parameter_name": self.parameter_name,
-                 "period": int(self.period), "termination": self.termination,
-                 "method": self.method, "reason": self.reason,
-                 "events": [e.to_dict() for e in self.events],
-                 "patterns": jsonable(self.patterns), "metadata": jsonable(self.metadata),
-                 "variables": list(self.variables)}
-        return xr.Dataset(data, coords={"parameter": ("point", np.asarray(self.parameter))},
-                          attrs=encode_attrs(attrs))
-
-    @classmethod
-    def from_dataset(cls, ds) -> Branch:
-        """Inverse of :meth:`to_dataset`."""
-        a = decode_attrs(ds.attrs)
-        if a.get("kind") != cls.kind:
-            raise ValueError(f"the dataset holds a {a.get('kind')!r}, not a branch")
-        return cls(a["parameter_name"], ds["parameter"].values,
-                   *(ds[k].values for k in _COLUMNS), int(a["period"]),
-                   [BifurcationEvent.from_dict(d) for d in a["events"]], a["termination"],
-                   a["method"], a.get("reason", ""), _tuples(a["patterns"]),
-                   {k: ds[k].values for k in a["variables"]}, a["metadata"])
-
-
-def load_branch(path) -> Branch:
-    """Read a :class:`Branch` written by :meth:`Branch.save` (``.nc``, ``.zarr`` or ``.npz``).
-
-    Examples
-    --------
-    The logistic map's fixed point ``1 - 1/r`` doubles its period at ``r = 3``:
-
-    >>> import os, tempfile
-    >>> import hybridpd as hp
-    >>> class Logistic(hp.PoincareMap):
-    ...     names = ("x",)
-    ...     def __init__(self, r):
-    ...         self.r = r
-    ...     def apply(self, s, k=1, jacobian=False):
-    ...         x, J = s[0], 1.0
-    ...         for _ in range(k):
-    ...             J, x = self.r * (1 - 2 * x) * J, self.r * x * (1 - x)
-    ...         return hp.MapResult(np.array([x]), DP=np.array([[J]]) if jacobian else None)
-    >>> br = hp.continue_orbit(Logistic, 2.5, 3.2, [0.6])
-    >>> back = load_branch(br.save(os.path.join(tempfile.mkdtemp(), "b.nc")))
-    >>> [(e.kind, round(e.parameter, 6)) for e in back.events]
-    [('period_doubling', 3.0), ('stability_change', 3.0)]
-    """
-    return Branch.load(path)
 
 
 def _map_factory(builder, section, map_options):
@@ -353,11 +97,6 @@ def _map_factory(builder, section, map_options):
     return make
 
 
-def _point(r, DP, s, p, zeros=0) -> BranchPoint:
-    """The family point of an application ``r`` of ``P^k`` with Jacobian ``DP`` at ``(s, p)``."""
-    st = stability(DP, structural_zeros=zeros)
-    return BranchPoint(float(p), s, DP, st.multipliers, st.spectral_radius,
-                       bool(st.stable), r.signature, r.t_hit - r.t_start)
 
 
 def follow_branch(path, first, p_end, *, method, step, min_step, max_step, max_steps, tol,
@@ -401,30 +140,23 @@ def follow_branch(path, first, p_end, *, method, step, min_step, max_step, max_s
                        explain=path.explain)
 
 
-def sequence_change(pa, pb, evaluate, *, locate, tol, max_iter=60):
-    """Where the jump sequence of one period changes between two branch points: the last
-    point on each side (bisection on the sequence, when ``locate``) and whether it converged.
-    """
-    if not locate:
-        return pa, pb, False
-    return bisect_predicate(lambda th: evaluate(pa, pb, th),
-                            lambda pt: pt.signature == pa.signature, pa, pb,
-                            size=float(np.linalg.norm(pb.u - pa.u)), tol=tol,
-                            max_iter=max_iter)
 
 
 def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None = None,
                    section=None, method: str = "arclength", step: float | None = None,
                    max_step: float | None = None, min_step: float | None = None,
-                   max_steps: int = 200, tol: float = 1e-10, fd_step: float = 1e-6,
-                   locate: bool = True, event_tol: float = 1e-9,
-                   events: tuple = EVENT_KINDS, map_options: dict | None = None) -> Branch:
+                   max_steps: int | None = None, tol: float = 1e-10,
+                   max_iter: int | None = None, fd_step: float | None = None,
+                   locate: bool = True, event_tol: float = 1e-9, events: tuple | None = None,
+                   map_options: dict | None = None) -> Branch:
     """Follow a periodic orbit (a fixed point of ``P^k``) in a parameter, on any map.
 
     Parameters
     ----------
-    builder : callable
-        ``p -> PoincareMap`` (any map: a user's, a specialisation, a
+    builder : ParameterFamily or callable
+        A map's family of one named parameter (``P.family("kv")``: its rules of
+        continuation, :class:`~hybridpd.analysis.family.ParameterFamily`), or ``p ->
+        PoincareMap`` (any map: a user's, a specialisation, a
         :class:`~hybridpd.analysis.hybridmap.SectionMap`), or ``p -> Section | automaton``
         with ``section`` (module docstring). A map class whose constructor takes the
         parameter first is a builder.
@@ -440,14 +172,18 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
     method : {"arclength", "natural"}
     step, max_step, min_step : float, optional
         Initial, largest and smallest step (in ``p`` for natural continuation, in arclength of
-        ``(s, p)`` otherwise); defaults ``|p_end - p0| / 20``, ``/ 5`` and ``/ 1e5`` (widened to
-        include ``step``).
-    max_steps : int
-        Bound on accepted points.
+        ``(s, p)`` otherwise); defaults the family's (:meth:`ParameterFamily.steps
+        <hybridpd.analysis.family.ParameterFamily.steps>`; a builder's ``|p_end - p0| / 20``,
+        ``/ 5`` and ``/ 1e5``), widened to include ``step``.
+    max_steps : int, optional
+        Bound on accepted points (default the family's: 200 for a builder).
     tol : float
-        Newton tolerance (residual relative to ``max(1, |s|)``).
-    fd_step : float
-        Relative step of the parameter derivative (arclength).
+        Newton tolerance (residual relative to the family's scale: ``max(1, |s|)`` for a
+        builder).
+    max_iter : int, optional
+        Newton bound of the corrector (default the family's: 15 for a builder).
+    fd_step : float, optional
+        Relative step of the parameter derivative (default the family's: ``1e-6``).
     locate : bool
         Locate the events (Illinois iterations on the test function along the branch,
         bisection on the jump sequence); otherwise each is reported at the nearer bracketing
@@ -455,7 +191,7 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
     event_tol : float
         Location tolerance: length of the final bracket in ``(s, p)``.
     events : tuple of str
-        Kinds to detect (a subset of :data:`EVENT_KINDS`).
+        Kinds to detect (default: all the family's kinds, :data:`EVENT_KINDS` for a builder).
     map_options : dict, optional
         Keyword arguments of :class:`SectionMap` (``t_max``, ``max_jumps``, ...).
 
@@ -466,7 +202,7 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
     Raises
     ------
     ValueError
-        If a parameter is out of range, ``section`` is missing for an automaton builder, or
+        If a parameter is out of range (or ``p_end`` out of the family's domain), ``section`` is missing for an automaton builder, or
         ``method`` is unknown.
 
     Examples
@@ -485,106 +221,107 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
     ('reached', 0.82, True)
     >>> br.reason
     'reached the end value p = 0.82'
+
+    The impact pair's orbit followed in its damping gain with the pair's rules (``kv`` from
+    20 to 23: the branch ends at grazing):
+
+    >>> from hybridpd.pair.orbits import symmetric_orbit
+    >>> orb = symmetric_orbit(hp.ImpactPair(0.1, 0.1, 0.75), hp.PDGains(10, 20), 5.0)
+    >>> P = hp.ImpactMap(orb.pair, orb.gains, orb.reference())
+    >>> br = hp.continue_orbit(P.family("kv"), 20.0, 23.0, orb.fixed_point, step=0.5)
+    >>> [ev.kind for ev in br.events][:1]
+    ['grazing']
     """
     if not callable(builder):
         raise ValueError(f"builder must be a callable p -> PoincareMap (e.g. a map class), got "
                          f"{type(builder).__name__}")
     if method not in ("arclength", "natural"):
         raise ValueError(f"method must be 'arclength' or 'natural', got {method!r}")
+    fam = builder if isinstance(builder, ParameterFamily) else ParameterFamily(
+        "p", math.nan, _map_factory(builder, section, dict(map_options or {})))
+    if fd_step is not None:
+        fam = replace(fam, fd_step=_positive("fd_step", fd_step))
     p0, p_end = float(p0), float(p_end)
     if not (math.isfinite(p0) and math.isfinite(p_end)) or p0 == p_end:
         raise ValueError(f"p0 and p_end must be finite and differ, got {p0!r}, {p_end!r}")
+    fam.check_range(p0, p_end)
     span = abs(p_end - p0)
-    step = span / 20 if step is None else float(step)
-    max_step = max(span / 5, step) if max_step is None else float(max_step)
-    min_step = min(span / 1e5, step) if min_step is None else float(min_step)
+    d_step, d_max, d_min = fam.steps(span)
+    step = d_step if step is None else float(step)
+    max_step = max(d_max, step) if max_step is None else float(max_step)
+    min_step = min(d_min, step) if min_step is None else float(min_step)
     if not (0 < min_step <= step <= max_step):
         raise ValueError("steps must satisfy 0 < min_step <= step <= max_step")
-    if int(max_steps) < 1:
+    max_steps = fam.max_steps if max_steps is None else int(max_steps)
+    if max_steps < 1:
         raise ValueError(f"max_steps must be >= 1, got {max_steps!r}")
-    if not event_tol > 0:
-        raise ValueError(f"event_tol must be > 0, got {event_tol!r}")
-    bad = [kind for kind in events if kind not in EVENT_KINDS]
+    max_iter = fam.max_iter if max_iter is None else int(max_iter)
+    if max_iter < 1:
+        raise ValueError(f"max_iter must be >= 1, got {max_iter!r}")
+    tol = _positive("tol", tol)
+    event_tol = _positive("event_tol", event_tol)
+    events = fam.kinds if events is None else tuple(events)
+    bad = [kind for kind in events if kind not in fam.kinds]
     if bad:
-        raise ValueError(f"events must be a subset of {EVENT_KINDS}, got {bad}")
+        raise ValueError(f"events must be a subset of {fam.kinds}, got {bad}")
     if period is None:
         period = getattr(s0, "period", 1)
     s0 = getattr(s0, "s", s0)
     k = int(period)
-    make = _map_factory(builder, section, dict(map_options or {}))
-    P = make(p0)
-    first = find_orbit(P, s0, k, tol=tol)
-    if not first.converged:
-        detail = f" ({first.detail})" if first.detail else ""
-        return Branch.from_points([], [], f"start failed: {first.reason}", method, k,
-                                  f"no fixed point of P^{k} at p = {p0:.10g} to start from: "
-                                  f"{first.reason}{detail}", dim=P.dim)
-    path = _Path(make, k, fd_step * max(1.0, abs(p0)), P.dim)
+    if k < 1:
+        raise ValueError(f"period must be >= 1, got {period!r}")
+    P = fam.at(p0)
+    if P is None:
+        raise ValueError(f"p0: the family has no map at {fam.name} = {p0:g}")
+    orbit = fam.start(P, s0, k, tol, max_iter)
+    if not orbit.converged:
+        return fam.start_failed(P, k, method, p0, orbit)
+    path = _Path(fam, k, p0, P)
+    first = path.point(np.append(orbit.s, p0), orbit.iterations)
+    if first is None:
+        return fam.start_failed(P, k, method, p0, None)
     lo, hi = sorted((p0, p_end))
-
-    def to_event(kind, pt, index, detail, fv, ok):
-        return BifurcationEvent(kind, index, float(pt.u[-1]), detail, pt.fam.s.copy(),
-                                pt.mult.copy(), float(fv), bool(ok))
-
-    def sequence_events(pa, pb, index, evaluate):
-        if "sequence_change" not in events or pa.signature == pb.signature:
-            return []
-        _la, lb, ok = sequence_change(pa, pb, evaluate, locate=locate, tol=event_tol)
-        return [to_event("sequence_change", lb, index,
-                         f"{len(pa.signature)} -> {len(pb.signature)} jumps per period",
-                         math.nan, ok)]
-
-    pts, evs, termination, _rej, _why = follow_branch(
-        path, path.point(np.append(first.s, p0)), p_end, method=method, step=step,
-        min_step=min_step, max_step=max_step, max_steps=int(max_steps) - 1, tol=tol,
-        max_iter=15, scale=lambda x: max(1.0, float(np.max(np.abs(x[:path.dim])))),
-        to_event=to_event, kinds=events, locate=locate, event_tol=event_tol,
-        extra_events=sequence_events, k=k, grow=1.3,
-        out_of_range=lambda p: None if lo - 1e-9 * span <= p <= hi + 1e-9 * span
+    slack = fam.range_slack * span
+    pts, evs, termination, rejected, why = follow_branch(
+        path, first, p_end, method=method, step=step, min_step=min_step, max_step=max_step,
+        max_steps=max_steps - 1, tol=tol, max_iter=max_iter,
+        scale=lambda x: fam.scale(x, P.dim), to_event=fam.to_event, kinds=events,
+        locate=locate, event_tol=event_tol,
+        extra_events=lambda pa, pb, i, evaluate: fam.extra_events(
+            pa, pb, i, evaluate, kinds=events, locate=locate, tol=event_tol),
+        nonsmooth=fam.nonsmooth, k=k, grow=fam.grow, name=fam.name,
+        out_of_range=lambda p: None if lo - slack <= p <= hi + slack
         else "turned back: left the parameter range")
-    reason = _reason(termination, pts[-1].u[-1], p_end, lo, hi, int(max_steps))
-    for key, short in (("reached", "reached"), ("max_steps", "max_steps"),
-                       ("step below", "min_step")):
-        termination = short if termination.startswith(key) else termination
-    return Branch.from_points([q.fam for q in pts], evs, termination, method, k, reason,
-                              dim=P.dim)
+    return fam.finish(PathRun(pts, evs, termination, rejected, why, p0, p_end, k, method,
+                              max_steps, events, P))
 
 
-def _reason(termination: str, p_last: float, p_end: float, lo: float, hi: float,
-            max_steps: int) -> str:
-    """The path follower's `termination` as a sentence that names where the branch ended."""
-    if termination.startswith("reached"):
-        return f"reached the end value p = {p_end:.10g}"
-    if termination.startswith("max_steps"):
-        return f"max_steps = {max_steps} accepted points reached at p = {p_last:.10g}"
-    if termination.startswith("turned back"):
-        return (f"{termination} [{lo:.10g}, {hi:.10g}] at p = {p_last:.10g} (the branch "
-                "passed a fold)")
-    return termination
-
-
-@dataclass(eq=False)
-class _PathPoint:
-    """A point of the path as the engine sees it: ``u = (s, p)``, ``DP``, ``dF/dp``."""
-
-    u: np.ndarray
-    DP: np.ndarray
-    Fp: np.ndarray | None
-    fam: BranchPoint
-    formal = True         # the multipliers mean what they say at every point
-
-    mult = property(lambda self: self.fam.multipliers)
-    rho = property(lambda self: self.fam.spectral_radius)
-    signature = property(lambda self: self.fam.signature)
+def _positive(name, value) -> float:
+    v = float(value)
+    if not v > 0 or not math.isfinite(v):
+        raise ValueError(f"{name} must be > 0 and finite, got {value!r}")
+    return v
 
 
 class _Path:
-    """``F(u) = P^k(s; p) - s`` (phase wrapped), its Jacobians and points, for the engine."""
+    """``F(u) = P^k(s; p) - s`` (phase wrapped) of a family's maps, its Jacobians and points,
+    for the engine; the family's hooks give the rules in which families differ."""
 
-    def __init__(self, make, k, hp, dim):
-        self.make, self.k, self.hp, self.dim = make, k, hp, dim
+    def __init__(self, family, k, p0, P0):
+        self.family, self.k, self.p0 = family, k, p0
+        self._maps = {float(p0): P0}
         self._last = (None, None)
         self._why = ""        # why the map was last undefined (see explain)
+
+    def map_at(self, p):
+        """The family's map at ``p`` (None outside its domain)."""
+        # the corrector and dF/dp revisit the same few parameter values
+        key = float(p)
+        if key not in self._maps:
+            if len(self._maps) > 64:
+                self._maps.clear()
+            self._maps[key] = self.family.at(key)
+        return self._maps[key]
 
     def explain(self) -> str:
         """Why the map was undefined at a point evaluated since the previous call (``""`` if
@@ -593,7 +330,11 @@ class _Path:
         return why
 
     def _undefined(self, u, r) -> None:
-        if r.ok:
+        if not self.family.explains:
+            return
+        if r is None:
+            what = "outside the family's domain"
+        elif r.ok:
             what = ("grazing (a tangential contact: no saltation matrix)" if r.grazing
                     else "its Jacobian DP is not finite")
         else:
@@ -604,7 +345,9 @@ class _Path:
     def _run(self, u):
         key = u.tobytes()
         if self._last[0] != key:      # F and Fs ask for the same point in turn
-            P = self.make(u[-1])
+            P = self.map_at(u[-1])
+            if P is None:
+                raise RuntimeError(f"no map at p = {u[-1]:.10g}")
             r = P.apply(u[:-1], self.k, jacobian=True)
             DP = r.DP
             if r.ok and DP is None:   # the map gives no DP: its finite differences
@@ -616,10 +359,17 @@ class _Path:
         return self._last[1]
 
     def F(self, u):
+        if not self.family.dp_in_residual:
+            P = self.map_at(u[-1])
+            return None if P is None else map_residual(P, u[:-1], self.k)
         try:
             P, r, DP = self._run(u)
         except ValueError as exc:     # not a section point
-            self._why = f"not a section point at p = {u[-1]:.10g}: {exc}"
+            if self.family.explains:
+                self._why = f"not a section point at p = {u[-1]:.10g}: {exc}"
+            return None
+        except RuntimeError:
+            self._undefined(u, None)
             return None
         if r.ok and np.all(np.isfinite(DP)):
             return P.wrap(r.s - u[:-1])
@@ -633,26 +383,34 @@ class _Path:
         return DP - np.eye(P.dim)
 
     def Fp(self, u):
-        m, s, hp = self.make, u[:-1], self.hp
-        return m(u[-1]).wrap(m(u[-1] + hp)(s, self.k) - m(u[-1] - hp)(s, self.k)) / (2 * hp)
+        P = self.map_at(u[-1])
+        if P is None:
+            raise RuntimeError(f"no map at p = {u[-1]:.10g}")
+        p_ref = self.p0 if self.family.gradient_step == "start" else None
+        return self.family.gradient(P, u[:-1], self.k, u[-1], at=self.map_at, p_ref=p_ref)
 
-    def point(self, u, _its=0):
-        P, r, DP = self._run(u)
+    def point(self, u, its=0):
+        try:
+            P, r, DP = self._run(u)
+        except (RuntimeError, ValueError):
+            self._undefined(u, None)
+            return None
         if not r.ok or not np.all(np.isfinite(DP)):
             self._undefined(u, r)
             return None
-        s = P.canonical(u[:-1].copy())
-        try:
-            fp = self.Fp(u)
-        except RuntimeError:
-            fp = None
-        return _PathPoint(u.copy(), DP, fp, _point(r, DP, s, u[-1], P.structural_zeros))
+
+        def gradient():
+            try:
+                return self.Fp(u)
+            except RuntimeError:
+                return None
+        return self.family.point(P, u, self.k, its, r, DP, gradient)
 
     def lower_period(self, u) -> bool:
         """The point is a fixed point of a lower power of the map (another branch)."""
-        return minimal_period(self.make(u[-1]), u[:-1], self.k) < self.k
+        return minimal_period(self.map_at(u[-1]), u[:-1], self.k) < self.k
 
     def unwrap(self, cur, new):
-        P = self.make(new.u[-1])
-        if P.period is not None:
+        P = self.map_at(new.u[-1])
+        if P is not None and P.period is not None:
             new.u[0] = cur.u[0] + P.wrap(new.u[:-1] - cur.u[:-1])[0]

@@ -192,9 +192,11 @@ class PoincareMap(abc.ABC):
         return {}
 
     def family(self, parameter: str, **options):
-        """A builder ``p -> PoincareMap``: this map with its parameter named `parameter` set to
-        ``p`` (the others kept), for :func:`~hybridpd.analysis.continuation.continue_orbit`.
-        The default map has no named parameters (``ValueError``)."""
+        """This map's family in its parameter named `parameter`: a
+        :class:`~hybridpd.analysis.family.ParameterFamily` (callable, ``p -> PoincareMap``: this
+        map with that parameter set to ``p``, the others kept) with the map's rules of
+        continuation, for :func:`~hybridpd.analysis.continuation.continue_orbit`. The default
+        map has no named parameters (``ValueError``)."""
         del options
         raise ValueError(f"parameter: this map ({type(self).__name__}) names no parameters, "
                          f"got {parameter!r}; give continue_orbit a builder p -> map")

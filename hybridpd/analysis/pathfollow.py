@@ -2,8 +2,8 @@
 
 Unknowns ``u = (s, p)``: a section point and the parameter; :func:`follow_path` continues a
 solution of ``F(u) = P^k(s; p) - s = 0`` by natural or pseudo-arclength steps (passing
-folds). Its callers (:func:`hybridpd.analysis.continuation.continue_orbit` for any map,
-:func:`hybridpd.pair.continuation.continue_pair_orbit` for the impact pair) give the map
+folds). Its caller (:func:`hybridpd.analysis.continuation.continue_orbit`, for any map's
+family: the rules in which families differ are the family's hooks) gives the map
 through ``F``, ``Fs``, ``Fp`` and ``make_point`` and their events through ``detect``; other
 paths bring their step rules as a :class:`Stepper` (:class:`CurveStepper`: a zero curve in a
 plane, :func:`hybridpd.pair.boundaries.boundary_curves`).

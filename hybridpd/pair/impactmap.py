@@ -26,7 +26,6 @@ from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns, minima
 from hybridpd.model import (
     Case,
     ImpactPair,
-    PDGains,
     Reference,
     as_gains,
     check_array,
@@ -42,7 +41,7 @@ from hybridpd.pair.batch import (
     trace_once,
     turning_margins,
 )
-from hybridpd.pair.orbits import symmetric_orbits
+from hybridpd.pair.family import _fixed_parameters, _min, pair_family
 from hybridpd.pair.params import PairParams
 
 __all__ = ["BatchMapResult", "ImpactMap", "MapResult", "Stability", "stability"]
@@ -223,25 +222,42 @@ class ImpactMap(PoincareMap):
         return orbit_quantities(self, s, k, graze_tol=graze_tol,
                                 margin_samples=margin_samples)
 
-    def family(self, parameter: str, *, x10: float | None = None, n: int = 1):
-        """A builder ``p -> ImpactMap``: this map with one parameter set to ``p``.
+    def traces(self, s, k: int, margin_samples: int = 256) -> list:
+        """:class:`MapTrace` (with flight margins) of ``s, P(s), ..., P^{k-1}(s)``, up to the
+        first application that does not return (:func:`trace_orbit`)."""
+        return trace_orbit(self, s, k, margin_samples)
+
+    def family(self, parameter: str, *, x10: float | None = None, n: int = 1,
+               fd_step: float = 1e-6, graze_tol: float = 1e-6, margin_samples: int = 128):
+        """This map's family in one parameter, with the pair's rules of continuation (a
+        :class:`~hybridpd.pair.family.PairFamily`: callable, ``p -> ImpactMap``), for
+        :func:`~hybridpd.analysis.continuation.continue_orbit`.
 
         Parameters
         ----------
         parameter : str
             One of ``kp, kv, e, mu, xm, omega, L, m2``; with ``x10`` (the design path: ``xm``
-            follows the amplitude of the order-``n`` symmetric orbit realising ``x10``) one of
-            ``kp, kv, e, mu, omega, L, m2, gamma, x10``.
+            follows the amplitude of the order-``n`` symmetric orbit realising ``x10``, paper
+            (20); the map's own ``xm`` is replaced by the design value) one of ``kp, kv, e,
+            mu, omega, L, m2, gamma, x10`` (``gamma`` then means ``L / x10``).
         x10 : float, optional
             The design amplitude (length).
         n : int
-            The order of the designed symmetric orbit.
+            The odd order of the designed symmetric orbit.
+        fd_step : float
+            Relative step of ``dF/dp`` (central at the current point, one-sided at the edge
+            of the parameter's domain).
+        graze_tol : float
+            Grazing threshold of the event at the end of a branch.
+        margin_samples : int
+            Grid of the turning-point search per flight (the points' flight margins).
 
         Returns
         -------
-        callable
-            ``p -> ImpactMap``; it raises ``ValueError`` where ``p`` is out of the parameter's
-            range or the design has no amplitude.
+        PairFamily
+            Its ``value`` is the parameter's value in this map; calling it at a value out of
+            the parameter's range, or where the design has no amplitude, raises
+            ``ValueError``.
 
         Examples
         --------
@@ -249,19 +265,12 @@ class ImpactMap(PoincareMap):
         >>> from hybridpd.pair.orbits import symmetric_orbit
         >>> orb = symmetric_orbit(ImpactPair(0.1, 0.5, 0.75), PDGains(10, 20), 5.0)
         >>> P = ImpactMap(orb.pair, orb.gains, orb.reference())
-        >>> P.family("kv")(22.0).gains.kv
-        22.0
+        >>> fam = P.family("kv")
+        >>> fam.value, fam(22.0).gains.kv
+        (20.0, 22.0)
         """
-        design = None if x10 is None else _Design(check_positive("x10", x10),
-                                                  check_int("n", n, 1))
-        name = _check_parameter(parameter, PARAMETERS if design is None else DESIGN_PARAMETERS)
-
-        def build(p):
-            Q = _map_with(self, name, float(p), design)
-            if Q is None:
-                raise ValueError(f"{name} = {p:g}: the design path has no amplitude xm here")
-            return Q
-        return build
+        return pair_family(self, parameter, x10=x10, n=n, fd_step=fd_step,
+                           graze_tol=graze_tol, margin_samples=margin_samples)
 
     def state(self, s, t: float | None = None) -> np.ndarray:
         """Full state ``[x1, y1, x2, y2, pc, ps]`` of the pre-impact section point ``s`` at time
@@ -398,84 +407,11 @@ class ImpactMap(PoincareMap):
         return stability(self.jacobian(s))
 
 
-#: Parameters :func:`continue_orbit` can follow (all others fixed).
-PARAMETERS = ("kp", "kv", "e", "mu", "xm", "omega", "L", "m2")
-#: Parameters :func:`continue_orbit` can follow along the design path (``x10`` given: the
-#: reference amplitude ``xm`` follows the symmetric-orbit design, as in
-#: :func:`continue_symmetric`).
-DESIGN_PARAMETERS = ("kp", "kv", "e", "mu", "omega", "L", "m2", "gamma", "x10")
-
-
-def _min(values):
-    return float(min(values)) if values else np.nan
-
-
 def _section_point(s, name, closure=False) -> np.ndarray:
     a = check_array(name, s, shape=(4,))  # (phi, z1, z2, z4)
     if a[3] < 0 or (a[3] == 0 and not closure):
         raise ValueError(f"{name}[3] = z4 must be > 0 (approaching the +L wall), got {a[3]!r}")
     return a
-
-
-def _check_parameter(name, allowed):
-    if not isinstance(name, str) or name not in allowed:
-        raise ValueError(f"parameter must be one of {allowed}, got {name!r}")
-    return name
-
-
-@dataclass(frozen=True)
-class _Design:
-    """The design path: ``xm`` is the amplitude that puts the primary mass on the order-``n``
-    triangle wave of amplitude ``x10`` (paper (20)), recomputed at every parameter value."""
-
-    x10: float
-    n: int = 1
-
-
-def design_xm(pair: ImpactPair, gains: PDGains, omega: float, x10: float, n: int = 1,
-              case="collocated") -> float:
-    """Reference amplitude ``xm`` of the order-``n`` symmetric orbit realising ``x10``.
-
-    The closed-form solution of (13)-(14) and (20) (the *formal* orbit: its viability is not
-    required); NaN where the conditions are singular or give ``xm <= 0``.
-    """
-    r = symmetric_orbits(gains.kp, gains.kv, mu=pair.mu, e=pair.e, L=pair.L, omega=omega,
-                         m2=pair.m2, x10=x10, n=n, case=case, margin=False, jacobian=False)
-    xm = float(np.asarray(r.xm).reshape(-1)[0])
-    return xm if np.isfinite(xm) and xm > 0 else np.nan
-
-
-def _map_with(P: ImpactMap, name: str, value: float, design: _Design | None = None):
-    """A copy of ``P`` with one parameter changed (the others and the tolerances kept).
-
-    With a ``design``, ``xm`` follows the design at the new value (``gamma`` moves
-    ``L = gamma * x10``; ``x10`` moves the design itself); None where the design has no
-    amplitude.
-    """
-    pair, g, ref = P.pair, P.gains, P.reference
-    if name in ("kp", "kv"):
-        g = PDGains(**{"kp": g.kp, "kv": g.kv, name: value})
-    elif name in ("e", "mu", "L", "m2", "gamma"):
-        if name == "gamma":
-            name, value = "L", value * design.x10
-        pair = ImpactPair(**{"mu": pair.mu, "e": pair.e, "L": pair.L, "m2": pair.m2,
-                             name: value})
-    elif name in ("xm", "omega"):
-        ref = Reference(**{"xm": ref.xm, "omega": ref.omega, name: value})
-    if design is not None:
-        if name == "x10":
-            design = _Design(value, design.n)
-        xm = design_xm(pair, g, ref.omega, design.x10, design.n, P.case)
-        if not np.isfinite(xm):
-            return None
-        ref = Reference(xm, ref.omega)
-    return type(P)(pair, g, ref, P.case, tol=P.tol, max_impacts=P.max_impacts)
-
-
-def _fixed_parameters(P: ImpactMap) -> dict:
-    return {"kp": P.gains.kp, "kv": P.gains.kv, "e": P.pair.e, "mu": P.pair.mu,
-            "L": P.pair.L, "m2": P.pair.m2, "xm": P.reference.xm,
-            "omega": P.reference.omega, "case": P.case.value}
 
 
 @dataclass(frozen=True)

@@ -8,9 +8,12 @@ Two complementary tools:
   contacts, sticking phases included); the map's hook
   :meth:`~hybridpd.pair.impactmap.ImpactMap.point_quantities` adds the pair's walls, flight
   margins and contact pattern to the orbit (:func:`.trace.orbit_quantities`).
-* :func:`continue_pair_orbit` follows a fixed point of ``P^k`` in one parameter among
-  :data:`PARAMETERS` (natural-parameter continuation with a secant predictor, or
-  pseudo-arclength continuation which passes folds); :func:`continue_symmetric` follows the
+* :func:`~hybridpd.analysis.continuation.continue_orbit` of the map's family
+  (``continue_orbit(P.family("kv"), 20.0, 23.0, s0)``, :meth:`ImpactMap.family
+  <hybridpd.pair.impactmap.ImpactMap.family>`) follows a fixed point of ``P^k`` in one
+  parameter among :data:`PARAMETERS` on the package's one engine, with the pair's rules
+  (natural-parameter continuation with a secant predictor, or pseudo-arclength continuation
+  which passes folds); :func:`continue_symmetric` follows the
   closed-form symmetric orbit family of :mod:`hybridpd.pair.orbits` (``x10`` fixed, ``xm``
   follows) in one of :data:`SYMMETRIC_PARAMETERS`.
 
@@ -47,12 +50,9 @@ Both return the package's one :class:`~hybridpd.analysis.continuation.Branch` of
 :class:`~hybridpd.analysis.continuation.BifurcationEvent` (re-exported here), with the
 pair's per-point variables (``viable``, ``margin``, ``min_impact_speed``, ``xm``,
 ``newton_iterations``) and metadata (``family``, ``case``, ``fixed``, ``n_rejected``).
-``continue_orbit`` of earlier versions is :func:`continue_pair_orbit` (the general name
-belongs to :func:`hybridpd.continue_orbit`, which follows any map's orbits).
 
-Modules: :mod:`.trace` (one application of ``P`` with its impact pattern), :mod:`.newton`
-(``P^k`` and its Jacobian), :mod:`.events` (event detection and location), :mod:`.branch`
-(:func:`continue_pair_orbit`), :mod:`.symmetric` (:func:`continue_symmetric`), :mod:`.switching`
+Modules: :mod:`.trace` (one application of ``P`` with its impact pattern),
+:mod:`.symmetric` (:func:`continue_symmetric`), :mod:`.switching`
 (:func:`switch_branch`: the period-doubled branch at a flip, the crossing branch at a branch
 point, the motion reached past a grazing point); branches are drawn by
 :func:`hybridpd.plotting.branches.plot_branch`.
@@ -60,20 +60,18 @@ point, the motion reached past a grazing point); branches are drawn by
 from __future__ import annotations
 
 from hybridpd.analysis.continuation import BifurcationEvent, Branch, load_branch
-from hybridpd.pair.continuation._common import (
+from hybridpd.pair.continuation.switching import BranchSwitch, branch_map, switch_branch
+from hybridpd.pair.continuation.symmetric import continue_symmetric
+from hybridpd.pair.continuation.trace import ImpactStep, MapTrace, trace_map
+from hybridpd.pair.family import (
     DESIGN_PARAMETERS,
     EVENT_KINDS,
     PARAMETERS,
     SYMMETRIC_PARAMETERS,
     design_xm,
 )
-from hybridpd.pair.continuation.branch import continue_pair_orbit
-from hybridpd.pair.continuation.newton import map_power_jacobian
-from hybridpd.pair.continuation.switching import BranchSwitch, branch_map, switch_branch
-from hybridpd.pair.continuation.symmetric import continue_symmetric
-from hybridpd.pair.continuation.trace import ImpactStep, MapTrace, trace_map
 
 __all__ = ["DESIGN_PARAMETERS", "EVENT_KINDS", "PARAMETERS", "SYMMETRIC_PARAMETERS",
            "BifurcationEvent", "Branch", "BranchSwitch", "ImpactStep", "MapTrace",
-           "branch_map", "continue_pair_orbit", "continue_symmetric", "design_xm", "load_branch",
-           "map_power_jacobian", "switch_branch", "trace_map"]
+           "branch_map", "continue_symmetric", "design_xm", "load_branch", "switch_branch",
+           "trace_map"]

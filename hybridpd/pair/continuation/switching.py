@@ -28,8 +28,9 @@ Three kinds of switch, chosen from the :class:`~hybridpd.analysis.continuation.B
     it. This is a *nonsmooth* switch: the new branch does not emanate from the grazing
     point, it is the attractor reached from it.
 
-The new orbit is then continued with :func:`~hybridpd.pair.continuation.branch.continue_pair_orbit`
-on the parent's parameter path (the design path ``x10`` fixed, ``xm`` following, for a branch
+The new orbit is then continued with :func:`~hybridpd.analysis.continuation.continue_orbit`
+on the parent's parameter path (the map's family, :meth:`ImpactMap.family
+<hybridpd.pair.impactmap.ImpactMap.family>`) (the design path ``x10`` fixed, ``xm`` following, for a branch
 of :func:`~hybridpd.pair.continuation.symmetric.continue_symmetric` or a design-path
 map continuation; fixed ``xm`` otherwise).
 """
@@ -41,23 +42,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from hybridpd._results import compact_repr
-from hybridpd.analysis.continuation import BifurcationEvent, Branch
+from hybridpd.analysis.continuation import BifurcationEvent, Branch, continue_orbit
+from hybridpd.analysis.family import map_residual
+from hybridpd.analysis.pathfollow import newton
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
 from hybridpd.model import Case, ImpactPair, PDGains, Reference, wrap_phase
-from hybridpd.pair.continuation._common import (
+from hybridpd.pair.family import (
     _Design,
-    _in_domain,
     _map_with,
     _positive_float,
     _positive_int,
     _scale,
-)
-from hybridpd.pair.continuation.branch import continue_pair_orbit
-from hybridpd.pair.continuation.newton import (
-    _newton,
-    _param_derivative,
-    _residual,
-    map_power_jacobian,
 )
 from hybridpd.pair.impactmap import ImpactMap
 
@@ -189,20 +184,20 @@ def _critical(DP, target):
 
 def _augmented_start(branch, Pc, sc, pc, v, K, a, tol, max_iter, fd_step):
     """Newton on ``[P^K(s) - s; v.(s - sc) - a]`` in ``(s, p)`` from ``(sc + a v, pc)``."""
-    name = branch.parameter_name
     design = _design_of(branch)
+    fam = Pc.family(branch.parameter_name, fd_step=fd_step,
+                    **({} if design is None else {"x10": design.x10, "n": design.n}))
     cache = {}
 
     def map_at(p):
         key = float(p)
         if key not in cache:
-            cache[key] = Pc if key == pc else (
-                _map_with(Pc, name, key, design) if _in_domain(name, key) else None)
+            cache[key] = Pc if key == pc else fam.at(key)
         return cache[key]
 
     def G(u):
         P = map_at(u[4])
-        r = None if P is None else _residual(P, u[:4], K)
+        r = None if P is None else map_residual(P, u[:4], K)
         if r is None:
             return None
         d = u[:4] - sc
@@ -213,11 +208,11 @@ def _augmented_start(branch, Pc, sc, pc, v, K, a, tol, max_iter, fd_step):
         P = map_at(u[4])
         if P is None:
             raise RuntimeError("map undefined")
-        Fs = map_power_jacobian(P, u[:4], K, fd_step=fd_step)[0] - np.eye(4)
-        Fp = _param_derivative(P, name, u[:4], K, fd_step, design)
+        Fs = P.jacobian(u[:4], K) - np.eye(4)
+        Fp = fam.gradient(P, u[:4], K, u[4], at=map_at)
         return np.vstack([np.column_stack([Fs, Fp]), np.append(v, 0.0)])
 
-    return _newton(G, JG, np.append(sc + a * v, pc), tol=tol, max_iter=max_iter, scale=_scale)
+    return newton(G, JG, np.append(sc + a * v, pc), tol=tol, max_iter=max_iter, scale=_scale)
 
 
 def _fixed_of_power(P, s, k, scale_tol=1e-7):
@@ -238,7 +233,7 @@ def _smooth_switch(branch, event, kind, amplitudes, tol, max_iter, fd_step):
     if Pc is None:
         raise ValueError(f"no map at the event ({name} = {pc:g})")
     sc = np.asarray(event.point, float)
-    DP = map_power_jacobian(Pc, sc, k, fd_step=fd_step)[0]
+    DP = Pc.jacobian(sc, k)
     target = -1.0 if kind == "period_doubling" else 1.0
     lam, v = _critical(DP, target)
     K = 2 * k if kind == "period_doubling" else k
@@ -335,7 +330,9 @@ def switch_branch(branch: Branch, event: BifurcationEvent, stop: float | None = 
     Parameters
     ----------
     branch : Branch
-        The parent branch (:func:`continue_pair_orbit` or :func:`continue_symmetric`).
+        The parent branch (a map continuation of the pair,
+        :func:`~hybridpd.analysis.continuation.continue_orbit` of :meth:`ImpactMap.family
+        <hybridpd.pair.impactmap.ImpactMap.family>`, or :func:`continue_symmetric`).
     event : BifurcationEvent
         One of ``branch.events``: ``period_doubling`` (switch to the period-doubled
         branch), ``fold`` that is a *branch point* (a multiplier at +1 while the parent goes
@@ -343,7 +340,8 @@ def switch_branch(branch: Branch, event: BifurcationEvent, stop: float | None = 
         past the grazing point). See the module docstring for the method.
     stop : float, optional
         Continue every new branch found from its start to this parameter value with
-        :func:`continue_pair_orbit` (on the parent's parameter path); not continued when None.
+        :func:`~hybridpd.analysis.continuation.continue_orbit` on the family of the map at the
+        start (on the parent's parameter path); not continued when None.
     amplitudes : sequence of float
         Steps ``a`` along the critical eigenvector tried in turn (smooth switches).
     offset : float
@@ -355,10 +353,11 @@ def switch_branch(branch: Branch, event: BifurcationEvent, stop: float | None = 
     tol, max_iter : float, int
         Newton tolerance (see :func:`~hybridpd.analysis.periodic.find_orbit`) and iteration bound.
     fd_step : float
-        Relative finite-difference step.
+        Relative finite-difference step of ``dF/dp`` (the switch's Newton and the new
+        branches' family).
     **continue_kwargs
-        Passed to :func:`continue_pair_orbit` (e.g. ``step``, ``max_steps``, ``method``); its
-        corrector tolerance defaults to ``1e-12`` here.
+        Passed to :func:`~hybridpd.analysis.continuation.continue_orbit` (e.g. ``step``,
+        ``max_steps``, ``method``); its corrector tolerance defaults to ``1e-12`` here.
 
     Returns
     -------
@@ -421,10 +420,9 @@ def switch_branch(branch: Branch, event: BifurcationEvent, stop: float | None = 
             kw = dict(continue_kwargs)
             # the new branch is checked as fixed points of P^K: correct tightly
             kw.setdefault("tol", 1e-12)
-            if design is not None:
-                kw.setdefault("x10", design.x10)
-                kw.setdefault("n", design.n)
-            branches.append(continue_pair_orbit(P, orb, name, stop, period=K, **kw))
+            fam = P.family(name, fd_step=fd_step, **({} if design is None else
+                                                    {"x10": design.x10, "n": design.n}))
+            branches.append(continue_orbit(fam, fam.value, stop, orb, period=K, **kw))
     return BranchSwitch(
         kind=kind, event=event, parameter_name=name, critical_value=float(event.parameter),
         eigenvector=v, critical_multiplier=complex(lam), starts=tuple(starts),

@@ -19,16 +19,17 @@ from hybridpd.model import (
     wrap_phase,
 )
 from hybridpd.pair import symbolic
-from hybridpd.pair.continuation._common import (
+from hybridpd.pair.family import (
     EVENT_KINDS,
     SYMMETRIC_PARAMETERS,
+    _branch_from_points,
     _check_parameter,
     _in_domain,
     _path_steps,
+    _Point,
     _positive_float,
     _positive_int,
 )
-from hybridpd.pair.continuation.events import _branch_from_points, _Point
 from hybridpd.pair.orbits import REASONS, symmetric_orbits
 from hybridpd.pair.params import PairParams
 
