@@ -105,6 +105,17 @@ def _until(page, tid, ok, what):
 
 
 
+def _url_has(page, pattern, what):
+    """Wait (at most WAIT_MS) until the page's URL matches ``pattern``: the page states its
+    fields in the URL from a callback after it loads, which may come after what it shows."""
+    deadline = time.monotonic() + WAIT_MS / 1000
+    while time.monotonic() < deadline:     # bounded by the deadline
+        if re.search(pattern, page.url):
+            return page.url
+        page.wait_for_timeout(20)
+    pytest.fail(f"{what}: the URL is still {page.url}")
+
+
 def _field(page, name):
     return page.get_by_role("textbox", name=name, exact=True)
 
@@ -125,7 +136,8 @@ def test_the_spectral_radius_is_hybridpd_orbits(page, server):
     assert _text(page, "stable") == str(cli["stable"]).lower()
     assert float(_text(page, "selected-kp")) == 12.5
     # the URL states every field, so the view reopens as it is
-    assert "case=noncollocated" in page.url and "num=201" in page.url
+    url = _url_has(page, r"num=201", "the URL never stated every field")
+    assert "case=noncollocated" in url
 
 
 def test_a_click_on_the_map_selects_that_cell(page, server):
@@ -140,7 +152,7 @@ def test_a_click_on_the_map_selects_that_cell(page, server):
     orb = hp.symmetric_orbit(hp.ImpactPair(0.1, 0.5, 0.75), (kp, kv), 5.0)
     assert float(_text(page, "spectral-radius")) == pytest.approx(orb.spectral_radius,
                                                                   rel=1e-10)
-    assert re.search(r"kp=3\d\.", page.url)
+    _url_has(page, r"kp=3\d\.", "the URL never stated the selected kp")
 
 
 def test_changing_e_redraws_the_map(page, server):
@@ -153,7 +165,7 @@ def test_changing_e_redraws_the_map(page, server):
     rm = S.pair_map(S.PairState(case="noncollocated", e=0.1, num=101))
     assert share == pytest.approx(rm.fraction("stable")[0], abs=1e-11)
     assert share != before
-    assert "e=0.1" in page.url
+    _url_has(page, r"e=0\.1\b", "the URL never stated the new e")
 
 
 def test_bad_input_is_refused_beside_its_control_and_the_server_lives(page, server):
