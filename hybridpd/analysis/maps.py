@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridpd._results import compact_repr
+from hybridpd.analysis.fd import difference_quotients
 from hybridpd.model import wrap_phase
 
 __all__ = ["MapResult", "PoincareMap", "check_returns", "detect_period", "minimal_period"]
@@ -212,8 +213,9 @@ class PoincareMap(abc.ABC):
             s[0] %= self.period
         return s
 
-    def _fd_steps(self, s, H):
-        """Finite-difference steps at ``s`` (a hook: keep ``s +- H`` on the section)."""
+    def _fd_steps(self, S, H):
+        """Finite-difference steps at the points ``S`` (shape ``(..., dim)``, as ``H``; a hook:
+        keep ``S +- H`` on the section)."""
         return H
 
     def wrap(self, ds) -> np.ndarray:
@@ -296,24 +298,11 @@ class PoincareMap(abc.ABC):
             raise ValueError(f"scale must be {m} positive finite numbers, got {scale!r}")
 
         def central(hrel):
-            H = self._fd_steps(s, hrel * sc)
-            # the centre is needed only for a one-sided difference
-            S = np.concatenate([s + np.diag(H), s - np.diag(H)] + [s[None, :]] * one_sided)
-            img, ok = self.apply_many(S, k)
-            if ok[:2 * m].all():
-                return self.wrap(img[:m] - img[m:2 * m]).T / (2 * H)
-            J = np.empty((m, m))
-            for j in range(m):
-                if ok[j] and ok[m + j]:
-                    d, hh = img[j] - img[m + j], 2 * H[j]
-                elif one_sided and ok[j] and ok[2 * m]:
-                    d, hh = img[j] - img[2 * m], H[j]
-                elif one_sided and ok[m + j] and ok[2 * m]:
-                    d, hh = img[2 * m] - img[m + j], H[j]
-                else:
-                    raise RuntimeError(f"P^{k} undefined around s in direction {j}")
-                J[:, j] = self.wrap(d) / hh
-            return J
+            J, ok = self._fd_jacobians(s[None, :], k, (hrel * sc)[None, :], one_sided)
+            if not ok.all():
+                j = int(np.flatnonzero(~ok[0])[0])
+                raise RuntimeError(f"P^{k} undefined around s in direction {j}")
+            return J[0]
 
         if richardson:
             return (4.0 * central(hr / 2) - central(hr)) / 3.0
@@ -364,6 +353,36 @@ class PoincareMap(abc.ABC):
                 if done + 1 >= int(tail) else np.nan
             status.append(why)
         return tails, status, its
+
+    def jacobians_fd(self, S, k: int = 1, h: float = 1e-6) -> np.ndarray:
+        """Finite differences of ``P^k`` at every row of ``S`` (shape ``(N, dim)``), all
+        points in one call of :meth:`apply_many`: the one rule of
+        :mod:`hybridpd.analysis.fd` (central, one-sided where one side does not return, NaN
+        where neither does or ``P^k`` is undefined at the row), coordinate ``j`` moving by
+        ``h max(1, |s_j|)`` (within the map's steps, :meth:`_fd_steps`). Shape
+        ``(N, dim, dim)``."""
+        X = np.atleast_2d(np.asarray(S, float))
+        return self._fd_jacobians(X, k, h * np.maximum(1.0, np.abs(X)), True)[0]
+
+    def _fd_jacobians(self, X, k, H, centre: bool) -> tuple:
+        """``(J (N, dim, dim), defined (N, dim))`` at the rows of ``X`` with the steps
+        ``H`` (shape ``(N, dim)``) by :func:`~hybridpd.analysis.fd.difference_quotients`
+        (without ``centre``, the centre is neither evaluated nor one-sided differences taken).
+        """
+        k = check_returns(k)
+        N, m = X.shape
+        H = self._fd_steps(X, H)
+        E = np.eye(m)
+        pts = [(X[:, None, :] + H[:, None, :] * E).reshape(-1, m),
+               (X[:, None, :] - H[:, None, :] * E).reshape(-1, m)]
+        img, ok = self.apply_many(np.concatenate(([X] if centre else []) + pts), k)
+        c = N if centre else 0
+        plus, minus = img[c:c + N * m].reshape(N, m, m), img[c + N * m:].reshape(N, m, m)
+        q, defined = difference_quotients(
+            plus, minus, H, img[:N] if centre else None, ok_plus=ok[c:c + N * m].reshape(N, m),
+            ok_minus=ok[c + N * m:].reshape(N, m), ok_centre=ok[:N] if centre else True,
+            wrap=self.wrap)
+        return q.swapaxes(-1, -2), defined
 
     def jacobians(self, S, k: int = 1) -> np.ndarray:
         """``DP^k`` at every row of ``S`` (shape ``(N, dim)``), shape ``(N, dim, dim)``
