@@ -4,8 +4,8 @@ where both sides return, one-sided from the centre where one does not, NaN (batc
 import numpy as np
 import pytest
 
-from hybridpd.analysis.fd import difference_quotients
 from hybridpd.analysis.family import parameter_gradient
+from hybridpd.analysis.fd import difference_quotients
 from hybridpd.analysis.maps import MapResult, PoincareMap
 
 A = np.array([[0.5, 1.0], [0.0, -0.25]])

@@ -55,9 +55,9 @@ def parameter_gradient(at: Callable, P: PoincareMap, s: np.ndarray, k: int, p: f
     r0 = None if all(ok) else map_residual(P, s, k)
     if r0 is None and not all(ok):
         raise RuntimeError("P^k undefined at the point")
-    nan = np.full(P.dim, np.nan)
-    d, defined = difference_quotients([vals[0] if ok[0] else nan], [vals[1] if ok[1] else nan],
-                                      [h], r0, ok_plus=ok[:1], ok_minus=ok[1:], wrap=P.wrap)
+    plus, minus = (v[None] if v is not None else np.full((1, P.dim), np.nan) for v in vals)
+    masks = {} if all(ok) else dict(ok_plus=np.array(ok[:1]), ok_minus=np.array(ok[1:]))
+    d, defined = difference_quotients(plus, minus, np.array([h]), r0, wrap=P.wrap, **masks)
     if not defined[0]:
         raise RuntimeError(f"P^k undefined on both sides of p = {p:g}")
     return d[0]

@@ -20,7 +20,7 @@ __all__ = ["difference_quotients"]
 
 
 def difference_quotients(plus, minus, steps, centre=None, *, ok_plus=None, ok_minus=None,
-                         ok_centre=True, wrap=None) -> tuple:
+                         ok_centre=None, wrap=None) -> tuple:
     """Difference quotients along ``m`` directions by the one rule (module docstring).
 
     Parameters
@@ -35,7 +35,7 @@ def difference_quotients(plus, minus, steps, centre=None, *, ok_plus=None, ok_mi
         taken as defined).
     ok_plus, ok_minus : array_like of bool, shape (..., m), optional
         Where each side is defined (default: everywhere).
-    ok_centre : array_like of bool, shape (...)
+    ok_centre : array_like of bool, shape (...), optional
         Where the centre is defined (default: everywhere).
     wrap : callable, optional
         Applied to every difference of values (e.g. the phase wrap of
@@ -60,22 +60,31 @@ def difference_quotients(plus, minus, steps, centre=None, *, ok_plus=None, ok_mi
     plus, minus = np.asarray(plus, float), np.asarray(minus, float)
     steps = np.asarray(steps, float)
     wrap = _same if wrap is None else wrap
-    okp = np.ones(steps.shape, bool) if ok_plus is None else np.asarray(ok_plus, bool)
-    okm = np.ones(steps.shape, bool) if ok_minus is None else np.asarray(ok_minus, bool)
-    okc = np.asarray(ok_centre, bool)[..., None]
-    both = okp & okm & okc
-    if both.all():           # the common case: central everywhere, nothing to select
-        return wrap(plus - minus) / (2 * steps)[..., None], both
+    both = None
+    for ok, per_point in ((ok_plus, False), (ok_minus, False), (ok_centre, True)):
+        if ok is not None:
+            ok = np.asarray(ok, bool)[..., None] if per_point else np.asarray(ok, bool)
+            both = ok if both is None else both & ok
+    central = wrap(plus - minus) / (2 * steps)[..., None]
+    if both is None or both.all():   # the common case: central everywhere, nothing to select
+        return central, np.ones(steps.shape, bool)
     with np.errstate(invalid="ignore"):
-        q = np.where(both[..., None], wrap(plus - minus) / (2 * steps)[..., None], np.nan)
+        both = np.broadcast_to(both, steps.shape).copy()
+        q = np.where(both[..., None], central, np.nan)
         if centre is None:
             return q, both
         c = np.asarray(centre, float)[..., None, :]
+        okp, okm = _mask(ok_plus, steps), _mask(ok_minus, steps)
+        okc = np.ones((), bool) if ok_centre is None else np.asarray(ok_centre, bool)[..., None]
         fwd = okp & ~okm & okc
         bwd = ~okp & okm & okc
         q = np.where(fwd[..., None], wrap(plus - c) / steps[..., None], q)
         q = np.where(bwd[..., None], wrap(c - minus) / steps[..., None], q)
     return q, both | fwd | bwd
+
+
+def _mask(ok, steps):
+    return np.ones(steps.shape, bool) if ok is None else np.asarray(ok, bool)
 
 
 def _same(d):

@@ -372,16 +372,18 @@ class PoincareMap(abc.ABC):
         k = check_returns(k)
         N, m = X.shape
         H = self._fd_steps(X, H)
-        E = np.eye(m)
-        pts = [(X[:, None, :] + H[:, None, :] * E).reshape(-1, m),
-               (X[:, None, :] - H[:, None, :] * E).reshape(-1, m)]
-        img, ok = self.apply_many(np.concatenate(([X] if centre else []) + pts), k)
+        D = H[:, None, :] * np.eye(m)           # row j of point i: its step along j
         c = N if centre else 0
-        plus, minus = img[c:c + N * m].reshape(N, m, m), img[c + N * m:].reshape(N, m, m)
-        q, defined = difference_quotients(
-            plus, minus, H, img[:N] if centre else None, ok_plus=ok[c:c + N * m].reshape(N, m),
-            ok_minus=ok[c + N * m:].reshape(N, m), ok_centre=ok[:N] if centre else True,
-            wrap=self.wrap)
+        img, ok = self.apply_many(np.concatenate(
+            ([X] if centre else []) + [(X[:, None, :] + D).reshape(-1, m),
+                                       (X[:, None, :] - D).reshape(-1, m)]), k)
+        vals = img[c:].reshape(2, N, m, m)
+        # all returned (the common case): no masks to combine
+        masks = {} if ok.all() else dict(ok_plus=ok[c:c + N * m].reshape(N, m),
+                                         ok_minus=ok[c + N * m:].reshape(N, m),
+                                         ok_centre=ok[:N] if centre else None)
+        q, defined = difference_quotients(vals[0], vals[1], H, img[:N] if centre else None,
+                                          wrap=self.wrap, **masks)
         return q.swapaxes(-1, -2), defined
 
     def jacobians(self, S, k: int = 1) -> np.ndarray:
