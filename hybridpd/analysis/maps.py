@@ -7,7 +7,8 @@ section points are taken with the phase wrapped to ``[-T/2, T/2)``. A map implem
 method, :meth:`PoincareMap.apply` (``P^k(s)``, optionally ``DP^k``, the return time and the
 signature: the sequence of jumps met on the way, as one :class:`MapResult`); the base class
 derives everything else once: ``__call__``, :meth:`~PoincareMap.jacobian`,
-:meth:`~PoincareMap.jacobian_fd` (the package's one finite-difference ``DP``) and
+:meth:`~PoincareMap.jacobian_fd` and its batch :meth:`~PoincareMap.jacobians_fd`
+(finite-difference ``DP`` by the package's one rule, :mod:`hybridpd.analysis.fd`) and
 :meth:`~PoincareMap.iterate`.
 
 The reference implementation is :class:`hybridpd.analysis.hybridmap.SectionMap` (any hybrid
@@ -110,9 +111,10 @@ class PoincareMap(abc.ABC):
     attribute is enough) and :meth:`apply`, returning a :class:`MapResult` (with ``DP``
     when ``jacobian`` is asked and the map knows it; without one the analyses take
     :meth:`jacobian_fd`). Everything else is derived once here: ``__call__``,
-    :meth:`jacobian`, :meth:`jacobian_fd`, :meth:`iterate`, :meth:`apply_many`,
-    :meth:`wrap`. A specialisation overrides only what it speeds up (a compiled
-    :meth:`apply_many` or :meth:`iterate`). Maps that know more about their orbits answer
+    :meth:`jacobian`, :meth:`jacobian_fd`, :meth:`jacobians_fd`, :meth:`iterate`,
+    :meth:`apply_many`, :meth:`wrap`. A specialisation overrides only what it speeds up (a
+    compiled :meth:`apply_many` or :meth:`iterate`; the finite differences evaluate through
+    :meth:`apply_many`). Maps that know more about their orbits answer
     the hooks :meth:`refuse` and :meth:`validate` (a hybrid section map checks that a
     fixed point returns after whole reference periods and that an independent simulation
     returns to it), :attr:`structural_zeros`, :meth:`state` and :attr:`mode`. A map with
@@ -257,7 +259,8 @@ class PoincareMap(abc.ABC):
 
     def jacobian_fd(self, s, k: int = 1, *, h: float | None = None, scale=None,
                     richardson: bool = False, one_sided: bool = False) -> np.ndarray:
-        """Central finite differences of ``P^k`` (phase differences wrapped), ``(dim, dim)``.
+        """Finite differences of ``P^k`` by the one rule (:mod:`hybridpd.analysis.fd`; phase
+        differences wrapped), ``(dim, dim)``: the single-point form of :meth:`jacobians_fd`.
 
         Parameters
         ----------
@@ -276,7 +279,8 @@ class PoincareMap(abc.ABC):
             Combine steps ``h`` and ``h/2`` as ``(4 J(h/2) - J(h)) / 3`` (error ``O(h^4)``).
         one_sided : bool
             Where one side of a coordinate is undefined (the map does not return), use a
-            one-sided difference on the other (``RuntimeError`` if both are undefined).
+            one-sided difference on the other (``RuntimeError`` if both are undefined, or
+            the map does not return from ``s``); otherwise central differences only.
 
         Returns
         -------
