@@ -22,6 +22,7 @@ from typing import ClassVar
 import numpy as np
 
 from hybridpd.analysis.branch import EVENT_KINDS, BifurcationEvent, Branch, BranchPoint
+from hybridpd.analysis.fd import difference_quotients
 from hybridpd.analysis.floquet import stability
 from hybridpd.analysis.maps import PoincareMap
 from hybridpd.analysis.pathfollow import bisect_predicate
@@ -41,26 +42,25 @@ def map_residual(P: PoincareMap, s: np.ndarray, k: int):
 
 def parameter_gradient(at: Callable, P: PoincareMap, s: np.ndarray, k: int, p: float,
                        h: float) -> np.ndarray:
-    """``d(P^k(s) - s)/dp`` at the map ``P`` (parameter ``p``): central differences with step
-    ``h``, one-sided where the family has no map (``at(q)`` is None) or ``P^k`` is undefined on
-    one side. Shape ``(dim,)``; ``RuntimeError`` where it is undefined on both sides."""
+    """``d(P^k(s) - s)/dp`` at the map ``P`` (parameter ``p``) by the one finite-difference
+    rule (:mod:`hybridpd.analysis.fd`) with step ``h``: central, one-sided where the family has
+    no map (``at(q)`` is None) or ``P^k`` is undefined on one side. Shape ``(dim,)``;
+    ``RuntimeError`` where it is undefined on both sides."""
     vals = []
     for q in (p + h, p - h):
         Q = at(q)
         vals.append(None if Q is None else map_residual(Q, s, k))
-    if vals[0] is not None and vals[1] is not None:
-        d, hh = vals[0] - vals[1], 2 * h
-    else:
-        r0 = map_residual(P, s, k)
-        if r0 is None:
-            raise RuntimeError("P^k undefined at the point")
-        if vals[0] is not None:
-            d, hh = vals[0] - r0, h
-        elif vals[1] is not None:
-            d, hh = r0 - vals[1], h
-        else:
-            raise RuntimeError(f"P^k undefined on both sides of p = {p:g}")
-    return P.wrap(d) / hh
+    ok = [v is not None for v in vals]
+    # the centre only where a side is missing: it costs one more application of P^k
+    r0 = None if all(ok) else map_residual(P, s, k)
+    if r0 is None and not all(ok):
+        raise RuntimeError("P^k undefined at the point")
+    plus, minus = (v[None] if v is not None else np.full((1, P.dim), np.nan) for v in vals)
+    masks = {} if all(ok) else dict(ok_plus=np.array(ok[:1]), ok_minus=np.array(ok[1:]))
+    d, defined = difference_quotients(plus, minus, np.array([h]), r0, wrap=P.wrap, **masks)
+    if not defined[0]:
+        raise RuntimeError(f"P^k undefined on both sides of p = {p:g}")
+    return d[0]
 
 
 def sequence_change(pa, pb, evaluate, *, locate, tol, max_iter=60):

@@ -7,7 +7,8 @@ section points are taken with the phase wrapped to ``[-T/2, T/2)``. A map implem
 method, :meth:`PoincareMap.apply` (``P^k(s)``, optionally ``DP^k``, the return time and the
 signature: the sequence of jumps met on the way, as one :class:`MapResult`); the base class
 derives everything else once: ``__call__``, :meth:`~PoincareMap.jacobian`,
-:meth:`~PoincareMap.jacobian_fd` (the package's one finite-difference ``DP``) and
+:meth:`~PoincareMap.jacobian_fd` and its batch :meth:`~PoincareMap.jacobians_fd`
+(finite-difference ``DP`` by the package's one rule, :mod:`hybridpd.analysis.fd`) and
 :meth:`~PoincareMap.iterate`.
 
 The reference implementation is :class:`hybridpd.analysis.hybridmap.SectionMap` (any hybrid
@@ -25,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridpd._results import compact_repr
+from hybridpd.analysis.fd import difference_quotients
 from hybridpd.model import wrap_phase
 
 __all__ = ["MapResult", "PoincareMap", "check_returns", "detect_period", "minimal_period"]
@@ -109,9 +111,10 @@ class PoincareMap(abc.ABC):
     attribute is enough) and :meth:`apply`, returning a :class:`MapResult` (with ``DP``
     when ``jacobian`` is asked and the map knows it; without one the analyses take
     :meth:`jacobian_fd`). Everything else is derived once here: ``__call__``,
-    :meth:`jacobian`, :meth:`jacobian_fd`, :meth:`iterate`, :meth:`apply_many`,
-    :meth:`wrap`. A specialisation overrides only what it speeds up (a compiled
-    :meth:`apply_many` or :meth:`iterate`). Maps that know more about their orbits answer
+    :meth:`jacobian`, :meth:`jacobian_fd`, :meth:`jacobians_fd`, :meth:`iterate`,
+    :meth:`apply_many`, :meth:`wrap`. A specialisation overrides only what it speeds up (a
+    compiled :meth:`apply_many` or :meth:`iterate`; the finite differences evaluate through
+    :meth:`apply_many`). Maps that know more about their orbits answer
     the hooks :meth:`refuse` and :meth:`validate` (a hybrid section map checks that a
     fixed point returns after whole reference periods and that an independent simulation
     returns to it), :attr:`structural_zeros`, :meth:`state` and :attr:`mode`. A map with
@@ -212,8 +215,9 @@ class PoincareMap(abc.ABC):
             s[0] %= self.period
         return s
 
-    def _fd_steps(self, s, H):
-        """Finite-difference steps at ``s`` (a hook: keep ``s +- H`` on the section)."""
+    def _fd_steps(self, S, H):
+        """Finite-difference steps at the points ``S`` (shape ``(..., dim)``, as ``H``; a hook:
+        keep ``S +- H`` on the section)."""
         return H
 
     def wrap(self, ds) -> np.ndarray:
@@ -255,7 +259,8 @@ class PoincareMap(abc.ABC):
 
     def jacobian_fd(self, s, k: int = 1, *, h: float | None = None, scale=None,
                     richardson: bool = False, one_sided: bool = False) -> np.ndarray:
-        """Central finite differences of ``P^k`` (phase differences wrapped), ``(dim, dim)``.
+        """Finite differences of ``P^k`` by the one rule (:mod:`hybridpd.analysis.fd`; phase
+        differences wrapped), ``(dim, dim)``: the single-point form of :meth:`jacobians_fd`.
 
         Parameters
         ----------
@@ -274,7 +279,8 @@ class PoincareMap(abc.ABC):
             Combine steps ``h`` and ``h/2`` as ``(4 J(h/2) - J(h)) / 3`` (error ``O(h^4)``).
         one_sided : bool
             Where one side of a coordinate is undefined (the map does not return), use a
-            one-sided difference on the other (``RuntimeError`` if both are undefined).
+            one-sided difference on the other (``RuntimeError`` if both are undefined, or
+            the map does not return from ``s``); otherwise central differences only.
 
         Returns
         -------
@@ -296,24 +302,11 @@ class PoincareMap(abc.ABC):
             raise ValueError(f"scale must be {m} positive finite numbers, got {scale!r}")
 
         def central(hrel):
-            H = self._fd_steps(s, hrel * sc)
-            # the centre is needed only for a one-sided difference
-            S = np.concatenate([s + np.diag(H), s - np.diag(H)] + [s[None, :]] * one_sided)
-            img, ok = self.apply_many(S, k)
-            if ok[:2 * m].all():
-                return self.wrap(img[:m] - img[m:2 * m]).T / (2 * H)
-            J = np.empty((m, m))
-            for j in range(m):
-                if ok[j] and ok[m + j]:
-                    d, hh = img[j] - img[m + j], 2 * H[j]
-                elif one_sided and ok[j] and ok[2 * m]:
-                    d, hh = img[j] - img[2 * m], H[j]
-                elif one_sided and ok[m + j] and ok[2 * m]:
-                    d, hh = img[2 * m] - img[m + j], H[j]
-                else:
-                    raise RuntimeError(f"P^{k} undefined around s in direction {j}")
-                J[:, j] = self.wrap(d) / hh
-            return J
+            J, ok = self._fd_jacobians(s[None, :], k, (hrel * sc)[None, :], one_sided)
+            if not ok.all():
+                j = int(np.flatnonzero(~ok[0])[0])
+                raise RuntimeError(f"P^{k} undefined around s in direction {j}")
+            return J[0]
 
         if richardson:
             return (4.0 * central(hr / 2) - central(hr)) / 3.0
@@ -364,6 +357,38 @@ class PoincareMap(abc.ABC):
                 if done + 1 >= int(tail) else np.nan
             status.append(why)
         return tails, status, its
+
+    def jacobians_fd(self, S, k: int = 1, h: float = 1e-6) -> np.ndarray:
+        """Finite differences of ``P^k`` at every row of ``S`` (shape ``(N, dim)``), all
+        points in one call of :meth:`apply_many`: the one rule of
+        :mod:`hybridpd.analysis.fd` (central, one-sided where one side does not return, NaN
+        where neither does or ``P^k`` is undefined at the row), coordinate ``j`` moving by
+        ``h max(1, |s_j|)`` (within the map's steps, :meth:`_fd_steps`). Shape
+        ``(N, dim, dim)``."""
+        X = np.atleast_2d(np.asarray(S, float))
+        return self._fd_jacobians(X, k, h * np.maximum(1.0, np.abs(X)), True)[0]
+
+    def _fd_jacobians(self, X, k, H, centre: bool) -> tuple:
+        """``(J (N, dim, dim), defined (N, dim))`` at the rows of ``X`` with the steps
+        ``H`` (shape ``(N, dim)``) by :func:`~hybridpd.analysis.fd.difference_quotients`
+        (without ``centre``, the centre is neither evaluated nor one-sided differences taken).
+        """
+        k = check_returns(k)
+        N, m = X.shape
+        H = self._fd_steps(X, H)
+        D = H[:, None, :] * np.eye(m)           # row j of point i: its step along j
+        c = N if centre else 0
+        img, ok = self.apply_many(np.concatenate(
+            ([X] if centre else []) + [(X[:, None, :] + D).reshape(-1, m),
+                                       (X[:, None, :] - D).reshape(-1, m)]), k)
+        vals = img[c:].reshape(2, N, m, m)
+        # all returned (the common case): no masks to combine
+        masks = {} if ok.all() else dict(ok_plus=ok[c:c + N * m].reshape(N, m),
+                                         ok_minus=ok[c + N * m:].reshape(N, m),
+                                         ok_centre=ok[:N] if centre else None)
+        q, defined = difference_quotients(vals[0], vals[1], H, img[:N] if centre else None,
+                                          wrap=self.wrap, **masks)
+        return q.swapaxes(-1, -2), defined
 
     def jacobians(self, S, k: int = 1) -> np.ndarray:
         """``DP^k`` at every row of ``S`` (shape ``(N, dim)``), shape ``(N, dim, dim)``

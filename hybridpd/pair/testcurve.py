@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridpd._results import compact_repr
+from hybridpd.analysis.fd import difference_quotients
 from hybridpd.analysis.pathfollow import (
     CurvePoint,
     CurveStepper,
@@ -129,32 +130,32 @@ class TestCurve:
     def fgrad(self, u, extra=None):
         """``F(u)``, ``grad F(u)`` (and of ``extra``), the center's TestValues.
 
-        The gradient in the box's unit coordinates by the parameter-gradient rule: central
-        differences of step ``_FD``, one-sided (forward, else backward) where a central one
-        would leave a parameter's domain. (Written here until the analysis layer holds the
-        one ``parameter_gradient``; the same rule, the box as the domain.)
+        The gradient in the box's unit coordinates by the one finite-difference rule
+        (:mod:`hybridpd.analysis.fd`) with step ``_FD``, the box as the domain: central,
+        one-sided (forward, else backward) where a central one would leave it.
         """
         pts = [u]
-        scheme = []
+        ip, im = [0, 0], [0, 0]              # rows of each side's point (0: not evaluated)
+        okp, okm = np.zeros(2, bool), np.zeros(2, bool)
         for a in range(2):
             lo, hi = self.dom[a]
             e = np.zeros(2)
             e[a] = _FD
-            up, dn = u[a] + _FD <= hi, u[a] - _FD > lo
-            if up and dn:
-                pts += [u + e, u - e]
-                scheme.append((len(pts) - 2, len(pts) - 1, 2 * _FD))
-            elif up:
+            okp[a], okm[a] = u[a] + _FD <= hi, u[a] - _FD > lo
+            if okp[a]:
                 pts.append(u + e)
-                scheme.append((len(pts) - 1, 0, _FD))
-            else:
+                ip[a] = len(pts) - 1
+            if okm[a]:
                 pts.append(u - e)
-                scheme.append((0, len(pts) - 1, _FD))
+                im[a] = len(pts) - 1
         tv = self.values(np.array(pts))
+        steps = np.full(2, _FD)
         out = []
         for f in [self.local] + ([extra] if extra is not None else []):
-            v = f(tv)
-            out.append((float(v[0]), np.array([(v[i] - v[j]) / d for i, j, d in scheme])))
+            v = np.asarray(f(tv), float)
+            d, _ok = difference_quotients(v[ip, None], v[im, None], steps, v[:1], ok_plus=okp,
+                                          ok_minus=okm)
+            out.append((float(v[0]), d[:, 0]))
         return out, _take(tv, 0)
 
     # -- corrector --------------------------------------------------------------------
