@@ -99,7 +99,7 @@ def compute() -> dict:
     S = orb.fixed_point + np.linspace(-0.05, 0.05, 12)[:, None] * np.array([1, -1, 0.5, 2])
     img, st, nimp = impact_map(p, 0, np.ascontiguousarray(S))
     out["impact_map.img"], out["impact_map.status"], out["impact_map.n"] = img, st, nimp
-    img, st, k, rec = trace_once(p, 0, np.ascontiguousarray(S[3]))
+    img, st, _k, rec = trace_once(p, 0, np.ascontiguousarray(S[3]))
     out["trace.img"], out["trace.rec"] = img, rec
     # symmetric orbits on a small gain grid with their viability margins
     kp, kv = np.meshgrid(np.linspace(2, 30, 7), np.linspace(1, 30, 7))

@@ -17,7 +17,8 @@ MAX_POSITIONAL = 8
 COMPILERS = {"njit", "jit", "generated_jit", "vectorize", "guvectorize", "cfunc", "stencil",
              "Kernel"}
 # a decorator line of a compiler, read as text: the AST scan must find as many kernels
-_DECORATOR_LINE = re.compile(r"^\s*@(?:\w+\.)*(?:%s)\b" % "|".join(sorted(COMPILERS)), re.M)
+_DECORATOR_LINE = re.compile(r"^\s*@(?:\w+\.)*(?:" + "|".join(sorted(COMPILERS)) + r")\b",
+                             re.MULTILINE)
 
 
 def _compiler(node) -> bool:

@@ -75,8 +75,8 @@ from hybridpd.hybrid.events import (
     EV_NONFINITE,
     EV_START,
     EV_STEP_LIMIT,
-    _matvec,
     FlowTables,
+    _matvec,
     advance,
     flow_to,
 )

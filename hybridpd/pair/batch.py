@@ -51,12 +51,36 @@ from hybridpd._jit import njit
 from hybridpd._phase import wrap_phase_kernel
 from hybridpd.pair import params as P
 
-__all__ = ["KIND_GRAZING", "KIND_IMPACT", "KIND_STICKING", "LABELS", "N_REC", "REC_KIND",
-           "Flight", "Flights",
-           "REC_SPEED", "REC_STICK_TIME", "REC_T", "REC_TAU", "REC_WALL", "REC_X1", "REC_X2",
-           "REC_Y1", "REC_Y2", "STATUS_IMPACT", "STATUS_NONFINITE", "STATUS_STICK",
-           "STATUS_TIMEOUT", "STATUS_UNRESOLVED", "impact_map", "iterate_map", "map_labels",
-           "next_impact", "pack_params", "trace_once"]
+__all__ = [
+    "KIND_GRAZING",
+    "KIND_IMPACT",
+    "KIND_STICKING",
+    "LABELS",
+    "N_REC",
+    "REC_KIND",
+    "REC_SPEED",
+    "REC_STICK_TIME",
+    "REC_T",
+    "REC_TAU",
+    "REC_WALL",
+    "REC_X1",
+    "REC_X2",
+    "REC_Y1",
+    "REC_Y2",
+    "STATUS_IMPACT",
+    "STATUS_NONFINITE",
+    "STATUS_STICK",
+    "STATUS_TIMEOUT",
+    "STATUS_UNRESOLVED",
+    "Flight",
+    "Flights",
+    "impact_map",
+    "iterate_map",
+    "map_labels",
+    "next_impact",
+    "pack_params",
+    "trace_once",
+]
 
 LABELS = ("converged", "not_converged", "diverged", "zeno_sticking", "unresolved")
 
