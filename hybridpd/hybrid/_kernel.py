@@ -361,11 +361,17 @@ def _zeno_switch(pk, rb, mode, g, t_k, t_inf, max_jumps, Kp1):
 
 
 @njit(cache=True)
+def _mode_tables(pk, mode):
+    """The tables of ``mode`` that :func:`~hybridpd.hybrid.events.advance` reads."""
+    return FlowTables(pk.h[mode], pk.Phi[mode], pk.Ah[mode], pk.dinv[mode], pk.trunc[mode],
+                      pk.G[mode], pk.gabs[mode], pk.gsum[mode], pk.cnorm[mode], pk.prio[mode],
+                      pk.ng[mode])
+
+
+@njit(cache=True)
 def run_hybrid_ex(pk, dt_min, t_end, max_jumps, max_steps, opts, rb, groups):
     """:func:`run_hybrid` with modes built on demand and simultaneity groups (module docstring)."""
-    h, Phi, Ah, dinv, trunc, G, gabs = pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs
-    gsum, cnorm, prio, ng, R, rh, target = (pk.gsum, pk.cnorm, pk.prio, pk.ng, pk.R, pk.rh,
-                                            pk.target)
+    h, G, ng, R, rh, target = pk.h, pk.G, pk.ng, pk.R, pk.rh, pk.target
     w, fc, ic, jt, st0, st1, zt_out = rb.w, rb.fc, rb.ic, rb.jt, rb.st0, rb.st1, rb.zt_out
     # One function on purpose: numba compiles the whole jump loop into one native loop.
     N1 = w.shape[0]
@@ -376,6 +382,8 @@ def run_hybrid_ex(pk, dt_min, t_end, max_jumps, max_steps, opts, rb, groups):
     zon, min_ratios, max_inst = opts.zeno_on, opts.min_ratios, opts.max_instant_jumps
     max_state = opts.max_state
     gkind, simtol, gid, fired = groups.gkind, groups.simtol, groups.gid, groups.fired
+    ft_mode = 0
+    ft = _mode_tables(pk, 0)
     while True:
         if (ic[IC_NJ] + 2 > jt.shape[0] or ic[IC_NS] + 3 > st0.shape[0]
                 or ic[IC_NZ] + 2 > zt_out.shape[0]):
@@ -391,8 +399,10 @@ def run_hybrid_ex(pk, dt_min, t_end, max_jumps, max_steps, opts, rb, groups):
         mode = ic[IC_MODE]
         si = ic[IC_NS]
         _add_seg(rb, t, t, mode, ic[IC_JUMPS], w)
-        ft = FlowTables(h[mode], Phi[mode], Ah[mode], dinv[mode], trunc[mode], G[mode],
-                        gabs[mode], gsum[mode], cnorm[mode], prio[mode], ng[mode])
+        if mode != ft_mode:
+            # the mode's tables, gathered again only when the mode changes
+            ft = _mode_tables(pk, mode)
+            ft_mode = mode
         code, tev, g, nst, err = advance(w, t, t_end, ft, ic[IC_LAST_GUARD], fc[FC_LOC_ERR],
                                          max_steps - ic[IC_STEPS], wout)
         ic[IC_STEPS] += nst
