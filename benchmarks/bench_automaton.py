@@ -60,8 +60,7 @@ def bench_kernel():
     md = prepare_lti_mode([[0.0, 1.0], [0.0, 0.0]], [0.0, -9.81], [([1.0, 0.0], 0.0, -1)])
     w0 = np.array([0.0, 1.0, 1.0])
     w_out = np.empty(3)
-    args = (w0, 0.0, 5.0, md.h, md.Phi, md.Ah, md.dinv, md.trunc, md.G, md.gabs, md.gsum,
-            md.cnorm, md.prio, 1, 0, 0.0, 10**6, w_out)
+    args = (w0, 0.0, 5.0, md.flow_tables(), 0, 0.0, 10**6, w_out)
     advance(*args)
     n = 20_000
     timer = timeit.Timer(lambda: advance(*args), timer=time.process_time)

@@ -72,7 +72,7 @@ def main():
     print(f"largest impact-time difference over the run: {diff.max():.3g} (the runs agree to "
           f"1e-6 up to impact {part}: chaotic transient)")
     # local accuracy, flight by flight from hybridpd's post-impact states
-    from hybridpd.pair.batch import next_impact, pack_params
+    from hybridpd.pair.batch import Flight, next_impact, pack_params
 
     cl = sysm.loop
     p = pack_params(10, 20, 1, 0.1, 0.5, 0.75, 5.0, 1.0)
@@ -80,7 +80,7 @@ def main():
     err_h, err_n = [], []
     for k in idx:
         t_k = traj.impact_times[k]
-        exact = next_impact(p, 0, t_k, *traj.post[k], 50.0, 1e-15)[1]
+        exact = next_impact(p, 0, Flight(t_k, *traj.post[k]), 50.0, 1e-15)[1]
         z0 = cl.initial_state(traj.post[k], t_k)
         err_h.append(abs(traj.impact_times[k + 1] - t_k - exact))
         err_n.append(abs(flight(cl, z0, 1e-10, 1e-12) - exact))

@@ -41,6 +41,7 @@ import numpy as np
 import sympy as sp
 
 from hybridpd.pair import symbolic as hs
+from hybridpd.pair.batch import Flights
 from hybridpd.pair.orbits import _viability_kernel, symmetric_orbits
 
 PAPER = dict(e=(0.1, 0.5, 0.9), L=0.75, omega=5.0, x10=1.0, m2=1.0, n=1)
@@ -100,8 +101,8 @@ def mu0_map(case, kp, kv, *, e, L, omega, m2=1.0, x10=1.0, n=1):
     flat = lambda a: np.ascontiguousarray(np.broadcast_to(a, shape), dtype=float).ravel()
     P = np.stack([flat(kp), flat(kv), flat(m2), flat(0.0), flat(e), flat(L), flat(omega),
                   flat(xm)], axis=1)
-    code = _viability_kernel(P, 0 if case == "collocated" else 1, flat(phi0), flat(x10),
-                             flat(v), flat(x20), flat(y2p), flat(tau), 1e-13, False, 16)[0]
+    fl = Flights(flat(phi0), flat(x10), -flat(v), flat(x20), flat(y2p), flat(tau))
+    code = _viability_kernel(P, 0 if case == "collocated" else 1, fl, 1e-13, False, 16)[0]
     exists = (code.reshape(shape) == 0) & (xm > 0)
     s0 = np.stack([phi0, np.broadcast_to(x20, shape), y2m, v - y2m], axis=-1)
     jac = hs.map_jacobian(s0, tau, tau, xm=xm, kp=kp, kv=kv, m2=m2, mu=0.0, e=e, L=L,

@@ -15,6 +15,7 @@ from hybridpd.pair.batch import (
     STATUS_IMPACT,
     STATUS_STICK,
     STATUS_TIMEOUT,
+    Flight,
     _eval,
     impact_map,
     next_impact,
@@ -40,7 +41,7 @@ def test_closed_form_flow_matches_expm(kp, kv, m2, w, xm, case, phi0, tau, x):
     cl, p, c = make(kp=kp, kv=kv, m2=m2, w=w, xm=xm, case=case)
     z0 = cl.initial_state(x, phi0)
     z = expm(cl.A * tau) @ z0
-    got = np.array(_eval(p, c, phi0, *x, tau, 0.1)[:4])
+    got = np.array(_eval(p, c, Flight(phi0, *x), tau, 0.1)[:4])
     scale = 1 + np.abs(z0).max() * (1 + tau) ** 3 * (1 + kp + kv) / m2
     np.testing.assert_allclose(got, z[:4], atol=1e-12 * scale)
 
@@ -54,7 +55,7 @@ def test_critical_damping_is_continuous(delta):
     x = [0.2, -0.3, 0.1, 0.4]
     for tau in (0.01, 0.3, 2.0):
         z = expm(cl.A * tau) @ cl.initial_state(x, 0.4)
-        got = np.array(_eval(p, c, 0.4, *x, tau, 0.1)[:4])
+        got = np.array(_eval(p, c, Flight(0.4, *x), tau, 0.1)[:4])
         np.testing.assert_allclose(got, z[:4], rtol=1e-12, atol=1e-12)
 
 
@@ -88,7 +89,8 @@ def test_200_impacts_flight_by_flight_against_solve_ivp(case):
     worst = 0.0
     for k in range(200):
         z0 = cl.initial_state([x1, y1, x2, y2], t)
-        st_, tau, wall, x1, y1, x2, y2, _graze = next_impact(p, c, t, x1, y1, x2, y2, 50.0, 1e-13)
+        fl = Flight(t, x1, y1, x2, y2)
+        st_, tau, wall, x1, y1, x2, y2, _graze = next_impact(p, c, fl, 50.0, 1e-13)
         assert st_ == STATUS_IMPACT
         if k % 10 == 0:
             tref, wref = flight_reference(cl, z0)
@@ -111,7 +113,8 @@ def test_200_impacts_against_naive_loop_non_chaotic():
     x1, y1, x2, y2, t = 0.3, 0.5, 0.0, 0.0, 0.0
     times = []
     for _ in range(200):
-        st_, tau, wall, x1, y1, x2, y2, _graze = next_impact(p, c, t, x1, y1, x2, y2, 50.0, 1e-13)
+        fl = Flight(t, x1, y1, x2, y2)
+        st_, tau, wall, x1, y1, x2, y2, _graze = next_impact(p, c, fl, 50.0, 1e-13)
         assert st_ == STATUS_IMPACT
         t += tau
         times.append(t)
@@ -147,7 +150,7 @@ def test_near_grazing_double_crossing_found_and_near_miss_ignored(delta):
     assert 0.4 < tstar < 0.9
     shift = cl.pair.L - zmax + delta
     x = base + [shift, 0, 0, 0]
-    st_, tau, wall, *_ = next_impact(p, c, 0.0, *x, tstar + 0.3, 1e-15)
+    st_, tau, wall, *_ = next_impact(p, c, Flight(0.0, *x), tstar + 0.3, 1e-15)
     z0 = cl.initial_state(x, 0.0)
     if delta > 0:
         g = lambda t: cl.pair.L - ((expm(cl.A * t) @ z0)[0] - (expm(cl.A * t) @ z0)[2])
@@ -174,20 +177,21 @@ def test_no_retrigger_after_impact_but_rebound_found(case):
         if cl.force @ z < -1.0:
             t0 = phi
             break
-    st_, tau, wall, *_ = next_impact(p, c, t0, x2 + L, y2 - 1e-3, x2, y2, 5.0, 1e-14)
+    st_, tau, wall, *_ = next_impact(p, c, Flight(t0, x2 + L, y2 - 1e-3, x2, y2), 5.0, 1e-14)
     assert st_ == STATUS_IMPACT and wall == 1 and tau > 1e-6
     # the same state with velocity pointing into the wall is an immediate impact
-    st2, tau2, wall2, *_ = next_impact(p, c, t0, x2 + L, y2 + 1e-3, x2, y2, 5.0, 1e-14)
+    st2, tau2, wall2, *_ = next_impact(p, c, Flight(t0, x2 + L, y2 + 1e-3, x2, y2), 5.0,
+                                     1e-14)
     assert st2 == STATUS_IMPACT and tau2 == 0.0 and wall2 == 1
     # zero relative velocity while pressed into the wall: sticking, not an impact loop
-    st3, *_ = next_impact(p, c, t0, x2 + L, y2, x2, y2, 5.0, 1e-14)
+    st3, *_ = next_impact(p, c, Flight(t0, x2 + L, y2, x2, y2), 5.0, 1e-14)
     assert st3 == STATUS_STICK
 
 
 def test_timeout_when_no_contact():
     # non-collocated loop, m1 at rest in the middle, xm = 0 and m2 at the origin: nothing moves
     _cl, p, c = make(case="noncollocated", xm=0.0)
-    st_, tau, *_ = next_impact(p, c, 0.0, 0.0, 0.0, 0.0, 0.0, 3.0, 1e-13)
+    st_, tau, *_ = next_impact(p, c, Flight(0.0, 0.0, 0.0, 0.0, 0.0), 3.0, 1e-13)
     assert st_ == STATUS_TIMEOUT and tau == 3.0
 
 

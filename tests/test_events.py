@@ -330,15 +330,13 @@ def test_kernel_hot_guard_and_priorities():
     md = prepare_lti_mode(FREE_FALL, [0, -G], [([1, 0], 0.0, -1), ([1, 0], 0.0, -1)],
                           priorities=[0, 5])
     w_out = np.empty(3)
-    args = (md.h, md.Phi, md.Ah, md.dinv, md.trunc, md.G, md.gabs, md.gsum, md.cnorm, md.prio)
-    code, t, g, _, err = advance(np.array([1.0, 0.0, 1.0]), 0.0, 3.0, *args, 2, -1, 0.0,
-                                   1000, w_out)
+    ft = md.flow_tables()
+    assert ft.ng == 2 and ft.G is md.G
+    code, t, g, _, err = advance(np.array([1.0, 0.0, 1.0]), 0.0, 3.0, ft, -1, 0.0, 1000, w_out)
     assert code == EV_CROSSING and g == 1 and err > 0
     assert t == pytest.approx(math.sqrt(2 / G), rel=1e-14)
-    code, t, g, _, err = advance(np.array([0.0, 0.0, 1.0]), 0.0, 3.0, *args, 2, -1, 0.0,
-                                   1000, w_out)
+    code, t, g, _, err = advance(np.array([0.0, 0.0, 1.0]), 0.0, 3.0, ft, -1, 0.0, 1000, w_out)
     assert code == EV_START and t == 0.0 and g == 1
-    code, t, g, _, err = advance(np.array([1.0, 0.0, 1.0]), 0.0, 0.1, *args, 2, -1, 0.0,
-                                   1000, w_out)
+    code, t, g, _, err = advance(np.array([1.0, 0.0, 1.0]), 0.0, 0.1, ft, -1, 0.0, 1000, w_out)
     assert code == EV_NONE and t == 0.1
     np.testing.assert_allclose(w_out, [1 - G * 0.005, -G * 0.1, 1.0], rtol=1e-15)

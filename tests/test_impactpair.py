@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from hybridpd import ImpactPair, PDGains, Reference
 from hybridpd.hybrid.automaton import TerminationCause
-from hybridpd.pair.batch import STATUS_IMPACT, next_impact, pack_params
+from hybridpd.pair.batch import STATUS_IMPACT, Flight, next_impact, pack_params
 from hybridpd.pair.impactpair import ControlledImpactPair
 from hybridpd.pair.naive import naive_simulate
 
@@ -43,7 +43,7 @@ def test_every_flight_against_the_batch_engine(case):
     starts = np.vstack([[0.3, 0.5, 0.0, 0.0], traj.post[:-1]])
     assert traj.n_impacts > 50
     for t0, s, t1, w in zip(t_prev, starts, traj.impact_times, traj.walls):
-        st_, tau, wall, *_ = next_impact(p, c, t0, *s, 50.0, 1e-14)
+        st_, tau, wall, *_ = next_impact(p, c, Flight(t0, *s), 50.0, 1e-14)
         assert st_ == STATUS_IMPACT and wall == w
         assert abs(t0 + tau - t1) < 1e-9
 

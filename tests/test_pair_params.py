@@ -137,7 +137,7 @@ def test_the_kernels_read_every_parameter_by_its_name(case):
                    xm=0.9)
     state = [0.2, 0.5, -0.1, 0.3]
     t0, tau = 0.37, 0.8
-    got = batch._eval.interpret(p.packed(), case, t0, *state, tau, 0.0)[:4]
+    got = batch._eval.interpret(p.packed(), case, batch.Flight(t0, *state), tau, 0.0)[:4]
     want = _flight_reference(p, case, t0, state, tau)
     np.testing.assert_allclose(got, want, rtol=1e-8, atol=1e-9)
 

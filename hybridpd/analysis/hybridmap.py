@@ -38,6 +38,7 @@ against it.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from scipy.linalg import expm
@@ -58,7 +59,9 @@ from hybridpd.hybrid._kernel import (
     IC_NJ,
     IC_NS,
     IC_NZ,
+    PackedAutomaton,
     RunBuffers,
+    RunOptions,
     _other_active,
 )
 from hybridpd.hybrid.automaton import TerminationCause, ZenoOptions, run_hybrid
@@ -85,9 +88,28 @@ FAST_RETURN_HINT = ("the section's guard fires again within one burst of impacts
 # ----------------------------------------------------------------------------------------
 # the compiled return kernel
 # ----------------------------------------------------------------------------------------
+class ReturnRun(NamedTuple):
+    """What a run to the section's guard reads besides its start (``_to_return``, the
+    labeller), by name: the automaton's tables ``pk`` and per-mode ``dt_min`` (shape
+    ``(M,)``, time), the jump loop's options ``opts``, the section's mode and guard, the
+    horizon ``t_max`` (time after the start) and the bounds on jumps and flow steps."""
+
+    pk: PackedAutomaton
+    dt_min: np.ndarray
+    opts: RunOptions
+    mode: int
+    guard: int
+    t_max: float
+    max_jumps: int
+    max_steps: int
+
+
 @njit(cache=True)
-def _any_joint(G, ng, h, groups, jt, jg, jsrc, jkind, jpre, nb, simtol):
-    """Whether one of the first ``nb`` recorded jumps is joint (see ``SectionMap.simtol``)."""
+def _any_joint(pk, groups, rb, nb, simtol):
+    """Whether one of the first ``nb`` jumps recorded in ``rb`` is joint (see
+    ``SectionMap.simtol``); ``groups (M, GM)``: the guards' simultaneity groups."""
+    G, ng, h = pk.G, pk.ng, pk.h
+    jt, jg, jsrc, jkind, jpre = rb.jt, rb.jg, rb.jsrc, rb.jkind, rb.jpre
     for q in range(nb):
         m, g = jsrc[q], jg[q]
         if jkind[q] != 3 and groups[m, g] != 0 and _other_active(
@@ -119,10 +141,11 @@ def _pending_guard(w, mode, G, ng):
 
 
 @njit(cache=True)
-def _to_return(pk, dt_min, zf, zi, w0, t0, gm, gi, k, t_max, J0, J_max, max_steps, rb):
-    """Run from the pre-jump state ``w0`` (mode ``gm``) to the ``(k+1)``-th firing of ``gi``.
+def _to_return(run, w0, t0, k, J0, rb):
+    """Run from the pre-jump state ``w0`` (mode ``run.mode``) at ``t0`` to the ``(k+1)``-th
+    firing of the section's guard ``run.guard``, first allowing ``J0`` jumps.
 
-    ``pk`` are the automaton's tables, ``rb`` the run's buffers (:mod:`hybridpd.hybrid._kernel`).
+    ``run`` is a :class:`ReturnRun`, ``rb`` the run's buffers (:mod:`hybridpd.hybrid._kernel`).
 
     Returns ``(status, n_before, J)``: ``n_before`` jumps precede the target firing; its
     pre-jump state is left in ``w`` and its time in ``fc[0]``; the tables hold the run.
@@ -132,6 +155,9 @@ def _to_return(pk, dt_min, zf, zi, w0, t0, gm, gi, k, t_max, J0, J_max, max_step
     """
     w, fc, ic, jt, jg, jsrc, jkind, jpre = (rb.w, rb.fc, rb.ic, rb.jt, rb.jg, rb.jsrc, rb.jkind,
                                             rb.jpre)
+    pk, dt_min, opts = run.pk, run.dt_min, run.opts
+    gm, gi, t_max, J_max, max_steps = (run.mode, run.guard, run.t_max, run.max_jumps,
+                                       run.max_steps)
     G, ng = pk.G, pk.ng
     N1 = w0.shape[0]
     J = min(max(J0, k), J_max)
@@ -144,7 +170,7 @@ def _to_return(pk, dt_min, zf, zi, w0, t0, gm, gi, k, t_max, J0, J_max, max_step
         ic[IC_MODE] = gm
         ic[IC_LAST_GUARD] = -1
         ic[IC_BURST_MODE] = -1
-        rc = run_hybrid(pk, dt_min, t0 + t_max, J, max_steps, zf, zi, rb)
+        rc = run_hybrid(pk, dt_min, t0 + t_max, J, max_steps, opts, rb)
         nj = ic[IC_NJ]
         if nj == 0 or jsrc[0] != gm or jg[0] != gi or jt[0] != t0 or jkind[0] == 3:
             return ST_BAD_START, 0, J
@@ -295,30 +321,33 @@ class SectionMap(OnSection, PoincareMap):
         if joint not in ("refuse", "resolve"):
             raise ValueError(f"joint must be 'refuse' or 'resolve', got {joint!r}")
         self.joint = joint
-        self._zf = np.array([zeno.ratio_max, zeno.ratio_rtol,
-                             -1.0 if zeno.tail_tol is None else float(zeno.tail_tol), -1.0],
-                            float)
-        self._zi = np.array([int(bool(zeno.enabled)), int(zeno.min_ratios),
-                             int(zeno.max_instant_jumps)], np.int64)
+        self._run_opts = zeno.run_options()
         self._tables_for = -1           # the tables' version when the kernel's were taken
         self._checked = 0               # modes checked against the section's exosystem
         self._hint = {}
 
     @property
-    def _kernel_args(self) -> tuple:
-        """The jump loop's tables over the modes built so far (taken afresh whenever they
-        changed: a mode built or a reset packed may make them new arrays), ``dt_min`` and
-        the Zeno options: the first arguments of ``_to_return``."""
+    def _tables(self) -> tuple:
+        """The jump loop's tables over the modes built so far and ``dt_min`` (taken afresh
+        whenever they changed: a mode built or a reset packed may make them new arrays)."""
         ha = self.section.automaton
         if self._tables_for != ha._store.version:
             self._check_exosystem()
             pk = ha.packed
             dt_min = (pk.h * 1e-9 if self.zeno.dt_min is None
                       else np.full(pk.h.shape[0], float(self.zeno.dt_min)))
-            self._args = (pk, dt_min, self._zf, self._zi)
+            self._pk_dt = (pk, dt_min)
             self._groups = ha._store.gkind()
             self._tables_for = ha._store.version
-        return self._args
+        return self._pk_dt
+
+    def _return_run(self, k: int) -> ReturnRun:
+        """What the compiled runs to ``P^k`` read (:class:`ReturnRun`), over the tables as
+        they are now."""
+        pk, dt_min = self._tables
+        sec = self.section
+        return ReturnRun(pk, dt_min, self._run_opts, sec.mode_index, sec.guard_index,
+                         float(self._t_max(k)), self.max_jumps, self.max_steps)
 
     def _check_exosystem(self):
         """Every mode built since the section was made moves its exosystem as the first
@@ -487,9 +516,7 @@ class SectionMap(OnSection, PoincareMap):
         # modes on demand: a run that enters a mode not built yet stops there; the mode is
         # built and the run made again (each mode is built once: bounded by max_modes)
         while True:
-            st, nb, _J = _to_return(*self._kernel_args, w0, t0, sec.mode_index,
-                                    sec.guard_index, int(k), self._t_max(k), J0,
-                                    self.max_jumps, self.max_steps, bufs)
+            st, nb, _J = _to_return(self._return_run(k), w0, t0, int(k), J0, bufs)
             if st != ST_NEED_MODE:
                 break
             if not self._complete(bufs.ic):
@@ -596,11 +623,10 @@ class SectionMap(OnSection, PoincareMap):
     def _joint_jump(self, bufs, nb) -> bool:
         """Whether one of the first ``nb`` jumps fired while another guard of its group was
         on its guard or closing onto it within ``simtol (1 + |t|)`` (the simulation's rule)."""
-        pk = self._kernel_args[0]
+        pk = self._tables[0]
         if self.simtol is None or not self._groups.any():
             return False
-        return _any_joint(pk.G, pk.ng, pk.h, self._groups, bufs.jt, bufs.jg, bufs.jsrc,
-                          bufs.jkind, bufs.jpre, int(nb), self.simtol)
+        return _any_joint(pk, self._groups, bufs, int(nb), self.simtol)
 
     def _jacobian(self, s, bufs, nb, z_hit) -> np.ndarray:
         sec = self.section

@@ -52,6 +52,7 @@ from hybridpd.analysis.periodic import (
     _TO_RESOLVER,
     _UNRESOLVED,
     _ZENO_STICKING,
+    LabelPoints,
     LabelSpec,
     _dist,
     _label_kernel,
@@ -711,12 +712,11 @@ class SectionLabeller(Labeller):
                     pass
             return lab, its, sub
         bufs = P._buffers()
-        k = spec.period
+        pts = LabelPoints(W0, T0, sub, lab, its)
         p = 0
         while p < N:   # bounded: each pass labels a point or builds one of max_modes modes
-            p, code = _label_kernel(*P._kernel_args, W0, T0, sec.mode_index, sec.guard_index,
-                                    P._t_max(k), P.max_jumps, P.max_steps, spec, sub, lab, its,
-                                    p, sec.resolver is not None, bufs)
+            p, code = _label_kernel(P._return_run(spec.period), spec, pts, p,
+                                    sec.resolver is not None, bufs)
             if p < N and code == _TO_RESOLVER:
                 if self._resolved_step(p, W0, T0, its, lab, sub, spec):
                     p += 1

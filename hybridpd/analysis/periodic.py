@@ -527,6 +527,19 @@ class LabelSpec(NamedTuple):
     cycle_tol: float
 
 
+class LabelPoints(NamedTuple):
+    """The points the compiled labeller works through, by name: their current iterates
+    (pre-jump states ``W0 (N, N1)`` at times ``T0 (N,)``, updated where a run is handed
+    back) and its outputs, the last section points ``S_out (N, dim)``, the labels ``lab (N,)``
+    and the iterations done ``its (N,)`` (int64; read as the iteration to resume from)."""
+
+    W0: np.ndarray
+    T0: np.ndarray
+    S_out: np.ndarray
+    lab: np.ndarray
+    its: np.ndarray
+
+
 _CONVERGED, _NOT_CONVERGED, _DIVERGED, _ZENO_STICKING, _UNRESOLVED = 0, 1, 2, 3, 4
 _TO_RESOLVER = 1 << 60      # the labeller's code of a run handed to the resolver
 
@@ -570,13 +583,12 @@ def _dist(s, fp, T, Q):
 
 
 @njit(cache=True)
-def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, t_max, J_max, max_steps, spec, S_out,
-                  lab, its, p0, resolve, rb):
-    """Label the points ``p0, p0 + 1, ...`` (rows of ``W0``, ``T0``) into ``lab``, ``its``.
+def _label_kernel(run, spec, pts, p0, resolve, rb):
+    """Label the points ``p0, p0 + 1, ...`` of ``pts`` (a :class:`LabelPoints`).
 
-    ``pk``, ``dt_min``, ``zf``, ``zi``: the map's tables and options
-    (``SectionMap._kernel_args``); ``spec``: the labelling's options (:class:`LabelSpec`);
-    ``rb``: the run's buffers (:mod:`hybridpd.hybrid._kernel`).
+    ``run``: what the runs to ``P^k`` read (a :class:`~hybridpd.analysis.hybridmap.ReturnRun`
+    of the map, ``k = spec.period``); ``spec``: the labelling's options
+    (:class:`LabelSpec`); ``rb``: the run's buffers (:mod:`hybridpd.hybrid._kernel`).
 
     Returns ``(p, code)``: ``p = N`` when every point is labelled; otherwise the run of
     point ``p`` handed back: ``ST_NEED_MODE`` (a mode not built yet, code ``code``, or a Zeno
@@ -586,6 +598,8 @@ def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, t_max, J_max, max_steps, s
     iterations so far in ``its[p]``, so that a call from ``p`` resumes it there.
     """
     w, fc, ic = rb.w, rb.fc, rb.ic
+    W0, T0, S_out, lab, its = pts.W0, pts.T0, pts.S_out, pts.lab, pts.its
+    gm = run.mode
     k, C, T, FP, QS, R2 = spec.period, spec.C, spec.T, spec.FP, spec.QS, spec.R2
     n_iter, criterion, escape = spec.n_iter, spec.criterion, spec.escape
     N = W0.shape[0]
@@ -600,8 +614,7 @@ def _label_kernel(pk, dt_min, zf, zi, W0, T0, gm, gi, t_max, J_max, max_steps, s
         label = -1
         e2 = np.inf
         for it in range(its[p], n_iter):
-            st, nb, _J = _to_return(pk, dt_min, zf, zi, w0, t0, gm, gi, k, t_max, Jh, J_max,
-                                    max_steps, rb)
+            st, nb, _J = _to_return(run, w0, t0, k, Jh, rb)
             if st == ST_NEED_MODE:
                 for i in range(N1):
                     W0[p, i] = w0[i]

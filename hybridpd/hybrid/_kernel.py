@@ -8,9 +8,11 @@ compiled lazily (:mod:`hybridpd._jit`).
 
 Calling contract
 ----------------
-``run_hybrid(pk, dt_min, t_end, max_jumps, max_steps, zf, zi, rb) -> code``, with ``pk`` the
-tables (a :class:`PackedAutomaton`) and ``rb`` the carried state and record buffers (a
-:class:`RunBuffers`); the kernels read both by name.
+``run_hybrid(pk, dt_min, t_end, max_jumps, max_steps, opts, rb) -> code``, with ``pk`` the
+tables (a :class:`PackedAutomaton`), ``opts`` the run's options (a :class:`RunOptions`, made by
+:meth:`ZenoOptions.run_options <hybridpd.hybrid.modes.ZenoOptions.run_options>`) and ``rb``
+the carried state and record buffers (a :class:`RunBuffers`); the kernels read all three by
+name.
 
 The per-mode arrays are stacked over ``M`` modes and padded to ``GM`` guards
 (:attr:`HybridAutomaton.packed`, a :class:`PackedAutomaton`): ``h (M,)``, ``Phi, Ah (M, N1, N1)``,
@@ -18,8 +20,10 @@ The per-mode arrays are stacked over ``M`` modes and padded to ``GM`` guards
 ``cnorm (M, GM)``, ``prio (M, GM) int64``, ``ng (M,) int64``, the distinct homogeneous
 resets ``R (P, N1, N1)`` (``[[R, r], [0, 1]]``; many guards share one, so each is stored once)
 and each guard's row in it, ``rh, rz (M, GM) int64`` (reset, Zeno reset),
-``target, zt (M, GM) int64`` (``zt = -1``: no Zeno target), ``dt_min (M,)``. Scalars: ``t_end``, ``max_jumps``, ``max_steps``;
-``zf = [ratio_max, ratio_rtol]``, ``zi = [enabled, min_ratios, max_instant_jumps]`` (int64).
+``target, zt (M, GM) int64`` (``zt = -1``: no Zeno target), ``dt_min (M,)``. Scalars:
+``t_end``, ``max_jumps``, ``max_steps``; options ``opts.zeno_on``, ``opts.min_ratios``,
+``opts.ratio_max``, ``opts.ratio_rtol``, ``opts.max_instant_jumps`` (accumulations, see
+:class:`~hybridpd.hybrid.modes.ZenoOptions`).
 Carried state (read and updated, so a full buffer can be resumed): ``w (N1,)`` homogeneous
 state, ``fc (8,)`` float (``fc[0]`` time), ``ic (18,)`` int64 (``ic[0]`` mode, ``ic[1]`` jump
 count ``j``, ``ic[2] = -1``, ``ic[3] = -1`` initially, ``ic[8]`` steps taken, ``ic[9..11]`` entries
@@ -28,14 +32,14 @@ written to the jump/segment/Zeno buffers, reset them to 0 before resuming). Outp
 2 grazing, 3 zeno), ``jpre, jpost (cap, N1)``; segments ``st0, st1, smode, sj, sw (cap, N1)``;
 ``zt_out`` Zeno times. ``code``: 0 end time, 1 jump limit, 2 Zeno, 3 non-finite, 4 step limit,
 5 buffer full (resume with fresh or emptied buffers). A basin-of-attraction engine can call
-it with small buffers and read only ``w``, ``fc[0]``, ``ic[0]``, ``ic[1]``. ``zf`` may carry a
-third entry, ``tail_tol``: an accumulation detected by its ratios is accepted only once the
+it with small buffers and read only ``w``, ``fc[0]``, ``ic[0]``, ``ic[1]``. With
+``opts.tail_tol >= 0`` an accumulation detected by its ratios is accepted only once the
 extrapolated tail ``t_inf - t_k`` is below ``tail_tol (1 + |t_k|)`` (more jumps are resolved
-until then); a negative or missing entry accepts it at once. A fourth entry ``max_state > 0``
-stops the run with code 8 (diverged) when a state component exceeds it in magnitude at the
-start of a flow.
+until then); a negative ``tail_tol`` accepts it at once. ``opts.max_state > 0`` stops the run
+with code 8 (diverged) when a state component exceeds it in magnitude at the start of a flow.
 
-``run_hybrid_ex(pk, ..., rb, gkind, simtol, gid, fired)`` adds two returns to the same loop:
+``run_hybrid_ex(pk, ..., rb, groups)`` adds two returns to the same loop, with ``groups`` a
+:class:`JointGroups` (``gkind, simtol, gid, fired``):
 code 6 when the current mode ``ic[0]`` is not built: a target (or Zeno target) ``-2 - r``
 names the mode reserved as number ``r`` (the jump is applied and recorded with that code as
 target, then the loop returns; build the mode, set ``ic[0]`` to its index, patch the tables
@@ -71,12 +75,14 @@ from hybridpd.hybrid.events import (
     EV_NONFINITE,
     EV_START,
     EV_STEP_LIMIT,
+    FlowTables,
     _matvec,
     advance,
     flow_to,
 )
 
-__all__ = ["PackedAutomaton", "RunBuffers", "run_hybrid", "run_hybrid_ex"]
+__all__ = ["JointGroups", "PackedAutomaton", "RunBuffers", "RunOptions", "run_hybrid",
+           "run_hybrid_ex"]
 
 _RC_BUFFER_FULL = 5
 _RC_STEP_LIMIT = 4
@@ -134,6 +140,62 @@ class PackedAutomaton(NamedTuple):
     @property
     def Rz(self) -> _Resets:
         return _Resets(self.R, self.rz)
+
+
+class RunOptions(NamedTuple):
+    """The options of one run of the jump loop, read by name in the kernels (module
+    docstring). Made by :meth:`ZenoOptions.run_options
+    <hybridpd.hybrid.modes.ZenoOptions.run_options>`; the types are fixed (floats, a bool,
+    ints) so that every run shares one compiled specialisation.
+
+    Attributes
+    ----------
+    ratio_max, ratio_rtol : float
+        Ratios of consecutive inter-jump times below ``ratio_max`` that agree to
+        ``ratio_rtol`` (relative) make an accumulation.
+    tail_tol : float
+        Accept an accumulation once its extrapolated tail is below ``tail_tol (1 + |t|)``
+        (negative: at once).
+    max_state : float
+        Stop (code 8) when a state component exceeds it in magnitude at the start of a flow
+        (non-positive: never).
+    zeno_on : bool
+        Detect accumulations.
+    min_ratios : int
+        Consistent ratios required.
+    max_instant_jumps : int
+        Jumps at one instant allowed before stopping with code 2.
+    """
+
+    ratio_max: float
+    ratio_rtol: float
+    tail_tol: float
+    max_state: float
+    zeno_on: bool
+    min_ratios: int
+    max_instant_jumps: int
+
+
+class JointGroups(NamedTuple):
+    """The simultaneity groups of :func:`run_hybrid_ex` (module docstring).
+
+    Attributes
+    ----------
+    gkind : ndarray of int64, shape (M, GM)
+        Group of each guard (0: none).
+    simtol : float
+        Relative time within which another guard of the group closing onto its guard makes
+        the jump joint (negative: groups off).
+    gid : ndarray of int64, shape (M, GM)
+        Identity of each guard across modes.
+    fired : ndarray of int64, shape (F,)
+        The guards of groups fired at the current instant (written).
+    """
+
+    gkind: np.ndarray
+    simtol: float
+    gid: np.ndarray
+    fired: np.ndarray
 
 
 class _Resets:
@@ -212,12 +274,13 @@ def _add_seg(rb, t0, t1, mode, j, w):
 
 
 @njit(cache=True)
-def _add_jump(rb, t, j, g, src, dst, kind, pre, post):
+def _add_jump(rb, t, g, src, dst, kind, pre, post):
+    """Record a jump (its count: the carried jump count ``ic[1]``)."""
     jt, jj, jg, jsrc, jdst, jkind, jpre, jpost, ic = (rb.jt, rb.jj, rb.jg, rb.jsrc, rb.jdst,
                                                       rb.jkind, rb.jpre, rb.jpost, rb.ic)
     k = ic[IC_NJ]
     jt[k] = t
-    jj[k] = j
+    jj[k] = ic[IC_JUMPS]
     jg[k] = g
     jsrc[k] = src
     jdst[k] = dst
@@ -273,8 +336,7 @@ def _zeno_switch(pk, rb, mode, g, t_k, t_inf, max_jumps, Kp1):
         _matvec(R[rz[mode, g]], wz, post)
     post[N1 - 1] = 1.0
     ic[IC_JUMPS] += 1
-    _add_jump(rb, t_inf, ic[IC_JUMPS], g, mode, target, 3,
-              wz, post)
+    _add_jump(rb, t_inf, g, mode, target, 3, wz, post)
     for i in range(N1):
         w[i] = post[i]
     fc[FC_T] = t_inf
@@ -299,25 +361,29 @@ def _zeno_switch(pk, rb, mode, g, t_k, t_inf, max_jumps, Kp1):
 
 
 @njit(cache=True)
-def run_hybrid_ex(pk, dt_min, t_end, max_jumps, max_steps, zf, zi, rb, gkind, simtol, gid,
-                  fired):
+def _mode_tables(pk, mode):
+    """The tables of ``mode`` that :func:`~hybridpd.hybrid.events.advance` reads."""
+    return FlowTables(pk.h[mode], pk.Phi[mode], pk.Ah[mode], pk.dinv[mode], pk.trunc[mode],
+                      pk.G[mode], pk.gabs[mode], pk.gsum[mode], pk.cnorm[mode], pk.prio[mode],
+                      pk.ng[mode])
+
+
+@njit(cache=True)
+def run_hybrid_ex(pk, dt_min, t_end, max_jumps, max_steps, opts, rb, groups):
     """:func:`run_hybrid` with modes built on demand and simultaneity groups (module docstring)."""
-    h, Phi, Ah, dinv, trunc, G, gabs = pk.h, pk.Phi, pk.Ah, pk.dinv, pk.trunc, pk.G, pk.gabs
-    gsum, cnorm, prio, ng, R, rh, target = (pk.gsum, pk.cnorm, pk.prio, pk.ng, pk.R, pk.rh,
-                                            pk.target)
+    h, G, ng, R, rh, target = pk.h, pk.G, pk.ng, pk.R, pk.rh, pk.target
     w, fc, ic, jt, st0, st1, zt_out = rb.w, rb.fc, rb.ic, rb.jt, rb.st0, rb.st1, rb.zt_out
     # One function on purpose: numba compiles the whole jump loop into one native loop.
     N1 = w.shape[0]
     Kp1 = G.shape[2]
     wout = np.empty(N1)
     post = np.empty(N1)
-    ratio_max = zf[0]
-    rtol = zf[1]
-    zon = zi[0] != 0
-    min_ratios = zi[1]
-    max_inst = zi[2]
-    tail_tol = zf[2] if zf.shape[0] > 2 else -1.0
-    max_state = zf[3] if zf.shape[0] > 3 else -1.0
+    ratio_max, rtol, tail_tol = opts.ratio_max, opts.ratio_rtol, opts.tail_tol
+    zon, min_ratios, max_inst = opts.zeno_on, opts.min_ratios, opts.max_instant_jumps
+    max_state = opts.max_state
+    gkind, simtol, gid, fired = groups.gkind, groups.simtol, groups.gid, groups.fired
+    ft_mode = 0
+    ft = _mode_tables(pk, 0)
     while True:
         if (ic[IC_NJ] + 2 > jt.shape[0] or ic[IC_NS] + 3 > st0.shape[0]
                 or ic[IC_NZ] + 2 > zt_out.shape[0]):
@@ -333,10 +399,12 @@ def run_hybrid_ex(pk, dt_min, t_end, max_jumps, max_steps, zf, zi, rb, gkind, si
         mode = ic[IC_MODE]
         si = ic[IC_NS]
         _add_seg(rb, t, t, mode, ic[IC_JUMPS], w)
-        code, tev, g, nst, err = advance(
-            w, t, t_end, h[mode], Phi[mode], Ah[mode], dinv[mode], trunc[mode], G[mode],
-            gabs[mode], gsum[mode], cnorm[mode], prio[mode], ng[mode], ic[IC_LAST_GUARD], fc[FC_LOC_ERR],
-            max_steps - ic[IC_STEPS], wout)
+        if mode != ft_mode:
+            # the mode's tables, gathered again only when the mode changes
+            ft = _mode_tables(pk, mode)
+            ft_mode = mode
+        code, tev, g, nst, err = advance(w, t, t_end, ft, ic[IC_LAST_GUARD], fc[FC_LOC_ERR],
+                                         max_steps - ic[IC_STEPS], wout)
         ic[IC_STEPS] += nst
         st1[si] = tev
         if code == EV_NONE or code == EV_NONFINITE or code == EV_STEP_LIMIT:
@@ -376,8 +444,7 @@ def run_hybrid_ex(pk, dt_min, t_end, max_jumps, max_steps, zf, zi, rb, gkind, si
         tgt = target[mode, g]
         kind = 2 if code == EV_GRAZING else 1
         ic[IC_JUMPS] += 1
-        _add_jump(rb, tev, ic[IC_JUMPS], g, mode, tgt,
-                  kind, wout, post)
+        _add_jump(rb, tev, g, mode, tgt, kind, wout, post)
         for i in range(N1):
             w[i] = post[i]
         fc[FC_T] = tev
@@ -496,8 +563,8 @@ def _other_active(Gm, ngm, gk, g, w, hm, tau):
 
 
 @njit(cache=True)
-def run_hybrid(pk, dt_min, t_end, max_jumps, max_steps, zf, zi, rb):
+def run_hybrid(pk, dt_min, t_end, max_jumps, max_steps, opts, rb):
     """Run the automaton from the carried state; see the module docstring for the contract."""
-    return run_hybrid_ex(pk, dt_min, t_end, max_jumps, max_steps, zf, zi, rb,
-                         np.zeros((1, 1), np.int64), -1.0, np.zeros((1, 1), np.int64),
-                         np.zeros(1, np.int64))
+    none = JointGroups(np.zeros((1, 1), np.int64), -1.0, np.zeros((1, 1), np.int64),
+                       np.zeros(1, np.int64))
+    return run_hybrid_ex(pk, dt_min, t_end, max_jumps, max_steps, opts, rb, none)

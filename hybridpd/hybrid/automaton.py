@@ -75,7 +75,8 @@ and re-exports everything public of :mod:`hybridpd.hybrid.modes` (:class:`Mode`,
 :mod:`hybridpd.hybrid.trajectory` (:class:`HybridTrajectory`, :class:`JumpTable`,
 :class:`SegmentTable`, :class:`Jump`, :class:`Segment`) and :mod:`hybridpd.hybrid._kernel`
 (``run_hybrid``, the numba jump loop for reuse, e.g. by a basin-of-attraction engine, and its
-inputs :class:`PackedAutomaton`; the calling contract is documented there).
+inputs :class:`PackedAutomaton`, :class:`RunOptions` and :class:`JointGroups`; the calling
+contract is documented there).
 """
 from __future__ import annotations
 
@@ -108,8 +109,10 @@ from hybridpd.hybrid._kernel import (
     IC_NZ,
     IC_REFIRE,
     IC_STEPS,
+    JointGroups,
     PackedAutomaton,
     RunBuffers,
+    RunOptions,
     run_hybrid,
     run_hybrid_ex,
 )
@@ -128,10 +131,12 @@ __all__ = [
     "Guard",
     "HybridAutomaton",
     "HybridTrajectory",
+    "JointGroups",
     "Jump",
     "JumpTable",
     "Mode",
     "PackedAutomaton",
+    "RunOptions",
     "Segment",
     "SegmentTable",
     "TerminationCause",
@@ -540,10 +545,7 @@ class HybridAutomaton:
         ``_INTERP_MAX_STEPS``). Returns the kernel's code and the concatenated records.
         """
         zeno, resolver, simtol, max_state = opts
-        zf = np.array([zeno.ratio_max, zeno.ratio_rtol,
-                       -1.0 if zeno.tail_tol is None else zeno.tail_tol, max_state])
-        zi = np.array([int(bool(zeno.enabled)), int(zeno.min_ratios),
-                       int(zeno.max_instant_jumps)], dtype=np.int64)
+        run_opts = zeno.run_options(max_state)
         N1 = self._n + 1
         chunks = []
         cap = min(max_jumps + 4, 2048)
@@ -561,8 +563,7 @@ class HybridAutomaton:
                       else np.full(pk.h.shape[0], float(zeno.dt_min)))
             # without groups the plain loop (the same code) is the kernel to compile
             kern = run_hybrid if simtol < 0 else run_hybrid_ex
-            extra = {} if simtol < 0 else {"gkind": gk, "simtol": simtol,
-                                           "gid": self._store.gid(), "fired": fired}
+            extra = () if simtol < 0 else (JointGroups(gk, simtol, self._store.gid(), fired),)
             interp = small and kern.prefer_interpreter()
             steps = min(max_steps, int(ic[IC_STEPS]) + _INTERP_MAX_STEPS) if interp else max_steps
             if interp:
@@ -571,7 +572,7 @@ class HybridAutomaton:
                 bufs = RunBuffers.empty(cap, N1, w, fc, ic)
             ic[IC_NJ:IC_NZ + 1] = 0
             run = kern.interpret if interp else kern
-            rc = run(pk, dt_min, t1, max_jumps, steps, zf, zi, bufs, **extra)
+            rc = run(pk, dt_min, t1, max_jumps, steps, run_opts, bufs, *extra)
             # the records are copied out: the buffers serve the next chunk, and a run that
             # returns often (joint jumps, modes built) holds only what it recorded
             chunks.append(bufs.records())

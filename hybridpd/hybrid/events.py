@@ -59,15 +59,16 @@ All arrays are C-contiguous ``float64`` unless stated; ``N1 = n + 1`` (homogeneo
 ``Kp1 = K + 1``, ``ng`` guards. The per-mode arrays are produced by :func:`prepare_lti_mode`
 (fields of :class:`LTIModeData`).
 
-``advance(w0, t0, t_end, h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, hot, hot_tol, max_steps, w_out) -> (code, t_event, guard, n_steps, err)``
+``advance(w0, t0, t_end, ft, hot, hot_tol, max_steps, w_out) -> (code, t_event, guard, n_steps, err)``
     Flow from the homogeneous state ``w0`` (shape ``(N1,)``, ``w0[-1] == 1``) at ``t0`` until the
-    first event or ``t_end``. ``Phi, Ah``: ``(N1, N1)``; ``dinv``: ``(N1,)``; ``trunc``: float;
-    ``G, gabs``: ``(>= ng, Kp1, N1)``; ``gsum``: ``(>= ng, N1)``; ``cnorm``: ``(>= ng,)``;
-    ``prio``: int64 ``(>= ng,)``; ``ng, hot, max_steps``: int; ``hot``: index of the guard that
-    has just fired (``-1``: none) and ``hot_tol`` its extra on-guard tolerance (use the ``err``
-    returned with that event). ``w_out`` (``(N1,)``, written): the state at the event (pre-reset)
-    or at ``t_end``. ``code``: ``EV_NONE`` (reached ``t_end``), ``EV_CROSSING``, ``EV_GRAZING``,
-    ``EV_START`` (event at ``t0``, see above), ``EV_NONFINITE`` (state overflowed; ``t_event`` is
+    first event or ``t_end``. ``ft``: the mode's tables, a :class:`FlowTables` read by name
+    (``Phi, Ah``: ``(N1, N1)``; ``dinv``: ``(N1,)``; ``trunc``: float; ``G, gabs``:
+    ``(>= ng, Kp1, N1)``; ``gsum``: ``(>= ng, N1)``; ``cnorm``: ``(>= ng,)``; ``prio``: int64
+    ``(>= ng,)``; ``ng``: int, the guards in use). ``hot, max_steps``: int; ``hot``: index of
+    the guard that has just fired (``-1``: none) and ``hot_tol`` its extra on-guard tolerance
+    (use the ``err`` returned with that event). ``w_out`` (``(N1,)``, written): the state at
+    the event (pre-reset) or at ``t_end``. ``code``: ``EV_NONE`` (reached ``t_end``),
+    ``EV_CROSSING``, ``EV_GRAZING``, ``EV_START`` (event at ``t0``, see above), ``EV_NONFINITE`` (state overflowed; ``t_event`` is
     the last step start), ``EV_STEP_LIMIT`` (``max_steps`` steps taken). ``guard``: index of the
     winning guard (ties within the time resolution go to the larger ``prio``, then the lower
     index), ``err``: error bound of the guard value at the event. Never allocates more than a
@@ -126,6 +127,7 @@ __all__ = [
     "K_DEFAULT",
     "THETA_DEFAULT",
     "CrossingResult",
+    "FlowTables",
     "LTIModeData",
     "advance",
     "first_crossing",
@@ -177,6 +179,29 @@ class LTIModeData(NamedTuple):
     gsum: np.ndarray
     cnorm: np.ndarray
     prio: np.ndarray
+
+    def flow_tables(self) -> FlowTables:
+        """The tables :func:`advance` reads, with every guard in use."""
+        return FlowTables(*self, ng=self.G.shape[0])
+
+
+class FlowTables(NamedTuple):
+    """The tables of one mode that :func:`advance` reads by name: the fields of
+    :class:`LTIModeData` and ``ng``, the number of guards in use (the first ``ng`` rows of
+    ``G``, ``gabs``, ``gsum``, ``cnorm``, ``prio``; tables padded to more guards than a
+    mode has share one shape across modes)."""
+
+    h: float
+    Phi: np.ndarray
+    Ah: np.ndarray
+    dinv: np.ndarray
+    trunc: float
+    G: np.ndarray
+    gabs: np.ndarray
+    gsum: np.ndarray
+    cnorm: np.ndarray
+    prio: np.ndarray
+    ng: int
 
 
 def _as_matrix(name, A):
@@ -321,9 +346,10 @@ def prepare_lti_mode(A, b=None, guards: Sequence = (), K: int = K_DEFAULT,
 # numba kernels
 # ----------------------------------------------------------------------------------------
 @njit(cache=True)
-def advance(w0, t0, t_end, h, Phi, Ah, dinv, trunc, G, gabs, gsum, cnorm, prio, ng, hot,
-            hot_tol, max_steps, w_out):
+def advance(w0, t0, t_end, ft, hot, hot_tol, max_steps, w_out):
     """Flow to the first guard event or ``t_end``; see the module docstring for the contract."""
+    h, Phi, Ah, dinv, trunc, ng = ft.h, ft.Phi, ft.Ah, ft.dinv, ft.trunc, ft.ng
+    G, gabs, gsum, cnorm, prio = ft.G, ft.gabs, ft.gsum, ft.cnorm, ft.prio
     N1 = w0.shape[0]
     Kp1 = G.shape[1]
     c1 = Kp1 * (N1 + 2) * _EPS          # coefficient rounding (G and the mat-vec)
@@ -657,9 +683,8 @@ def first_crossing(A, c, d, z0, t_max, b=None, direction=-1, max_steps=10_000_00
     md = prepare_lti_mode(A, b, [(c, d, direction)], K=K)
     w0 = np.append(z0, 1.0)
     w_out = np.empty(n + 1)
-    code, t, _, _, err = advance(w0, 0.0, t_max, md.h, md.Phi, md.Ah, md.dinv, md.trunc, md.G,
-                                 md.gabs, md.gsum, md.cnorm, md.prio, 1, -1, 0.0,
-                                 int(max_steps), w_out)
+    code, t, _, _, err = advance(w0, 0.0, t_max, md.flow_tables(), -1, 0.0, int(max_steps),
+                                 w_out)
     if code == EV_NONFINITE:
         raise FloatingPointError(f"the flow overflowed before t = {t:g}")
     if code == EV_STEP_LIMIT:

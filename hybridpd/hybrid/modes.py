@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hybridpd._results import compact_repr
+from hybridpd.hybrid._kernel import RunOptions
 
 __all__ = ["Guard", "Mode", "TerminationCause", "ZenoOptions"]
 
@@ -195,3 +196,21 @@ class ZenoOptions:
             raise ValueError("zeno.tail_tol must be >= 0")
         if int(self.max_instant_jumps) < 1:
             raise ValueError("zeno.max_instant_jumps must be >= 1")
+
+    def run_options(self, max_state: float = -1.0) -> RunOptions:
+        """The options of the compiled jump loop (read by name there).
+
+        Parameters
+        ----------
+        max_state : float
+            Stop a run as diverged when a state component exceeds this in magnitude at the
+            start of a flow (state units; ``<= 0``: never).
+
+        Returns
+        -------
+        RunOptions
+        """
+        return RunOptions(float(self.ratio_max), float(self.ratio_rtol),
+                          -1.0 if self.tail_tol is None else float(self.tail_tol),
+                          float(max_state), bool(self.enabled), int(self.min_ratios),
+                          int(self.max_instant_jumps))

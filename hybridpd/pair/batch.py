@@ -43,6 +43,7 @@ periods), 4 unresolved (an iteration bound was hit inside one flight).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -50,11 +51,36 @@ from hybridpd._jit import njit
 from hybridpd._phase import wrap_phase_kernel
 from hybridpd.pair import params as P
 
-__all__ = ["KIND_GRAZING", "KIND_IMPACT", "KIND_STICKING", "LABELS", "N_REC", "REC_KIND",
-           "REC_SPEED", "REC_STICK_TIME", "REC_T", "REC_TAU", "REC_WALL", "REC_X1", "REC_X2",
-           "REC_Y1", "REC_Y2", "STATUS_IMPACT", "STATUS_NONFINITE", "STATUS_STICK",
-           "STATUS_TIMEOUT", "STATUS_UNRESOLVED", "impact_map", "iterate_map", "map_labels",
-           "next_impact", "pack_params", "trace_once"]
+__all__ = [
+    "KIND_GRAZING",
+    "KIND_IMPACT",
+    "KIND_STICKING",
+    "LABELS",
+    "N_REC",
+    "REC_KIND",
+    "REC_SPEED",
+    "REC_STICK_TIME",
+    "REC_T",
+    "REC_TAU",
+    "REC_WALL",
+    "REC_X1",
+    "REC_X2",
+    "REC_Y1",
+    "REC_Y2",
+    "STATUS_IMPACT",
+    "STATUS_NONFINITE",
+    "STATUS_STICK",
+    "STATUS_TIMEOUT",
+    "STATUS_UNRESOLVED",
+    "Flight",
+    "Flights",
+    "impact_map",
+    "iterate_map",
+    "map_labels",
+    "next_impact",
+    "pack_params",
+    "trace_once",
+]
 
 LABELS = ("converged", "not_converged", "diverged", "zeno_sticking", "unresolved")
 
@@ -82,6 +108,36 @@ N_REC = 10
 KIND_IMPACT = 0     # kinds of contact in the column REC_KIND
 KIND_GRAZING = 1
 KIND_STICKING = 2
+
+
+class Flight(NamedTuple):
+    """Where a flight starts, read by name in the kernels: the time ``t0`` (the reference
+    phase there is ``w t0``) and the mechanical state ``x1, y1, x2, y2`` (lengths, speeds)
+    with ``|x1 - x2| <= L``."""
+
+    t0: float
+    x1: float
+    y1: float
+    x2: float
+    y2: float
+
+
+class Flights(NamedTuple):
+    """Many flights (arrays of shape ``(N,)``): the fields of :class:`Flight` and each
+    flight's duration ``tau`` (time)."""
+
+    t0: np.ndarray
+    x1: np.ndarray
+    y1: np.ndarray
+    x2: np.ndarray
+    y2: np.ndarray
+    tau: np.ndarray
+
+
+@njit(cache=True)
+def flight_at(f, i):
+    """Flight ``i`` of the :class:`Flights` ``f``."""
+    return Flight(f.t0[i], f.x1[i], f.y1[i], f.x2[i], f.y2[i])
 
 
 def pack_params(kp, kv, m2, mu, e, L, w, xm) -> np.ndarray:
@@ -138,14 +194,16 @@ def _ech(alpha, D, t):
 
 
 @njit(cache=True)
-def _eval(params, case, phi0, x10, y10, x20, y20, tau, dmax):
-    """Flight state at ``tau`` plus derivatives and bounds valid on ``[tau, tau + dmax]``.
+def _eval(params, case, fl, tau, dmax):
+    """State at ``tau`` of the flight ``fl`` (a :class:`Flight`) plus derivatives and bounds
+    valid on ``[tau, tau + dmax]``.
 
     Returns ``(x1, y1, x2, y2, a2, a3, M2, M3)``: ``a2 = x2''(tau)``, ``a3 = x2'''(tau)``,
     ``M2 >= sup |x2''|`` and ``M3 >= sup |x2'''|`` on the interval (``x1'' = 0``, so these bound
     the gap's second and third derivatives).
     """
     kp, kv, m2, w, xm = params[P.KP], params[P.KV], params[P.M2], params[P.OMEGA], params[P.XM]
+    phi0, x10, y10, x20, y20 = fl.t0, fl.x1, fl.y1, fl.x2, fl.y2
     x1 = x10 + y10 * tau
     y1 = y10
     th = w * (phi0 + tau)
@@ -206,13 +264,13 @@ def _eval(params, case, phi0, x10, y10, x20, y20, tau, dmax):
 
 
 @njit(cache=True)
-def turning_margins(params, case, phi0, x1, y1, x2, y2, tau, nsamp, approached=False):
+def turning_margins(params, case, fl, tau, nsamp, approached=False):
     """The two smallest ``(L - |z3|)/L`` at interior turning points of ``z3`` on ``(0, tau)``.
 
     Turning points are sign changes of ``z4 = y1 - y2`` on a uniform grid of ``nsamp``
-    intervals, refined by bisection; the state is the flight from ``(x1, y1, x2, y2)`` at
-    time ``phi0``. Returns ``(m, m2)``, each 1 when there is no such turning point; where
-    both vanish two turning points graze at once. With ``approached`` a maximum of ``z3`` is
+    intervals, refined by bisection, along the flight ``fl`` (a :class:`Flight`). Returns
+    ``(m, m2)``, each 1 when there is no such turning point; where both vanish two turning
+    points graze at once. With ``approached`` a maximum of ``z3`` is
     measured to ``+L`` and a minimum to ``-L`` only (a small hop away from the wall just
     left is then not a near-grazing).
     """
@@ -223,7 +281,7 @@ def turning_margins(params, case, phi0, x1, y1, x2, y2, tau, nsamp, approached=F
     prev = 0.0
     for k in range(1, nsamp):
         s = k * h
-        r = _eval(params, case, phi0, x1, y1, x2, y2, s, 0.0)
+        r = _eval(params, case, fl, s, 0.0)
         z4 = r[1] - r[3]
         if k > 1 and z4 * prev < 0.0:
             a = s - h
@@ -233,14 +291,14 @@ def turning_margins(params, case, phi0, x1, y1, x2, y2, tau, nsamp, approached=F
                 c = 0.5 * (a + b)
                 if c <= a or c >= b:
                     break
-                rc = _eval(params, case, phi0, x1, y1, x2, y2, c, 0.0)
+                rc = _eval(params, case, fl, c, 0.0)
                 fc = rc[1] - rc[3]
                 if fc * fa > 0.0:
                     a = c
                     fa = fc
                 else:
                     b = c
-            rc = _eval(params, case, phi0, x1, y1, x2, y2, 0.5 * (a + b), 0.0)
+            rc = _eval(params, case, fl, 0.5 * (a + b), 0.0)
             z3 = rc[0] - rc[2]
             if not approached:
                 mk = (L - abs(z3)) / L
@@ -308,8 +366,8 @@ def _contact(g, rel, gdd, tau, tol, ztol):
 
 
 @njit(cache=True)
-def next_impact(params, case, phi0, x1, y1, x2, y2, t_max, tol):
-    """Locate the first wall contact of the flight starting at time ``phi0``.
+def next_impact(params, case, fl, t_max, tol):
+    """Locate the first wall contact of the flight ``fl``.
 
     Parameters
     ----------
@@ -317,10 +375,9 @@ def next_impact(params, case, phi0, x1, y1, x2, y2, t_max, tol):
         ``[kp, kv, m2, mu, e, L, w, xm]``.
     case : int
         0 collocated, 1 non-collocated.
-    phi0 : float
-        Start time (any real; the reference phase is ``w * phi0``).
-    x1, y1, x2, y2 : float
-        Post-impact (or initial) mechanical state, ``|x1 - x2| <= L``.
+    fl : Flight
+        Start time ``t0`` (any real; the reference phase is ``w * t0``) and the post-impact
+        (or initial) mechanical state ``x1, y1, x2, y2``, ``|x1 - x2| <= L``.
     t_max : float
         Horizon: give up (status ``STATUS_TIMEOUT``) beyond this flight time.
     tol : float
@@ -338,7 +395,7 @@ def next_impact(params, case, phi0, x1, y1, x2, y2, t_max, tol):
     dmax = 0.5 * math.pi / w
     tau = 0.0
     for _ in range(_MAX_SAFE_STEPS):
-        X1, Y1, X2, Y2, a2, _a3, M2, M3 = _eval(params, case, phi0, x1, y1, x2, y2, tau, dmax)
+        X1, Y1, X2, Y2, a2, _a3, M2, M3 = _eval(params, case, fl, tau, dmax)
         z3 = X1 - X2
         z4 = Y1 - Y2
         if not (math.isfinite(z3) and math.isfinite(z4) and math.isfinite(M2)):
@@ -526,7 +583,7 @@ def _map_once(params, case, s, out, tol, max_impacts, stick, rec):
             rec[k, REC_X2] = x2
             rec[k, REC_Y2] = y2
         st, tau, wall, x1, y1, x2, y2, graze = next_impact(
-            params, case, t, x1, y1, x2, y2, 50.0 * T, tol)
+            params, case, Flight(t, x1, y1, x2, y2), 50.0 * T, tol)
         if k < rec.shape[0]:
             _record(rec[k], st, tau, wall, y1 - y2, graze, stick)
         if st == STATUS_STICK and stick:

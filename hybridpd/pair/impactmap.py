@@ -515,8 +515,8 @@ def trace_map(impact_map_: ImpactMap, s, *, margin: bool = True,
     if margin:
         # smallest distance / L to the wall approached at interior turning points of z3
         start = slice(B.REC_T, B.REC_Y2 + 1)      # t, x1, y1, x2, y2 where the flight starts
-        marg = min([1.0] + [turning_margins(P.params, P._c, *r[start], r[B.REC_TAU], nsamp,
-                                            True)[0]
+        marg = min([1.0] + [turning_margins(P.params, P._c, B.Flight(*map(float, r[start])),
+                                            r[B.REC_TAU], nsamp, True)[0]
                             for r in rec if r[B.REC_TAU] > 0.0])
     speeds = [float(r[B.REC_SPEED]) for r in rec if r[B.REC_KIND] != B.KIND_STICKING]
     ok = st == STATUS_IMPACT

@@ -39,7 +39,16 @@ from hybridpd.model import (
     check_positive,
 )
 from hybridpd.pair import symbolic
-from hybridpd.pair.batch import STATUS_IMPACT, STATUS_STICK, _eval, next_impact, turning_margins
+from hybridpd.pair.batch import (
+    STATUS_IMPACT,
+    STATUS_STICK,
+    Flight,
+    Flights,
+    _eval,
+    flight_at,
+    next_impact,
+    turning_margins,
+)
 
 __all__ = ["REASONS", "OrbitArrays", "SymmetricOrbitResult", "symmetric_orbit", "symmetric_orbits"]
 
@@ -57,18 +66,21 @@ _END_RTOL = 1e-7   # a contact this close to n T / 2 (relative) is the orbit's o
 
 
 @njit(cache=True)
-def _viability_kernel(P, case, phi0, x10, v, x20, y2p, tau, tol, margin, nsamp):
-    """Per point: (code, contact time, contact wall, contact x1, margin)."""
+def _viability_kernel(P, case, fl, tol, margin, nsamp):
+    """Per point: (code, contact time, contact wall, contact x1, margin) of the half-period
+    flights ``fl`` (:class:`~hybridpd.pair.batch.Flights`)."""
     N = P.shape[0]
     code = np.zeros(N, dtype=np.int64)
     t_c = np.full(N, np.nan)
     w_c = np.zeros(N, dtype=np.int64)
     x_c = np.full(N, np.nan)
     marg = np.full(N, np.nan)
+    tau = fl.tau
     for i in range(N):
         p = P[i]
+        f = flight_at(fl, i)
         st, t, wall, X1, _Y1, _X2, _Y2, _graze = next_impact(
-            p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i], tau[i] * (1 + 10 * _END_RTOL), tol)
+            p, case, f, tau[i] * (1 + 10 * _END_RTOL), tol)
         if st == STATUS_STICK:
             code[i] = 4
             t_c[i] = t
@@ -84,8 +96,7 @@ def _viability_kernel(P, case, phi0, x10, v, x20, y2p, tau, tol, margin, nsamp):
             w_c[i] = wall
             x_c[i] = X1
         if margin:
-            marg[i] = turning_margins(p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i], tau[i],
-                                      nsamp)[0]
+            marg[i] = turning_margins(p, case, f, tau[i], nsamp)[0]
     return code, t_c, w_c, x_c, marg
 
 
@@ -228,10 +239,11 @@ def symmetric_orbits(kp, kv, *, mu, e, L, omega, m2=1.0, x10=1.0, n=1, case="col
     if idx.size:
         sub = lambda a: flat(a)[idx]
         # a handful of orbits: interpreting beats loading numba (see hybridpd._jit)
-        r = _viability_kernel.call(idx.size <= 16, np.ascontiguousarray(P[idx]), 0 if case is Case.COLLOCATED else 1,
-                              sub(cand.phi0), sub(cand.x10), sub(cand.v), sub(cand.x20),
-                              sub(cand.y2_post), sub(cand.tau), tol, bool(margin),
-                              int(margin_samples))
+        fl = Flights(sub(cand.phi0), sub(cand.x10), -sub(cand.v), sub(cand.x20),
+                     sub(cand.y2_post), sub(cand.tau))
+        r = _viability_kernel.call(idx.size <= 16, np.ascontiguousarray(P[idx]),
+                                   0 if case is Case.COLLOCATED else 1, fl, tol, bool(margin),
+                                   int(margin_samples))
         code[idx], t_c[idx], w_c[idx], x_c[idx], marg[idx] = r
     reason.ravel()[:] = np.where(reason.ravel() == 0, code, reason.ravel())
     exists = reason == 0
@@ -352,8 +364,8 @@ class SymmetricOrbitResult:
                         e=self.pair.e, L=self.pair.L, w=self.omega, xm=self.xm)
         c = 0 if self.case is Case.COLLOCATED else 1
         t = np.asarray(t, float)
-        out = np.array([_eval(p, c, self.t0, *self.post_plus, s - self.t0, 0.0)[:4]
-                        for s in t.ravel()])
+        fl = Flight(float(self.t0), *(float(v) for v in self.post_plus))
+        out = np.array([_eval(p, c, fl, s - self.t0, 0.0)[:4] for s in t.ravel()])
         return out.reshape(t.shape + (4,))
 
     def to_dict(self) -> dict:

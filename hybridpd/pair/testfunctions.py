@@ -60,7 +60,7 @@ import numpy as np
 from hybridpd._jit import njit
 from hybridpd.model import Case, check_finite, check_odd_order, check_positive
 from hybridpd.pair import symbolic
-from hybridpd.pair.batch import _eval, pack_params, turning_margins
+from hybridpd.pair.batch import Flights, _eval, flight_at, pack_params, turning_margins
 
 __all__ = ["KINDS", "PARAMETERS", "Axis", "Plane", "TestValues", "make_plane"]
 
@@ -141,8 +141,9 @@ class Axis:
 
 
 @njit(cache=True)
-def _margin_kernel(P, case, phi0, x10, v, x20, y2p, tau, nsamp):
-    """Per point: (margin, second margin, post-impact gap acceleration).
+def _margin_kernel(P, case, fl, nsamp):
+    """Per point: (margin, second margin, post-impact gap acceleration) of the half-period
+    flights ``fl`` (:class:`~hybridpd.pair.batch.Flights`).
 
     ``margin`` is ``min (L - |z3|)/L`` over the interior turning points of ``z3`` on
     ``(0, tau)`` (1 without any), ``second`` the next smallest value (1 without one): where
@@ -155,11 +156,10 @@ def _margin_kernel(P, case, phi0, x10, v, x20, y2p, tau, nsamp):
     for i in range(N):
         p = P[i]
         # x2'' at the start of the flight
-        _x1, _y1, _x2, _y2, a2, _a3, _M2, _M3 = _eval(p, case, phi0[i], x10[i], -v[i], x20[i],
-                                                     y2p[i], 0.0, 0.0)
+        f = flight_at(fl, i)
+        _x1, _y1, _x2, _y2, a2, _a3, _M2, _M3 = _eval(p, case, f, 0.0, 0.0)
         acc[i] = a2
-        marg[i], marg2[i] = turning_margins(p, case, phi0[i], x10[i], -v[i], x20[i], y2p[i],
-                                            tau[i], nsamp)
+        marg[i], marg2[i] = turning_margins(p, case, f, fl.tau[i], nsamp)
     return marg, marg2, acc
 
 
@@ -380,9 +380,10 @@ class Plane:
                             mu=b(safe["mu"]), e=b(safe["e"]), L=b(L), w=b(safe["omega"]),
                             xm=xm)[idx]
             sub = lambda a: np.ascontiguousarray(b(a)[idx])
+            fl = Flights(sub(c.phi0), sub(c.x10), -sub(c.v), sub(c.x20), sub(c.y2_post),
+                         sub(c.tau))
             marg[idx], marg2[idx], acc[idx] = _margin_kernel(
-                np.ascontiguousarray(P), 0 if self.case is Case.COLLOCATED else 1,
-                sub(c.phi0), sub(c.x10), sub(c.v), sub(c.x20), sub(c.y2_post), sub(c.tau),
+                np.ascontiguousarray(P), 0 if self.case is Case.COLLOCATED else 1, fl,
                 int(margin_samples))
             M = _half_map_jacobian(c, idx, N)
             good = np.all(np.isfinite(M), axis=(1, 2))

@@ -34,7 +34,7 @@ class _FreeFlight:
         self.n = n
         self.gap = gap
         self.max_steps = int(max_steps)
-        self.md = prepare_lti_mode(loop.A, None, [(-gap, L, -1), (gap, L, -1)])
+        self.tables = prepare_lti_mode(loop.A, None, [(-gap, L, -1), (gap, L, -1)]).flow_tables()
 
     def next_contact(self, z, t_max, hot=-1, hot_tol=0.0):
         """First contact of the flow from ``z`` within ``(0, t_max]``.
@@ -42,12 +42,10 @@ class _FreeFlight:
         Returns ``(code, tau, wall, z_event, err)``; ``code`` is an ``events.EV_*`` constant,
         ``wall`` is ``+1``/``-1`` (0 if none), ``z_event`` the pre-reset state.
         """
-        md = self.md
         w0 = np.append(np.asarray(z, float), 1.0)
         w_out = np.empty(self.n + 1)
-        code, t, g, _, err = advance(w0, 0.0, float(t_max), md.h, md.Phi, md.Ah, md.dinv,
-                                     md.trunc, md.G, md.gabs, md.gsum, md.cnorm, md.prio, 2,
-                                     int(hot), float(hot_tol), self.max_steps, w_out)
+        code, t, g, _, err = advance(w0, 0.0, float(t_max), self.tables, int(hot),
+                                     float(hot_tol), self.max_steps, w_out)
         wall = 1 if g == _WALL_PLUS else (-1 if g == _WALL_MINUS else 0)
         return int(code), float(t), wall, w_out[:self.n].copy(), float(err)
 

@@ -164,7 +164,7 @@ def flight_time(s, *, xm, kp, kv, m2=1.0, w, L, wall=1, case="collocated",
         Only with ``return_wall``: the wall hit (0 if none).
     """
     # deferred import: loaded only when this runs, for start-up time
-    from hybridpd.pair.batch import STATUS_IMPACT, STATUS_STICK, next_impact, pack_params
+    from hybridpd.pair.batch import STATUS_IMPACT, STATUS_STICK, Flight, next_impact, pack_params
 
     collocated = _case(case) == "collocated"
     s = np.asarray(s, dtype=float)
@@ -174,9 +174,9 @@ def flight_time(s, *, xm, kp, kv, m2=1.0, w, L, wall=1, case="collocated",
         tmax = 100 * math.pi / w if tmax is None else float(tmax)
         # next_impact reads neither mu nor e: placeholders
         params = pack_params(kp=kp, kv=kv, m2=m2, mu=0.0, e=0.0, L=L, w=w, xm=xm)
-        st, tau, hit, *_ = next_impact(params, 0 if collocated else 1, float(s[0]),
-                                       s[1] + wall * L, s[2] + s[3], float(s[1]), float(s[2]),
-                                       tmax, 1e-13)
+        fl = Flight(float(s[0]), float(s[1] + wall * L), float(s[2] + s[3]), float(s[1]),
+                    float(s[2]))
+        st, tau, hit, *_ = next_impact(params, 0 if collocated else 1, fl, tmax, 1e-13)
         if st in (STATUS_IMPACT, STATUS_STICK):
             res = (float(tau), int(hit))
     return res if return_wall else res[0]
