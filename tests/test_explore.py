@@ -215,6 +215,18 @@ def test_the_warm_up_map_is_drawn_in_the_first_page_of_its_box_only():
     np.testing.assert_array_equal(S.map_classes(fresh.rm), S.map_classes(p.rm))
 
 
+def test_the_first_map_computed_in_a_forked_process_is_the_map():
+    """The command's first map (a process forked before Panel loads) is what the page
+    computes itself: the same classes and shares."""
+    base = S.PairState(case="noncollocated", e=0.3, num=31)
+    done, rm, ms = S.warm_map(base).result(timeout=120)
+    assert done == base and ms > 0
+    mine = S.pair_map(base)
+    np.testing.assert_array_equal(S.map_classes(rm), S.map_classes(mine))
+    np.testing.assert_array_equal(rm.x, mine.x)
+    np.testing.assert_array_equal(rm.y, mine.y)
+
+
 def test_a_tap_selects_the_nearest_cell(page):
     class Tap:
         x, y = 31.3, 7.9

@@ -95,12 +95,13 @@ def _run_model(args) -> int:
 
 
 def _need_panel():
-    try:
-        import bokeh  # noqa: F401
-        import panel  # noqa: F401
-    except ImportError as exc:
-        raise UsageError(f"the explorer needs Panel and Bokeh ({exc.name} is missing): "
-                         "pip install 'hybridpd[explore]'") from None
+    # found, not imported: Panel loads later, after the first map's process is forked
+    from importlib.util import find_spec
+
+    for name in ("bokeh", "panel"):
+        if find_spec(name) is None:
+            raise UsageError(f"the explorer needs Panel and Bokeh ({name} is missing): "
+                             "pip install 'hybridpd[explore]'")
 
 
 def start_state(args):
@@ -125,10 +126,15 @@ def run(args) -> int:
         raise UsageError("--x and --y need --model FILE.toml (the pair's map is over kp, kv)")
     base = start_state(args)
     _need_panel()
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.explore.state import warm_map
+
+    # forked before Panel loads: the first map is computed while the server starts
+    first_map = warm_map(base)
     # deferred import: panel and the page load only when the server starts
     from hybridpd.explore.app import pair_app, warm_up
     from hybridpd.explore.server import serve
 
-    warm = warm_up(base)    # while the server starts and the browser loads the page
+    warm = warm_up(base, first_map)    # while the server starts and the browser loads it
     serve(args.port, open_browser=not args.no_browser, app=lambda: pair_app(base, warm))
     return 0

@@ -611,22 +611,26 @@ def _sorted(p, v):
     return np.asarray(p)[order], np.asarray(v)[order]
 
 
-def warm_up(state: S.PairState):
-    """Start computing ``state``'s map and orbit on a worker thread (numba's kernels and the
-    closed forms' cached code load on their first call): run when a server starts, so the
-    first page does not wait for them.
+def warm_up(state: S.PairState, warm=None):
+    """Start computing ``state``'s map and orbit (numba's kernels and the closed forms'
+    cached code load on their first call): run when a server starts, so the first page
+    does not wait for them.
 
-    Returns a future of ``(state, map, milliseconds)``; :func:`pair_app` given it draws the
-    map in the page it builds when the page's box is the same and the map is ready."""
-    def work():
-        t0 = time.perf_counter()
-        rm = S.pair_map(state)
-        ms = 1000 * (time.perf_counter() - t0)
+    Returns a future of ``(state, map, milliseconds)`` (``warm``, a future of
+    :func:`hybridpd.explore.state.warm_map` already started for the map, if given; else a
+    worker thread computes it); :func:`pair_app` given it draws the map in the page it
+    builds when the page's box is the same and the map is ready. The orbit is computed on
+    a worker thread here, for the caches of this process.
+    """
+    def orbit():
         orb = S.pair_orbit(state)
         if orb.exists:
             S.orbit_series(orb)
-        return state, rm, ms
-    return _POOL.submit(work)
+    if warm is None:
+        warm = _POOL.submit(lambda: (S._timed_map(state), orbit())[0])
+    else:
+        _POOL.submit(orbit)
+    return warm
 
 
 def pair_app(base: S.PairState | None = None, warm=None):

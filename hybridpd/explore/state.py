@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,7 +36,7 @@ from hybridpd.model import (
 
 __all__ = ["FIELDS", "MAP_FIELDS", "MAX_BASIN_NUM", "MAX_NUM", "PairState", "check_field",
            "finite_or_none", "map_classes", "orbit_series", "pair_basin", "pair_branch",
-           "pair_map", "pair_orbit", "parse_query", "same_map", "snap", "to_query"]
+           "pair_map", "pair_orbit", "parse_query", "same_map", "snap", "to_query", "warm_map"]
 
 #: Largest points per axis of the page's region map: 401 x 401 cells classify in about a
 #: second, beyond that a control change would keep the page waiting.
@@ -290,6 +291,37 @@ def same_map(a: PairState, b: PairState) -> bool:
     (True, False)
     """
     return all(getattr(a, f) == getattr(b, f) for f in MAP_FIELDS)
+
+
+def _timed_map(state: PairState) -> tuple:
+    t0 = time.perf_counter()
+    rm = pair_map(state)
+    return state, rm, 1000 * (time.perf_counter() - t0)
+
+
+def warm_map(state: PairState):
+    """Start computing ``state``'s region map in a forked process: a future of ``(state,
+    map, milliseconds)``.
+
+    Run first when a server starts: the child, forked before the web libraries load, loads
+    the compiled kernels and computes the map on the other core while the parent imports
+    Panel, so the first page can show its map as it is built. Where processes cannot be
+    forked (``spawn`` platforms) it runs on a thread instead. The process ends with its
+    one job.
+    """
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+
+    try:
+        if "fork" not in multiprocessing.get_all_start_methods():
+            raise OSError("no fork on this platform")
+        pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork"))
+        future = pool.submit(_timed_map, state)
+    except OSError:      # no fork, or no process to be had: the thread does the same work
+        pool = ThreadPoolExecutor(1, thread_name_prefix="hybridpd-warm")
+        future = pool.submit(_timed_map, state)
+    future.add_done_callback(lambda _f: pool.shutdown(wait=False))
+    return future
 
 
 def map_classes(rm) -> np.ndarray:

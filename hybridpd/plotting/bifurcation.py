@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 
 from hybridpd.analysis.diagrams import CLASSES
-from hybridpd.pair.bifdiagram import COORDINATES, section_coordinate
 from hybridpd.plotting._common import _COLORS, figure, model_title
 from hybridpd.plotting.branches import _grow
 from hybridpd.plotting.style import DOUBLE, styled
@@ -84,6 +83,9 @@ def _title(diagram):
 def _values_of(diagram, coordinate):
     """``(coordinate, (M, keep) values, axis label)`` of the kept points; the pair's physical
     coordinates from its half clearance ``L``."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.pair.bifdiagram import COORDINATES, section_coordinate
+
     pair = "L" in diagram.variables and tuple(diagram.names) == COORDINATES[:4]
     if coordinate is None:
         names = list(diagram.names)
@@ -230,6 +232,9 @@ bifurcation_legend = styled(bifurcation_legend)
 def _draw_branch(ax, br, coordinate, style, name, events, seen):
     """Draw one branch (``style``: colour and marker), labelling the first artist of every
     kind not yet in ``seen``."""
+    # deferred import: loaded only when this runs, for start-up time
+    from hybridpd.pair.bifdiagram import section_coordinate
+
     c, marker = style
     cyc, L = _branch_cycles(br)
     yc = section_coordinate(cyc, coordinate, L[:, None])

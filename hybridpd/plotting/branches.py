@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hybridpd.analysis.continuation import Branch
+from hybridpd.analysis.branch import Branch
 
 _EVENT_STYLE = {
     "fold": ("s", "tab:red"),
