@@ -395,14 +395,11 @@ class PairExplorer:
         self.basin_src = ColumnDataSource(dict(image=[np.zeros((2, 2))], x=[0.0], y=[0.0],
                                                dw=[1.0], dh=[1.0]))
         self.basin_fp = ColumnDataSource(dict(x=[], y=[]))
-        f = _fig("basin slice (x1, y1) through the orbit", "x1 (length)",
-                 "y1 (length/time)", width=420, height=360)
         self.basin_cm = LinearColorMapper(palette=_BASIN_COLORS, low=-0.5, high=6.5,
                                           nan_color=(0, 0, 0, 0))
-        f.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.basin_src,
-                color_mapper=self.basin_cm)
-        f.scatter("x", "y", source=self.basin_fp, marker="x", size=12, color="black")
-        self.basin_fig = f
+        # drawn with its first slice: a page starts faster without figures it does not show
+        self.basin_fig = None
+        self.basin_pane = pn.pane.Bokeh(None, width=420, height=360)
         self.basin_num = _widget(pn.widgets.TextInput, "points per axis",
                                  value=repr(self.state.basin_num), width=110)
         self.basin_button = _widget(pn.widgets.Button, "compute basin slice", primary=True)
@@ -411,6 +408,14 @@ class PairExplorer:
                                                       width=200, visible=False)
         self.basin_info = pn.pane.HTML(_tid("basin-status", "not computed"), width=420)
         self.basin_downloads = self._downloads("basin", lambda: self.basin)
+
+    def _basin_figure(self):
+        f = _fig("basin slice (x1, y1) through the orbit", "x1 (length)",
+                 "y1 (length/time)", width=420, height=360)
+        f.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.basin_src,
+                color_mapper=self.basin_cm)
+        f.scatter("x", "y", source=self.basin_fp, marker="x", size=12, color="black")
+        return f
 
     def _clear_basin(self):
         self.basin_src.data = dict(image=[np.full((2, 2), np.nan)], x=[0.0], y=[0.0],
@@ -460,6 +465,9 @@ class PairExplorer:
             self.basin_info.object = _tid("basin-status", f"basin failed: {err}")
             return
         self.basin = ab
+        if self.basin_fig is None:
+            self.basin_fig = self._basin_figure()
+            self.basin_pane.object = self.basin_fig
         codes = sorted({int(a.label) for a in ab.attractors})
         index = {c: i for i, c in enumerate(codes)}
         img = np.vectorize(lambda v: index.get(int(v), np.nan), otypes=[float])(ab.labels)
@@ -486,6 +494,12 @@ class PairExplorer:
         self.branch_button.on_click(lambda _e: self._schedule(self._compute_branch))
         self.branch_src = ColumnDataSource(dict(p=[], rho=[], stable=[]))
         self.event_src = ColumnDataSource(dict(p=[], rho=[], kind=[]))
+        self.branch_fig = None     # drawn with the first branch, as the basin's
+        self.branch_pane = pn.pane.Bokeh(None, width=420, height=300)
+        self.branch_info = pn.pane.HTML(_tid("branch-status", "not computed"), width=420)
+        self.branch_downloads = self._downloads("branch", lambda: self.branch)
+
+    def _branch_figure(self):
         # log scale: the crossings of 1 show however large the radius grows along the branch
         f = _fig("spectral radius along the branch (log scale)", "parameter",
                  "spectral radius", width=420, height=300, y_axis_type="log")
@@ -493,9 +507,7 @@ class PairExplorer:
         f.scatter("p", "rho", source=self.event_src, size=11, marker="diamond",
                   color=OKABE_ITO["vermillion"])
         f.add_tools(HoverTool(tooltips=[("event", "@kind"), ("at", "@p{0.000000}")]))
-        self.branch_fig = f
-        self.branch_info = pn.pane.HTML(_tid("branch-status", "not computed"), width=420)
-        self.branch_downloads = self._downloads("branch", lambda: self.branch)
+        return f
 
     def _clear_branch(self):
         self.branch_src.data = dict(p=[], rho=[], stable=[])
@@ -530,6 +542,9 @@ class PairExplorer:
 
     def _show_branch(self, br):
         self.branch = br
+        if self.branch_fig is None:
+            self.branch_fig = self._branch_figure()
+            self.branch_pane.object = self.branch_fig
         self.branch_fig.xaxis.axis_label = br.parameter_name
         self.branch_src.data = dict(p=br.parameter, rho=br.spectral_radius,
                                     stable=br.stable.astype(int))
@@ -589,10 +604,10 @@ class PairExplorer:
         mult = pn.Column(pn.pane.Bokeh(self.mult_fig), self.mult_downloads)
         basin = pn.Column(pn.Row(self.basin_num, self.messages["basin_num"]),
                           pn.Row(self.basin_button, self.basin_progress),
-                          pn.pane.Bokeh(self.basin_fig), self.basin_info, self.basin_downloads)
+                          self.basin_pane, self.basin_info, self.basin_downloads)
         branch = pn.Column(pn.Row(self.branch_param, self.branch_stop,
                                   self.messages["stop"]),
-                           self.branch_button, pn.pane.Bokeh(self.branch_fig),
+                           self.branch_button, self.branch_pane,
                            self.branch_info, self.branch_downloads)
         main = pn.Column(
             self.status,
