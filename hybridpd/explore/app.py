@@ -397,9 +397,9 @@ class PairExplorer:
         self.basin_fp = ColumnDataSource(dict(x=[], y=[]))
         self.basin_cm = LinearColorMapper(palette=_BASIN_COLORS, low=-0.5, high=6.5,
                                           nan_color=(0, 0, 0, 0))
-        # drawn with its first slice: a page starts faster without figures it does not show
-        self.basin_fig = None
-        self.basin_pane = pn.pane.Bokeh(None, width=420, height=360)
+        # drawn from the start, unlike the branch's: its first slice shows sooner
+        self.basin_fig = self._basin_figure()
+        self.basin_pane = pn.pane.Bokeh(self.basin_fig)
         self.basin_num = _widget(pn.widgets.TextInput, "points per axis",
                                  value=repr(self.state.basin_num), width=110)
         self.basin_button = _widget(pn.widgets.Button, "compute basin slice", primary=True)
@@ -465,9 +465,6 @@ class PairExplorer:
             self.basin_info.object = _tid("basin-status", f"basin failed: {err}")
             return
         self.basin = ab
-        if self.basin_fig is None:
-            self.basin_fig = self._basin_figure()
-            self.basin_pane.object = self.basin_fig
         codes = sorted({int(a.label) for a in ab.attractors})
         index = {c: i for i, c in enumerate(codes)}
         img = np.vectorize(lambda v: index.get(int(v), np.nan), otypes=[float])(ab.labels)
@@ -494,7 +491,8 @@ class PairExplorer:
         self.branch_button.on_click(lambda _e: self._schedule(self._compute_branch))
         self.branch_src = ColumnDataSource(dict(p=[], rho=[], stable=[]))
         self.event_src = ColumnDataSource(dict(p=[], rho=[], kind=[]))
-        self.branch_fig = None     # drawn with the first branch, as the basin's
+        # drawn with the first branch: a page starts faster without figures it does not show
+        self.branch_fig = None
         self.branch_pane = pn.pane.Bokeh(None, width=420, height=300)
         self.branch_info = pn.pane.HTML(_tid("branch-status", "not computed"), width=420)
         self.branch_downloads = self._downloads("branch", lambda: self.branch)
