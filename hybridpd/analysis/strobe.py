@@ -19,7 +19,7 @@ Jacobian
 --------
 ``DP^k = C Z E``: ``E`` the section's embedding, ``C`` its coordinates and ``Z`` the product of
 the flows' exponentials and of the saltation matrix of every jump on the way
-(:func:`~hybridpd.analysis.hybridmap.sensitivity_chain`: impacts, the end of an accumulation
+(:func:`~hybridpd.analysis.saltation.sensitivity_chain`: impacts, the end of an accumulation
 at its estimated limit, releases, sample instants with their held inputs, a crossing forced
 at the instant of a reset). No time correction at the end: the end time is fixed. Where a jump
 has no saltation matrix (a joint jump of several contacts resolved together, a tangential
@@ -45,8 +45,9 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from hybridpd.analysis.hybridmap import OnSection, sensitivity_chain
+from hybridpd.analysis.hybridmap import OnSection
 from hybridpd.analysis.maps import MapResult, PoincareMap, check_returns
+from hybridpd.analysis.saltation import sensitivity_chain
 from hybridpd.hybrid.automaton import TerminationCause, ZenoOptions
 from hybridpd.hybrid.section import StroboscopicSection
 
@@ -281,7 +282,7 @@ def _orth(Z, rank):
 
 def _records(ha, tr) -> SimpleNamespace:
     """A trajectory's jumps and segments as the index records of
-    :func:`~hybridpd.analysis.hybridmap.sensitivity_chain`."""
+    :func:`~hybridpd.analysis.saltation.sensitivity_chain`."""
     J, S = tr.jumps, tr.segments
     index = {name: i for i, name in enumerate(ha.built_mode_names)}
     gidx = {}
