@@ -354,7 +354,13 @@ def test_curve_stepper_follows_an_ellipse_once_around():
     """The curve stepper of follow_path on x^2/4 + y^2 = 1 (exact gradient, Newton corrector):
     every point on the ellipse, every step within (0.2 h, 1.6 h] of the largest step, the
     tangent's turn per step within max_turn, and the curve closed after one turn."""
-    from hybridpd.analysis.pathfollow import CurvePoint, CurveStepper, follow_path, perp
+    from hybridpd.analysis.pathfollow import (
+        CurvePoint,
+        CurveStepper,
+        PathOptions,
+        follow_path,
+        perp,
+    )
 
     def F(u):
         return u[0] ** 2 / 4 + u[1] ** 2 - 1.0
@@ -380,8 +386,9 @@ def test_curve_stepper_follows_an_ellipse_once_around():
         return [], (CurvePoint(start, None, None), "closed") if (
             i > 1 and angle(b.u) < angle(a.u)) else None
 
-    pts, _, end, _, _ = follow_path(first, None, stepper=CurveStepper(correct, max_step=0.1),
-                                    step=0.01, min_step=1e-6, max_step=0.1, max_steps=2000,
+    pts, _, end, _, _ = follow_path(first, None, PathOptions(step=0.01, min_step=1e-6,
+                                                             max_step=0.1, max_steps=2000),
+                                    stepper=CurveStepper(correct, max_step=0.1),
                                     detect=detect)
     U = np.array([p.u for p in pts])
     assert end == "closed"

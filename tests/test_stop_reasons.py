@@ -8,7 +8,7 @@ import numpy as np
 from hybridpd import ImpactPair, PDGains, Reference
 from hybridpd.analysis.continuation import continue_orbit
 from hybridpd.analysis.hybridmap import SectionMap
-from hybridpd.analysis.pathfollow import corrector, follow_path
+from hybridpd.analysis.pathfollow import PathOptions, corrector, follow_path
 from hybridpd.cli import main
 from hybridpd.pair.impactmap import ImpactMap
 from hybridpd.pair.impactpair import ControlledImpactPair
@@ -92,10 +92,11 @@ def test_the_path_follower_names_why_the_map_was_undefined():
 
     correct = corrector(F, Fs, Fp, tol=1e-12, max_iter=20, scale=lambda x: 1.0,
                         explain=explain)
-    pts, _, term, _, stuck = follow_path(Pt(np.array([1.0, 0.0])), 2.0, F=F, Fs=Fs, Fp=Fp,
-                                         make_point=lambda u, _its: Pt(u), correct=correct,
-                                         method="natural", step=0.25, min_step=1e-4,
-                                         max_step=0.25, max_steps=100, name="p")
+    opts = PathOptions(step=0.25, min_step=1e-4, max_step=0.25, max_steps=100,
+                       method="natural", name="p")
+    pts, _, term, _, stuck = follow_path(Pt(np.array([1.0, 0.0])), 2.0, opts, F=F, Fs=Fs,
+                                         Fp=Fp, make_point=lambda u, _its: Pt(u),
+                                         correct=correct)
     assert term.startswith(f"step below min_step = 0.0001 at p = {pts[-1].u[-1]:.10g}: ")
     assert "map undefined: outside the domain" in stuck and stuck in term
     np.testing.assert_allclose(pts[-1].u[1], 1.0, rtol=0, atol=1e-3)

@@ -55,7 +55,7 @@ from hybridpd.analysis.branch import (
 from hybridpd.analysis.family import ParameterFamily, PathRun, map_residual
 from hybridpd.analysis.hybridmap import Section, SectionMap
 from hybridpd.analysis.maps import PoincareMap, minimal_period
-from hybridpd.analysis.pathfollow import corrector, follow_path
+from hybridpd.analysis.pathfollow import PathOptions, corrector, follow_path
 
 __all__ = ["EVENT_KINDS", "BifurcationEvent", "Branch", "BranchPoint", "continue_orbit",
            "load_branch"]
@@ -99,10 +99,9 @@ def _map_factory(builder, section, map_options):
 
 
 
-def follow_branch(path, first, p_end, *, method, step, min_step, max_step, max_steps, tol,
-                  max_iter, scale, to_event, kinds=EVENT_KINDS, locate=True, event_tol=1e-9,
-                  extra_events=None, nonsmooth=None, out_of_range=None, k=1, grow=1.5,
-                  name="p"):
+def follow_branch(path, first, p_end, options: PathOptions, *, scale, to_event,
+                  kinds=EVENT_KINDS, extra_events=None, nonsmooth=None, out_of_range=None,
+                  k=1):
     """The one continuation engine: follow a branch from ``first`` towards ``p = p_end`` and
     detect its events.
 
@@ -113,11 +112,13 @@ def follow_branch(path, first, p_end, *, method, step, min_step, max_step, max_s
     :func:`~hybridpd.analysis.pathfollow.follow_path`, the detector
     :class:`~hybridpd.analysis.bifevents.EventTracker` (with turning points); a family's own
     events come from ``extra_events(pa, pb, index, evaluate)`` (``evaluate(pa, pb, theta)``
-    the corrected point between two points). Returns ``follow_path``'s
+    the corrected point between two points). ``options`` (a
+    :class:`~hybridpd.analysis.pathfollow.PathOptions`) holds the steps, the corrector's
+    tolerance and iterations and the events' location rules. Returns ``follow_path``'s
     ``(points, events, termination, rejected, why)``.
     """
-    correct = corrector(path.F, path.Fs, path.Fp, tol=tol, max_iter=max_iter, scale=scale,
-                        explain=path.explain)
+    correct = corrector(path.F, path.Fs, path.Fp, tol=options.tol, max_iter=options.max_iter,
+                        scale=scale, explain=path.explain)
 
     def evaluate(pa, pb, theta):
         chord = pb.u - pa.u
@@ -125,19 +126,17 @@ def follow_branch(path, first, p_end, *, method, step, min_step, max_step, max_s
         return path.point(u, res.iterations) if res.converged else None
 
     tracker = EventTracker(kinds, evaluate, lambda a, b: float(np.linalg.norm(b.u - a.u)),
-                           event_tol, 60, locate, to_event, turn_test=turn_test,
-                           nonsmooth=nonsmooth)
+                           options.event_tol, 60, options.locate, to_event,
+                           turn_test=turn_test, nonsmooth=nonsmooth)
 
     def detect(a, b, i):
         return tracker.detect(a, b, i, () if extra_events is None
                               else extra_events(a, b, i, evaluate))
 
-    return follow_path(first, p_end, F=path.F, Fs=path.Fs, Fp=path.Fp,
-                       make_point=path.point, correct=correct, method=method, step=step,
-                       min_step=min_step, max_step=max_step, max_steps=max_steps, k=k,
+    return follow_path(first, p_end, options, F=path.F, Fs=path.Fs, Fp=path.Fp,
+                       make_point=path.point, correct=correct, k=k,
                        lower_period=path.lower_period, unwrap=path.unwrap, detect=detect,
-                       out_of_range=out_of_range, tol=tol, name=name, grow=grow,
-                       explain=path.explain)
+                       out_of_range=out_of_range, explain=path.explain)
 
 
 
@@ -282,14 +281,15 @@ def continue_orbit(builder, p0: float, p_end: float, s0, *, period: int | None =
         return fam.start_failed(P, k, method, p0, None)
     lo, hi = sorted((p0, p_end))
     slack = fam.range_slack * span
+    options = PathOptions(step=step, min_step=min_step, max_step=max_step,
+                          max_steps=max_steps - 1, method=method, tol=tol, max_iter=max_iter,
+                          grow=fam.grow, name=fam.name, locate=locate, event_tol=event_tol)
     pts, evs, termination, rejected, why = follow_branch(
-        path, first, p_end, method=method, step=step, min_step=min_step, max_step=max_step,
-        max_steps=max_steps - 1, tol=tol, max_iter=max_iter,
-        scale=lambda x: fam.scale(x, P.dim), to_event=fam.to_event, kinds=events,
-        locate=locate, event_tol=event_tol,
+        path, first, p_end, options, scale=lambda x: fam.scale(x, P.dim),
+        to_event=fam.to_event, kinds=events,
         extra_events=lambda pa, pb, i, evaluate: fam.extra_events(
             pa, pb, i, evaluate, kinds=events, locate=locate, tol=event_tol),
-        nonsmooth=fam.nonsmooth, k=k, grow=fam.grow, name=fam.name,
+        nonsmooth=fam.nonsmooth, k=k,
         out_of_range=lambda p: None if lo - slack <= p <= hi + slack
         else "turned back: left the parameter range")
     return fam.finish(PathRun(pts, evs, termination, rejected, why, p0, p_end, k, method,

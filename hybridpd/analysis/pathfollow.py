@@ -19,8 +19,8 @@ from typing import Protocol
 
 import numpy as np
 
-__all__ = ["CurvePoint", "CurveStepper", "NewtonResult", "Stepper", "bisect_predicate", "corrector",
-           "follow_path", "illinois", "newton", "perp"]
+__all__ = ["CurvePoint", "CurveStepper", "NewtonResult", "PathOptions", "Stepper",
+           "bisect_predicate", "corrector", "follow_path", "illinois", "newton", "perp"]
 
 _MAX_HALVINGS = 60         # bound on step halvings in one continuation step
 
@@ -230,10 +230,54 @@ def _tangent(DP, fp):
     return np.linalg.svd(np.column_stack([DP - np.eye(DP.shape[0]), fp]))[2][-1]
 
 
-def follow_path(first, stop, *, F=None, Fs=None, Fp=None, make_point=None, correct=None,
-                method="arclength", step, min_step, max_step, max_steps, k=1,
-                lower_period=None, unwrap=None, detect=None, out_of_range=None, tol=1e-10,
-                name="p", grow=1.5, explain=None, stepper=None):
+@dataclass(frozen=True)
+class PathOptions:
+    """The step rules of one path: what :func:`follow_path`,
+    :func:`~hybridpd.analysis.continuation.follow_branch` and
+    :func:`~hybridpd.analysis.continuation.continue_orbit` pass down as one record.
+
+    Attributes
+    ----------
+    step, min_step, max_step : float
+        Initial, smallest and largest step (``p`` units for ``natural``, arclength in ``u``).
+    max_steps : int
+        Bound on accepted steps.
+    method : {"arclength", "natural"}
+    tol : float
+        Corrector tolerance.
+    max_iter : int
+        Corrector (Newton) iterations per point.
+    grow : float
+        Step growth factor after an easy correction (at most 3 Newton iterations).
+    name : str
+        Parameter name in messages.
+    locate : bool
+        Locate events (else report the bracketing points).
+    event_tol : float
+        Location tolerance of events.
+
+    Examples
+    --------
+    >>> PathOptions(step=0.1, min_step=1e-6, max_step=0.5, max_steps=100).method
+    'arclength'
+    """
+
+    step: float
+    min_step: float
+    max_step: float
+    max_steps: int
+    method: str = "arclength"
+    tol: float = 1e-10
+    max_iter: int = 15
+    grow: float = 1.5
+    name: str = "p"
+    locate: bool = True
+    event_tol: float = 1e-9
+
+
+def follow_path(first, stop, options: PathOptions, *, F=None, Fs=None, Fp=None,
+                make_point=None, correct=None, k=1, lower_period=None, unwrap=None,
+                detect=None, out_of_range=None, explain=None, stepper=None):
     """Continue from the accepted point ``first`` (its ``u``) towards ``p = stop``.
 
     ``method="natural"``: ``p`` steps by ``h`` (secant predictor through the last two
@@ -255,13 +299,10 @@ def follow_path(first, stop, *, F=None, Fs=None, Fp=None, make_point=None, corre
         End value of the parameter.
     F, Fs, Fp : callable
         ``F(u)`` (residual, None where undefined), its Jacobians in ``s`` and ``p``.
+    options : PathOptions
+        Steps, their bound, method, corrector tolerance, growth and the parameter's name.
     correct : callable
         ``correct(u_pred, normal)`` (:func:`corrector`).
-    method : {"arclength", "natural"}
-    step, min_step, max_step : float
-        Initial, smallest and largest step (``p`` units for ``natural``, arclength in ``u``).
-    max_steps : int
-        Bound on accepted steps.
     k : int
         Period (returns to the section).
     lower_period : callable, optional
@@ -274,20 +315,15 @@ def follow_path(first, stop, *, F=None, Fs=None, Fp=None, make_point=None, corre
     out_of_range : callable, optional
         ``out_of_range(p)``: None inside the range, else the termination message (the
         arclength branch has turned back out of it).
-    tol : float
-        Corrector tolerance (for the distance test of the natural corrector).
-    name : str
-        Parameter name in messages.
-    grow : float
-        Step growth factor after an easy correction (at most 3 Newton iterations).
     explain : callable, optional
         ``explain()``: why the map was undefined at a point tried since the previous call
         (``""`` if it was not); names the cause when a corrected point has no Jacobian.
     stepper : Stepper, optional
         Step rules of another kind of path (e.g. :class:`CurveStepper`, a zero curve in a
         plane). Then ``stepper`` predicts and corrects, and ``F``, ``Fs``, ``Fp``,
-        ``make_point``, ``correct``, ``method``, ``stop`` and the options after ``max_steps``
-        but ``detect`` are not used; ``detect(cur, new, index)`` returns ``(events, end)``
+        ``make_point``, ``correct``, ``stop``, the keywords after ``k`` but ``detect`` and the
+        options after ``max_steps`` are not used; ``detect(cur, new, index)`` returns
+        ``(events, end)``
         with ``end`` None (go on) or ``(last, termination)``: the path stops there, with
         ``last`` (a point or None) appended. None: today's arclength or natural rules.
 
@@ -306,8 +342,10 @@ def follow_path(first, stop, *, F=None, Fs=None, Fp=None, make_point=None, corre
         Why the last step failed (``""`` unless the step fell below ``min_step``).
     """
     if stepper is not None:
-        return _follow_stepper(first, stepper, step=step, min_step=min_step,
-                               max_step=max_step, max_steps=max_steps, detect=detect)
+        return _follow_stepper(first, stepper, options, detect)
+    method, step, min_step, max_step = (options.method, options.step, options.min_step,
+                                        options.max_step)
+    max_steps, tol, name, grow = options.max_steps, options.tol, options.name, options.grow
     pts = [first]
     evs = []
     rejected = 0
@@ -518,8 +556,8 @@ class CurveStepper:
     >>> st = CurveStepper(correct, max_step=0.1)
     >>> first = CurvePoint(np.array([1.0, 0.0]), np.array([2.0, 0.0]), np.array([0.0, 1.0]))
     >>> pts, _, end, _, _ = follow_path(
-    ...     first, None, stepper=st, step=0.05, min_step=1e-6, max_step=0.1, max_steps=100,
-    ...     detect=lambda a, b, i: ([], None if b.u[0] > 0 else (None, "quarter")))
+    ...     first, None, PathOptions(step=0.05, min_step=1e-6, max_step=0.1, max_steps=100),
+    ...     stepper=st, detect=lambda a, b, i: ([], None if b.u[0] > 0 else (None, "quarter")))
     >>> end, bool(np.allclose([p.u @ p.u for p in pts], 1.0)), len(pts)
     ('quarter', True, 32)
     """
@@ -550,8 +588,10 @@ class CurveStepper:
         return h
 
 
-def _follow_stepper(first, stepper, *, step, min_step, max_step, max_steps, detect):
+def _follow_stepper(first, stepper, options, detect):
     """:func:`follow_path` with a :class:`Stepper`: the same returns."""
+    step, min_step, max_step, max_steps = (options.step, options.min_step, options.max_step,
+                                           options.max_steps)
     pts = [first]
     evs = []
     rejected = 0

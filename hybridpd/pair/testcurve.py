@@ -22,6 +22,7 @@ from hybridpd.analysis.fd import difference_quotients
 from hybridpd.analysis.pathfollow import (
     CurvePoint,
     CurveStepper,
+    PathOptions,
     follow_path,
     illinois,
     newton,
@@ -260,9 +261,10 @@ class TestCurve:
 
         stepper = CurveStepper(self.correct, max_step=self.max_step, max_turn=self.max_turn)
         pts, codim, end, _rej, _why = follow_path(
-            first, None, stepper=stepper, step=min(0.25 * self.max_step, 0.01),
-            min_step=self.min_step, max_step=self.max_step, max_steps=self.max_steps,
-            detect=detect)
+            first, None, PathOptions(step=min(0.25 * self.max_step, 0.01),
+                                     min_step=self.min_step, max_step=self.max_step,
+                                     max_steps=self.max_steps),
+            stepper=stepper, detect=detect)
         U = [p.u for p in pts]
         if end.startswith("step below"):
             end = self._stalled(U, codim, pts[-1].u, pts[-1].data)
