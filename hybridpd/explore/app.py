@@ -22,6 +22,7 @@ import io
 import time
 import traceback
 from concurrent.futures import ThreadPoolExecutor
+from functools import partial
 
 import numpy as np
 import panel as pn
@@ -38,6 +39,9 @@ __all__ = ["PairExplorer", "pair_app", "warm_up"]
 #: Worker threads of every session together: the computations are NumPy-bound, and the
 #: machine's cores are what they share.
 _POOL = ThreadPoolExecutor(max_workers=2, thread_name_prefix="hybridpd-explore")
+
+#: Milliseconds after which a computation's final text is sent again (:meth:`_resend`).
+_RESEND_MS = 200
 
 #: Map classes 0 no orbit, 1 unstable orbit, 2 stable orbit.
 _CLASS_COLORS = ["#f2f2f2", OKABE_ITO["orange"], OKABE_ITO["blue"]]
@@ -97,6 +101,7 @@ class PairExplorer:
         self._doc = pn.state.curdoc
         self.rm = self.orb = self.basin = self.branch = None
         self._gen = {"map": 0, "basin": 0, "branch": 0}
+        self._tasks = set()       # the page's pending computations (see _schedule)
         self._build_controls()
         self._build_map()
         self._build_orbit()
@@ -187,9 +192,14 @@ class PairExplorer:
             if coro is None:
                 return
             try:
-                asyncio.get_running_loop().create_task(coro)
+                task = asyncio.get_running_loop().create_task(coro)
             except RuntimeError:      # no event loop (a plain script): run it to the end
                 asyncio.run(coro)
+                return
+            # the loop keeps only a weak reference to a task: without this one a pending
+            # computation could be collected and its result never shown
+            self._tasks.add(task)
+            task.add_done_callback(self._tasks.discard)
         self._on_doc(go)
 
     async def _off_loop(self, fn, *args):
@@ -203,6 +213,23 @@ class PairExplorer:
             doc.add_next_tick_callback(lambda: self._safely(fn, *args))
         else:
             self._safely(fn, *args)
+
+    def _resend(self, *panes):
+        """Send the panes' final text once more, a moment later. Panel writes a change made
+        while the page's socket is busy writing later, from a queue, and a change made
+        after it directly, so the two can arrive in the other order: a computation that
+        ends within ~0.1 s of its start could leave "computing" on the page."""
+        doc = self._doc
+        if doc is not None and doc.session_context is not None:
+            for pane in panes:
+                doc.add_timeout_callback(partial(self._safely, self._again, pane, pane.object),
+                                         _RESEND_MS)
+
+    @staticmethod
+    def _again(pane, text):
+        # the same text changed by an invisible comment: Bokeh sends only a real change
+        if pane.object == text:
+            pane.object = text + "<!-- final -->"
 
     def _safely(self, fn, *args):
         try:
@@ -270,6 +297,7 @@ class PairExplorer:
             f"{_tid('map-stable-share', _num(rm.fraction('stable')[0]))} of the box "
             f"(computed in {_tid('map-ms', f'{ms:.0f}')} ms)")
         self._say("ready")
+        self._resend(self.map_info, self.status)
 
     def _on_tap(self, event):
         try:
@@ -397,7 +425,6 @@ class PairExplorer:
         self.basin_fp = ColumnDataSource(dict(x=[], y=[]))
         self.basin_cm = LinearColorMapper(palette=_BASIN_COLORS, low=-0.5, high=6.5,
                                           nan_color=(0, 0, 0, 0))
-        # drawn from the start, unlike the branch's: its first slice shows sooner
         self.basin_fig = self._basin_figure()
         self.basin_pane = pn.pane.Bokeh(self.basin_fig)
         self.basin_num = _widget(pn.widgets.TextInput, "points per axis",
@@ -480,6 +507,7 @@ class PairExplorer:
             _tid("basin-status", "done") + f" in {_tid('basin-ms', f'{ms:.0f}')} ms; "
             f"the orbit's basin: {_tid('basin-share', _num(ab.converged_fraction))} of the "
             "slice<br>" + "<br>".join(keys))
+        self._resend(self.basin_info)
 
     # ---- the branch -------------------------------------------------------------------
     def _build_branch(self):
@@ -491,9 +519,8 @@ class PairExplorer:
         self.branch_button.on_click(lambda _e: self._schedule(self._compute_branch))
         self.branch_src = ColumnDataSource(dict(p=[], rho=[], stable=[]))
         self.event_src = ColumnDataSource(dict(p=[], rho=[], kind=[]))
-        # drawn with the first branch: a page starts faster without figures it does not show
-        self.branch_fig = None
-        self.branch_pane = pn.pane.Bokeh(None, width=420, height=300)
+        self.branch_fig = self._branch_figure()
+        self.branch_pane = pn.pane.Bokeh(self.branch_fig)
         self.branch_info = pn.pane.HTML(_tid("branch-status", "not computed"), width=420)
         self.branch_downloads = self._downloads("branch", lambda: self.branch)
 
@@ -540,9 +567,6 @@ class PairExplorer:
 
     def _show_branch(self, br):
         self.branch = br
-        if self.branch_fig is None:
-            self.branch_fig = self._branch_figure()
-            self.branch_pane.object = self.branch_fig
         self.branch_fig.xaxis.axis_label = br.parameter_name
         self.branch_src.data = dict(p=br.parameter, rho=br.spectral_radius,
                                     stable=br.stable.astype(int))
@@ -556,6 +580,7 @@ class PairExplorer:
         self.branch_info.object = (
             _tid("branch-status", f"done: {br.termination}") + f", {len(br.parameter)} points"
             f", {_tid('branch-events', len(ev))} events<br>" + "<br>".join(lines))
+        self._resend(self.branch_info)
 
     # ---- saving -----------------------------------------------------------------------
     def _downloads(self, panel: str, get):

@@ -60,6 +60,8 @@ class ModelExplorer:
     _off_loop = PairExplorer._off_loop
     _on_doc = PairExplorer._on_doc
     _safely = PairExplorer._safely
+    _resend = PairExplorer._resend
+    _again = PairExplorer._again
     _say = PairExplorer._say
     _need = staticmethod(PairExplorer._need)
     _guarded = PairExplorer._guarded
@@ -71,6 +73,7 @@ class ModelExplorer:
         self.record = None
         self.values = None
         self._gen = {"orbit": 0, "basin": 0}
+        self._tasks = set()       # the page's pending computations (see _schedule)
         self.status = pn.pane.HTML(_tid("status", "starting"), margin=(2, 10))
         self.map_src = ColumnDataSource(dict(image=[np.zeros((2, 2), np.int8)], x=[0.0],
                                              y=[0.0], dw=[1.0], dh=[1.0]))
@@ -163,6 +166,7 @@ class ModelExplorer:
             f"{_tid('map-exists-share', _num(rm.fraction('exists')[0]))}, stable on "
             f"{_tid('map-stable-share', _num(rm.fraction('stable')[0]))} of the grid")
         self._say("ready")
+        self._resend(self.map_info, self.status)
 
     # ---- a cell's orbit ---------------------------------------------------------------------
     def _on_tap(self, event):
@@ -236,6 +240,7 @@ class ModelExplorer:
                                   + "<table>" + "".join(f"<tr><td>{k}</td><td>{v}</td></tr>"
                                                         for k, v in rows) + "</table>")
         self._say("ready")
+        self._resend(self.orbit_info, self.status)
 
     # ---- the basin ----------------------------------------------------------------------
     def _start_basin(self):
@@ -283,6 +288,7 @@ class ModelExplorer:
         self.basin_fig.xaxis.axis_label, self.basin_fig.yaxis.axis_label = mb.x_name, mb.y_name
         self.basin_info.object = (_tid("basin-status", "done") + "<br>"
                                   + "<br>".join(html.escape(x) for x in mb.summary()))
+        self._resend(self.basin_info)
 
 
     # ---- saving -----------------------------------------------------------------------
