@@ -665,7 +665,7 @@ def warm_up(state: S.PairState, warm=None):
         if orb.exists:
             S.orbit_series(orb)
     if warm is None:
-        warm = _POOL.submit(lambda: (S._timed_map(state), orbit())[0])
+        warm = _POOL.submit(lambda: (S.timed_map(state), orbit())[0])
     else:
         _POOL.submit(orbit)
     return warm

@@ -36,7 +36,8 @@ from hybridpd.model import (
 
 __all__ = ["FIELDS", "MAP_FIELDS", "MAX_BASIN_NUM", "MAX_NUM", "PairState", "check_field",
            "finite_or_none", "map_classes", "orbit_series", "pair_basin", "pair_branch",
-           "pair_map", "pair_orbit", "parse_query", "same_map", "snap", "to_query", "warm_map"]
+           "pair_map", "pair_orbit", "parse_query", "same_map", "snap", "timed_map", "to_query",
+           "warm_map"]
 
 #: Largest points per axis of the page's region map: 401 x 401 cells classify in about a
 #: second, beyond that a control change would keep the page waiting.
@@ -293,7 +294,8 @@ def same_map(a: PairState, b: PairState) -> bool:
     return all(getattr(a, f) == getattr(b, f) for f in MAP_FIELDS)
 
 
-def _timed_map(state: PairState) -> tuple:
+def timed_map(state: PairState) -> tuple:
+    """``(state, map, milliseconds)``: :func:`pair_map` and the time it took."""
     t0 = time.perf_counter()
     rm = pair_map(state)
     return state, rm, 1000 * (time.perf_counter() - t0)
@@ -316,10 +318,10 @@ def warm_map(state: PairState):
         if "fork" not in multiprocessing.get_all_start_methods():
             raise OSError("no fork on this platform")
         pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork"))
-        future = pool.submit(_timed_map, state)
+        future = pool.submit(timed_map, state)
     except OSError:      # no fork, or no process to be had: the thread does the same work
         pool = ThreadPoolExecutor(1, thread_name_prefix="hybridpd-warm")
-        future = pool.submit(_timed_map, state)
+        future = pool.submit(timed_map, state)
     future.add_done_callback(lambda _f: pool.shutdown(wait=False))
     return future
 
