@@ -25,8 +25,8 @@ from hybridpd.model import (
     PDGains,
     Reference,
     check_array,
-    check_finite,
     check_int,
+    check_positive,
 )
 from hybridpd.pair.orbits import symmetric_orbits
 
@@ -119,17 +119,6 @@ _END_GRAZE = 1e-4          # a branch whose corrector fails this close to grazin
 _NEAR_BRANCH = 5e-2        # a stuck continuation this close to a +1 multiplier: branch point
 
 
-def _positive_int(name, value) -> int:
-    return check_int(name, value, 1)
-
-
-def _positive_float(name, value) -> float:
-    v = check_finite(name, value)
-    if v <= 0:
-        raise ValueError(f"{name} must be > 0, got {value!r}")
-    return v
-
-
 def _domain(name):
     """``(lo, hi, lo_closed)`` of a parameter's admissible values."""
     if name == "e":
@@ -171,12 +160,12 @@ def _path_steps(name, p0, stop, step, max_step, min_step, max_steps, defaults):
     _check_stop(name, p0, stop)
     n_steps, n_max, min_fraction = defaults
     span = abs(stop - p0)
-    step = span / n_steps if step is None else _positive_float("step", step)
-    max_step = span / n_max if max_step is None else _positive_float("max_step", max_step)
-    min_step = span * min_fraction if min_step is None else _positive_float("min_step", min_step)
+    step = span / n_steps if step is None else check_positive("step", step)
+    max_step = span / n_max if max_step is None else check_positive("max_step", max_step)
+    min_step = span * min_fraction if min_step is None else check_positive("min_step", min_step)
     if min_step > step:
         raise ValueError(f"min_step = {min_step!r} must not exceed step = {step!r}")
-    return span, step, max(max_step, step), min_step, _positive_int("max_steps", max_steps)
+    return span, step, max(max_step, step), min_step, check_int("max_steps", max_steps, 1)
 
 
 def _check_stop(name, p0, stop):
@@ -431,7 +420,7 @@ def pair_family(P: ImpactMap, parameter: str, *, x10=None, n=1, fd_step=1e-6,
     """The :class:`PairFamily` of ``P`` in ``parameter`` (:meth:`ImpactMap.family`)."""
     design = None
     if x10 is not None:
-        design = _Design(_positive_float("x10", x10), _positive_int("n", n))
+        design = _Design(check_positive("x10", x10), check_int("n", n, 1))
     name = _check_parameter(parameter, PARAMETERS if design is None else DESIGN_PARAMETERS)
     value = _map_value(P, name, design)
     base = P
@@ -441,6 +430,6 @@ def pair_family(P: ImpactMap, parameter: str, *, x10=None, n=1, fd_step=1e-6,
             raise ValueError(f"the design path has no reference amplitude at {name} = "
                              f"{value:g} (x10 = {design.x10:g}, n = {design.n})")
     build = functools.partial(_map_in_domain, base, name, design)
-    return PairFamily(name, value, build, _positive_float("fd_step", fd_step), base=base,
-                      design=design, graze_tol=_positive_float("graze_tol", graze_tol),
-                      margin_samples=_positive_int("margin_samples", margin_samples))
+    return PairFamily(name, value, build, check_positive("fd_step", fd_step), base=base,
+                      design=design, graze_tol=check_positive("graze_tol", graze_tol),
+                      margin_samples=check_int("margin_samples", margin_samples, 1))

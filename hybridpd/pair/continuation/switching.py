@@ -46,12 +46,18 @@ from hybridpd.analysis.continuation import BifurcationEvent, Branch, continue_or
 from hybridpd.analysis.family import map_residual
 from hybridpd.analysis.pathfollow import newton
 from hybridpd.analysis.periodic import PeriodicOrbit, find_orbit
-from hybridpd.model import Case, ImpactPair, PDGains, Reference, wrap_phase
+from hybridpd.model import (
+    Case,
+    ImpactPair,
+    PDGains,
+    Reference,
+    check_int,
+    check_positive,
+    wrap_phase,
+)
 from hybridpd.pair.family import (
     _Design,
     _map_with,
-    _positive_float,
-    _positive_int,
     _scale,
 )
 from hybridpd.pair.impactmap import ImpactMap
@@ -390,15 +396,15 @@ def switch_branch(branch: Branch, event: BifurcationEvent, stop: float | None = 
     if event.kind == "fold" and "turns back" in event.detail:
         raise ValueError("this fold is a turning point of the branch (it turns back): no "
                          "other branch crosses there; switch at a branch point instead")
-    amplitudes = tuple(_positive_float("amplitudes", a) for a in amplitudes)
+    amplitudes = tuple(check_positive("amplitudes", a) for a in amplitudes)
     if not amplitudes:
         raise ValueError("amplitudes must not be empty")
-    offset = _positive_float("offset", offset)
-    settle = _positive_int("settle", settle)
-    max_period = _positive_int("max_period", max_period)
-    tol = _positive_float("tol", tol)
-    max_iter = _positive_int("max_iter", max_iter)
-    fd_step = _positive_float("fd_step", fd_step)
+    offset = check_positive("offset", offset)
+    settle = check_int("settle", settle, 1)
+    max_period = check_int("max_period", max_period, 1)
+    tol = check_positive("tol", tol)
+    max_iter = check_int("max_iter", max_iter, 1)
+    fd_step = check_positive("fd_step", fd_step)
     name = branch.parameter_name
     design = _design_of(branch)
     if event.kind == "grazing":

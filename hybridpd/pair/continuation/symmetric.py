@@ -15,7 +15,9 @@ from hybridpd.model import (
     PDGains,
     as_gains,
     check_finite,
+    check_int,
     check_odd_order,
+    check_positive,
     wrap_phase,
 )
 from hybridpd.pair import symbolic
@@ -27,8 +29,6 @@ from hybridpd.pair.family import (
     _in_domain,
     _path_steps,
     _Point,
-    _positive_float,
-    _positive_int,
 )
 from hybridpd.pair.orbits import REASONS, symmetric_orbits
 from hybridpd.pair.params import PairParams
@@ -113,8 +113,8 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
     if not isinstance(pair, ImpactPair):
         raise ValueError(f"pair must be an ImpactPair, got {type(pair).__name__}")
     gains = as_gains(gains)
-    omega = _positive_float("omega", omega)
-    x10 = _positive_float("x10", x10)
+    omega = check_positive("omega", omega)
+    x10 = check_positive("x10", x10)
     case = Case.parse(case)
     name = _check_parameter(parameter, SYMMETRIC_PARAMETERS)
     stop = check_finite("stop", stop)
@@ -122,9 +122,9 @@ def continue_symmetric(pair: ImpactPair, gains: PDGains, omega: float, parameter
     p0 = pair.L if name == "L" else getattr(base, name)
     _, step, max_step, min_step, max_steps = _path_steps(
         name, p0, stop, step, max_step, min_step, max_steps, (100, 20, 1e-6))
-    max_change = _positive_float("max_change", max_change)
-    event_tol = _positive_float("event_tol", event_tol)
-    margin_samples = _positive_int("margin_samples", margin_samples)
+    max_change = check_positive("max_change", max_change)
+    event_tol = check_positive("event_tol", event_tol)
+    margin_samples = check_int("margin_samples", margin_samples, 1)
     bad = [kd for kd in events if kd not in EVENT_KINDS]
     if bad:
         raise ValueError(f"events must be a subset of {EVENT_KINDS}, got {bad}")
